@@ -1,0 +1,361 @@
+"""The impulse-momentum equations of pin-connected rigid bodies, solved on arrays.
+
+One implementation serves the single solve and the batch: every input carries a leading
+batch axis ``B`` (B = 1 for one impact). The structure of the problem (which bodies, hitches,
+constraints, tangential law) is fixed across the batch; every number may vary.
+
+Formulation
+-----------
+Generalised velocities q = (vx, vy, w) per body, world frame. Every unknown impulse
+lambda_k acts on the bodies through a row J_k (B, n, 3) of a Jacobian, so that the final
+velocities are (paper Eqs. 1, 2)
+
+    Q = q + Minv (p_ext + J^T lambda),
+
+with Minv = diag(1/m, 1/m, 1/I) per body (0 for a rigid barrier: exact, not a large mass).
+The unknowns are, in this order,
+
+    lambda = (P_n, P_t, M, R_1x, R_1y, ..., R_hx, R_hy, C_1, ..., C_c)
+
+(crush normal and tangential impulse on body 1, moment impulse on body 1, the impulse of
+each hitch on its front body, and each velocity constraint's impulse along its direction).
+The same rows J_k give the velocities the conditions speak of: J_n Q is the normal
+velocity of body 1's contact point relative to body 2's, J_h Q the pin-velocity mismatch.
+With W = J Minv J^T and u = J (q + Minv p_ext) the conditions are linear in lambda:
+
+    restitution (Eq. 5)      W_n lambda = -e J_n q - u_n
+    no sliding at separation W_t lambda = -u_t                     (defines mu_max)
+    impulse ratio (Eq. 4)    P_t - mu P_n = 0
+    moment (Eq. 6)           e' M - (1 + e') Ibar J_M Q = 0        (e' = -1 gives M = 0)
+    hitch pins (Eq. 3)       W_h lambda = -u_h
+    constraints (Eq. 7)      W_c lambda = value - u_c
+
+Eq. 6 is used with the sign that makes e' a restitution coefficient (see
+``shared/papers/recovered-geometry.md``): e' M = -(1 + e')(Omega_2 - Omega_1) Ibar.
+The system is equilibrated (rows, then columns, scaled to unit max-norm) before the LU
+solve; its condition number is reported so an ill-posed configuration is visible.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, fields, replace
+
+import numpy as np
+
+__all__ = ["ImpactStructure", "ImpactArrays", "solve_arrays", "TANGENTIAL_KINDS"]
+
+TANGENTIAL_KINDS = ("ratio", "no_slide", "friction")
+
+
+@dataclass(frozen=True)
+class ImpactStructure:
+    """What is fixed across a batch: the bodies, the joints, the laws.
+
+    Attributes
+    ----------
+    body_names : tuple of str
+        All bodies, vehicle by vehicle, front to rear.
+    vehicle_index : tuple of int
+        Vehicle number (0 or 1) of each body.
+    vehicle_names : tuple of str
+    fixed : tuple of bool
+        True for a rigid barrier body.
+    body1, body2 : int
+        Indices of the bodies in contact.
+    hitches : tuple of (int, int)
+        (front, rear) body indices of each hitch.
+    hitch_names : tuple of str
+    constraint_bodies : tuple of int
+    constraint_names : tuple of str
+    external_bodies : tuple of int
+    external_names : tuple of str
+    tangential : str
+        One of ``"ratio"``, ``"no_slide"``, ``"friction"``.
+    """
+
+    body_names: tuple[str, ...]
+    vehicle_index: tuple[int, ...]
+    vehicle_names: tuple[str, ...]
+    fixed: tuple[bool, ...]
+    body1: int
+    body2: int
+    hitches: tuple[tuple[int, int], ...] = ()
+    hitch_names: tuple[str, ...] = ()
+    constraint_bodies: tuple[int, ...] = ()
+    constraint_names: tuple[str, ...] = ()
+    external_bodies: tuple[int, ...] = ()
+    external_names: tuple[str, ...] = ()
+    tangential: str = "no_slide"
+
+    @property
+    def n_bodies(self) -> int:
+        return len(self.body_names)
+
+    @property
+    def n_unknowns(self) -> int:
+        return 3 + 2 * len(self.hitches) + len(self.constraint_bodies)
+
+    def equation_labels(self) -> tuple[str, ...]:
+        """Human-readable label of each equation row (for error messages)."""
+        t = {"ratio": "impulse ratio P_t = mu P_n (Eq. 4)",
+             "no_slide": "no sliding at separation",
+             "friction": "no sliding at separation / friction limit"}[self.tangential]
+        labels = ["restitution (Eq. 5)", t, "moment restitution (Eq. 6)"]
+        for name in self.hitch_names:
+            labels += [f"hitch {name!r} pin velocity x (Eq. 3)", f"hitch {name!r} pin velocity y (Eq. 3)"]
+        labels += [f"velocity constraint {name!r} (Eq. 7)" for name in self.constraint_names]
+        return tuple(labels)
+
+
+@dataclass
+class ImpactArrays:
+    """Every number of an impact, with a leading batch axis B (named state of the solver).
+
+    Shapes: n bodies, h hitches, c constraints, x external impulses. SI units, world frame.
+    Modify fields freely (e.g. ``arrays.restitution[:] = np.linspace(0, 1, B)``) and call
+    :func:`solve_arrays`. Values of barrier bodies' masses are ignored (their inverse mass is 0).
+    """
+
+    mass: np.ndarray                 # (B, n) kg (inf for a barrier)
+    yaw_inertia: np.ndarray          # (B, n) kg m^2
+    position: np.ndarray             # (B, n, 2) m, CG
+    heading: np.ndarray              # (B, n) rad
+    velocity: np.ndarray             # (B, n, 2) m/s, CG
+    yaw_rate: np.ndarray             # (B, n) rad/s
+    hitch_front_point: np.ndarray    # (B, h, 2) m, pin in front-body axes
+    hitch_rear_point: np.ndarray     # (B, h, 2) m, pin in rear-body axes
+    point: np.ndarray                # (B, 2) m, contact point, world
+    normal_angle: np.ndarray         # (B,) rad, n from body 2 into body 1
+    tangent_sign: np.ndarray         # (B,) +1 or -1
+    restitution: np.ndarray          # (B,) e
+    law_value: np.ndarray            # (B,) mu (ratio) or f (friction)
+    moment_restitution: np.ndarray   # (B,) e'
+    constraint_point: np.ndarray     # (B, c, 2) m, world
+    constraint_direction: np.ndarray  # (B, c) rad, world
+    constraint_value: np.ndarray     # (B, c) m/s
+    external_point: np.ndarray       # (B, x, 2) m, world
+    external_impulse: np.ndarray     # (B, x, 2) N s, world
+
+    @property
+    def size(self) -> int:
+        return self.mass.shape[0]
+
+    def copy(self) -> "ImpactArrays":
+        return replace(self, **{f.name: getattr(self, f.name).copy() for f in fields(self)})
+
+    def repeat(self, n: int) -> "ImpactArrays":
+        """n copies of a batch of one (for sweeps)."""
+        if self.size != 1:
+            raise ValueError(f"repeat() needs a batch of one, this batch has {self.size}")
+        return replace(self, **{f.name: np.repeat(getattr(self, f.name), n, axis=0) for f in fields(self)})
+
+
+def _rot(vec, ang):
+    c, s = np.cos(ang), np.sin(ang)
+    return np.stack([c * vec[..., 0] - s * vec[..., 1], s * vec[..., 0] + c * vec[..., 1]], -1)
+
+
+def _cross(a, b):
+    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+
+
+def _put(J, k, body, u, r, sign):
+    """Row k of J gets a linear impulse u (B,2) at lever arm r (B,2) on ``body`` with ``sign``."""
+    J[:, k, body, 0] += sign * u[:, 0]
+    J[:, k, body, 1] += sign * u[:, 1]
+    J[:, k, body, 2] += sign * _cross(r, u)
+
+
+def _assemble(S: ImpactStructure, A: ImpactArrays):
+    """Jacobian J (B, K, n, 3), inverse masses (B, n, 3), known-impulse velocities."""
+    B, n = A.mass.shape
+    K = S.n_unknowns
+    fixed = np.asarray(S.fixed, dtype=bool)
+    with np.errstate(divide="ignore"):
+        inv_m = np.where(fixed, 0.0, 1.0 / A.mass)
+        inv_i = np.where(fixed, 0.0, 1.0 / A.yaw_inertia)
+    minv = np.stack([inv_m, inv_m, inv_i], -1)  # (B, n, 3)
+
+    J = np.zeros((B, K, n, 3))
+    i1, i2 = S.body1, S.body2
+    nvec = np.stack([np.cos(A.normal_angle), np.sin(A.normal_angle)], -1)
+    tvec = A.tangent_sign[:, None] * np.stack([-nvec[:, 1], nvec[:, 0]], -1)
+    r1 = A.point - A.position[:, i1]
+    r2 = A.point - A.position[:, i2]
+    for k, u in ((0, nvec), (1, tvec)):
+        _put(J, k, i1, u, r1, 1.0)
+        _put(J, k, i2, u, r2, -1.0)
+    J[:, 2, i1, 2] += 1.0
+    J[:, 2, i2, 2] -= 1.0
+    ex = np.broadcast_to(np.array([1.0, 0.0]), (B, 2))
+    ey = np.broadcast_to(np.array([0.0, 1.0]), (B, 2))
+    for j, (f, r) in enumerate(S.hitches):
+        rf = _rot(A.hitch_front_point[:, j], A.heading[:, f])
+        rr = _rot(A.hitch_rear_point[:, j], A.heading[:, r])
+        for k, u in ((3 + 2 * j, ex), (4 + 2 * j, ey)):
+            _put(J, k, f, u, rf, 1.0)
+            _put(J, k, r, u, rr, -1.0)
+    k0 = 3 + 2 * len(S.hitches)
+    for c, b in enumerate(S.constraint_bodies):
+        d = np.stack([np.cos(A.constraint_direction[:, c]), np.sin(A.constraint_direction[:, c])], -1)
+        _put(J, k0 + c, b, d, A.constraint_point[:, c] - A.position[:, b], 1.0)
+
+    p_ext = np.zeros((B, n, 3))
+    for x, b in enumerate(S.external_bodies):
+        imp = A.external_impulse[:, x]
+        r = A.external_point[:, x] - A.position[:, b]
+        p_ext[:, b, 0] += imp[:, 0]
+        p_ext[:, b, 1] += imp[:, 1]
+        p_ext[:, b, 2] += _cross(r, imp)
+    return J, minv, p_ext, nvec, tvec
+
+
+def _equilibrate(M, b):
+    """Scale rows then columns of M to unit max-norm. Returns (Ms, bs, col_scale)."""
+    r = np.max(np.abs(M), axis=2)
+    r = np.where(r > 0, r, 1.0)
+    M = M / r[:, :, None]
+    b = b / r
+    c = np.max(np.abs(M), axis=1)
+    c = np.where(c > 0, c, 1.0)
+    return M / c[:, None, :], b, c
+
+
+def _solve(M, b):
+    """Batched solve of equilibrated systems; singular items come back as NaN with ok=False."""
+    Ms, bs, cs = _equilibrate(M, b)
+    try:
+        x = np.linalg.solve(Ms, bs[..., None])[..., 0]
+        ok = np.all(np.isfinite(x), axis=1)
+    except np.linalg.LinAlgError:
+        x = np.full_like(bs, np.nan)
+        ok = np.zeros(bs.shape[0], dtype=bool)
+        for i in range(bs.shape[0]):
+            try:
+                x[i] = np.linalg.solve(Ms[i], bs[i])
+                ok[i] = bool(np.all(np.isfinite(x[i])))
+            except np.linalg.LinAlgError:
+                pass
+    return x / cs, ok, Ms
+
+
+def solve_arrays(S: ImpactStructure, A: ImpactArrays, *, condition: bool = False) -> dict[str, np.ndarray]:
+    """Solve a batch of impacts.
+
+    Parameters
+    ----------
+    S : ImpactStructure
+    A : ImpactArrays
+    condition : bool
+        Also compute the 2-norm condition number of each equilibrated system (an SVD each).
+
+    Returns
+    -------
+    dict of ndarray
+        ``velocity`` (B, n, 2), ``yaw_rate`` (B, n), ``impulses`` (B, K) in the unknown order,
+        ``normal_impulse``, ``tangential_impulse``, ``moment_impulse``, ``mu``, ``mu_max`` (B,),
+        ``sliding`` (B,) bool, ``hitch_impulse`` (B, h, 2) on the front body,
+        ``constraint_impulse`` (B, c), ``closing_velocity`` (B,) (relative normal velocity
+        before, < 0 when approaching), ``separation_normal``/``separation_tangential`` (B,)
+        relative contact-point velocities after, ``ke_before``/``ke_after`` (B, n) [J],
+        ``ok`` (B,) bool (False: singular), ``condition`` (B,) if asked.
+    """
+    J, minv, p_ext, nvec, tvec = _assemble(S, A)
+    B, K, n, _ = J.shape
+    q = np.concatenate([A.velocity, A.yaw_rate[..., None]], -1)  # (B, n, 3)
+    Jf = J.reshape(B, K, 3 * n)
+    JM = Jf * minv.reshape(B, 1, 3 * n)
+    W = JM @ np.swapaxes(Jf, 1, 2)  # (B, K, K)
+    u0 = Jf @ q.reshape(B, 3 * n, 1)
+    u0 = u0[..., 0]
+    dq_ext = (minv * p_ext).reshape(B, 3 * n, 1)
+    u_free = u0 + (Jf @ dq_ext)[..., 0]
+
+    e = A.restitution
+    ep = A.moment_restitution
+    inv_ibar = minv[:, S.body1, 2] + minv[:, S.body2, 2]
+    with np.errstate(divide="ignore"):
+        ibar = np.where(inv_ibar > 0, 1.0 / inv_ibar, 0.0)
+
+    Mat = W.copy()
+    rhs = -u_free.copy()
+    rhs[:, 0] = -e * u0[:, 0] - u_free[:, 0]
+    Mat[:, 2, :] = -((1.0 + ep) * ibar)[:, None] * W[:, 2, :]
+    Mat[:, 2, 2] += ep
+    rhs[:, 2] = (1.0 + ep) * ibar * u_free[:, 2]
+    k0 = 3 + 2 * len(S.hitches)
+    if S.constraint_bodies:
+        rhs[:, k0:] = A.constraint_value - u_free[:, k0:]
+
+    # First pass: no sliding at separation -> mu_max (needed by every law for the report).
+    lam_ns, ok, Ms = _solve(Mat, rhs)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mu_max = lam_ns[:, 1] / lam_ns[:, 0]
+
+    if S.tangential == "no_slide":
+        lam = lam_ns
+        sliding = np.zeros(B, dtype=bool)
+    else:
+        if S.tangential == "ratio":
+            mu_used = A.law_value.copy()
+            redo = np.ones(B, dtype=bool)
+        else:  # friction: keep the no-slide answer where |mu_max| <= f (Eq. 8)
+            redo = ~(np.abs(mu_max) <= A.law_value)
+            mu_used = A.law_value * np.sign(mu_max)
+        lam = lam_ns.copy()
+        if np.any(redo):
+            idx = np.nonzero(redo)[0]
+            Mr = Mat[idx].copy()
+            rr = rhs[idx].copy()
+            Mr[:, 1, :] = 0.0
+            Mr[:, 1, 1] = 1.0
+            Mr[:, 1, 0] = -mu_used[idx]
+            rr[:, 1] = 0.0
+            lam_r, ok_r, Ms_r = _solve(Mr, rr)
+            lam[idx] = lam_r
+            ok[idx] &= ok_r
+            Ms = Ms.copy()
+            Ms[idx] = Ms_r
+        sliding = redo.copy()
+
+    dq = minv * (p_ext + np.einsum("bkni,bk->bni", J, lam))
+    Q = q + dq
+    u_after = (Jf @ Q.reshape(B, 3 * n, 1))[..., 0]
+    if S.tangential == "ratio":
+        # sliding continues through separation unless mu happens to equal mu_max
+        sliding = np.abs(u_after[:, 1]) > 1e-9 * (1.0 + np.abs(u0[:, 1]))
+
+    fixed = np.asarray(S.fixed, dtype=bool)
+    m = np.where(fixed, 0.0, A.mass)
+    inertia = np.where(fixed, 0.0, A.yaw_inertia)
+
+    def ke(v, w):
+        return 0.5 * m * np.sum(v * v, -1) + 0.5 * inertia * w * w
+
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mu = lam[:, 1] / lam[:, 0]
+    out = {
+        "velocity": Q[..., :2],
+        "yaw_rate": Q[..., 2],
+        "impulses": lam,
+        "normal_impulse": lam[:, 0],
+        "tangential_impulse": lam[:, 1],
+        "moment_impulse": lam[:, 2],
+        "mu": mu,
+        "mu_max": mu_max,
+        "sliding": sliding,
+        "hitch_impulse": lam[:, 3:k0].reshape(B, len(S.hitches), 2),
+        "constraint_impulse": lam[:, k0:],
+        "closing_velocity": u0[:, 0],
+        "separation_normal": u_after[:, 0],
+        "separation_tangential": u_after[:, 1],
+        "ke_before": ke(A.velocity, A.yaw_rate),
+        "ke_after": ke(Q[..., :2], Q[..., 2]),
+        "normal": nvec,
+        "tangent": tvec,
+        "ok": ok,
+    }
+    if condition:
+        with np.errstate(invalid="ignore"):
+            out["condition"] = np.where(ok, np.linalg.cond(np.where(np.isfinite(Ms), Ms, 0.0)), np.inf)
+    return out

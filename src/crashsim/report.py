@@ -1,0 +1,70 @@
+"""Readable reports of results, in SI or US customary units (an edge module: formats only)."""
+
+from __future__ import annotations
+
+import math
+
+from .units import Kind, to_unit
+
+__all__ = ["format_impact", "fmt"]
+
+
+def fmt(value: float, kind: Kind | str, system: str = "SI", digits: int = 4) -> str:
+    """Format an SI value in the display unit of ``system``, e.g. ``fmt(13.41, "speed", "US")``."""
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return "n/a"
+    if Kind(kind) is Kind.ANGLE:
+        return f"{math.degrees(value):.1f} deg"
+    v, label = to_unit(value, kind, system)
+    text = f"{v:.{digits}g}" if abs(v) >= 1e-12 else "0"
+    return f"{text} {label}".rstrip()
+
+
+def _vec(values, kind, system):
+    v = [to_unit(x, kind, system) for x in values]
+    label = v[0][1]
+    return "(" + ", ".join(f"{x:.4g}" for x, _ in v) + f") {label}"
+
+
+def format_impact(result, system: str = "SI") -> str:
+    """Multi-line text report of an :class:`~crashsim.impact.ImpactResult`."""
+    s = system
+    lines = []
+    lines.append(f"Impact: {result.body1} (body 1) against {result.body2} (body 2)")
+    lines.append(f"  crush surface normal {_vec(result.normal, 'dimensionless', s)}, "
+                 f"tangent {_vec(result.tangent, 'dimensionless', s)}, point {_vec(result.point, 'length', s)}")
+    lines.append(f"  closing velocity {fmt(-result.closing_velocity, 'speed', s)}; separation: normal "
+                 f"{fmt(result.separation_normal_velocity, 'speed', s)}, tangential "
+                 f"{fmt(result.separation_tangential_velocity, 'speed', s)}")
+    lines.append("")
+    lines.append("  body            velocity after            yaw rate     delta-v    PDOF")
+    for name, b in result.bodies.items():
+        if b.fixed:
+            continue
+        pdof = "" if b.pdof is None else f"{math.degrees(b.pdof):6.1f} deg ({b.clock}o'clock)"
+        lines.append(
+            f"  {name:<14} {_vec(b.velocity, 'speed', s):<25} {fmt(b.yaw_rate, 'angular_velocity', s):<12} "
+            f"{fmt(b.delta_v_magnitude, 'speed', s):<10} {pdof}"
+        )
+    lines.append("")
+    lines.append(f"  crush impulse: normal {fmt(result.normal_impulse, 'impulse', s, 6)}, tangential "
+                 f"{fmt(result.tangential_impulse, 'impulse', s, 6)}, moment "
+                 f"{result.moment_impulse:.4g} N m s")
+    lines.append(f"  impulse ratio mu = {result.mu:.4f}, mu_max = {result.mu_max:.4f} "
+                 f"({result.tangential_law}; {'sliding at separation' if result.sliding else 'no sliding at separation'})")
+    for name, h in result.hitches.items():
+        lines.append(f"  hitch {name}: impulse on front body {_vec(h.impulse, 'impulse', s)} "
+                     f"(longitudinal {fmt(h.longitudinal, 'impulse', s)}, lateral {fmt(h.lateral, 'impulse', s)})")
+    for name, c in result.constraints.items():
+        lines.append(f"  constraint {name!r} on {c.body}: impulse {fmt(c.impulse, 'impulse', s)}")
+    for name, x in result.external.items():
+        lines.append(f"  external impulse {name!r} on {x['body']}: {_vec(x['impulse'], 'impulse', s)}")
+    lines.append("")
+    lines.append("  kinetic energy        before        after      loss")
+    for name, ke in result.kinetic_energy.items():
+        if name not in result.energy_loss:
+            continue
+        lines.append(f"  {name:<14} {fmt(ke['before'], 'energy', s):>12} {fmt(ke['after'], 'energy', s):>12} "
+                     f"{100 * result.energy_loss[name]:8.1f} %")
+    lines.append(f"  condition number of the impulse equations: {result.condition_number:.3g}")
+    return "\n".join(lines)

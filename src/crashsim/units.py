@@ -1,0 +1,528 @@
+"""Units at the edge: the only module of crashsim that knows mph, ft, lbf and deg.
+
+Everything inside crashsim is SI (m, kg, s, N, rad). Values written by people, in
+scenario files or on the command line, are strings carrying their unit (``"30 mph"``,
+``"20945 lbf"``, ``"75 deg"``); :func:`parse` turns one into an SI float, once, at the
+boundary. :func:`to_unit` goes the other way for reports, in SI or US customary units,
+from the single display table :data:`DISPLAY_UNITS`.
+
+Conventions (decided here, and only here)
+-----------------------------------------
+* **Standard gravity** ``G0 = 9.80665 m/s^2`` exactly: the "standard acceleration of
+  gravity" declared by the 3rd CGPM (1901) and listed in NIST SP 811 (2008), Appendix B;
+  the value pint uses in ``lbf`` and ``kgf``.
+* **lb is a mass.** ``lb``/``pound`` is the avoirdupois pound, 0.45359237 kg exactly.
+* **A weight is accepted for a mass.** A force given for a :attr:`Kind.MASS`
+  (``"20945 lbf"``, ``"93.2 kN"``) is a weight and is converted to mass by dividing by
+  ``G0``. Since ``1 lbf = 1 lb * G0``, ``"W lbf"`` and ``"W lb"`` give the same mass.
+* **lb for lbf in US practice.** Where reading ``lb`` as a mass gives the wrong dimension
+  and reading it as ``lbf`` gives the expected one, ``lbf`` is meant: ``"90639 lb-s"`` is
+  an impulse in lbf s, ``"1.95e6 ft-lb"`` an energy in ft lbf, ``"15489 ft-lb-s^2"`` a yaw
+  inertia in lbf ft s^2 (= slug ft^2), ``"8143 lb"`` a force in lbf. Where the literal
+  reading already fits it wins (``"lb ft^2"`` is a yaw inertia in pound-mass ft^2).
+* **g is standard gravity for an acceleration.** A unit written exactly ``g`` for an
+  :attr:`Kind.ACCELERATION` means ``G0`` (``"0.7 g"``); anywhere else pint's ``g`` (gram).
+* **Angles are checked.** pint treats radians as dimensionless; here an angle unit counts
+  as a dimension of its own, so ``"75"`` or ``"75 %"`` is not an angle, ``"10 Hz"`` is not
+  an angular velocity and ``"5 m deg"`` is not a length.
+* **Spelling.** A hyphen between unit names is a product (``"N-s"``, ``"kg-m^2"``,
+  ``"ft-lb-s^2"``); ``²``/``³`` are powers; ``·`` is a product.
+* **Dimensionless** values are plain numbers (``0.6``, ``"0.6"``) or percentages
+  (``"5 %"`` -> 0.05).
+
+pint is imported on first use (:func:`registry`), so ``import crashsim.units`` is cheap;
+unit expressions are parsed once and cached.
+
+Examples
+--------
+>>> parse("30 mph", Kind.SPEED, field="vehicles.A.speed")
+13.4112
+>>> round(parse("20945 lbf", "mass", field="vehicles.A.mass"), 3)  # a weight, as mass
+9500.492
+>>> to_unit(13.4112, Kind.SPEED, "US")
+(30.0, 'mph')
+"""
+
+from __future__ import annotations
+
+import difflib
+import enum
+import functools
+import math
+import re
+import threading
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Literal
+
+from crashsim.errors import ScenarioError
+
+if TYPE_CHECKING:  # pragma: no cover
+    import pint
+
+__all__ = [
+    "G0",
+    "Kind",
+    "System",
+    "DISPLAY_UNITS",
+    "registry",
+    "parse",
+    "parse_vector",
+    "to_unit",
+    "convert",
+    "describe",
+    "example",
+    "si_unit",
+    "toml_repr",
+]
+
+G0: float = 9.80665
+"""Standard acceleration of gravity [m/s^2], exact by definition (3rd CGPM, 1901)."""
+
+System = Literal["SI", "US"]
+
+
+class Kind(str, enum.Enum):
+    """Physical kind of a quantity; each has one SI unit, used everywhere inside crashsim."""
+
+    LENGTH = "length"
+    SPEED = "speed"
+    MASS = "mass"
+    YAW_INERTIA = "yaw_inertia"
+    ANGLE = "angle"
+    ANGULAR_VELOCITY = "angular_velocity"
+    TIME = "time"
+    FORCE = "force"
+    IMPULSE = "impulse"
+    ACCELERATION = "acceleration"
+    ENERGY = "energy"
+    DIMENSIONLESS = "dimensionless"
+
+    def __str__(self) -> str:
+        return self.value
+
+
+@dataclass(frozen=True)
+class _Spec:
+    noun: str  # "a speed"
+    expect: str  # accepted units, for messages and documentation
+    examples: tuple[str, str]  # two example values
+    spellings: tuple[str, ...]  # unit spellings offered as "did you mean"
+    angle_power: int = 0  # power of the angle pseudo-dimension
+
+
+_SPECS: dict[Kind, _Spec] = {
+    Kind.LENGTH: _Spec("a length", "m, mm, km, ft, in, yd, mi", ("12.5 m", "41 ft"),
+                       ("m", "mm", "cm", "km", "ft", "in", "yd", "mi")),
+    Kind.SPEED: _Spec("a speed", "m/s, km/h, mph, ft/s", ("30 mph", "13.41 m/s"),
+                      ("m/s", "km/h", "kph", "mph", "ft/s", "fps")),
+    Kind.MASS: _Spec("a mass", "kg, t, lb; or a weight in N, kN, lbf, kip",
+                     ("9500 kg", "20945 lbf"), ("kg", "t", "lb", "lbs", "N", "kN", "lbf", "kip")),
+    Kind.YAW_INERTIA: _Spec("a yaw inertia", "kg m^2, slug ft^2, lbf ft s^2 (ft-lb-s^2)",
+                            ("21000 kg m^2", "15489 ft-lb-s^2"),
+                            ("kg m^2", "kg*m^2", "slug ft^2", "lbf ft s^2", "ft-lb-s^2")),
+    Kind.ANGLE: _Spec("an angle", "deg, rad", ("75 deg", "1.309 rad"),
+                      ("deg", "rad", "degree", "radian"), angle_power=1),
+    Kind.ANGULAR_VELOCITY: _Spec("an angular velocity", "deg/s, rad/s, rpm",
+                                 ("10.3 deg/s", "0.18 rad/s"), ("deg/s", "rad/s", "rpm"),
+                                 angle_power=1),
+    Kind.TIME: _Spec("a time", "s, ms, min, h", ("0.15 s", "150 ms"), ("s", "ms", "min", "h")),
+    Kind.FORCE: _Spec("a force", "N, kN, lbf, kip", ("36222 N", "8143 lbf"),
+                      ("N", "kN", "lbf", "kip")),
+    Kind.IMPULSE: _Spec("an impulse", "N s, kN s, lbf s (lb-s)",
+                        ("403164 N s", "90639 lb-s"), ("N s", "N*s", "kN s", "lbf s", "lb-s")),
+    Kind.ACCELERATION: _Spec("an acceleration", "m/s^2, ft/s^2, g (standard gravity)",
+                             ("9.81 m/s^2", "0.7 g"), ("m/s^2", "ft/s^2", "g")),
+    Kind.ENERGY: _Spec("an energy", "J, kJ, N m, ft lbf (ft-lb)",
+                       ("2.65e6 J", "1.95e6 ft-lb"), ("J", "kJ", "MJ", "N m", "ft lbf", "ft-lb")),
+    Kind.DIMENSIONLESS: _Spec("a plain number", "a number, or a percentage", ("0.6", "5 %"),
+                              ("%",)),
+}
+
+DISPLAY_UNITS: dict[Kind, dict[str, str]] = {
+    Kind.LENGTH: {"SI": "m", "US": "ft"},
+    Kind.SPEED: {"SI": "m/s", "US": "mph"},
+    Kind.MASS: {"SI": "kg", "US": "lb"},  # lb (mass) is numerically the weight in lbf
+    Kind.YAW_INERTIA: {"SI": "kg m^2", "US": "lbf ft s^2"},
+    Kind.ANGLE: {"SI": "rad", "US": "deg"},
+    Kind.ANGULAR_VELOCITY: {"SI": "rad/s", "US": "deg/s"},
+    Kind.TIME: {"SI": "s", "US": "s"},
+    Kind.FORCE: {"SI": "N", "US": "lbf"},
+    Kind.IMPULSE: {"SI": "N s", "US": "lbf s"},
+    Kind.ACCELERATION: {"SI": "m/s^2", "US": "ft/s^2"},
+    Kind.ENERGY: {"SI": "J", "US": "ft lbf"},
+    Kind.DIMENSIONLESS: {"SI": "", "US": ""},
+}
+"""Display unit of each kind in each system: the one table behind :func:`to_unit`.
+
+Every label is also accepted by :func:`parse`, so ``f"{value!r} {label}"`` reads back."""
+
+# Aliases defined in the registry if this pint version lacks them.
+_ALIASES = (("kph", "kilometer_per_hour"), ("fps", "foot_per_second"),
+            ("lbs", "pound"), ("rev", "revolution"))
+_ANGLE_ALIASES = ("rad", "deg", "arcmin", "arcsec", "turn", "rpm", "grad")
+
+_registry: pint.UnitRegistry | None = None
+_angle_names: frozenset[str] = frozenset()
+_lock = threading.Lock()
+
+
+def registry() -> pint.UnitRegistry:
+    """Return crashsim's single pint registry, creating it (and importing pint) on first use."""
+    global _registry, _angle_names
+    if _registry is None:
+        with _lock:
+            if _registry is None:
+                import pint
+
+                ureg = pint.UnitRegistry()
+                for alias, target in _ALIASES:
+                    if alias not in ureg:
+                        ureg.define(f"@alias {target} = {alias}")
+                _angle_names = frozenset(ureg.get_name(a) for a in _ANGLE_ALIASES)
+                _registry = ureg
+    return _registry
+
+
+class _Invalid(Exception):
+    """A value cannot be read; the message says why (without the field name)."""
+
+
+_NUMBER = re.compile(
+    r"\s*(?P<num>[+-]?(?:(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|(?:inf(?:inity)?|nan)\b))"
+    r"\s*(?P<unit>.*?)\s*",
+    re.IGNORECASE,
+)
+_HYPHEN = re.compile(r"(?<=[A-Za-z_²³)])-(?=[A-Za-z(])")
+_POUND = re.compile(r"\b(?:lb|lbs|pound|pounds)\b")
+
+
+def _kind(kind: Kind | str) -> Kind:
+    try:
+        return Kind(kind)
+    except ValueError:
+        raise ValueError(
+            f"unknown quantity kind {kind!r}; use one of {', '.join(k.value for k in Kind)}"
+        ) from None
+
+
+def toml_repr(value: object) -> str:
+    """A value as written in TOML (``"30 mph"``, ``true``, ``["1 m", "2 m"]``), for messages."""
+    if isinstance(value, str):
+        return f'"{value}"'
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(toml_repr(v) for v in value) + "]"
+    if isinstance(value, dict):
+        return "a table"
+    return repr(value)
+
+
+def _type_noun(value: object) -> str:
+    """How a TOML user would call the type of ``value``."""
+    if isinstance(value, bool):
+        return "a boolean"
+    if isinstance(value, dict):
+        return "a table"
+    if isinstance(value, (list, tuple)):
+        return "a list"
+    return f"a {type(value).__name__}"
+
+
+def _such_as(spec: _Spec) -> str:
+    return f'write {spec.noun} such as "{spec.examples[0]}" or "{spec.examples[1]}"'
+
+
+def _pint_unit(text: str) -> pint.Unit:
+    """Parse a normalised unit expression; raise _Invalid on unknown or malformed units."""
+    ureg = registry()
+    import pint
+
+    try:
+        return ureg.parse_units(text)
+    except pint.UndefinedUnitError as exc:
+        names = exc.unit_names if isinstance(exc.unit_names, str) else ", ".join(exc.unit_names)
+        raise _Invalid(f"has an unknown unit '{names}'") from None
+    except Exception:  # pint's parser raises assorted types for malformed input
+        raise _Invalid(f"has a malformed unit '{text}'") from None
+
+
+def _angle_power(unit: pint.Unit) -> float:
+    """Power of the angle pseudo-dimension in ``unit`` (pint keeps angles dimensionless)."""
+    return sum(p for name, p in unit._units.items() if name in _angle_names)
+
+
+def _dims_noun(unit: pint.Unit) -> str:
+    """What a unit measures, in words (``"a mass"``), for error messages."""
+    power = _angle_power(unit)
+    for kind, spec in _SPECS.items():
+        if kind is not Kind.DIMENSIONLESS and power == spec.angle_power:
+            if unit.dimensionality == registry().parse_units(si_unit(kind)).dimensionality:
+                return spec.noun
+    if power == 0 and unit.dimensionless:
+        return _SPECS[Kind.DIMENSIONLESS].noun
+    if power == 0 and unit.dimensionality == registry().parse_units("1/s").dimensionality:
+        return "a frequency (no angle unit)"
+    angle = "" if not power else " * [angle]" if power == 1 else f" * [angle] ** {power:g}"
+    dims = str(unit.dimensionality) + angle
+    return f"of dimension {dims}"
+
+
+@functools.lru_cache(maxsize=4096)
+def _si_factor(unit: str, kind: Kind) -> float:
+    """SI value of one ``unit`` read as ``kind``; raise _Invalid with the reason if impossible."""
+    spec = _SPECS[kind]
+    text = _HYPHEN.sub("*", unit.strip().replace("·", "*"))
+    if kind is Kind.ACCELERATION and text in ("g", "G"):
+        text = "standard_gravity"
+    ureg = registry()
+    si = ureg.parse_units(si_unit(kind))
+
+    def fits(u: pint.Unit) -> bool:
+        return u.dimensionality == si.dimensionality and _angle_power(u) == spec.angle_power
+
+    literal = _pint_unit(text)
+    if fits(literal):
+        return float(ureg.Quantity(1.0, literal).to(si).magnitude)
+    newton = ureg.parse_units("N")
+    if kind is Kind.MASS and literal.dimensionality == newton.dimensionality:
+        return float(ureg.Quantity(1.0, literal).to(newton).magnitude) / G0  # weight
+    if _POUND.search(text):
+        as_force = _pint_unit(_POUND.sub("lbf", text))
+        if fits(as_force):
+            return float(ureg.Quantity(1.0, as_force).to(si).magnitude)
+    raise _Invalid(f"is {_dims_noun(literal)}")
+
+
+def _suggest(unit: str, spec: _Spec) -> str:
+    close = difflib.get_close_matches(unit, spec.spellings, n=1, cutoff=0.6)
+    return f"; did you mean '{close[0]}'?" if close else ""
+
+
+def _to_si(value: object, kind: Kind) -> float:
+    """Read one value as ``kind`` and return it in SI; raise _Invalid naming the value."""
+    spec = _SPECS[kind]
+    shown = toml_repr(value)
+    if isinstance(value, bool) or not isinstance(value, (str, int, float)):
+        raise _Invalid(f"{shown} is {_type_noun(value)}, not {spec.noun}; {_such_as(spec)}")
+    if isinstance(value, (int, float)):
+        number, unit = float(value), None
+    else:
+        match = _NUMBER.fullmatch(value)
+        if not value.strip():
+            raise _Invalid(f"{shown} is empty; {_such_as(spec)}")
+        if match is None:
+            raise _Invalid(f"{shown} is not a number followed by a unit; {_such_as(spec)}")
+        number, unit = float(match["num"]), match["unit"]
+    if not math.isfinite(number):
+        raise _Invalid(f"{shown} is not a finite number")
+    if kind is Kind.DIMENSIONLESS:
+        if not unit:
+            return number
+        if unit in ("%", "percent"):
+            return number / 100.0
+        try:
+            what = f"is {_dims_noun(_pint_unit(_HYPHEN.sub('*', unit)))}"
+        except _Invalid as exc:
+            what = str(exc)
+        raise _Invalid(f'{shown} {what}; expected a plain number such as "0.6" or "5 %"')
+    if not unit:
+        raise _Invalid(f"{shown} has no unit; {_such_as(spec)}")
+    try:
+        factor = _si_factor(unit, kind)
+    except _Invalid as exc:
+        raise _Invalid(f"{shown} {exc}; expected {spec.noun} ({spec.expect})"
+                       f"{_suggest(unit, spec)}") from None
+    result = number * factor
+    if not math.isfinite(result):
+        raise _Invalid(f"{shown} is too large: not a finite number in SI")
+    return result
+
+
+def parse(value: str | int | float, kind: Kind | str, *, field: str,
+          file: str | None = None) -> float:
+    """Read one value with its unit and return it in the SI unit of ``kind``.
+
+    Parameters
+    ----------
+    value
+        A number followed by its unit, e.g. ``"30 mph"``, ``"-3260 N s"``, ``"2.5e3 N*s"``,
+        ``"20945 lbf"`` (a weight, accepted for a mass). For :attr:`Kind.DIMENSIONLESS`
+        also an ``int``/``float``, a bare number string or a percentage (``"5 %"``).
+    kind
+        The physical kind expected (:class:`Kind` or its string value).
+    field
+        Dotted path of the value (``"vehicles.A.speed"``), used in error messages.
+    file
+        File the value came from, if any, used in error messages.
+
+    Returns
+    -------
+    float
+        The value in the SI unit of ``kind`` (see :func:`si_unit`).
+
+    Raises
+    ------
+    ScenarioError
+        If the value has no unit where one is needed, has an unknown unit or the wrong
+        dimension, is malformed or is not finite. The message names the value and what
+        is expected.
+
+    Examples
+    --------
+    >>> parse("75 deg", "angle", field="impact.angle")  # doctest: +ELLIPSIS
+    1.308996938995...
+    >>> parse("30", "speed", field="vehicles.A.speed")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    crashsim.errors.ScenarioError: vehicles.A.speed: "30" has no unit; write a speed such as ...
+    """
+    try:
+        return _to_si(value, _kind(kind))
+    except _Invalid as exc:
+        raise ScenarioError(str(exc), field=field, file=file) from None
+
+
+def parse_vector(value: Sequence[str | int | float], kind: Kind | str, n: int | None = 2, *,
+                 field: str, file: str | None = None) -> tuple[float, ...]:
+    """Read a list of values, each with its own unit, e.g. ``["1 m", "2 ft"]``.
+
+    Parameters
+    ----------
+    value
+        A list (or tuple) of values as accepted by :func:`parse`.
+    kind
+        The physical kind of every component.
+    n
+        Required number of components, or ``None`` for any length.
+    field, file
+        As for :func:`parse`; a component's error names ``field[i]``.
+
+    Returns
+    -------
+    tuple of float
+        The components in SI.
+
+    Raises
+    ------
+    ScenarioError
+        If ``value`` is not a list of length ``n`` or a component is invalid.
+    """
+    kind = _kind(kind)
+    spec = _SPECS[kind]
+    if isinstance(value, (str, bytes)) or not isinstance(value, Sequence):
+        raise ScenarioError(
+            f'{toml_repr(value)} is not a list; write {n or "several"} values each with its unit, '
+            f'e.g. ["{spec.examples[0]}", "{spec.examples[1]}"]', field=field, file=file)
+    if n is not None and len(value) != n:
+        count = f"{len(value)} component{'' if len(value) == 1 else 's'}"
+        raise ScenarioError(f"{toml_repr(value)} has {count}; expected {n}",
+                            field=field, file=file)
+    return tuple(parse(v, kind, field=f"{field}[{i}]", file=file) for i, v in enumerate(value))
+
+
+def si_unit(kind: Kind | str) -> str:
+    """SI unit label of ``kind`` (``"m/s"`` for a speed, ``""`` for dimensionless)."""
+    return DISPLAY_UNITS[_kind(kind)]["SI"]
+
+
+def to_unit(si_value: float, kind: Kind | str, system: System = "SI") -> tuple[float, str]:
+    """Express an SI value in the display unit of ``system`` (from :data:`DISPLAY_UNITS`).
+
+    Parameters
+    ----------
+    si_value
+        Value in the SI unit of ``kind``.
+    kind
+        Its physical kind.
+    system
+        ``"SI"`` or ``"US"`` (US customary: ft, mph, lb, lbf, lbf s, ft lbf, lbf ft s^2,
+        deg, deg/s, ft/s^2).
+
+    Returns
+    -------
+    (float, str)
+        The value and its unit label; the label is accepted by :func:`parse`.
+
+    Examples
+    --------
+    >>> to_unit(9500.0, "mass", "US")  # doctest: +ELLIPSIS
+    (20943.914..., 'lb')
+    """
+    kind = _kind(kind)
+    if system not in ("SI", "US"):
+        raise ValueError(f"unknown unit system {system!r}; use 'SI' or 'US'")
+    label = DISPLAY_UNITS[kind][system]
+    if kind is Kind.DIMENSIONLESS:
+        return float(si_value), label
+    return float(si_value) / _si_factor(label, kind), label
+
+
+def convert(value: float, from_unit: str, to_unit: str, kind: Kind | str | None = None) -> float:
+    """Convert a number between two units, with the conventions of this module.
+
+    Parameters
+    ----------
+    value
+        The number, in ``from_unit``.
+    from_unit, to_unit
+        Unit expressions (``"kg m^2"``, ``"ft-lb-s^2"``, ``"mph"``).
+    kind
+        Read both units as this kind (so ``"lbf"`` -> ``"kg"`` is weight to mass). If
+        ``None``, every kind that can read both units is tried; they must agree.
+
+    Returns
+    -------
+    float
+        The value in ``to_unit``.
+
+    Raises
+    ------
+    ScenarioError
+        If no kind reads both units, or two kinds give different answers.
+
+    Examples
+    --------
+    >>> round(convert(21000, "kg m^2", "ft-lb-s^2"), 1)
+    15488.8
+    """
+    kinds = list(Kind) if kind is None else [_kind(kind)]
+    results: dict[Kind, float] = {}
+    reasons: list[str] = []
+    for k in kinds:
+        unit = from_unit
+        try:
+            factor = _si_factor(unit, k)
+            unit = to_unit
+            results[k] = value * factor / _si_factor(unit, k)
+        except _Invalid as exc:
+            reasons.append(f"'{unit}' {exc}, not {_SPECS[k].noun}")
+    if not results:
+        detail = f": {reasons[0]}" if kind is not None else ": no quantity kind reads both"
+        raise ScenarioError(f"cannot convert '{from_unit}' to '{to_unit}'{detail}")
+    first = next(iter(results.values()))
+    if any(not math.isclose(r, first, rel_tol=1e-12) for r in results.values()):
+        raise ScenarioError(f"converting '{from_unit}' to '{to_unit}' is ambiguous between "
+                            f"{', '.join(k.value for k in results)}; pass kind=")
+    return first
+
+
+def example(kind: Kind | str) -> str:
+    """An example value of ``kind`` as written in a file (``"30 mph"`` for a speed)."""
+    return _SPECS[_kind(kind)].examples[0]
+
+
+def describe(kind: Kind | str) -> str:
+    """Short text for documentation: the SI unit and accepted examples of ``kind``.
+
+    Examples
+    --------
+    >>> describe("speed")
+    'speed [m/s]; accepts m/s, km/h, mph, ft/s; e.g. "30 mph", "13.41 m/s"'
+    """
+    kind = _kind(kind)
+    spec = _SPECS[kind]
+    unit = f" [{si_unit(kind)}]" if si_unit(kind) else ""
+    return (f'{kind.value.replace("_", " ")}{unit}; accepts {spec.expect}; '
+            f'e.g. "{spec.examples[0]}", "{spec.examples[1]}"')

@@ -16,14 +16,17 @@ def fmt(value: float, kind: Kind | str, system: str = "SI", digits: int = 4) -> 
     if Kind(kind) is Kind.ANGLE:
         return f"{math.degrees(value):.1f} deg"
     v, label = to_unit(value, kind, system)
-    text = f"{v:.{digits}g}" if abs(v) >= 1e-12 else "0"
+    text = f"{v:.{digits}g}" if abs(v) >= 1e-9 else "0"
     return f"{text} {label}".rstrip()
 
 
 def _vec(values, kind, system):
+    """A vector in display units; components below 1e-9 of its largest are shown as 0."""
     v = [to_unit(x, kind, system) for x in values]
     label = v[0][1]
-    return "(" + ", ".join(f"{x:.4g}" for x, _ in v) + f") {label}"
+    big = max(abs(x) for x, _ in v)
+    parts = ["0" if abs(x) <= 1e-9 * big else f"{x:.4g}" for x, _ in v]
+    return (f"({', '.join(parts)}) {label}").rstrip()
 
 
 def format_impact(result, system: str = "SI") -> str:
@@ -41,7 +44,7 @@ def format_impact(result, system: str = "SI") -> str:
     for name, b in result.bodies.items():
         if b.fixed:
             continue
-        pdof = "" if b.pdof is None else f"{math.degrees(b.pdof):6.1f} deg ({b.clock}o'clock)"
+        pdof = "" if b.pdof is None else f"{math.degrees(b.pdof):6.1f} deg ({b.clock} o'clock)"
         lines.append(
             f"  {name:<14} {_vec(b.velocity, 'speed', s):<25} {fmt(b.yaw_rate, 'angular_velocity', s):<12} "
             f"{fmt(b.delta_v_magnitude, 'speed', s):<10} {pdof}"
@@ -49,7 +52,7 @@ def format_impact(result, system: str = "SI") -> str:
     lines.append("")
     lines.append(f"  crush impulse: normal {fmt(result.normal_impulse, 'impulse', s, 6)}, tangential "
                  f"{fmt(result.tangential_impulse, 'impulse', s, 6)}, moment "
-                 f"{result.moment_impulse:.4g} N m s")
+                 f"{0.0 if abs(result.moment_impulse) < 1e-9 else result.moment_impulse:.4g} N m s")
     lines.append(f"  impulse ratio mu = {result.mu:.4f}, mu_max = {result.mu_max:.4f} "
                  f"({result.tangential_law}; {'sliding at separation' if result.sliding else 'no sliding at separation'})")
     for name, h in result.hitches.items():

@@ -33,7 +33,7 @@ __all__ = ["SCHEMA", "Scenario", "load_scenario", "scenario_from_dict", "schema_
 
 BODY = Section("body", [
     Field("name", "str", description="Body name, unique in the scene (results are keyed by it)",
-          example='"tractor"'),
+          example='tractor'),
     Field("mass", Kind.MASS, minimum=0, exclusive_minimum=True, example="9500 kg",
           description="Mass (a weight such as \"20945 lbf\" is accepted and divided by g0)"),
     Field("yaw_inertia", Kind.YAW_INERTIA, minimum=0, exclusive_minimum=True, example="21000 kg m^2",
@@ -71,13 +71,13 @@ VEHICLE = Section("vehicle", [
    description="A vehicle: a chain of bodies (car; car + trailer; tractor + semitrailer; doubles)")
 
 BARRIER = Section("barrier", [
-    Field("name", "str", example='"barrier"', description="Name of the barrier body (use it as impact.body2)"),
+    Field("name", "str", example='barrier', description="Name of the barrier body (use it as impact.body2)"),
     Field("description", "str", default="", description="Free text for the report"),
 ], required=False, description="A rigid barrier: a body of infinite mass at rest (exact, not a large number)")
 
 CONSTRAINT = Section("constraint", [
     Field("name", "str", default="", description="Label for the report"),
-    Field("body", "str", description="Body whose velocity is constrained", example='"tractor"'),
+    Field("body", "str", description="Body whose velocity is constrained", example='tractor'),
     Field("point", Kind.LENGTH, n=2, example='["2 m", "0 m"]', description="Point of the body held"),
     Field("frame", "str", default="world", description="Frame of point and direction: \"world\" or a body name"),
     Field("direction", Kind.ANGLE, example="90 deg", description="Direction along which the velocity is held"),
@@ -86,7 +86,7 @@ CONSTRAINT = Section("constraint", [
 
 EXTERNAL = Section("external_impulse", [
     Field("name", "str", default="", description="Label for the report"),
-    Field("body", "str", description="Body the impulse acts on", example='"trailer"'),
+    Field("body", "str", description="Body the impulse acts on", example='trailer'),
     Field("point", Kind.LENGTH, n=2, example='["-2.477 m", "0 m"]', description="Point of application"),
     Field("frame", "str", default="world",
           description="Frame of point, impulse and direction: \"world\" or a body name"),
@@ -103,8 +103,8 @@ EXTERNAL = Section("external_impulse", [
 ], description="A known external impulse, e.g. tyre friction over the impact")
 
 IMPACT = Section("impact", [
-    Field("body1", "str", example='"trailer"', description="Body of one vehicle in contact; the impulse P acts on it"),
-    Field("body2", "str", example='"car"', description="Body of the other vehicle (or the barrier) in contact"),
+    Field("body1", "str", example='trailer', description="Body of one vehicle in contact; the impulse P acts on it"),
+    Field("body2", "str", example='car', description="Body of the other vehicle (or the barrier) in contact"),
     Field("point", Kind.LENGTH, n=2, example='["-2.517 m", "-1.157 m"]',
           description="Contact point: where the resultant crush impulse acts"),
     Field("point_frame", "str", default="world", description="Frame of point: \"world\" or a body name"),
@@ -118,7 +118,7 @@ IMPACT = Section("impact", [
           description="Coefficient of restitution e (Eq. 5)"),
     Field("moment_restitution", "float", default=-1.0, minimum=-1, maximum=1,
           description="Moment coefficient e' (Eq. 6): -1 for no moment impulse, else 0 <= e' <= 1"),
-    Field("tangential", choices=("no_slide", "ratio", "friction"), example='"friction"',
+    Field("tangential", choices=("no_slide", "ratio", "friction"), example='friction',
           description="Tangential law: no sliding at separation (mu = mu_max); a given impulse ratio mu; "
                       "or friction f (stick if |mu_max| <= f, else slide with |mu| = f)"),
     Field("mu", "float", required=False, example="0.3", description="Impulse ratio P_t/P_n, for tangential = \"ratio\""),
@@ -130,7 +130,7 @@ IMPACT = Section("impact", [
 ], description="The impact: crush surface, coefficients, constraints, external impulses")
 
 META = Section("scenario", [
-    Field("title", "str", example='"Car into trailer wheels"', description="Title of the scene"),
+    Field("title", "str", example='Car into trailer wheels', description="Title of the scene"),
     Field("source", "str", default="", description="Where the inputs come from (report, paper, measurement)"),
     Field("notes", "str", default="", description="Free text"),
     Field("units", choices=("SI", "US"), default="SI", description="Units of the readable report"),

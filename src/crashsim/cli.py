@@ -50,6 +50,8 @@ def _cmd_run(args) -> int:
         sys.stdout.write("\n")
     else:
         sys.stdout.write(result.report(args.units) + "\n")
+    if args.strict and result.evidence is not None and not result.evidence.all_passed:
+        return 1
     return 0
 
 
@@ -57,6 +59,15 @@ def _cmd_schema(args) -> int:
     from .scenario import schema_document
 
     sys.stdout.write(schema_document(args.format) + "\n")
+    return 0
+
+
+def _cmd_presets(args) -> int:
+    from .scenario import presets
+
+    for name, p in presets().items():
+        sys.stdout.write(f"{name}\n    mass {p['mass']}, yaw inertia {p['yaw_inertia']}, "
+                         f"{len(p.get('axles', []))} axles\n    source: {p['source']}\n")
     return 0
 
 
@@ -72,11 +83,15 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--json", action="store_true", help="print the full result as one JSON object (SI units)")
     r.add_argument("--units", choices=("SI", "US"), default="SI", help="units of the readable report")
     r.add_argument("--csv", metavar="DIR", help="write time histories as CSV files into DIR")
+    r.add_argument("--strict", action="store_true", help="exit with code 1 if an evidence item is out of tolerance")
     r.set_defaults(func=_cmd_run)
 
     s = sub.add_parser("schema", help="print the documented scenario-file schema")
     s.add_argument("--format", choices=("text", "markdown"), default="text")
     s.set_defaults(func=_cmd_schema)
+
+    pr = sub.add_parser("presets", help="list the vehicle library's body parameter sets and their sources")
+    pr.set_defaults(func=_cmd_presets)
     return p
 
 

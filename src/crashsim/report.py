@@ -6,7 +6,7 @@ import math
 
 from .units import Kind, to_unit
 
-__all__ = ["format_impact", "fmt"]
+__all__ = ["format_impact", "format_runout", "format_evidence", "fmt"]
 
 
 def fmt(value: float, kind: Kind | str, system: str = "SI", digits: int = 4) -> str:
@@ -70,4 +70,40 @@ def format_impact(result, system: str = "SI") -> str:
         lines.append(f"  {name:<14} {fmt(ke['before'], 'energy', s):>12} {fmt(ke['after'], 'energy', s):>12} "
                      f"{100 * result.energy_loss[name]:8.1f} %")
     lines.append(f"  condition number of the impulse equations: {result.condition_number:.3g}")
+    return "\n".join(lines)
+
+
+def format_runout(runout: dict, system: str = "SI") -> str:
+    """Text report of the run-outs (dict vehicle name -> RunoutResult)."""
+    s = system
+    lines = ["Run-out to rest"]
+    for vname, r in runout.items():
+        lines.append(f"  vehicle {vname}: {r.status} after {fmt(r.t_end, 'time', s)} ({r.message}); "
+                     f"method {r.method}, {r.nfev} right-hand-side evaluations")
+        for name, b in r.bodies.items():
+            ttr = "n/a" if b.time_to_rest is None else fmt(b.time_to_rest, "time", s)
+            lines.append(f"    {name:<14} rest at {_vec(b.rest_position, 'length', s):<22} heading "
+                         f"{math.degrees(b.rest_heading_wrapped):7.1f} deg, travelled {fmt(b.distance, 'length', s)}, "
+                         f"time to rest {ttr}")
+    return "\n".join(lines)
+
+
+def format_evidence(report, system: str = "SI") -> str:
+    """Text table of evidence residuals and verdicts."""
+    s = system
+    lines = [f"Evidence: {len(report.checks) - report.n_failed} of {len(report.checks)} items within tolerance"]
+    for c in report.checks:
+        if c.quantity == "angle":
+            res, tol = f"{math.degrees(c.residual):+.1f} deg", f"{math.degrees(c.tolerance):.1f} deg"
+        elif math.isinf(c.residual):
+            res, tol = "none computed", fmt(c.tolerance, c.quantity, s)
+        else:
+            res, tol = fmt(c.residual, c.quantity, s), fmt(c.tolerance, c.quantity, s)
+        extra = ""
+        if "matched_wheel" in c.details:
+            extra = f" (closest track: {c.details['matched_wheel']})"
+        elif "reason" in c.details:
+            extra = f" ({c.details['reason']})"
+        lines.append(f"  {'PASS' if c.passed else 'FAIL'}  {c.kind:<16} {c.name:<28} residual {res:<14} "
+                     f"tolerance {tol}{extra}")
     return "\n".join(lines)

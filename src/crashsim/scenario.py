@@ -20,18 +20,31 @@ import numpy as np
 
 from .errors import ScenarioError
 from .geometry import rotate
+from .motion import (LATERAL_MODELS, METHODS, WHEEL_STATES, FrictionZone, Road, RunoutOptions, ScheduledChange,
+                     WheelSetting, WheelSettings)
 from .impact import (CrushSurface, ExternalImpulse, ImpactProblem, TangentialLaw, VelocityConstraint,
                      tyre_friction_impulse)
 from .schema import ArrayOf, Field, Section, Table, document, load_toml, validate
 from .units import Kind
-from .vehicles import Body, BodyState, Hitch, Vehicle, chain_states
+from .reconstruct.evidence import DeltaVEvidence, Evidence, ImpactPointEvidence, MarkEvidence, RestEvidence
+from .vehicles import Axle, Body, BodyState, Hitch, Vehicle, chain_states
 
-__all__ = ["SCHEMA", "Scenario", "load_scenario", "scenario_from_dict", "schema_document"]
+__all__ = ["SCHEMA", "Scenario", "RunoutSpec", "load_scenario", "presets", "scenario_from_dict", "schema_document"]
 
 # ----------------------------------------------------------------------------------------
 # The schema (validates and documents)
 
+AXLE = Section("axle", [
+    Field("name", "str", default="", description="Label (\"steer\", \"drive 1\"); selects wheels as <body>/<name>"),
+    Field("x", Kind.LENGTH, example="-3.2 m", description="Axle position from the body CG, forward positive"),
+    Field("track", Kind.LENGTH, minimum=0, exclusive_minimum=True, example="2.05 m",
+          description="Distance between the left and right tyre contact centres"),
+    Field("dual", "bool", default=False, description="Dual tyres on each side (one contact per side, summed)"),
+], description="One axle (each axle of a tandem group separately), for the run-out")
+
 BODY = Section("body", [
+    Field("preset", "str", required=False, example="tractor-3axle",
+          description="Name of a parameter set of crashsim's vehicle library (crashsim presets); keys given here override it"),
     Field("name", "str", description="Body name, unique in the scene (results are keyed by it)",
           example='tractor'),
     Field("mass", Kind.MASS, minimum=0, exclusive_minimum=True, example="9500 kg",
@@ -57,7 +70,39 @@ BODY = Section("body", [
     Field("articulation_limit", Kind.ANGLE, required=False, minimum=0, maximum=math.pi,
           exclusive_minimum=True, example="80 deg",
           description="Largest articulation before the bodies meet (jack-knife stop)"),
-], description="One rigid body of the vehicle, front to rear")
+    Field("cg_height", Kind.LENGTH, required=False, minimum=0, exclusive_minimum=True, example="1.1 m",
+          description="CG height above ground (only for the run-out's load transfer)"),
+], subsections=[ArrayOf("axles", AXLE, required=False, description="Axles, front to rear (needed for a run-out)")],
+   description="One rigid body of the vehicle, front to rear")
+
+def _wheel_fields(override: bool) -> list[Field]:
+    opt = {"required": False}
+    return [
+        Field("state", choices=WHEEL_STATES, **({"required": False} if override else {}), example="locked",
+              description="rolling (free), braked (brake fraction), locked (slides), jammed (damaged, slides)"),
+        Field("brake", "float", minimum=0, maximum=1, **opt, example="0.5",
+              description="Brake fraction of mu N, for state = \"braked\""),
+        Field("steer", Kind.ANGLE, **opt, example="5 deg", description="Fixed steer angle, counter-clockwise positive"),
+        Field("cornering_coefficient", "float", minimum=0, exclusive_minimum=True, **opt, example="8.6",
+              description="Cornering stiffness per unit load [1/rad] (8.6/rad = 15 %/deg, car tyres)"),
+        Field("cornering_stiffness", Kind.FORCE, minimum=0, exclusive_minimum=True, **opt, example="40000 N",
+              description="Cornering stiffness per tyre, in force per radian of slip angle"),
+        Field("rolling_resistance", "float", minimum=0, maximum=0.5, **opt, example="0.012",
+              description="Rolling-resistance coefficient f_r (rolling and braked wheels)"),
+        Field("mu_factor", "float", minimum=0, maximum=2, exclusive_minimum=True, **opt, example="0.5",
+              description="Multiplier on the road friction at this wheel (e.g. a flat tyre)"),
+    ]
+
+
+TYRES = Section("tyres", _wheel_fields(False), required=False,
+                description="Wheel state and tyre data of every wheel of the vehicle (run-out)")
+WHEEL = Section("wheel", [Field("select", "str", example="trailer/0/right",
+                                description="Which wheels: \"*\", a body, <body>/<axle>, <body>/<axle>/<left|right>")]
+                + _wheel_fields(True), description="Override of the tyres section for some wheels")
+WHEEL_CHANGE = Section("wheel_change", [
+    Field("at", Kind.TIME, minimum=0, exclusive_minimum=True, example="0.8 s", description="Time after separation"),
+    Field("select", "str", example="tractor", description="Which wheels (as in wheels[].select)"),
+] + _wheel_fields(True), description="A change of wheel settings from a given time on (brakes released, ...)")
 
 VEHICLE = Section("vehicle", [
     Field("description", "str", default="", description="Free text for the report"),
@@ -67,8 +112,12 @@ VEHICLE = Section("vehicle", [
     Field("speed", Kind.SPEED, minimum=0, example="30 mph", description="CG speed of the first body at impact"),
     Field("course", Kind.ANGLE, required=False, example="95 deg",
           description="Direction of the first body's CG velocity (default: its heading, no side slip)"),
-], subsections=[ArrayOf("bodies", BODY, min_items=1, description="The bodies, front to rear, joined by hitches")],
-   description="A vehicle: a chain of bodies (car; car + trailer; tractor + semitrailer; doubles)")
+], subsections=[
+    ArrayOf("bodies", BODY, min_items=1, description="The bodies, front to rear, joined by hitches"),
+    TYRES,
+    ArrayOf("wheels", WHEEL, required=False, description="Per-wheel overrides of the tyres section"),
+    ArrayOf("wheel_changes", WHEEL_CHANGE, required=False, description="Scheduled changes of wheel settings"),
+], description="A vehicle: a chain of bodies (car; car + trailer; tractor + semitrailer; doubles)")
 
 BARRIER = Section("barrier", [
     Field("name", "str", example='barrier', description="Name of the barrier body (use it as impact.body2)"),
@@ -129,6 +178,76 @@ IMPACT = Section("impact", [
     ArrayOf("external_impulses", EXTERNAL, required=False, description="Known external impulses"),
 ], description="The impact: crush surface, coefficients, constraints, external impulses")
 
+_OPT = RunoutOptions()
+ZONE = Section("zone", [
+    Field("name", "str", default="", description="Label (\"grass verge\")"),
+    Field("friction", "float", minimum=0, maximum=2, exclusive_minimum=True, example="0.35",
+          description="Tyre-road friction coefficient inside the zone"),
+    Field("polygon", Kind.LENGTH, n=2, points=True, min_points=3, example='[["0 m", "-4 m"], ["60 m", "-4 m"], ["60 m", "-12 m"]]',
+          description="Vertices of the zone, world frame"),
+], description="A friction zone (polygon with its own coefficient); later zones win where zones overlap")
+
+RUNOUT = Section("runout", [
+    Field("road_friction", "float", minimum=0, maximum=2, exclusive_minimum=True, example="0.7",
+          description="Tyre-road friction coefficient outside the zones"),
+    Field("method", choices=METHODS, default=_OPT.method, description="solve_ivp method (LSODA: cheap also when stiff)"),
+    Field("rtol", "float", minimum=1e-14, maximum=0.1, default=_OPT.rtol, description="Relative tolerance of the solver"),
+    Field("atol", "float", minimum=0, maximum=1, exclusive_minimum=True, default=_OPT.atol,
+          description="Absolute tolerance (state in m, rad, m/s, rad/s)"),
+    Field("eps", Kind.SPEED, minimum=0, exclusive_minimum=True, default=f"{_OPT.eps} m/s",
+          description="Low-speed regularisation speed of the friction laws"),
+    Field("v_stop", Kind.SPEED, minimum=0, exclusive_minimum=True, default=f"{_OPT.v_stop} m/s",
+          description="Rest threshold (residual travel <= v_stop^2 / (2 a_min))"),
+    Field("max_step", Kind.TIME, minimum=0, exclusive_minimum=True, default=f"{_OPT.max_step} s",
+          description="Largest solver step (lower it for thin friction zones)"),
+    Field("t_max", Kind.TIME, minimum=0, exclusive_minimum=True, default=f"{_OPT.t_max} s",
+          description="Time limit of the run-out"),
+    Field("sample_dt", Kind.TIME, minimum=0, exclusive_minimum=True, default=f"{_OPT.sample_dt} s",
+          description="Spacing of the sampled histories and tracks"),
+    Field("lateral_model", choices=LATERAL_MODELS, default=_OPT.lateral_model, description="Lateral tyre curve"),
+    Field("load_transfer", "bool", default=_OPT.load_transfer,
+          description="Quasi-static load transfer (needs every body's cg_height)"),
+], subsections=[ArrayOf("zones", ZONE, required=False, description="Friction zones")],
+   required=False, description="Run-out of every vehicle from separation to rest (omit for an impact-only study)")
+
+EV_REST = Section("rest", [
+    Field("name", "str", default="", description="Label for the report"),
+    Field("body", "str", example="trailer", description="Body whose rest position was measured"),
+    Field("position", Kind.LENGTH, n=2, example='["12.3 m", "2.6 m"]', description="Measured CG rest position, world"),
+    Field("tolerance", Kind.LENGTH, minimum=0, example="0.5 m", description="Largest acceptable distance"),
+    Field("heading", Kind.ANGLE, required=False, example="-25 deg", description="Measured rest heading"),
+    Field("heading_tolerance", Kind.ANGLE, required=False, minimum=0, example="5 deg",
+          description="Largest acceptable heading error (required with heading)"),
+], description="A measured rest position (and heading) of a body")
+EV_MARK = Section("mark", [
+    Field("name", "str", default="", description="Label for the report"),
+    Field("wheel", "str", default="*", description="Wheel(s) that may have left it: \"*\", a body, "
+                                                     "<body>/<axle>, <body>/<axle>/<left|right>"),
+    Field("points", Kind.LENGTH, n=2, points=True, min_points=2, example='[["-9 m", "-1 m"], ["-4 m", "0.5 m"]]',
+          description="The mark as a polyline, world"),
+    Field("tolerance", Kind.LENGTH, minimum=0, example="0.3 m",
+          description="Largest acceptable distance of any point of the mark from the computed track"),
+    Field("sliding_only", "bool", default=True, description="Compare with the sliding parts of tracks only"),
+], description="A tyre mark measured at the scene")
+EV_POI = Section("impact_point", [
+    Field("position", Kind.LENGTH, n=2, example='["-9.6 m", "-1.2 m"]', description="Measured point of impact, world"),
+    Field("tolerance", Kind.LENGTH, minimum=0, example="0.5 m", description="Largest acceptable distance"),
+], required=False, description="The point of impact found at the scene (gouges, debris)")
+EV_DV = Section("delta_v", [
+    Field("name", "str", default="", description="Label for the report"),
+    Field("body", "str", example="tractor", description="Body carrying the recorder"),
+    Field("value", Kind.SPEED, example="2.5 mph", description="Recorded delta-v"),
+    Field("component", choices=("magnitude", "longitudinal", "lateral"), default="magnitude",
+          description="What was recorded: the magnitude, or the component along the body's x or y axis"),
+    Field("tolerance", Kind.SPEED, minimum=0, example="1 mph", description="Largest acceptable difference"),
+], description="A delta-v recorded by an event data recorder")
+EVIDENCE = Section("evidence", [], subsections=[
+    ArrayOf("rest", EV_REST, required=False, description="Rest positions"),
+    ArrayOf("marks", EV_MARK, required=False, description="Tyre marks"),
+    EV_POI,
+    ArrayOf("delta_v", EV_DV, required=False, description="Recorded delta-v"),
+], required=False, description="What was found at the scene; each item is checked against its tolerance")
+
 META = Section("scenario", [
     Field("title", "str", example='Car into trailer wheels', description="Title of the scene"),
     Field("source", "str", default="", description="Where the inputs come from (report, paper, measurement)"),
@@ -141,6 +260,8 @@ SCHEMA = Section("scenario file", subsections=[
     Table("vehicles", VEHICLE, min_entries=1, placeholder="<vehicle>", description="The vehicles, by name"),
     BARRIER,
     IMPACT,
+    RUNOUT,
+    EVIDENCE,
 ], description="A crashsim scenario file (TOML)")
 
 
@@ -166,6 +287,10 @@ class Scenario:
     states : dict of BodyState
         Every body's state at impact.
     impact : ImpactProblem
+    runout : RunoutSpec or None
+        Road, solver options and wheel settings; None for an impact-only scenario.
+    evidence : Evidence
+        What was measured at the scene (possibly empty).
     data : dict
         The validated file contents (SI floats), for traceability.
     """
@@ -177,7 +302,93 @@ class Scenario:
     vehicles: tuple[Vehicle, ...]
     states: dict
     impact: ImpactProblem
+    runout: "RunoutSpec | None"
+    evidence: Evidence
     data: dict = field(repr=False)
+
+
+@dataclass(frozen=True)
+class RunoutSpec:
+    """What the run-out needs besides the separation states (all SI)."""
+
+    road: Road
+    options: RunoutOptions
+    wheels: dict  # vehicle name -> WheelSettings
+
+
+_WHEEL_KEYS = ("state", "brake", "steer", "cornering_coefficient", "cornering_stiffness", "rolling_resistance",
+               "mu_factor")
+
+
+def _given(d: dict) -> dict:
+    return {k: d[k] for k in _WHEEL_KEYS if d.get(k) is not None}
+
+
+def _rewrap(exc: ScenarioError, prefix: str, file: str | None) -> ScenarioError:
+    msg = str(exc)
+    if exc.field and msg.startswith(f"{exc.field}: "):
+        msg = msg[len(exc.field) + 2:]
+    key = f"{prefix}.{exc.field}" if exc.field else prefix
+    return ScenarioError(msg, field=key, file=file)
+
+
+def _build_wheels(vehicle: Vehicle, v: dict, file: str | None) -> WheelSettings:
+    name = vehicle.name
+    tyres = v["tyres"]
+    if tyres is None:
+        raise _err("the run-out needs the wheel state and tyre data of every wheel: add a [vehicles."
+                   f"{name}.tyres] section with at least state = \"locked\" (or rolling/braked with "
+                   "cornering_coefficient and rolling_resistance)", f"vehicles.{name}.tyres", file)
+    for i, b in enumerate(v["bodies"]):
+        if not b["axles"]:
+            raise _err(f"body {b['name']!r} has no axles; the run-out needs them ([[vehicles.{name}.bodies.axles]] "
+                       "with x and track)", f"vehicles.{name}.bodies[{i}].axles", file)
+    try:
+        default = WheelSetting(**_given(tyres))
+    except ScenarioError as exc:
+        raise _rewrap(exc, f"vehicles.{name}.tyres", file) from None
+    overrides = {}
+    for i, w in enumerate(v["wheels"]):
+        merged = {**_given(tyres), **_given(w)}
+        if "state" in _given(w) and w["state"] != "braked" and w.get("brake") is None:
+            merged.pop("brake", None)
+        for pair in (("cornering_coefficient", "cornering_stiffness"), ("cornering_stiffness", "cornering_coefficient")):
+            if w.get(pair[0]) is not None:
+                merged.pop(pair[1], None)
+        try:
+            overrides[w["select"]] = WheelSetting(**merged)
+        except ScenarioError as exc:
+            raise _rewrap(exc, f"vehicles.{name}.wheels[{i}]", file) from None
+    try:
+        schedule = [ScheduledChange(c["at"], c["select"], _given(c)) for c in v["wheel_changes"]]
+        ws = WheelSettings(default, overrides, schedule)
+        ws.resolve(vehicle)
+    except ScenarioError as exc:
+        raise _rewrap(exc, f"vehicles.{name}", file) from None
+    return ws
+
+
+def _build_runout(r: dict, vehicles, raw_vehicles: dict, file: str | None) -> RunoutSpec:
+    try:
+        zones = tuple(FrictionZone(tuple(z["polygon"]), z["friction"], z["name"] or f"zone {i + 1}")
+                      for i, z in enumerate(r["zones"]))
+        road = Road(r["road_friction"], zones)
+    except ScenarioError as exc:
+        raise _rewrap(exc, "runout.zones", file) from None
+    try:
+        options = RunoutOptions(method=r["method"], rtol=r["rtol"], atol=r["atol"], eps=r["eps"], v_stop=r["v_stop"],
+                                max_step=r["max_step"], t_max=r["t_max"], sample_dt=r["sample_dt"],
+                                lateral_model=r["lateral_model"], load_transfer=r["load_transfer"])
+    except ScenarioError as exc:
+        raise _rewrap(exc, "runout", file) from None
+    if options.load_transfer:
+        for veh in vehicles:
+            for i, b in enumerate(veh.bodies):
+                if b.cg_height is None and not b.is_fixed:
+                    raise _err(f"runout.load_transfer = true needs the CG height of body {b.name!r}",
+                               f"vehicles.{veh.name}.bodies[{i}].cg_height", file)
+    wheels = {veh.name: _build_wheels(veh, raw_vehicles[veh.name], file) for veh in vehicles if not veh.is_barrier}
+    return RunoutSpec(road, options, wheels)
 
 
 def _err(msg: str, key: str, file: str | None) -> ScenarioError:
@@ -204,8 +415,9 @@ def _build_vehicle(name: str, v: dict, file: str | None) -> tuple[Vehicle, dict[
         if i == 0 and b["articulation"] != 0.0:
             raise _err("the first body has no front hitch to articulate about", f"{key}.articulation", file)
         try:
+            axles = tuple(Axle(a["x"], a["track"], a["dual"], a["name"]) for a in b["axles"])
             bodies.append(Body(b["name"], b["mass"], b["yaw_inertia"], b["length"], b["width"],
-                               tuple(b["outline_center"])))
+                               tuple(b["outline_center"]), axles, b["cg_height"]))
         except ScenarioError as exc:
             raise _err(str(exc), key, file) from None
         if i > 0:
@@ -241,9 +453,47 @@ def _point(p, frame, states, key, file):
     return tuple(origin + rotate(np.asarray(p), ang))
 
 
+def presets() -> dict[str, dict]:
+    """crashsim's library of body parameter sets (raw file values, each with its ``source``)."""
+    import tomllib
+    from importlib.resources import files
+
+    return tomllib.loads(files("crashsim").joinpath("data/vehicles.toml").read_text(encoding="utf-8"))
+
+
+def _apply_presets(data: dict, file: str | None) -> dict:
+    """Merge each body's preset under its own keys (before validation, so units are checked alike)."""
+    import copy
+    import difflib
+
+    vehicles = data.get("vehicles")
+    if not isinstance(vehicles, dict):
+        return data
+    library = None
+    data = copy.deepcopy(data)
+    for vname, v in data["vehicles"].items():
+        bodies = v.get("bodies") if isinstance(v, dict) else None
+        if not isinstance(bodies, list):
+            continue
+        for i, b in enumerate(bodies):
+            if not isinstance(b, dict) or "preset" not in b:
+                continue
+            library = library if library is not None else presets()
+            name = b["preset"]
+            if name not in library:
+                near = difflib.get_close_matches(str(name), list(library), n=2)
+                hint = f"; did you mean {', '.join(map(repr, near))}?" if near else ""
+                raise _err(f"unknown preset {name!r}{hint} Presets: {', '.join(library)}",
+                           f"vehicles.{vname}.bodies[{i}].preset", file)
+            base = {k: copy.deepcopy(val) for k, val in library[name].items() if k != "source"}
+            base.update({k: val for k, val in b.items()})
+            bodies[i] = base
+    return data
+
+
 def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scenario:
     """Validate a parsed scenario (as from TOML) and build the typed SI objects."""
-    d = validate(data, SCHEMA, file=file)
+    d = validate(_apply_presets(data, file), SCHEMA, file=file)
     vehicles, states = [], {}
     for name, v in d["vehicles"].items():
         veh, st = _build_vehicle(name, v, file)
@@ -321,8 +571,47 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
                                 tuple(constraints), tuple(external))
     except ScenarioError as exc:
         raise ScenarioError(str(exc), field=exc.field, file=file) from None
+    runout = None
+    if d["runout"] is not None:
+        runout = _build_runout(d["runout"], vehicles, d["vehicles"], file)
+    evidence = _build_evidence(d["evidence"], states, file)
     meta = d["scenario"]
-    return Scenario(file, meta["title"], meta["source"], meta["units"], tuple(vehicles), states, problem, d)
+    return Scenario(file, meta["title"], meta["source"], meta["units"], tuple(vehicles), states, problem, runout,
+                    evidence, d)
+
+
+def _build_evidence(e: dict | None, states: dict, file: str | None) -> Evidence:
+    if e is None:
+        return Evidence()
+    import difflib
+
+    def body(name, key):
+        if name not in states:
+            near = difflib.get_close_matches(name, list(states), n=1)
+            hint = f"; did you mean {near[0]!r}?" if near else ""
+            raise _err(f"unknown body {name!r}{hint} Bodies: {', '.join(map(repr, states))}", key, file)
+        return name
+
+    rest = []
+    for i, r in enumerate(e["rest"]):
+        key = f"evidence.rest[{i}]"
+        if (r["heading"] is None) != (r["heading_tolerance"] is None):
+            raise _err("heading and heading_tolerance go together", f"{key}.heading_tolerance", file)
+        rest.append(RestEvidence(body(r["body"], f"{key}.body"), tuple(r["position"]), r["tolerance"], r["heading"],
+                                 r["heading_tolerance"], r["name"]))
+    marks = []
+    for i, m in enumerate(e["marks"]):
+        sel = m["wheel"]
+        if sel != "*":
+            body(sel.split("/")[0], f"evidence.marks[{i}].wheel")
+        marks.append(MarkEvidence(np.asarray(m["points"], dtype=float), m["tolerance"], sel, m["sliding_only"],
+                                  m["name"]))
+    poi = None
+    if e["impact_point"] is not None:
+        poi = ImpactPointEvidence(tuple(e["impact_point"]["position"]), e["impact_point"]["tolerance"])
+    dv = [DeltaVEvidence(body(x["body"], f"evidence.delta_v[{i}].body"), x["value"], x["tolerance"], x["component"],
+                         x["name"]) for i, x in enumerate(e["delta_v"])]
+    return Evidence(tuple(rest), tuple(marks), poi, tuple(dv))
 
 
 def load_scenario(path: str | Path) -> Scenario:

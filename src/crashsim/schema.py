@@ -43,7 +43,7 @@ import os
 import re
 import tomllib
 from collections.abc import Sequence
-from dataclasses import KW_ONLY, dataclass
+from dataclasses import KW_ONLY, dataclass, replace
 from typing import Any, Literal, TypeAlias, cast
 
 from crashsim import units
@@ -118,6 +118,8 @@ class Field:
     exclusive_maximum: bool = False
     choices: tuple[str, ...] = ()
     n: int | None = None
+    points: bool = False
+    min_points: int = 1
     example: str | None = None
 
     def __post_init__(self) -> None:
@@ -149,6 +151,8 @@ class Field:
             raise TypeError(f"{where}: minimum/maximum need a numeric or quantity kind")
         if self.n is not None and not (isinstance(kind, Kind) or kind == "float"):
             raise TypeError(f"{where}: n= (a vector) needs a quantity kind or 'float'")
+        if self.points and self.n is None:
+            raise TypeError(f"{where}: points=True (a list of points) needs n= (components per point)")
 
     @property
     def is_quantity(self) -> bool:
@@ -294,6 +298,8 @@ def _short_type(f: Field) -> str:
         text = "one of " + ", ".join(f"'{c}'" for c in f.choices)
     else:
         text = _TYPE_NAMES[str(f.kind)]
+    if f.points:
+        return f"list of points, each {f.n} x {text}"
     return f"list of {f.n} x {text}" if f.n else text
 
 
@@ -323,6 +329,14 @@ def _check_range(x: float, raw: object, f: Field, path: str, problems: _Problems
 
 
 def _field(value: object, f: Field, path: str, problems: _Problems) -> Any:
+    if f.points:
+        if not isinstance(value, list) or len(value) < f.min_points:
+            problems.append((path, f"{toml_repr(value)} is not a list of at least {f.min_points} points, "
+                                   f"each a list of {f.n} values such as {_example(f) or '[...]'}"))
+            return None
+        item = replace(f, points=False, example=None)
+        got = [_field(v, item, f"{path}[{i}]", problems) for i, v in enumerate(value)]
+        return None if any(g is None for g in got) else tuple(got)
     kind = f.kind
     if isinstance(kind, Kind):
         try:
@@ -533,6 +547,8 @@ def _type_text(f: Field) -> str:
     if not isinstance(f.kind, Kind):
         return _short_type(f)
     text = units.describe(f.kind)
+    if f.points:
+        return f"list of >= {f.min_points} points, each a list of {f.n} x {text}"
     return f"list of {f.n} x {text}" if f.n else text
 
 

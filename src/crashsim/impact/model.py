@@ -258,6 +258,12 @@ class ImpactProblem:
             if c.body in fixed:
                 raise ScenarioError(f"body {c.body!r} is a barrier; its velocity cannot be constrained",
                                     field=f"constraint {c.name!r}.body")
+        for what, items in (("constraint", self.constraints), ("external impulse", self.external)):
+            named = [it.name for it in items if it.name]
+            dup = sorted({n for n in named if named.count(n) > 1})
+            if dup:
+                raise ScenarioError(f"{what} names must be unique (results are keyed by name); repeated: {dup}",
+                                    field=f"impact.{what.replace(' ', '_')}s")
         for x in self.external:
             if x.body not in owner:
                 raise ScenarioError(f"unknown body {x.body!r}; bodies are {names}", field=f"external {x.name!r}.body")

@@ -117,9 +117,7 @@ def solve_impact(problem: ImpactProblem) -> ImpactResult:
         )
     cond = float(out["condition"][0])
     if not out["ok"][0] or not cond < CONDITION_LIMIT:
-        _, A1 = compile_problem(problem)
-        Ms = _equilibrated_matrix(S, A1)
-        dep = _dependent_rows(Ms, S.equation_labels())
+        dep = _dependent_rows(out["matrix"][0], S.equation_labels())
         raise IllConditionedError(
             "the impact equations are singular or ill-conditioned (condition number "
             f"{cond:.3g}, limit {CONDITION_LIMIT:.0e}); linearly dependent: " + "; ".join(dep)
@@ -128,27 +126,6 @@ def solve_impact(problem: ImpactProblem) -> ImpactResult:
             dependent=dep,
         )
     return ImpactResult.from_arrays(problem, S, A, out, 0)
-
-
-def _equilibrated_matrix(S: ImpactStructure, A: ImpactArrays) -> np.ndarray:
-    """The equilibrated no-slide matrix of a batch of one (for diagnosis)."""
-    from .core import _assemble, _equilibrate
-
-    J, minv, p_ext, _, _ = _assemble(S, A)
-    B, K, n, _ = J.shape
-    Jf = J.reshape(B, K, 3 * n)
-    W = (Jf * minv.reshape(B, 1, 3 * n)) @ np.swapaxes(Jf, 1, 2)
-    ep = A.moment_restitution
-    inv_ibar = minv[:, S.body1, 2] + minv[:, S.body2, 2]
-    ibar = np.where(inv_ibar > 0, 1.0 / np.where(inv_ibar > 0, inv_ibar, 1.0), 0.0)
-    W[:, 2, :] *= -((1.0 + ep) * ibar)[:, None]
-    W[:, 2, 2] += ep
-    if S.tangential == "ratio":
-        W[:, 1, :] = 0.0
-        W[:, 1, 1] = 1.0
-        W[:, 1, 0] = -A.law_value
-    Ms, _, _ = _equilibrate(W, np.zeros((B, K)))
-    return Ms[0]
 
 
 @dataclass

@@ -1,0 +1,58 @@
+"""Post-impact run-out to rest of single and articulated vehicles.
+
+Public API
+----------
+simulate_runout, simulate_scene
+    Integrate the run-out of one vehicle / all movable vehicles of a scene.
+make_hitch_consistent
+    Project impact-solver velocities onto the hitch constraints.
+RunoutOptions, Road, FrictionZone, WheelSettings, WheelSetting, ScheduledChange
+    Inputs.
+RunoutResult, BodyRunout, WheelTrack, TrackSegment, HitchHistory, RunoutEvent, BodyHistory
+    Results.
+StateLayout
+    The named state vector.
+tyre_forces, lateral_force
+    Pure tyre force laws (shared with the pymunk cross-check).
+static_loads, StaticLoads
+    Static wheel, axle and hitch loads.
+
+The numeric core never imports pymunk, matplotlib or file formats.
+"""
+
+from .dynamics import make_hitch_consistent
+from .layout import StateLayout
+from .loads import StaticLoads, static_loads
+from .options import METHODS, RunoutOptions
+from .result import BodyHistory, BodyRunout, HitchHistory, RunoutEvent, RunoutResult, TrackSegment, WheelTrack
+from .road import FrictionZone, Road
+from .simulate import simulate_runout, simulate_scene
+from .tyres import LATERAL_MODELS, lateral_force, tyre_forces
+from .wheels import WHEEL_STATES, ScheduledChange, WheelSetting, WheelSettings
+
+__all__ = [
+    "simulate_runout",
+    "simulate_scene",
+    "make_hitch_consistent",
+    "RunoutOptions",
+    "METHODS",
+    "Road",
+    "FrictionZone",
+    "WheelSettings",
+    "WheelSetting",
+    "ScheduledChange",
+    "WHEEL_STATES",
+    "RunoutResult",
+    "BodyRunout",
+    "BodyHistory",
+    "WheelTrack",
+    "TrackSegment",
+    "HitchHistory",
+    "RunoutEvent",
+    "StateLayout",
+    "tyre_forces",
+    "lateral_force",
+    "LATERAL_MODELS",
+    "static_loads",
+    "StaticLoads",
+]

@@ -1,0 +1,130 @@
+"""Numerical options of the run-out simulation, with their defaults and what they cost."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+from ..errors import ScenarioError
+from .tyres import LATERAL_MODELS
+
+__all__ = ["RunoutOptions", "METHODS"]
+
+#: solve_ivp methods accepted by :class:`RunoutOptions`.
+METHODS = ("RK45", "DOP853", "LSODA", "Radau", "BDF")
+
+
+def _in_range(name, value, lo, hi, *, lo_open=True):
+    """``value`` as float if it lies in (lo, hi] (or [lo, hi]); NaN never does."""
+    v = float(value)
+    if not ((v > lo if lo_open else v >= lo) and v <= hi):
+        raise ScenarioError(f"must lie in {'(' if lo_open else '['}{lo}, {hi}], got {value!r}", field=f"options.{name}")
+    return v
+
+
+@dataclass(frozen=True)
+class RunoutOptions:
+    """Solver and model options of :func:`~crashsim.motion.simulate_runout`.
+
+    The defaults follow the research note (sec. 3.5, 6).  Costs quoted are for the
+    benchmark case in ``plots/runout_benchmark.md``.
+
+    Parameters
+    ----------
+    method : {"LSODA", "RK45", "DOP853", "Radau", "BDF"}
+        solve_ivp method.  LSODA (default) switches between Adams and BDF and stays cheap
+        when free-rolling tyres make the equations stiff at low speed (stiffness
+        ~ sum C_alpha/(m |u|)); RK45/DOP853 are fine for locked or braked run-outs but need
+        ~10x more right-hand-side evaluations for free rolling; Radau/BDF are robust but
+        costlier in pure Python.
+    rtol, atol : float
+        Relative and absolute local error tolerances (atol in the state's SI units: m, rad,
+        m/s, rad/s).  Default 1e-6 / 1e-8: rest positions within a fraction of a millimetre
+        of a converged reference; scipy's default rtol 1e-3 gave 1-2 cm errors (note sec. 3.5).
+    eps : float
+        Low-speed regularisation speed [m/s] of the friction laws, default 0.01.  Error in
+        stopping distance O(eps^2/(mu g)) (~0.1 mm at 20 m/s); larger eps biases results,
+        smaller eps adds stiffness mu g/eps only in the last moments.
+    v_stop : float
+        Rest threshold [m/s], default 0.03.  The run stops when, for every body,
+        ``max(|v_cg|, |yaw rate| * L_ref) <= v_stop``.  Residual travel after the stop is at
+        most ``v_stop^2/(2 a_min)``: 0.06 mm with locked wheels (a = mu g), ~5 mm for a
+        free-rolling vehicle (a = f_r g ~ 0.1 m/s^2).  Must exceed ``eps`` / 10.
+    max_step : float
+        Largest solver step [s], default 0.1.  A zone crossing is found only if a step ends
+        inside the zone, so a zone narrower than ``speed * max_step`` (1.5 m at 15 m/s with
+        the default) can be stepped over; the result then carries a ``"zone_missed"`` event
+        (samples are checked against the zones) and a warning is logged.  Lower it for thin
+        zones (a 0.3 m painted line at 15 m/s needs 0.02 s).  Costs little: a 5 s run-out
+        needs >= 50 steps anyway.
+    first_step : float or None
+        Initial step [s]; None lets the solver choose.
+    t_max : float
+        Time limit [s], default 120 (a free-rolling truck at 13 m/s needs ~2 min).  Reaching
+        it ends the run with status ``"time_limit"``, never ``"rest"``.
+    sample_dt : float
+        Spacing [s] of the sampled history and wheel tracks in the result, default 0.01
+        (post-processing only; the dense solution ``sol`` is exact to the solver).
+    lateral_model : {"fiala", "linear"}
+        Pure-slip lateral tyre curve, see :func:`~crashsim.motion.tyres.lateral_force`.
+    load_transfer : bool
+        Quasi-static longitudinal and lateral load transfer (default off; needs every body's
+        ``cg_height``), see :mod:`crashsim.motion.loads`.
+    load_transfer_tau : float
+        Time constant [s] of the first-order lag on the accelerations used for load transfer
+        (suspension pitch/roll response, 0.1-0.3 s), default 0.2.
+    baumgarte_omega, baumgarte_zeta : float
+        Hitch-constraint stabilisation ``g'' + 2 zeta omega g' + omega^2 g = 0``; default
+        10 /s and 1 (critical damping), note sec. 1.4.
+    max_segments : int
+        Safety limit on restarts of the integration (events and scheduled changes).
+    """
+
+    method: str = "LSODA"
+    rtol: float = 1e-6
+    atol: float = 1e-8
+    eps: float = 0.01
+    v_stop: float = 0.03
+    max_step: float = 0.1
+    first_step: float | None = None
+    t_max: float = 120.0
+    sample_dt: float = 0.01
+    lateral_model: str = "fiala"
+    load_transfer: bool = False
+    load_transfer_tau: float = 0.2
+    baumgarte_omega: float = 10.0
+    baumgarte_zeta: float = 1.0
+    max_segments: int = 10_000
+
+    def __post_init__(self):
+        if self.method not in METHODS:
+            raise ScenarioError(f"must be one of {METHODS}, got {self.method!r}", field="options.method")
+        if self.lateral_model not in LATERAL_MODELS:
+            raise ScenarioError(
+                f"must be one of {LATERAL_MODELS}, got {self.lateral_model!r}", field="options.lateral_model"
+            )
+        _in_range("rtol", self.rtol, 1e-14, 0.1)
+        _in_range("atol", self.atol, 0.0, 1.0)
+        _in_range("eps", self.eps, 0.0, 1.0)
+        _in_range("v_stop", self.v_stop, 0.0, 5.0)
+        if self.v_stop < self.eps / 10:
+            raise ScenarioError(
+                f"must be >= eps/10 = {self.eps / 10} m/s (below, the regularised friction cannot bring the "
+                f"vehicle to v_stop in reasonable time), got {self.v_stop!r}",
+                field="options.v_stop",
+            )
+        _in_range("max_step", self.max_step, 0.0, math.inf)
+        if self.first_step is not None:
+            _in_range("first_step", self.first_step, 0.0, 1.0)
+        _in_range("t_max", self.t_max, 0.0, 1e5)
+        _in_range("sample_dt", self.sample_dt, 0.0, 10.0)
+        _in_range("load_transfer_tau", self.load_transfer_tau, 0.0, 10.0)
+        _in_range("baumgarte_omega", self.baumgarte_omega, 0.0, 1e4, lo_open=False)
+        _in_range("baumgarte_zeta", self.baumgarte_zeta, 0.0, 100.0, lo_open=False)
+        if int(self.max_segments) < 1:
+            raise ScenarioError(f"must be >= 1, got {self.max_segments!r}", field="options.max_segments")
+        object.__setattr__(self, "load_transfer", bool(self.load_transfer))
+
+    def to_dict(self) -> dict:
+        """Options as a JSON-ready dict (SI units)."""
+        return asdict(self)

@@ -1,0 +1,434 @@
+"""Result objects of a run-out: what stopped it, where every body came to rest, and how it got there.
+
+All numbers are SI (m, rad, s, m/s, rad/s, N, J) in the world frame unless a name says
+otherwise.  Headings are continuous (not wrapped): a body that spun one and a half turns
+ends with a heading 3 pi away from its initial one.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import numpy as np
+
+from ..geometry import wrap_angle
+from ..vehicles import BodyState
+
+__all__ = [
+    "BodyHistory",
+    "BodyRunout",
+    "TrackSegment",
+    "WheelTrack",
+    "HitchHistory",
+    "RunoutEvent",
+    "RunoutResult",
+    "STATUSES",
+]
+
+#: Why a run-out stopped.
+STATUSES = ("rest", "time_limit", "solver_failure")
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, np.ndarray):
+        return _jsonable(value.tolist())
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (np.floating, float)):
+        v = float(value)
+        return v if math.isfinite(v) else None
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if isinstance(value, np.bool_):
+        return bool(value)
+    return value
+
+
+@dataclass(frozen=True, eq=False)
+class BodyHistory:
+    """Sampled time history of one body (arrays of equal length).
+
+    Attributes
+    ----------
+    t : ndarray
+        Time after separation [s].
+    x, y : ndarray
+        CG position [m].
+    heading : ndarray
+        Heading [rad], continuous.
+    vx, vy : ndarray
+        CG velocity [m/s].
+    yaw_rate : ndarray
+        [rad/s].
+    """
+
+    t: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    heading: np.ndarray
+    vx: np.ndarray
+    vy: np.ndarray
+    yaw_rate: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class BodyRunout:
+    """Run-out of one body.
+
+    Attributes
+    ----------
+    name : str
+    initial, final : BodyState
+        State at separation and at the end of the run.
+    rest_position : (float, float)
+        CG position at the end of the run [m] (the rest position if the run ended at rest).
+    rest_heading : float
+        Heading at the end of the run [rad], continuous from the initial heading.
+    time_to_rest : float or None
+        Time from separation to rest [s]; None unless the run ended at rest.
+    distance : float
+        Length of the CG path [m].
+    history : BodyHistory
+        Sampled history.
+    sol : callable
+        ``sol(t)`` -> array ``(6,) + shape(t)`` of (x, y, heading, vx, vy, yaw_rate) at any
+        time in the run [s] (the solver's dense output).
+    """
+
+    name: str
+    initial: BodyState
+    final: BodyState
+    rest_position: tuple[float, float]
+    rest_heading: float
+    time_to_rest: float | None
+    distance: float
+    history: BodyHistory
+    sol: Callable[[Any], np.ndarray]
+
+    @property
+    def rest_heading_wrapped(self) -> float:
+        """Rest heading wrapped to (-pi, pi] [rad]."""
+        return float(wrap_angle(self.rest_heading))
+
+
+@dataclass(frozen=True, eq=False)
+class TrackSegment:
+    """A stretch of a wheel's track in which the wheel either slides or rolls.
+
+    Attributes
+    ----------
+    kind : {"sliding", "rolling"}
+        ``sliding``: the wheel is locked/jammed or its lateral demand is saturated (a tyre
+        mark is expected); ``rolling``: partial slip (no mark expected).
+    t : ndarray, shape (n,)
+        Sample times [s]; consecutive segments share their boundary sample.
+    points : ndarray, shape (n, 2)
+        Contact positions [m].
+    """
+
+    kind: str
+    t: np.ndarray
+    points: np.ndarray
+
+    @property
+    def length(self) -> float:
+        """Polyline length [m]."""
+        return float(np.sum(np.hypot(*np.diff(self.points, axis=0).T))) if len(self.points) > 1 else 0.0
+
+
+@dataclass(frozen=True, eq=False)
+class WheelTrack:
+    """Track of one tyre contact.
+
+    Attributes
+    ----------
+    key, body, axle_index, axle_name, side : str, str, int, str, str
+        Identification (see :mod:`crashsim.motion.wheels`).
+    static_load : float
+        Static normal load [N].
+    t : ndarray
+        Sample times [s].
+    points : ndarray, shape (n, 2)
+        Contact positions [m].
+    sliding : ndarray of bool
+        Sliding flag at each sample.
+    load : ndarray
+        Normal load at each sample [N] (equal to ``static_load`` without load transfer).
+    segments : tuple of TrackSegment
+        The track split into sliding and rolling stretches (split at sample resolution).
+    path_length : float
+        Contact-point path length ``integral |v_k| dt`` [m].
+    sliding_length : float
+        Part of the path travelled while sliding [m] (tyre-mark length).
+    energy : float
+        Energy dissipated by the tyre force ``integral -F_k . v_k dt`` [J].
+    """
+
+    key: str
+    body: str
+    axle_index: int
+    axle_name: str
+    side: str
+    static_load: float
+    t: np.ndarray
+    points: np.ndarray
+    sliding: np.ndarray
+    load: np.ndarray
+    segments: tuple[TrackSegment, ...]
+    path_length: float
+    sliding_length: float
+    energy: float
+
+
+@dataclass(frozen=True, eq=False)
+class HitchHistory:
+    """Force history of one hitch.
+
+    Attributes
+    ----------
+    front, rear : str
+        Body names.
+    static_load : float
+        Static vertical hitch load [N] (kingpin load).
+    t : ndarray
+        Sample times [s].
+    force : ndarray, shape (n, 2)
+        Horizontal hitch force **on the front body**, world frame [N] (the rear body gets
+        the opposite force).
+    force_body : ndarray, shape (n, 2)
+        The same force in the front body's axes (longitudinal forward, lateral left) [N]:
+        a positive longitudinal value means the rear body pushes the front body.
+    articulation : ndarray
+        Articulation angle ``heading_front - heading_rear`` [rad].
+    stop_moment : ndarray
+        Moment of a closed articulation stop on the front body [N m] (0 while open).
+    """
+
+    front: str
+    rear: str
+    static_load: float
+    t: np.ndarray
+    force: np.ndarray
+    force_body: np.ndarray
+    articulation: np.ndarray
+    stop_moment: np.ndarray
+
+    @property
+    def peak_force(self) -> float:
+        """Largest horizontal hitch force magnitude [N]."""
+        return float(np.max(np.hypot(*self.force.T))) if len(self.force) else 0.0
+
+
+@dataclass(frozen=True)
+class RunoutEvent:
+    """Something that happened during the run (for traceability).
+
+    Attributes
+    ----------
+    t : float
+        Time [s].
+    kind : str
+        ``"zone_enter"``, ``"zone_exit"``, ``"schedule"``, ``"stop_closed"``,
+        ``"stop_impact"``, ``"stop_open"``, ``"rest"``, ``"time_limit"`` or ``"solver_failure"``.
+    detail : str
+        Human-readable description (wheel, zone, ...).
+    energy : float
+        Kinetic energy dissipated by the event [J] (articulation-stop impacts; else 0).
+    """
+
+    t: float
+    kind: str
+    detail: str
+    energy: float = 0.0
+
+
+@dataclass(frozen=True, eq=False)
+class RunoutResult:
+    """Result of the run-out of one vehicle.
+
+    Attributes
+    ----------
+    vehicle : str
+        Vehicle name.
+    success : bool
+        True only if the run ended at rest (``status == "rest"``); positions of a run that
+        hit the time limit or failed are not rest positions.
+    status : {"rest", "time_limit", "solver_failure"}
+        Why the run stopped (also available as ``termination``).
+    message : str
+        Explanation; for a solver failure, solve_ivp's message.
+    t_end : float
+        Time at the end of the run [s].
+    nfev, njev, nlu : int
+        Right-hand-side evaluations, Jacobian evaluations and LU decompositions (solver
+        work; the pymunk cross-check reports its step count as nfev).
+    n_segments : int
+        Number of integration segments (restarts at events and scheduled changes).
+    bodies : dict of str to BodyRunout
+    wheels : dict of str to WheelTrack
+    hitches : tuple of HitchHistory
+    events : tuple of RunoutEvent
+    kinetic_energy_initial, kinetic_energy_final : float
+        [J].
+    energy_dissipated : float
+        Sum of the wheels' dissipated energies [J]; with an ideal hitch and no stop impacts
+        it equals the kinetic-energy loss.
+    max_hitch_gap : float
+        Largest distance between paired hitch pins over the samples [m] (constraint drift).
+    method : str
+        ``"scipy/<method>"`` or ``"pymunk/dt=<dt>"``.
+    options : dict
+        The options used.
+    sol : callable
+        ``sol(t)`` -> full state vector(s) (see :class:`~crashsim.motion.layout.StateLayout`).
+    layout : StateLayout
+    """
+
+    vehicle: str
+    success: bool
+    status: str
+    message: str
+    t_end: float
+    nfev: int
+    njev: int
+    nlu: int
+    n_segments: int
+    bodies: dict[str, BodyRunout]
+    wheels: dict[str, WheelTrack]
+    hitches: tuple[HitchHistory, ...]
+    events: tuple[RunoutEvent, ...]
+    kinetic_energy_initial: float
+    kinetic_energy_final: float
+    energy_dissipated: float
+    max_hitch_gap: float
+    method: str
+    options: dict
+    sol: Callable[[Any], np.ndarray]
+    layout: Any
+
+    @property
+    def termination(self) -> str:
+        """Alias of :attr:`status`."""
+        return self.status
+
+    @property
+    def energy_residual(self) -> float:
+        """``(KE_0 - KE_end - tyre dissipation - stop-impact losses) / KE_0``: spurious work (constraint drift, solver error)."""
+        ke0 = self.kinetic_energy_initial
+        impacts = sum(e.energy for e in self.events)
+        return (ke0 - self.kinetic_energy_final - self.energy_dissipated - impacts) / ke0 if ke0 > 0 else 0.0
+
+    def table(self) -> dict[str, np.ndarray]:
+        """Sampled history of every body as columns (name with unit -> array), for CSV export.
+
+        Returns
+        -------
+        dict
+            ``"t [s]"`` and, per body, ``"<body>.x [m]"``, ``".y [m]"``, ``".heading [rad]"``,
+            ``".vx [m/s]"``, ``".vy [m/s]"``, ``".yaw_rate [rad/s]"``; per hitch
+            ``"<front>-<rear>.force_long [N]"``, ``".force_lat [N]"``, ``".articulation [rad]"``.
+        """
+        first = next(iter(self.bodies.values()))
+        cols: dict[str, np.ndarray] = {"t [s]": first.history.t}
+        units = {"x": "m", "y": "m", "heading": "rad", "vx": "m/s", "vy": "m/s", "yaw_rate": "rad/s"}
+        for name, body in self.bodies.items():
+            for field, unit in units.items():
+                cols[f"{name}.{field} [{unit}]"] = getattr(body.history, field)
+        for h in self.hitches:
+            cols[f"{h.front}-{h.rear}.force_long [N]"] = h.force_body[:, 0]
+            cols[f"{h.front}-{h.rear}.force_lat [N]"] = h.force_body[:, 1]
+            cols[f"{h.front}-{h.rear}.articulation [rad]"] = h.articulation
+        return cols
+
+    def to_dict(self, *, history: bool = True) -> dict:
+        """JSON-ready dict (SI units; NaN/inf become None).
+
+        Parameters
+        ----------
+        history : bool
+            Include sampled histories and tracks (large); summaries are always included.
+        """
+        bodies = {}
+        for name, b in self.bodies.items():
+            d = {
+                "rest_position_m": list(b.rest_position),
+                "rest_heading_rad": b.rest_heading,
+                "rest_heading_wrapped_rad": b.rest_heading_wrapped,
+                "time_to_rest_s": b.time_to_rest,
+                "distance_m": b.distance,
+                "initial": {
+                    "position_m": list(b.initial.position),
+                    "heading_rad": b.initial.heading,
+                    "velocity_m_s": list(b.initial.velocity),
+                    "yaw_rate_rad_s": b.initial.yaw_rate,
+                },
+                "final_velocity_m_s": list(b.final.velocity),
+                "final_yaw_rate_rad_s": b.final.yaw_rate,
+            }
+            if history:
+                h = b.history
+                d["history"] = {
+                    "t_s": h.t,
+                    "x_m": h.x,
+                    "y_m": h.y,
+                    "heading_rad": h.heading,
+                    "vx_m_s": h.vx,
+                    "vy_m_s": h.vy,
+                    "yaw_rate_rad_s": h.yaw_rate,
+                }
+            bodies[name] = d
+        wheels = {}
+        for key, w in self.wheels.items():
+            d = {
+                "body": w.body,
+                "axle_index": w.axle_index,
+                "axle_name": w.axle_name,
+                "side": w.side,
+                "static_load_N": w.static_load,
+                "path_length_m": w.path_length,
+                "sliding_length_m": w.sliding_length,
+                "energy_J": w.energy,
+            }
+            if history:
+                d["segments"] = [{"kind": s.kind, "t_s": s.t, "points_m": s.points} for s in w.segments]
+            wheels[key] = d
+        hitches = []
+        for h in self.hitches:
+            d = {"front": h.front, "rear": h.rear, "static_load_N": h.static_load, "peak_force_N": h.peak_force}
+            if history:
+                d.update(
+                    t_s=h.t,
+                    force_world_N=h.force,
+                    force_front_axes_N=h.force_body,
+                    articulation_rad=h.articulation,
+                    stop_moment_Nm=h.stop_moment,
+                )
+            hitches.append(d)
+        return _jsonable(
+            {
+                "vehicle": self.vehicle,
+                "success": self.success,
+                "status": self.status,
+                "message": self.message,
+                "t_end_s": self.t_end,
+                "method": self.method,
+                "nfev": self.nfev,
+                "njev": self.njev,
+                "nlu": self.nlu,
+                "n_segments": self.n_segments,
+                "kinetic_energy_initial_J": self.kinetic_energy_initial,
+                "kinetic_energy_final_J": self.kinetic_energy_final,
+                "energy_dissipated_J": self.energy_dissipated,
+                "energy_residual": self.energy_residual,
+                "max_hitch_gap_m": self.max_hitch_gap,
+                "options": self.options,
+                "bodies": bodies,
+                "wheels": wheels,
+                "hitches": hitches,
+                "events": [{"t_s": e.t, "kind": e.kind, "detail": e.detail, "energy_J": e.energy} for e in self.events],
+            }
+        )

@@ -1,0 +1,222 @@
+"""Road surface: a friction coefficient and polygonal friction zones (world coordinates).
+
+A wheel inside a zone polygon uses the zone's mu; zones listed later take precedence where
+zones overlap; elsewhere the road's mu applies.  Polygons may be non-convex but must be
+simple (no self-intersection).  The integrator locates every crossing of a zone edge by
+a wheel with a solve_ivp event on :meth:`FrictionZone.signed_distance`, which is continuous
+across edges and zero exactly on the boundary (positive inside).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import ScenarioError
+
+__all__ = ["FrictionZone", "Road", "points_in_polygon", "signed_distance"]
+
+# Allowed friction coefficients: (0, _MU_MAX].
+_MU_MAX = 2.0
+
+
+def _check_mu(value, where: str) -> float:
+    mu = float(value)
+    if not (0.0 < mu <= _MU_MAX):
+        raise ScenarioError(f"friction coefficient must lie in (0, {_MU_MAX}], got {value!r}", field=where)
+    return mu
+
+
+def _edges(polygon) -> tuple[np.ndarray, ...]:
+    """Edge data of a polygon: start x, start y, edge x, edge y and 1/|edge|^2, each shape (n,)."""
+    start = np.asarray(polygon, dtype=float)
+    vec = np.roll(start, -1, axis=0) - start
+    return start[:, 0].copy(), start[:, 1].copy(), vec[:, 0].copy(), vec[:, 1].copy(), 1.0 / np.sum(vec * vec, axis=1)
+
+
+def _inside_rel(rx, ry, ex, ey) -> np.ndarray:
+    """Even-odd rule from the points' offsets (rx, ry) to every edge start and the edge vectors."""
+    straddle = (ry < 0) != (ry - ey < 0)  # the edge spans the point's y
+    # the edge crosses the horizontal through the point at x_start + (py - y_start) ex / ey
+    cross_right = rx * ey < ry * ex  # px < x_cross, written without division (sign of ey handled below)
+    hits = straddle & (cross_right == (ey > 0))
+    return (np.count_nonzero(hits, axis=-1) % 2) == 1
+
+
+def _relative(pts: np.ndarray, x0: np.ndarray, y0: np.ndarray):
+    return pts[..., 0:1] - x0, pts[..., 1:2] - y0
+
+
+def _signed_distance(pts: np.ndarray, x0, y0, ex, ey, inv_len2) -> np.ndarray:
+    rx, ry = _relative(pts, x0, y0)  # (..., n)
+    s = np.minimum(np.maximum((rx * ex + ry * ey) * inv_len2, 0.0), 1.0)
+    dx = rx - s * ex
+    dy = ry - s * ey
+    dist = np.sqrt(np.min(dx * dx + dy * dy, axis=-1))
+    return np.where(_inside_rel(rx, ry, ex, ey), dist, -dist)
+
+
+def points_in_polygon(points, polygon) -> np.ndarray:
+    """Even-odd (crossing-number) point-in-polygon test; works for non-convex polygons.
+
+    Parameters
+    ----------
+    points : array_like, shape (..., 2)
+        Query points [m].
+    polygon : array_like, shape (n, 2)
+        Polygon vertices [m], either orientation, not repeated at the end.
+
+    Returns
+    -------
+    ndarray of bool, shape (...)
+        True strictly inside (points exactly on an edge may go either way; the run-out
+        never relies on that, see :func:`signed_distance`).
+    """
+    x0, y0, ex, ey, _ = _edges(polygon)
+    return _inside_rel(*_relative(np.asarray(points, dtype=float), x0, y0), ex, ey)
+
+
+def signed_distance(points, polygon) -> np.ndarray:
+    """Distance to the polygon boundary, positive inside and negative outside [m].
+
+    Continuous everywhere (the sign flips only where the distance is zero), so a root of
+    it is exactly a boundary crossing.
+
+    Parameters
+    ----------
+    points : array_like, shape (..., 2)
+    polygon : array_like, shape (n, 2)
+
+    Returns
+    -------
+    ndarray, shape (...)
+    """
+    return _signed_distance(np.asarray(points, dtype=float), *_edges(polygon))
+
+
+def _segments_intersect(p1, p2, q1, q2) -> bool:
+    def orient(a, b, c):
+        return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+
+    d1, d2 = orient(q1, q2, p1), orient(q1, q2, p2)
+    d3, d4 = orient(p1, p2, q1), orient(p1, p2, q2)
+    return (d1 * d2 < 0) and (d3 * d4 < 0)
+
+
+@dataclass(frozen=True)
+class FrictionZone:
+    """A polygonal area of the road with its own friction coefficient.
+
+    Parameters
+    ----------
+    polygon : array_like, shape (n, 2)
+        Vertices in world coordinates [m], n >= 3, a simple (non-self-intersecting)
+        polygon, convex or not, either orientation.
+    mu : float
+        Friction coefficient in the zone, in (0, 2].
+    name : str
+        Label for reports ("gravel shoulder").
+    """
+
+    polygon: tuple[tuple[float, float], ...]
+    mu: float
+    name: str = ""
+
+    def __post_init__(self):
+        where = f"zone {self.name!r}"
+        poly = np.asarray(self.polygon, dtype=float)
+        if poly.ndim != 2 or poly.shape[1] != 2 or poly.shape[0] < 3 or not np.all(np.isfinite(poly)):
+            raise ScenarioError(
+                f"polygon must be a finite (n >= 3, 2) array of world points [m], got shape {poly.shape}",
+                field=f"{where}.polygon",
+            )
+        if np.allclose(poly[0], poly[-1]):
+            poly = poly[:-1]
+            if poly.shape[0] < 3:
+                raise ScenarioError("polygon needs at least 3 distinct vertices", field=f"{where}.polygon")
+        x, y = poly[:, 0], poly[:, 1]
+        area = 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+        if abs(area) < 1e-9:
+            raise ScenarioError("polygon has zero area", field=f"{where}.polygon")
+        if np.any(np.all(np.isclose(np.roll(poly, -1, axis=0), poly), axis=1)):
+            raise ScenarioError("polygon has repeated consecutive vertices", field=f"{where}.polygon")
+        n = len(poly)
+        for i in range(n):
+            for j in range(i + 2, n):
+                if i == 0 and j == n - 1:
+                    continue
+                if _segments_intersect(poly[i], poly[(i + 1) % n], poly[j], poly[(j + 1) % n]):
+                    raise ScenarioError(
+                        f"polygon edges {i} and {j} cross: the polygon must be simple", field=f"{where}.polygon"
+                    )
+        object.__setattr__(self, "polygon", tuple((float(a), float(b)) for a, b in poly))
+        object.__setattr__(self, "mu", _check_mu(self.mu, f"{where}.mu"))
+        object.__setattr__(self, "_edge_arrays", _edges(poly))
+
+    @property
+    def vertices(self) -> np.ndarray:
+        """Polygon vertices, shape (n, 2) [m]."""
+        return np.asarray(self.polygon)
+
+    def contains(self, points) -> np.ndarray:
+        """True for points inside the zone."""
+        x0, y0, ex, ey, _ = self._edge_arrays
+        return _inside_rel(*_relative(np.asarray(points, dtype=float), x0, y0), ex, ey)
+
+    def signed_distance(self, points) -> np.ndarray:
+        """Signed distance to the zone boundary [m], positive inside."""
+        return _signed_distance(np.asarray(points, dtype=float), *self._edge_arrays)
+
+
+@dataclass(frozen=True)
+class Road:
+    """The road surface of a run-out.
+
+    Parameters
+    ----------
+    mu : float
+        Tyre-road friction coefficient outside every zone, in (0, 2] (dry asphalt 0.7-0.8
+        for cars; case-specific skid tests preferred).
+    zones : sequence of FrictionZone
+        Areas with their own mu; later zones take precedence where zones overlap.
+    """
+
+    mu: float
+    zones: tuple[FrictionZone, ...] = field(default=())
+
+    def __post_init__(self):
+        object.__setattr__(self, "mu", _check_mu(self.mu, "road.mu"))
+        zones = tuple(self.zones)
+        for z in zones:
+            if not isinstance(z, FrictionZone):
+                raise ScenarioError(f"must be a FrictionZone, got {type(z).__name__}", field="road.zones")
+        object.__setattr__(self, "zones", zones)
+
+    def mu_from_membership(self, inside: np.ndarray) -> np.ndarray:
+        """Friction coefficient per point from zone membership flags.
+
+        Parameters
+        ----------
+        inside : ndarray of bool, shape (n_points, n_zones)
+
+        Returns
+        -------
+        ndarray, shape (n_points,)
+        """
+        mu = np.full(inside.shape[0], self.mu)
+        for z, zone in enumerate(self.zones):
+            mu[inside[:, z]] = zone.mu
+        return mu
+
+    def membership(self, points) -> np.ndarray:
+        """Zone membership of points, shape (n_points, n_zones), by the inside test."""
+        pts = np.asarray(points, dtype=float).reshape(-1, 2)
+        if not self.zones:
+            return np.zeros((pts.shape[0], 0), dtype=bool)
+        return np.stack([z.contains(pts) for z in self.zones], axis=1)
+
+    def mu_at(self, points) -> np.ndarray:
+        """Friction coefficient at world points [m], shape (n_points,)."""
+        return self.mu_from_membership(self.membership(points))
+

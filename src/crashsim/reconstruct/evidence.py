@@ -1,0 +1,255 @@
+"""Scene evidence and the check users care about most: do the results agree with the scene?
+
+Each item of evidence gets a residual (how far the computation lies from the measurement)
+and a verdict against the tolerance the user stated for it. All SI, world frame.
+
+Residuals
+---------
+rest position   distance between computed and measured CG rest positions [m]; heading error
+                wrapped to (-pi, pi] [rad] if a heading was measured.
+tyre mark       one-sided Hausdorff distance from the measured mark (a polyline, densified to
+                ``MARK_SPACING``) to the computed track of the wheel that matches it best: the
+                largest distance of any point of the mark from the track [m]. Only the sliding
+                parts of a track count unless the mark says otherwise (rolling tyres leave no
+                mark). The mean distance and the best-matching wheel are reported too.
+point of impact distance between the scenario's contact point and the measured one [m].
+delta-v         computed minus recorded delta-v of a body [m/s]: its magnitude, or its
+                component along the body's x (longitudinal, as event data recorders report)
+                or y axis (lateral), in the body axes at impact.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..geometry import rotate, wrap_angle
+
+__all__ = [
+    "RestEvidence", "MarkEvidence", "ImpactPointEvidence", "DeltaVEvidence", "Evidence",
+    "Check", "EvidenceReport", "evaluate_evidence", "distance_to_polyline", "MARK_SPACING",
+]
+
+#: Spacing [m] to which measured marks are densified before their distance to a track is taken.
+MARK_SPACING = 0.1
+
+
+@dataclass(frozen=True)
+class RestEvidence:
+    body: str
+    position: tuple[float, float]
+    tolerance: float
+    heading: float | None = None
+    heading_tolerance: float | None = None
+    name: str = ""
+
+
+@dataclass(frozen=True)
+class MarkEvidence:
+    points: np.ndarray
+    tolerance: float
+    wheel: str | None = None  # "*", "<body>", "<body>/<axle>", "<body>/<axle>/<side>"
+    sliding_only: bool = True
+    name: str = ""
+
+
+@dataclass(frozen=True)
+class ImpactPointEvidence:
+    position: tuple[float, float]
+    tolerance: float
+    name: str = "point of impact"
+
+
+@dataclass(frozen=True)
+class DeltaVEvidence:
+    body: str
+    value: float
+    tolerance: float
+    component: str = "magnitude"  # "magnitude", "longitudinal", "lateral"
+    name: str = ""
+
+
+@dataclass(frozen=True)
+class Evidence:
+    """All evidence of a scene."""
+
+    rest: tuple[RestEvidence, ...] = ()
+    marks: tuple[MarkEvidence, ...] = ()
+    impact_point: ImpactPointEvidence | None = None
+    delta_v: tuple[DeltaVEvidence, ...] = ()
+
+    @property
+    def empty(self) -> bool:
+        return not (self.rest or self.marks or self.delta_v or self.impact_point)
+
+
+@dataclass(frozen=True)
+class Check:
+    """Outcome of one evidence item.
+
+    Attributes
+    ----------
+    kind : {"rest", "rest heading", "mark", "point of impact", "delta-v"}
+    name : str
+    residual : float
+        Computed minus measured (or a distance) in SI: m, rad or m/s (``quantity`` says which);
+        ``inf`` if the computation has nothing to compare (no run-out, no track).
+    tolerance : float
+        The user's tolerance for this item, same unit.
+    passed : bool
+        ``abs(residual) <= tolerance``.
+    quantity : str
+        Unit kind of residual and tolerance ("length", "angle", "speed").
+    details : dict
+        Computed and measured values and any extra figure (mean distance, matched wheel).
+    """
+
+    kind: str
+    name: str
+    residual: float
+    tolerance: float
+    passed: bool
+    quantity: str
+    details: dict = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        return {"kind": self.kind, "name": self.name, "residual": self.residual, "tolerance": self.tolerance,
+                "passed": self.passed, "quantity": self.quantity, "details": self.details}
+
+
+@dataclass(frozen=True)
+class EvidenceReport:
+    checks: tuple[Check, ...]
+
+    @property
+    def all_passed(self) -> bool:
+        return all(c.passed for c in self.checks)
+
+    @property
+    def n_failed(self) -> int:
+        return sum(not c.passed for c in self.checks)
+
+    def to_dict(self) -> dict:
+        return {"all_passed": self.all_passed, "n_checks": len(self.checks), "n_failed": self.n_failed,
+                "checks": [c.to_dict() for c in self.checks]}
+
+
+def _densify(points: np.ndarray, spacing: float) -> np.ndarray:
+    pts = np.asarray(points, dtype=float)
+    if len(pts) < 2:
+        return pts
+    out = [pts[:1]]
+    for a, b in zip(pts[:-1], pts[1:]):
+        n = max(1, int(math.ceil(np.hypot(*(b - a)) / spacing)))
+        s = np.linspace(0.0, 1.0, n + 1)[1:, None]
+        out.append(a + s * (b - a))
+    return np.vstack(out)
+
+
+def distance_to_polyline(points, polyline) -> np.ndarray:
+    """Distance of each point (n, 2) to a polyline (m, 2) [m]; a single vertex is a point."""
+    p = np.asarray(points, dtype=float)[:, None, :]
+    line = np.asarray(polyline, dtype=float)
+    if len(line) == 1:
+        return np.hypot(*(p[:, 0, :] - line[0]).T)
+    a = line[:-1][None]
+    ab = (line[1:] - line[:-1])[None]
+    denom = np.sum(ab * ab, -1)
+    t = np.clip(np.sum((p - a) * ab, -1) / np.where(denom > 0, denom, 1.0), 0.0, 1.0)
+    d = p - (a + t[..., None] * ab)
+    return np.min(np.hypot(d[..., 0], d[..., 1]), axis=1)
+
+
+def _wheel_matches(track, selector: str | None) -> bool:
+    if selector in (None, "*"):
+        return True
+    parts = selector.split("/")
+    if parts[0] != track.body:
+        return False
+    if len(parts) >= 2 and parts[1] not in (str(track.axle_index), track.axle_name):
+        return False
+    if len(parts) >= 3 and parts[2] != track.side:
+        return False
+    return True
+
+
+def _check_mark(ev: MarkEvidence, tracks: dict, index: int) -> Check:
+    name = ev.name or f"mark {index + 1}"
+    pts = _densify(ev.points, MARK_SPACING)
+    best = None
+    for key, tr in tracks.items():
+        if not _wheel_matches(tr, ev.wheel):
+            continue
+        pieces = [seg.points for seg in tr.segments if (seg.kind == "sliding" or not ev.sliding_only) and len(seg.points)]
+        if not pieces:
+            continue
+        d = np.min(np.stack([distance_to_polyline(pts, piece) for piece in pieces]), axis=0)
+        cand = (float(np.max(d)), float(np.mean(d)), key)
+        if best is None or cand[0] < best[0]:
+            best = cand
+    if best is None:
+        what = "sliding track" if ev.sliding_only else "track"
+        return Check("mark", name, math.inf, ev.tolerance, False, "length",
+                     {"wheel": ev.wheel, "reason": f"no computed {what} of a wheel matching {ev.wheel or '*'}"})
+    return Check("mark", name, best[0], ev.tolerance, best[0] <= ev.tolerance, "length",
+                 {"matched_wheel": best[2], "mean_distance": best[1], "selector": ev.wheel or "*",
+                  "mark_length": float(np.sum(np.hypot(*np.diff(np.asarray(ev.points, float), axis=0).T)))})
+
+
+def evaluate_evidence(evidence: Evidence, impact, runout: dict | None, contact_point) -> EvidenceReport:
+    """Residual and verdict of every evidence item.
+
+    Parameters
+    ----------
+    evidence : Evidence
+    impact : ImpactResult
+    runout : dict of RunoutResult by vehicle, or None (rest and mark items then fail with
+        an infinite residual: nothing was computed to compare).
+    contact_point : (float, float)
+        The scenario's contact point, world [m].
+    """
+    checks: list[Check] = []
+    bodies = {}
+    tracks = {}
+    if runout is not None:
+        for r in runout.values():
+            bodies.update(r.bodies)
+            tracks.update(r.wheels)
+    if evidence.impact_point is not None:
+        ev = evidence.impact_point
+        d = float(np.hypot(*(np.asarray(contact_point) - np.asarray(ev.position))))
+        checks.append(Check("point of impact", ev.name, d, ev.tolerance, d <= ev.tolerance, "length",
+                            {"computed": list(map(float, contact_point)), "measured": list(ev.position)}))
+    for i, ev in enumerate(evidence.rest):
+        name = ev.name or f"rest of {ev.body}"
+        b = bodies.get(ev.body)
+        if b is None:
+            checks.append(Check("rest", name, math.inf, ev.tolerance, False, "length",
+                                {"reason": "no run-out was computed for this body"}))
+            continue
+        d = float(np.hypot(*(np.asarray(b.rest_position) - np.asarray(ev.position))))
+        at_rest = b.time_to_rest is not None
+        checks.append(Check("rest", name, d, ev.tolerance, d <= ev.tolerance and at_rest, "length",
+                            {"computed": [float(v) for v in b.rest_position], "measured": list(ev.position),
+                             "at_rest": at_rest}))
+        if ev.heading is not None:
+            err = float(wrap_angle(b.rest_heading - ev.heading))
+            checks.append(Check("rest heading", f"{name} (heading)", err, ev.heading_tolerance,
+                                abs(err) <= ev.heading_tolerance, "angle",
+                                {"computed": float(wrap_angle(b.rest_heading)), "measured": ev.heading}))
+    for i, ev in enumerate(evidence.marks):
+        checks.append(_check_mark(ev, tracks, i))
+    for i, ev in enumerate(evidence.delta_v):
+        name = ev.name or f"delta-v of {ev.body} ({ev.component})"
+        b = impact.bodies[ev.body]
+        if ev.component == "magnitude":
+            computed = b.delta_v_magnitude
+        else:
+            local = rotate(b.delta_v, -b.heading)
+            computed = float(local[0] if ev.component == "longitudinal" else local[1])
+        res = computed - ev.value
+        checks.append(Check("delta-v", name, res, ev.tolerance, abs(res) <= ev.tolerance, "speed",
+                            {"computed": computed, "measured": ev.value, "component": ev.component}))
+    return EvidenceReport(tuple(checks))

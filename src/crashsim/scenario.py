@@ -122,6 +122,9 @@ VEHICLE = Section("vehicle", [
 BARRIER = Section("barrier", [
     Field("name", "str", example='barrier', description="Name of the barrier body (use it as impact.body2)"),
     Field("description", "str", default="", description="Free text for the report"),
+    Field("extent", Kind.LENGTH, n=2, required=False, example='["-3 m", "20 m"]',
+          description="Where the barrier face lies along the crush-surface tangent, from the contact point "
+                      "(default: an endless line); used to draw it and to warn of contact after separation"),
 ], required=False, description="A rigid barrier: a body of infinite mass at rest (exact, not a large number)")
 
 CONSTRAINT = Section("constraint", [
@@ -305,6 +308,15 @@ class Scenario:
     runout: "RunoutSpec | None"
     evidence: Evidence
     data: dict = field(repr=False)
+
+    @property
+    def barrier_extent(self) -> tuple[float, float] | None:
+        """(from, to) along the crush tangent [m] of a barrier face; None without a barrier,
+        (-inf, inf) for an endless one."""
+        b = self.data.get("barrier")
+        if b is None:
+            return None
+        return tuple(b["extent"]) if b["extent"] is not None else (-math.inf, math.inf)
 
 
 @dataclass(frozen=True)

@@ -26,6 +26,7 @@ class SceneResult:
     impact: ImpactResult
     runout: dict | None = None  # vehicle name -> RunoutResult
     evidence: Any = None  # EvidenceReport or None
+    warnings: tuple[str, ...] = ()
 
     def runout_body(self, name: str):
         """The BodyRunout of a body (KeyError if the scene has no run-out or no such body)."""
@@ -61,6 +62,7 @@ class SceneResult:
             }
         if self.evidence is not None:
             out["evidence"] = self.evidence.to_dict()
+        out["warnings"] = list(self.warnings)
         return out
 
     def report(self, system: str = "SI") -> str:
@@ -82,12 +84,51 @@ class SceneResult:
             from ..report import format_evidence
 
             text += "\n\n" + format_evidence(self.evidence, system)
+        if self.warnings:
+            text += "\n\nWarnings\n" + "\n".join(f"  - {w}" for w in self.warnings)
         return text
 
     def write_csv(self, directory: Path) -> list[Path]:
-        """Write time histories (none for an impact-only scene); returns the files written."""
+        """Write CSV files (SI units, column headers carry the unit); returns the paths written.
+
+        ``impact.csv``: one row per body (velocities before/after, delta-v, yaw rates);
+        ``<vehicle>_history.csv``: sampled run-out history of every body and hitch;
+        ``<vehicle>_tracks.csv``: every wheel's track (time, x, y, sliding flag).
+        """
+        import csv
+
+        directory = Path(directory)
         directory.mkdir(parents=True, exist_ok=True)
-        return []
+        written = []
+        path = directory / "impact.csv"
+        with path.open("w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(["body", "vehicle", "vx_before [m/s]", "vy_before [m/s]", "yaw_rate_before [rad/s]",
+                        "vx_after [m/s]", "vy_after [m/s]", "yaw_rate_after [rad/s]", "delta_vx [m/s]",
+                        "delta_vy [m/s]", "delta_v [m/s]", "pdof [rad]"])
+            for name, b in self.impact.bodies.items():
+                if b.fixed:
+                    continue
+                w.writerow([name, b.vehicle, *b.velocity_before, b.yaw_rate_before, *b.velocity, b.yaw_rate,
+                            *b.delta_v, b.delta_v_magnitude, "" if b.pdof is None else b.pdof])
+        written.append(path)
+        for vname, r in (self.runout or {}).items():
+            cols = r.table()
+            path = directory / f"{vname}_history.csv"
+            with path.open("w", newline="") as fh:
+                w = csv.writer(fh)
+                w.writerow(list(cols))
+                w.writerows(zip(*[c.tolist() for c in cols.values()]))
+            written.append(path)
+            path = directory / f"{vname}_tracks.csv"
+            with path.open("w", newline="") as fh:
+                w = csv.writer(fh)
+                w.writerow(["wheel", "t [s]", "x [m]", "y [m]", "sliding"])
+                for key, tr in r.wheels.items():
+                    for t, (x, y), sl in zip(tr.t.tolist(), tr.points.tolist(), tr.sliding.tolist()):
+                        w.writerow([key, t, x, y, int(sl)])
+            written.append(path)
+        return written
 
 
 def separation_states(scenario, impact: ImpactResult) -> dict:
@@ -123,4 +164,48 @@ def run_scene(scenario) -> SceneResult:
         from .evidence import evaluate_evidence
 
         evidence = evaluate_evidence(scenario.evidence, impact, runout, scenario.impact.surface.point)
-    return SceneResult(scenario=scenario, impact=impact, runout=runout, evidence=evidence)
+    warnings = []
+    if runout is not None:
+        warnings += barrier_crossings(scenario, runout)
+        for vname, r in runout.items():
+            if not r.success:
+                warnings.append(f"the run-out of vehicle {vname!r} did not reach rest: {r.status} ({r.message})")
+    return SceneResult(scenario=scenario, impact=impact, runout=runout, evidence=evidence, warnings=tuple(warnings))
+
+
+#: Growth of a body's overlap with the barrier after separation [m] that is reported: the
+#: run-out does not model a second contact with the barrier.
+BARRIER_OVERLAP_WARNING = 0.25
+
+
+def barrier_crossings(scenario, runout: dict) -> list[str]:
+    """Warnings for bodies whose outline moves into the barrier after separation."""
+    import numpy as np
+
+    extent = scenario.barrier_extent
+    if extent is None:
+        return []
+    surf = scenario.impact.surface
+    n, t, p0 = surf.normal, surf.tangent, np.asarray(surf.point)
+    out = []
+    for r in runout.values():
+        for name, b in r.bodies.items():
+            body = next(bb for v in scenario.vehicles for bb in v.bodies if bb.name == name)
+            corners = body.outline()
+            if corners is None:
+                continue
+            h = b.history
+            c, s_ = np.cos(h.heading)[:, None], np.sin(h.heading)[:, None]
+            wx = h.x[:, None] + c * corners[:, 0] - s_ * corners[:, 1]
+            wy = h.y[:, None] + s_ * corners[:, 0] + c * corners[:, 1]
+            dn = (wx - p0[0]) * n[0] + (wy - p0[1]) * n[1]  # > 0 on the vehicle's side
+            dt = (wx - p0[0]) * t[0] + (wy - p0[1]) * t[1]
+            inside = (dt >= extent[0]) & (dt <= extent[1])
+            depth = np.max(np.where(inside, -dn, -np.inf), axis=1)
+            growth = depth - max(depth[0], 0.0)
+            k = np.nonzero(growth > BARRIER_OVERLAP_WARNING)[0]
+            if len(k):
+                out.append(f"body {name!r} moves {np.max(growth):.2f} m into the barrier after separation "
+                           f"(from t = {h.t[k[0]]:.2f} s): a second contact with the barrier is not modelled, "
+                           "so its run-out past that time is not physical")
+    return out

@@ -12,7 +12,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["BarrierAxes", "plot_barrier_sweep", "plot_barrier_figures"]
+__all__ = ["BarrierAxes", "plot_barrier_sweep", "plot_barrier_figures", "plot_scene", "plot_histories",
+           "save_scene_figures", "SCENE_FIGURE_SUFFIXES"]
 
 
 def _plt():
@@ -161,3 +162,944 @@ def plot_barrier_figures(loaded: dict, empty: dict, axes=None, **kwargs):
     for ax, sw in zip(axes, (loaded, empty)):
         plot_barrier_sweep(sw, ax, **kwargs)
     return axes[0].figure
+
+
+# --------------------------------------------------------------------------------------------
+# Scene diagram, run-out histories
+# --------------------------------------------------------------------------------------------
+
+#: File suffixes :func:`save_scene_figures` writes (matplotlib picks the format from them).
+SCENE_FIGURE_SUFFIXES = (".png", ".svg", ".pdf")
+
+#: Colour family of each vehicle, in scenario order: (fill at impact, line, dark).
+#: Red and green are kept free for the evidence and its verdicts.
+_FAMILIES = (
+    ("#c6dbef", "#2171b5", "#08306b"),  # blue
+    ("#dadaeb", "#6a51a3", "#3f007d"),  # purple
+    ("#f6e8c3", "#8c510a", "#543005"),  # brown
+    ("#d9d9d9", "#525252", "#000000"),  # grey
+    ("#c7eae5", "#01665e", "#003c30"),  # teal
+)
+_EVIDENCE = "#d62728"   # measured items
+_PASS = "#1a7f37"
+_FAIL = "#c62828"
+_NICE = (1.0, 2.0, 2.5, 5.0)
+
+# z-order of the layers, bottom to top
+_Z_BARRIER, _Z_TRACK, _Z_GHOST, _Z_IMPACT, _Z_REST, _Z_EVIDENCE, _Z_ARROW, _Z_TEXT = 2, 3, 4, 5, 6, 7, 8, 9
+
+
+def _system(scene, system):
+    from .errors import ScenarioError
+
+    system = scene.scenario.units if system is None else system
+    if system not in ("SI", "US"):
+        raise ScenarioError(f"unknown unit system {system!r}; allowed 'SI', 'US'", field="system")
+    return system
+
+
+def _nice_steps(lo: float, hi: float):
+    """The 1-2-2.5-5 numbers between lo and hi, ascending."""
+    out = []
+    for e in range(int(np.floor(np.log10(lo))) - 1, int(np.ceil(np.log10(hi))) + 1):
+        out += [m * 10.0 ** e for m in _NICE if lo <= m * 10.0 ** e <= hi]
+    return out
+
+
+def _nice_at_most(x: float) -> float:
+    """Largest 1-2-2.5-5 number <= x (x > 0)."""
+    steps = _nice_steps(x / 20.0, x)
+    return steps[-1] if steps else x
+
+
+def _halo(width: float = 2.5):
+    from matplotlib import patheffects
+
+    return [patheffects.withStroke(linewidth=width, foreground="white")]
+
+
+def _wrap(text: str, width: int) -> str:
+    import textwrap
+
+    return "\n".join(textwrap.wrap(text, width, break_on_hyphens=False)) if text else text
+
+
+def _ghost_times(t_end: float, interval: float) -> np.ndarray:
+    """Multiples of ``interval`` inside the run, not closer than interval/4 to its end."""
+    n = int(np.floor((t_end - 0.25 * interval) / interval + 1e-9))
+    return interval * np.arange(1, max(n, 0) + 1)
+
+
+def _default_intervals(ends: dict) -> dict:
+    """Ghost interval per vehicle: one 1-2-2.5-5 step that gives every vehicle 4-6 ghosts if
+    there is one (ghosts of all vehicles then show the same instants), else one per vehicle."""
+    ends = {k: v for k, v in ends.items() if v > 0}
+    if not ends:
+        return {}
+    steps = _nice_steps(min(ends.values()) / 50.0, max(ends.values()))
+    for s in reversed(steps):
+        if all(4 <= len(_ghost_times(t, s)) <= 6 for t in ends.values()):
+            return dict.fromkeys(ends, s)
+    out = {}
+    for k, t in ends.items():
+        cand = [s for s in _nice_steps(t / 50.0, t) if 4 <= len(_ghost_times(t, s)) <= 6]
+        out[k] = cand[-1] if cand else _nice_at_most(t / 5.0)
+    return out
+
+
+class _Scene:
+    """State shared by the drawing steps of :func:`plot_scene` (display units, legend, extent)."""
+
+    def __init__(self, scene, ax, system):
+        from .units import Kind, to_unit
+
+        self.scene = scene
+        self.sc = scene.scenario
+        self.ax = ax
+        self.system = system
+        self.k, self.lunit = to_unit(1.0, Kind.LENGTH, system)  # display length per metre
+        self.points: list[np.ndarray] = []   # everything drawn, display units, for the limits
+        self.handles: dict[str, object] = {}  # legend: label -> proxy artist (ordered, deduplicated)
+        self.label_colors: dict[str, str] = {}
+        self.labels: list[np.ndarray] = []  # positions of the text labels placed so far
+        self.texts: list = []  # labels anchored in data coordinates
+        self.no_outline: set[str] = set()  # bodies drawn as a skeleton
+        self.body_of = {b.name: b for v in self.sc.vehicles for b in v.bodies}
+        self.vehicle_of = {b.name: v for v in self.sc.vehicles for b in v.bodies}
+        movable = [v for v in self.sc.vehicles if not v.is_barrier]
+        self.family = {v.name: _FAMILIES[i % len(_FAMILIES)] for i, v in enumerate(movable)}
+
+    # -- helpers ---------------------------------------------------------------------------
+    def d(self, xy) -> np.ndarray:
+        """World SI point(s) -> display units."""
+        return self.k * np.asarray(xy, dtype=float)
+
+    def add(self, xy):
+        self.points.append(np.atleast_2d(np.asarray(xy, dtype=float)))
+
+    def legend_entry(self, label: str, handle, color: str | None = None):
+        if label not in self.handles:
+            self.handles[label] = handle
+            if color is not None:
+                self.label_colors[label] = color
+
+    def colors(self, body_name: str):
+        return self.family.get(self.vehicle_of[body_name].name, _FAMILIES[-1])
+
+    # -- vehicles --------------------------------------------------------------------------
+    def outline(self, body, position, heading, *, gid: str, fill, edge, lw: float, ls="-", alpha=1.0,
+                zorder=_Z_IMPACT):
+        """Outline rectangle of ``body`` at a pose; None if the body has no outline data."""
+        from matplotlib.patches import Polygon
+
+        from .geometry import to_world
+
+        corners = body.outline()
+        if corners is None:
+            return None
+        xy = self.d(to_world(corners, position, heading))
+        patch = Polygon(xy, closed=True, facecolor=fill if fill is not None else "none", edgecolor=edge,
+                        lw=lw, ls=ls, alpha=alpha, zorder=zorder, gid=gid)
+        self.ax.add_patch(patch)
+        self.add(xy)
+        return patch
+
+    def axle_lines(self, body, position, heading, color, lw, alpha=1.0, zorder=_Z_IMPACT):
+        from .geometry import to_world
+
+        for a in body.axles:
+            xy = self.d(to_world(np.array([[a.x, -a.track / 2], [a.x, a.track / 2]]), position, heading))
+            self.ax.plot(xy[:, 0], xy[:, 1], "-", color=color, lw=lw, alpha=alpha, zorder=zorder,
+                         solid_capstyle="butt")
+
+    def pins(self, vehicle, poses: dict, color, size, alpha=1.0, zorder=_Z_IMPACT):
+        """Hitch pins of a vehicle at the given body poses (pin position from the front body)."""
+        from .geometry import to_world
+
+        for i, h in enumerate(vehicle.hitches):
+            front = vehicle.bodies[i].name
+            if front not in poses:
+                continue
+            p = self.d(to_world(h.front_point, *poses[front]))
+            self.ax.plot(*p, "o", ms=size, mfc="white", mec=color, mew=1.0, alpha=alpha, zorder=zorder + 0.5)
+
+    def skeleton(self, body, position, heading, color):
+        """A body without outline data: CG symbol, heading tick, links to its pins and the contact."""
+        from .geometry import rotate, to_body, to_world
+
+        vehicle = self.vehicle_of[body.name]
+        self.no_outline.add(body.name)
+        pts = []
+        for i, h in enumerate(vehicle.hitches):
+            if vehicle.bodies[i].name == body.name:
+                pts.append(h.front_point)
+            if vehicle.bodies[i + 1].name == body.name:
+                pts.append(h.rear_point)
+        if body.name in (self.scene.impact.body1, self.scene.impact.body2):
+            pts.append(to_body(self.scene.impact.point, position, heading))
+        c = self.d(position)
+        for p in pts:
+            w = self.d(to_world(p, position, heading))
+            self.ax.plot([c[0], w[0]], [c[1], w[1]], "-", color=color, lw=2.0, zorder=_Z_IMPACT,
+                         solid_capstyle="round")
+            self.add(w)
+        tick = c + self.d(rotate(np.array([1.5, 0.0]), heading))
+        self.ax.plot([c[0], tick[0]], [c[1], tick[1]], "-", color=color, lw=1.0, zorder=_Z_IMPACT)
+        self.ax.plot(*c, "o", ms=7, mfc="white", mec=color, mew=1.5, zorder=_Z_IMPACT + 0.5)
+        self.ax.plot(*c, "+", ms=7, color=color, mew=1.0, zorder=_Z_IMPACT + 0.6)
+        self.add(np.vstack([c, tick]))
+        from matplotlib.lines import Line2D
+
+        self.legend_entry("no outline data: CG, heading tick, links to pins and contact",
+                          Line2D([], [], color="0.3", lw=2.0, marker="o", mfc="white", mec="0.3"))
+
+    def text(self, xy, text, **kw):
+        """A label anchored at a data point (kept inside the axes limits by :func:`_fit_texts`)."""
+        kw.setdefault("zorder", _Z_TEXT)
+        t = self.ax.annotate(text, xy=tuple(xy), **kw)
+        self.texts.append(t)
+        return t
+
+    def label_hits(self, anchor, direction, n_chars: int, n_lines: int, fontsize: float = 7.0) -> int:
+        """How many placed labels a text anchored at ``anchor`` and extending along the signs of
+        ``direction`` would roughly cover (scale estimated from the extent drawn so far)."""
+        pts = np.vstack(self.points)
+        per_inch = float(max(np.ptp(pts[:, 0]), np.ptp(pts[:, 1]), 5.0 * self.k)) / 9.0
+        w = n_chars * 0.55 * fontsize / 72.0 * per_inch
+        h = n_lines * 1.2 * fontsize / 72.0 * per_inch
+        x0, x1 = sorted((anchor[0], anchor[0] + np.copysign(w, direction[0])))
+        y0, y1 = sorted((anchor[1], anchor[1] + np.copysign(h, direction[1])))
+        pad = 0.3 * h
+        return sum(1 for q in self.labels if x0 - pad <= q[0] <= x1 + pad and y0 - pad <= q[1] <= y1 + pad)
+
+    def body_label(self, name, position, *, suffix="", offset=0.0):
+        p = self.d(position)
+        self.labels.append(p)
+        if offset:  # above (offset > 0) or below the point, leaving a CG or evidence marker visible
+            self.text(p, name + suffix, xytext=(0, offset), textcoords="offset points", fontsize=7, ha="center",
+                      va="bottom" if offset > 0 else "top", color="0.1", path_effects=_halo(2.0))
+        else:
+            self.text(p, name + suffix, fontsize=7, ha="center", va="center", color="0.1", path_effects=_halo(2.0))
+
+
+def _check_map(scene) -> dict:
+    """Evidence checks keyed by (kind, index of the evidence item), walking the report in the
+    order :func:`crashsim.reconstruct.evidence.evaluate_evidence` writes it; each key is
+    confirmed by the check's kind and its (default) name."""
+    ev = scene.scenario.evidence
+    rep = scene.evidence
+    if rep is None:
+        return {}
+    out = {}
+    checks = list(rep.checks)
+    by_name = {(c.kind, c.name): c for c in checks}
+
+    def take(kind, index, name):
+        c = by_name.get((kind, name))
+        if c is not None:
+            out[(kind, index)] = c
+
+    if ev.impact_point is not None:
+        take("point of impact", 0, ev.impact_point.name)
+    for i, r in enumerate(ev.rest):
+        name = r.name or f"rest of {r.body}"
+        take("rest", i, name)
+        take("rest heading", i, f"{name} (heading)")
+    for i, m in enumerate(ev.marks):
+        take("mark", i, m.name or f"mark {i + 1}")
+    for i, x in enumerate(ev.delta_v):
+        take("delta-v", i, x.name or f"delta-v of {x.body} ({x.component})")
+    return out
+
+
+def _verdict(checks) -> tuple[str, str]:
+    """('PASS'/'FAIL', colour) of one or more checks (all must pass)."""
+    checks = [c for c in checks if c is not None]
+    if not checks:
+        return "not checked", "0.3"
+    ok = all(c.passed for c in checks)
+    return ("PASS", _PASS) if ok else ("FAIL", _FAIL)
+
+
+def _residual_text(c, system) -> str:
+    from .report import fmt
+
+    if c is None:
+        return ""
+    if np.isinf(c.residual):
+        return "nothing computed"
+    if c.quantity == "angle":
+        from .units import Kind, convert
+
+        return (f"{convert(c.residual, 'rad', 'deg', Kind.ANGLE):+.1f}\N{DEGREE SIGN} "
+                f"(tol. {convert(c.tolerance, 'rad', 'deg', Kind.ANGLE):.0f}\N{DEGREE SIGN})")
+    return f"{fmt(abs(c.residual), c.quantity, system, 2)} (tol. {fmt(c.tolerance, c.quantity, system, 2)})"
+
+
+def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evidence: bool = True,
+               arrows: bool = True, system: str | None = None, legend=True, axles: bool = True):
+    """Scale diagram of a reconstructed scene in the ground frame: impact, run-out, evidence.
+
+    Parameters
+    ----------
+    scene : SceneResult
+        From :func:`crashsim.reconstruct.run_scene` (with or without a run-out).
+    ax : matplotlib Axes, optional
+        New figure, sized to the scene, if None.
+    interval : float, optional
+        Time between intermediate ("ghost") outlines [s]. Default: a 1-2-2.5-5 step giving
+        4 to 6 ghosts per vehicle (the same step for all vehicles when one fits them all).
+    times : sequence of float, optional
+        Explicit ghost times after separation [s] (overrides ``interval``); times past a
+        vehicle's end of run are skipped for it. ``times=()`` draws no ghosts.
+    evidence : bool
+        Overlay the scene evidence and its verdicts (PASS green, FAIL red).
+    arrows : bool
+        Delta-v arrows at the CGs (one scale for all, stated in the legend) and principal
+        direction of force arrows at the contact point.
+    system : {"SI", "US"}, optional
+        Display units: coordinates in m or ft, speeds in m/s or mph. Default: the scenario's.
+    legend : bool or str
+        True: legend outside the axes (at the right; under the diagram for a new figure of a
+        wide scene, with the figure sized to hold it); a matplotlib
+        location string (``"best"``, ``"upper left"``): inside; False: none.
+    axles : bool
+        Draw the axles (at impact and at rest) as thin cross lines.
+
+    Returns
+    -------
+    matplotlib Axes
+        Equal aspect. Patches carry gids: ``"outline:impact:<body>"``, ``"outline:rest:<body>"``,
+        ``"outline:ghost:<body>:<t>"``, ``"evidence:rest:<body>"``; the scale bar is the artist
+        with gid ``"scalebar"``.
+
+    Notes
+    -----
+    Outlines are ``Body.outline()`` placed by the body pose: the CG position and heading at
+    impact (``scenario.states``), from the run-out's dense output at the ghost times, and
+    ``rest_position``/``rest_heading`` at the end of the run. Wheel tracks come from
+    ``RunoutResult.wheels``: sliding stretches bold and dark (tyre marks expected), rolling
+    stretches thin and dashed. The PDOF arrow of each body in contact starts at the contact
+    point and points along the crush impulse on that body (SAE J224: its tail lies on the
+    side the force comes from). A barrier is drawn as a thick line through the contact point
+    along the crush-surface tangent (over ``scenario.barrier_extent`` when given).
+    """
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    system = _system(scene, system)
+    new = ax is None
+    if new:
+        # laid out by _layout_scene_figure (exact equal-aspect box plus legend), not by a layout engine
+        ax = _plt().figure(figsize=(10.0, 6.0)).add_subplot()
+    S = _Scene(scene, ax, system)
+    sc = S.sc
+    runout = scene.runout or {}
+
+    # -- at impact ---------------------------------------------------------------------------
+    for v in sc.vehicles:  # the colour key first in the legend
+        if not v.is_barrier:
+            fill, line, _ = S.family[v.name]
+            desc = (sc.data.get("vehicles", {}).get(v.name, {}).get("description", "")
+                    if isinstance(sc.data, dict) else "")
+            S.legend_entry(_wrap(f"vehicle {v.name}" + (f": {desc}" if desc else ""), 60),
+                           Patch(facecolor=fill, edgecolor=line, lw=1.2))
+    for v in sc.vehicles:
+        if v.is_barrier:
+            continue
+        fill, line, dark = S.family[v.name]
+        poses = {}
+        for b in v.bodies:
+            st = sc.states[b.name]
+            poses[b.name] = (st.position, st.heading)
+            p = S.outline(b, st.position, st.heading, gid=f"outline:impact:{b.name}", fill=fill, edge=line, lw=1.4,
+                          alpha=0.9, zorder=_Z_IMPACT)
+            if p is None:
+                S.skeleton(b, st.position, st.heading, line)
+            elif axles:
+                S.axle_lines(b, st.position, st.heading, line, 1.0, zorder=_Z_IMPACT)
+            S.add(S.d(st.position))
+        S.pins(v, poses, line, 4.0, zorder=_Z_IMPACT)
+    if any((p.get_gid() or "").startswith("outline:impact:") for p in ax.patches):
+        S.legend_entry("at impact", Patch(facecolor="0.85", edgecolor="0.3", lw=1.4))
+
+    # -- run-out: tracks, CG paths, ghosts, rest -----------------------------------------------
+    if runout:
+        # body names go at the CGs at impact and at rest: keep the ghost time labels off them
+        S.labels += [S.d(sc.states[n].position) for n in S.body_of if n in sc.states and not S.body_of[n].is_fixed]
+        S.labels += [S.d(br.rest_position) for r in runout.values() for br in r.bodies.values()]
+        if times is not None:
+            tt = np.sort(np.asarray(times, dtype=float).ravel())
+            ghost = {vn: tt[(tt > 0) & (tt < r.t_end)] for vn, r in runout.items()}
+            ghost_note = "intermediate, at the given times"
+        else:
+            if interval is not None:
+                if not (np.isfinite(interval) and interval > 0):
+                    from .errors import ScenarioError
+
+                    raise ScenarioError(f"must be a positive time in s, got {interval!r}", field="interval")
+                steps = dict.fromkeys(runout, float(interval))
+            else:
+                steps = _default_intervals({vn: r.t_end for vn, r in runout.items()})
+            ghost = {vn: _ghost_times(r.t_end, steps[vn]) if vn in steps else np.array([])
+                     for vn, r in runout.items()}
+            uniq = sorted(set(steps.values()))
+            if not uniq:
+                ghost_note = "intermediate: none (no motion after separation)"
+            elif len(uniq) == 1:
+                ghost_note = f"intermediate, every {uniq[0]:g} s"
+            else:
+                ghost_note = "intermediate, every " + ", ".join(f"{steps[vn]:g} s ({vn})" for vn in runout)
+        for vn, r in runout.items():
+            v = next(x for x in sc.vehicles if x.name == vn)
+            fill, line, dark = S.family[vn]
+            for tr in r.wheels.values():
+                for seg in tr.segments:
+                    if len(seg.points) < 2:
+                        continue
+                    xy = S.d(seg.points)
+                    if seg.kind == "sliding":
+                        ax.plot(xy[:, 0], xy[:, 1], "-", color=dark, lw=2.2, alpha=0.85, zorder=_Z_TRACK,
+                                solid_capstyle="butt")
+                    else:
+                        ax.plot(xy[:, 0], xy[:, 1], "--", color=line, lw=0.7, alpha=0.8, zorder=_Z_TRACK,
+                                dashes=(4, 3))
+                    S.add(xy)
+            for name, br in r.bodies.items():
+                h = br.history
+                xy = S.d(np.column_stack([h.x, h.y]))
+                ax.plot(xy[:, 0], xy[:, 1], ":", color=dark, lw=1.0, zorder=_Z_TRACK)
+                S.add(xy)
+            # ghosts
+            for j, t in enumerate(ghost.get(vn, ())):
+                poses = {}
+                for name, br in r.bodies.items():
+                    st = np.asarray(br.sol(float(t)), dtype=float)
+                    poses[name] = ((st[0], st[1]), st[2])
+                    p = S.outline(S.body_of[name], poses[name][0], poses[name][1], gid=f"outline:ghost:{name}:{t:g}",
+                                  fill=None, edge=line, lw=0.7, alpha=0.55, zorder=_Z_GHOST)
+                    if p is None:
+                        c = S.d(poses[name][0])
+                        ax.plot(*c, "o", ms=3, color=line, alpha=0.6, zorder=_Z_GHOST)
+                S.pins(v, poses, line, 2.5, alpha=0.6, zorder=_Z_GHOST)
+                # time label at the lead body's CG, unless it would sit on another label
+                lead = next(iter(r.bodies))
+                c = S.d(poses[lead][0])
+                if all(np.hypot(*(c - q)) > 1.6 * S.k for q in S.labels):
+                    S.text(c, f"{t:g} s", fontsize=6.5, color=dark, ha="center", va="center",
+                           path_effects=_halo(1.8))
+                    S.labels.append(c)
+            # at rest (or at the end of a run that did not reach rest)
+            poses = {}
+            for name, br in r.bodies.items():
+                poses[name] = (br.rest_position, br.rest_heading)
+                p = S.outline(S.body_of[name], br.rest_position, br.rest_heading, gid=f"outline:rest:{name}",
+                              fill=fill, edge=dark, lw=1.8, alpha=0.55 if r.success else 0.3, zorder=_Z_REST)
+                if p is None:
+                    S.skeleton(S.body_of[name], br.rest_position, br.rest_heading, dark)
+                elif axles:
+                    S.axle_lines(S.body_of[name], br.rest_position, br.rest_heading, dark, 1.0, zorder=_Z_REST)
+                S.body_label(name, np.asarray(br.rest_position), suffix="" if r.success else " (run stopped)",
+                             offset=6.0 if name in S.no_outline else -5.0)
+            S.pins(v, poses, dark, 4.0, zorder=_Z_REST)
+        S.legend_entry(ghost_note, Patch(facecolor="none", edgecolor="0.4", lw=0.7, alpha=0.7))
+        S.legend_entry("at rest (end of run)", Patch(facecolor="0.8", edgecolor="0.1", lw=1.8))
+        S.legend_entry("tyre track, sliding (mark expected)", Line2D([], [], color="0.15", lw=2.2))
+        S.legend_entry("tyre track, rolling", Line2D([], [], color="0.4", lw=0.7, ls="--", dashes=(4, 3)))
+        S.legend_entry("CG path", Line2D([], [], color="0.2", lw=1.0, ls=":"))
+    else:
+        S.legend_entry("impact only: no run-out computed", Line2D([], [], ls="none"))
+    for v in sc.vehicles:
+        if not v.is_barrier:
+            for b in v.bodies:
+                pos = np.asarray(sc.states[b.name].position)
+                if runout:
+                    rest = np.asarray(scene.runout_body(b.name).rest_position)
+                    if np.hypot(*(rest - pos)) < 1.5:  # named at rest already
+                        continue
+                S.body_label(b.name, pos, offset=6.0 if b.name in S.no_outline else 0.0)
+    if any(v.hitches for v in sc.vehicles):
+        S.legend_entry("hitch pin", Line2D([], [], ls="none", marker="o", ms=4, mfc="white", mec="0.2"))
+
+    # -- evidence ---------------------------------------------------------------------------
+    checks = _check_map(scene) if evidence else {}
+    if evidence and not sc.evidence.empty:
+        _draw_evidence(S, checks)
+
+    # -- arrows -----------------------------------------------------------------------------
+    if arrows:
+        _draw_arrows(S)
+
+    # -- barrier (after everything else: an endless barrier spans the drawn extent) -----------
+    _draw_barrier(S)
+
+    # -- frame, limits, decorations ---------------------------------------------------------
+    pts = np.vstack(S.points)
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    span = float(max((hi - lo).max(), 5.0 * S.k))
+    pad = 0.03 * span + 0.6 * S.k
+    lo, hi = lo - pad, hi + pad
+    # room at the bottom for the scale bar and at the top for the axes indicator
+    lo[1] -= 0.05 * span
+    hi[1] += 0.05 * span
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(lo[1], hi[1])
+    ax.set_aspect("equal", adjustable="box")
+    ax.set_xlabel(f"X [{S.lunit}]")
+    ax.set_ylabel(f"Y [{S.lunit}]")
+    ax.grid(True, color="0.9", lw=0.6, zorder=0)
+    ax.set_axisbelow(True)
+    ax.set_title(_wrap(sc.title, 100), fontsize=10)
+    _axes_indicator(ax)
+    for w in tuple(getattr(scene, "warnings", ()) or ()):
+        S.legend_entry(_wrap("warning: " + w, 60), Line2D([], [], ls="none"), color="#b35900")
+    # a new figure of a wide scene: legend under the diagram, in two columns; else at the right
+    below = new and (hi[1] - lo[1]) / (hi[0] - lo[0]) < 0.75
+    leg = _scene_legend(S, legend, below) if legend else None
+    if new:
+        _layout_scene_figure(ax, leg if legend is True else None, below)
+    _fit_texts(S)
+    if new:
+        _layout_scene_figure(ax, leg if legend is True else None, below)
+    xl = ax.get_xlim()
+    _scale_bar(S, xl[1] - xl[0])
+    return ax
+
+
+def _draw_evidence(S: _Scene, checks: dict) -> None:
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Circle, Polygon
+
+    from .geometry import to_world
+
+    ax, ev, system = S.ax, S.sc.evidence, S.system
+    for i, r in enumerate(ev.rest):
+        c_pos, c_head = checks.get(("rest", i)), checks.get(("rest heading", i))
+        verdict, color = _verdict([c_pos, c_head])
+        p = S.d(r.position)
+        body = S.body_of.get(r.body)
+        if r.heading is not None and body is not None and body.outline() is not None:
+            xy = S.d(to_world(body.outline(), r.position, r.heading))
+            ax.add_patch(Polygon(xy, closed=True, facecolor="none", edgecolor=_EVIDENCE, lw=1.2, ls=(0, (4, 2)),
+                                 zorder=_Z_EVIDENCE, gid=f"evidence:rest:{r.body}"))
+            S.add(xy)
+        ax.add_patch(Circle(p, S.k * r.tolerance, facecolor="none", edgecolor=_EVIDENCE, lw=0.6, ls=":",
+                            zorder=_Z_EVIDENCE))
+        ax.plot(*p, "x", color=_EVIDENCE, ms=7, mew=1.8, zorder=_Z_EVIDENCE + 0.5)
+        S.add(p)
+        S.labels.append(p)
+        detail = _residual_text(c_pos, system)
+        if c_head is not None:
+            detail += f", heading {_residual_text(c_head, system)}"
+        label = f"measured rest, {r.body}: {verdict}" + (f"\n  {detail}" if detail else "")
+        S.legend_entry(label, Line2D([], [], ls=(0, (4, 2)), color=_EVIDENCE, lw=1.2, marker="x", ms=6, mew=1.5),
+                       color)
+    for i, m in enumerate(ev.marks):
+        c = checks.get(("mark", i))
+        verdict, color = _verdict([c])
+        xy = S.d(m.points)
+        ax.plot(xy[:, 0], xy[:, 1], "-", color=_EVIDENCE, lw=1.4, marker="o", ms=2.5, zorder=_Z_EVIDENCE)
+        S.add(xy)
+        name = m.name or f"mark {i + 1}"
+        detail = _residual_text(c, system)
+        if c is not None and "matched_wheel" in c.details:
+            detail += f", nearest {c.details['matched_wheel']}"
+        S.legend_entry(_wrap(f"measured mark \u201c{name}\u201d: {verdict}", 52) + (f"\n  {detail}" if detail else ""),
+                       Line2D([], [], color=_EVIDENCE, lw=1.4, marker="o", ms=2.5), color)
+    if ev.impact_point is not None:
+        c = checks.get(("point of impact", 0))
+        verdict, color = _verdict([c])
+        p = S.d(ev.impact_point.position)
+        # above the PDOF arrows (it lies at the contact point), below the contact-point dot
+        ax.plot(*p, "*", ms=13, mfc=_EVIDENCE, mec="white", mew=0.8, zorder=_Z_ARROW + 0.3)
+        S.add(p)
+        detail = _residual_text(c, system)
+        S.legend_entry(f"measured point of impact: {verdict}" + (f"\n  {detail}" if detail else ""),
+                       Line2D([], [], ls="none", marker="*", ms=11, mfc=_EVIDENCE, mec="white"), color)
+    for i, x in enumerate(ev.delta_v):
+        c = checks.get(("delta-v", i))
+        verdict, color = _verdict([c])
+        name = x.name or f"delta-v of {x.body} ({x.component})"
+        detail = _residual_text(c, system)
+        S.legend_entry(_wrap(f"recorded \u0394v \u201c{name}\u201d: {verdict}", 52)
+                       + (f"\n  {detail}" if detail else ""),
+                       Line2D([], [], ls="none"), color)
+
+
+def _draw_arrows(S: _Scene) -> None:
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import FancyArrowPatch
+
+    from .report import fmt
+    from .units import Kind, convert, to_unit
+
+    ax, imp, system, sc = S.ax, S.scene.impact, S.system, S.sc
+    moving = [b for b in imp.bodies.values() if not b.fixed]
+    if not moving:
+        return
+    # one arrow scale for all bodies: display length per display speed, a 1-2-2.5-5 number,
+    # such that the largest delta-v is drawn about 6 m (20 ft) long
+    ref_len = to_unit(6.0, Kind.LENGTH, system)[0]
+    dv_max = max(to_unit(b.delta_v_magnitude, Kind.SPEED, system)[0] for b in moving)
+    sunit = to_unit(1.0, Kind.SPEED, system)[1]
+    if dv_max > 0:
+        scale = _nice_at_most(ref_len / dv_max)  # display length per display speed unit
+        for b in moving:
+            dv, _ = to_unit(b.delta_v_magnitude, Kind.SPEED, system)
+            if dv <= 0:
+                continue
+            tail = S.d(sc.states[b.name].position)
+            vec = np.asarray(b.delta_v, dtype=float) / b.delta_v_magnitude * dv * scale
+            dark = S.colors(b.name)[2]
+            ax.add_patch(FancyArrowPatch(tail, tail + vec, arrowstyle="-|>", mutation_scale=12, lw=1.6, color=dark,
+                                         shrinkA=0, shrinkB=0, zorder=_Z_ARROW, gid=f"arrow:delta-v:{b.name}"))
+            S.add(tail + vec)
+            # label beyond the tip, on the arrow's line
+            u = vec / np.hypot(*vec)
+            tip = tail + vec + u * 0.5 * S.k
+            S.text(tip, f"\u0394v {b.name}\n{fmt(b.delta_v_magnitude, Kind.SPEED, system, 3)}",
+                    fontsize=7, color=dark, ha="left" if u[0] >= 0 else "right", va="bottom" if u[1] >= 0 else "top",
+                    zorder=_Z_TEXT, path_effects=_halo())
+        per = 1.0 / scale
+        S.legend_entry(f"\u0394v at the CG (1 {S.lunit} of arrow = {per:.3g} {sunit})",
+                       Line2D([], [], color="0.15", lw=1.6, marker=">", markevery=[1], ms=5))
+    # principal direction of force at the contact point
+    length = 3.0 * S.k
+    p0 = S.d(imp.point)
+    ax.plot(*p0, "o", ms=5, mfc="black", mec="white", mew=0.8, zorder=_Z_ARROW + 0.5)
+    S.add(p0)
+    S.legend_entry("contact point (crush impulse centre)",
+                   Line2D([], [], ls="none", marker="o", ms=5, mfc="black", mec="white"))
+    for name in (imp.body1, imp.body2):
+        b = imp.bodies[name]
+        if b.fixed or b.crush_impulse is None or b.pdof is None:
+            continue
+        f = np.asarray(b.crush_impulse, dtype=float)
+        if not np.hypot(*f) > 0:
+            continue
+        u = f / np.hypot(*f)
+        tip = p0 + length * u
+        dark = S.colors(name)[2]
+        ax.add_patch(FancyArrowPatch(p0, tip, arrowstyle="simple,head_width=0.9,head_length=0.9,tail_width=0.35",
+                                     mutation_scale=14, facecolor="white", edgecolor=dark, lw=1.2, shrinkA=0,
+                                     shrinkB=0, zorder=_Z_ARROW, gid=f"arrow:pdof:{name}"))
+        S.add(tip)
+        deg = convert(b.pdof, "rad", "deg", Kind.ANGLE)
+        text = f"PDOF {name}\n{deg:.0f}\N{DEGREE SIGN} ({b.clock} o'clock)"
+        # beyond the tip, or beyond the tail (the side the force comes from) if that covers fewer labels
+        best = None
+        for anchor, d in ((tip + u * 0.4 * S.k, u), (p0 - u * 0.4 * S.k, -u)):
+            hits = S.label_hits(anchor, d, 17, 2)
+            if best is None or hits < best[0]:
+                best = (hits, anchor, d)
+        _, lab, d = best
+        S.text(lab, text, fontsize=7, color=dark, ha="left" if d[0] >= 0 else "right",
+               va="bottom" if d[1] >= 0 else "top", zorder=_Z_TEXT, path_effects=_halo())
+        S.labels.append(lab)
+    S.legend_entry("PDOF: crush force on each body in contact",
+                   Line2D([], [], ls="none", marker=r"$\Rightarrow$", ms=12, color="0.15"))
+
+
+def _draw_barrier(S: _Scene) -> None:
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Polygon
+
+    sc = S.sc
+    if not any(v.is_barrier for v in sc.vehicles):
+        return
+    surf = sc.impact.surface
+    p0 = np.asarray(surf.point, dtype=float)
+    t = np.asarray(surf.tangent, dtype=float)
+    n = np.asarray(surf.normal, dtype=float)  # from the barrier into the vehicle
+    extent = getattr(sc, "barrier_extent", None) or (-np.inf, np.inf)
+    a, b = float(extent[0]), float(extent[1])
+    if not (np.isfinite(a) and np.isfinite(b)):
+        # an endless face: across everything drawn, plus a margin
+        proj = (np.vstack(S.points) / S.k - p0) @ t
+        a = a if np.isfinite(a) else float(proj.min()) - 3.0
+        b = b if np.isfinite(b) else float(proj.max()) + 3.0
+    ends = S.d(np.array([p0 + a * t, p0 + b * t]))
+    depth = 0.6 * S.k
+    back = ends - depth * n
+    name = next(v.bodies[0].name for v in sc.vehicles if v.is_barrier)
+    S.ax.add_patch(Polygon(np.vstack([ends, back[::-1]]), closed=True, facecolor="0.85", edgecolor="0.35", lw=0.0,
+                           hatch="////", zorder=_Z_BARRIER, gid=f"barrier:{name}"))
+    S.ax.plot(ends[:, 0], ends[:, 1], "-", color="0.15", lw=4.0, solid_capstyle="butt", zorder=_Z_BARRIER + 0.5)
+    S.add(np.vstack([ends, back]))
+    S.legend_entry(f"barrier face ({name})", Line2D([], [], color="0.15", lw=4.0))
+
+
+def _scale_bar(S: _Scene, width: float) -> None:
+    from matplotlib.font_manager import FontProperties
+    from mpl_toolkits.axes_grid1.anchored_artists import AnchoredSizeBar
+
+    length = _nice_at_most(width / 5.0)
+    bar = AnchoredSizeBar(S.ax.transData, length, f"{length:g} {S.lunit}", "lower left", pad=0.5, sep=3,
+                          borderpad=0.6, frameon=True, size_vertical=0.0, color="black",
+                          fontproperties=FontProperties(size=8))
+    bar.patch.set(facecolor="white", alpha=0.85, edgecolor="0.6", lw=0.5)
+    # the bar itself: a thick line (size_vertical would be in data units)
+    bar.size_bar.get_children()[0].set_linewidth(3.0)
+    bar.set_gid("scalebar")
+    bar.set_zorder(_Z_TEXT + 1)
+    S.ax.add_artist(bar)
+
+
+def _axes_indicator(ax) -> None:
+    """+X / +Y arrows near the top left corner (equal aspect: screen and world directions agree)."""
+    base = (0.03, 0.80)
+    arrow = dict(arrowstyle="<|-", lw=1.2, color="black", shrinkA=0, shrinkB=0, mutation_scale=10)
+    for off, text, ha, va, toff in (((26, 0), "+X", "left", "center", (30, 0)),
+                                    ((0, 26), "+Y", "center", "bottom", (0, 29))):
+        ax.annotate("", xy=base, xycoords="axes fraction", xytext=off, textcoords="offset points",
+                    arrowprops=arrow, zorder=_Z_TEXT + 1)
+        ax.annotate(text, xy=base, xycoords="axes fraction", xytext=toff, textcoords="offset points",
+                    fontsize=8, ha=ha, va=va, zorder=_Z_TEXT + 1, path_effects=_halo(), gid="axes-indicator")
+
+
+def _layout_scene_figure(ax, leg, below: bool, width: float = 10.0, height: float = 7.0) -> None:
+    """Size a figure made by :func:`plot_scene` and place its axes: the axes box gets exactly
+    the aspect of the limits (equal scale, no wasted band), the legend its measured size.
+
+    A wide scene is ``width`` inches wide with the legend under it; a tall one has axes
+    ``height`` inches high and the legend at the right.
+    """
+    fig = ax.figure
+    r = fig.canvas.get_renderer()
+    x0, x1 = ax.get_xlim()
+    y0, y1 = ax.get_ylim()
+    aspect = (y1 - y0) / (x1 - x0)
+    leg_w = leg_h = 0.0
+    if leg is not None:
+        bb = leg.get_window_extent(r)
+        leg_w, leg_h = bb.width / fig.dpi, bb.height / fig.dpi
+    left, right, bottom = 0.8, 0.2, 0.6  # y tick labels + label; margin; x tick labels + label
+    top = ax.title.get_window_extent(r).height / fig.dpi + 0.3
+    if below:
+        w_ax = width - left - right
+        h_ax = w_ax * aspect
+        w_fig = width
+        h_fig = top + h_ax + bottom + (leg_h + 0.25 if leg is not None else 0.0)
+    else:
+        h_ax = height
+        w_ax = h_ax / aspect
+        if w_ax > width:  # very wide but with the legend at the right (legend= a location): cap
+            w_ax, h_ax = width, width * aspect
+        w_fig = left + w_ax + right + (leg_w + 0.3 if leg is not None else 0.0)
+        h_fig = max(top + h_ax + bottom, top + leg_h + 0.2)
+    fig.set_size_inches(w_fig, h_fig)
+    fig.draw_without_rendering()  # the renderer follows the new size
+    ax.set_position([left / w_fig, (h_fig - top - h_ax) / h_fig, w_ax / w_fig, h_ax / h_fig])
+
+
+def _fit_texts(S: _Scene) -> None:
+    """Widen the limits so that every data-anchored label lies inside the axes."""
+    ax = S.ax
+    fig = ax.figure
+    if not S.texts:
+        return
+    fig.draw_without_rendering()
+    inv = ax.transData.inverted()
+    x0, x1 = ax.get_xlim()
+    y0, y1 = ax.get_ylim()
+    lo, hi = np.array([x0, y0]), np.array([x1, y1])
+    r = fig.canvas.get_renderer()
+    for t in S.texts:
+        bb = t.get_window_extent(r)
+        corners = inv.transform([[bb.x0, bb.y0], [bb.x1, bb.y1]])
+        lo = np.minimum(lo, corners.min(axis=0))
+        hi = np.maximum(hi, corners.max(axis=0))
+    margin = 0.01 * float((hi - lo).max())
+    if np.any(lo < [x0, y0]) or np.any(hi > [x1, y1]):
+        ax.set_xlim(lo[0] - margin if lo[0] < x0 else x0, hi[0] + margin if hi[0] > x1 else x1)
+        ax.set_ylim(lo[1] - margin if lo[1] < y0 else y0, hi[1] + margin if hi[1] > y1 else y1)
+
+
+def _scene_legend(S: _Scene, legend, below: bool):
+    labels = list(S.handles)
+    handles = [S.handles[k] for k in labels]
+    if legend is True and below:
+        from matplotlib.transforms import offset_copy
+
+        # anchored 40 pt under the axes: below the tick labels and the axis label
+        under = offset_copy(S.ax.transAxes, fig=S.ax.figure, y=-40, units="points")
+        leg = S.ax.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, 0.0), bbox_transform=under,
+                          borderaxespad=0.0, fontsize=7.5, frameon=False, handlelength=2.6, ncol=2,
+                          columnspacing=2.5)
+    elif legend is True:
+        leg = S.ax.legend(handles, labels, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0,
+                          fontsize=7.5, frameon=False, handlelength=2.6)
+    else:
+        leg = S.ax.legend(handles, labels, loc=legend, fontsize=7, framealpha=0.9, handlelength=2.6)
+    n = len(S.scene.evidence.checks) if S.scene.evidence is not None else 0
+    if n:
+        failed = S.scene.evidence.n_failed
+        leg.set_title(f"Evidence: {n - failed} of {n} items within tolerance", prop={"size": 8, "weight": "bold"})
+        leg.get_title().set_color(_PASS if failed == 0 else _FAIL)
+    leg.set_zorder(_Z_TEXT + 2)
+    for text in leg.get_texts():
+        c = S.label_colors.get(text.get_text())
+        if c is not None:
+            text.set_color(c)
+    return leg
+
+
+def plot_histories(scene, axes=None, *, system: str | None = None):
+    """Run-out time histories: CG speed, yaw rate and articulation angle after separation.
+
+    Parameters
+    ----------
+    scene : SceneResult
+        With a run-out (``scene.runout`` not None).
+    axes : sequence of 3 matplotlib Axes, optional
+        Panels for speed, yaw rate and articulation; a new 3 x 1 figure (shared time axis)
+        if None.
+    system : {"SI", "US"}, optional
+        Speed in m/s or mph; yaw rate in deg/s and articulation in deg in both. Default: the
+        scenario's units.
+
+    Returns
+    -------
+    matplotlib Figure if ``axes`` is None, else ``axes`` (as an array of 3 Axes).
+
+    Raises
+    ------
+    ScenarioError
+        If the scene has no run-out (an impact-only scenario).
+
+    Notes
+    -----
+    One line per body (colour family per vehicle as in :func:`plot_scene`; solid for the
+    first body of a vehicle, dashed and dotted for the towed ones) from the sampled
+    ``BodyRunout.history``; a dot marks the time to rest. The articulation at each hitch is
+    ``HitchHistory.articulation`` (heading of the front body minus that of the rear body);
+    a hitch's articulation limit, if set, is drawn as thin grey lines.
+    """
+    from .errors import ScenarioError
+    from .units import Kind, convert, to_unit
+
+    system = _system(scene, system)
+    if not scene.runout:
+        raise ScenarioError(f"scene {scene.scenario.title!r} has no run-out (impact only): there are no time "
+                            "histories to plot; add a [runout] section to the scenario", field="runout")
+    new = axes is None
+    if new:
+        fig, axes = _plt().subplots(3, 1, figsize=(8.0, 8.5), sharex=True, layout="constrained")
+    axes = np.asarray(axes, dtype=object).ravel()
+    if len(axes) != 3:
+        raise ScenarioError(f"needs 3 axes (speed, yaw rate, articulation), got {len(axes)}", field="axes")
+    ax_v, ax_w, ax_a = axes
+    kv, vunit = to_unit(1.0, Kind.SPEED, system)
+    kw = convert(1.0, "rad/s", "deg/s", Kind.ANGULAR_VELOCITY)
+    ka = convert(1.0, "rad", "deg", Kind.ANGLE)
+    styles = ("-", "--", ":", "-.")
+    movable = [v for v in scene.scenario.vehicles if not v.is_barrier]
+    family = {v.name: _FAMILIES[i % len(_FAMILIES)] for i, v in enumerate(movable)}
+    limits = {}
+    for v in movable:
+        for i, h in enumerate(v.hitches):
+            limits[(v.bodies[i].name, v.bodies[i + 1].name)] = h.articulation_limit
+    t_max = 0.0
+    n_hitch = 0
+    for vn, r in scene.runout.items():
+        _, line, dark = family.get(vn, _FAMILIES[-1])
+        at_rest = r.success
+        for j, (name, b) in enumerate(r.bodies.items()):
+            h = b.history
+            color = dark if j == 0 else line
+            ls = styles[j % len(styles)]
+            speed = kv * np.hypot(h.vx, h.vy)
+            ax_v.plot(h.t, speed, ls, color=color, lw=1.5, label=f"{name} ({vn})")
+            ax_w.plot(h.t, kw * h.yaw_rate, ls, color=color, lw=1.5, label=f"{name} ({vn})")
+            if at_rest and b.time_to_rest is not None:
+                ax_v.plot(h.t[-1], speed[-1], "o", color=color, ms=4)
+            t_max = max(t_max, float(h.t[-1]))
+        for k, hh in enumerate(r.hitches):
+            n_hitch += 1
+            color = dark if k == 0 else line
+            ax_a.plot(hh.t, ka * hh.articulation, styles[k % len(styles)], color=color, lw=1.5,
+                      label=f"{hh.front} \N{MINUS SIGN} {hh.rear} ({vn})")
+            lim = limits.get((hh.front, hh.rear))
+            if lim is not None:
+                for sgn in (1, -1):
+                    ax_a.axhline(sgn * ka * lim, color="0.6", lw=0.8, ls="--")
+                ax_a.plot([], [], "--", color="0.6", lw=0.8, label="articulation limit")
+    ax_v.set_ylabel(f"CG speed [{vunit}]")
+    ax_w.set_ylabel("yaw rate [deg/s]")
+    ax_a.set_ylabel("articulation [deg]")
+    ax_a.set_xlabel("time after separation [s]")
+    for ax in axes:
+        ax.grid(True, alpha=0.4)
+        ax.set_xlim(0.0, t_max * 1.02 if t_max > 0 else 1.0)
+        ax.axhline(0.0, color="0.3", lw=0.6)
+    ax_v.set_ylim(bottom=0.0)
+    ax_v.legend(fontsize=8, loc="upper right", title="\N{BLACK CIRCLE} time to rest", title_fontsize=7)
+    ax_w.legend(fontsize=8, loc="best")
+    if n_hitch:
+        ax_a.legend(fontsize=8, loc="best", title="front \N{MINUS SIGN} rear heading", title_fontsize=7)
+    else:
+        ax_a.text(0.5, 0.5, "no articulated vehicle in this scene", transform=ax_a.transAxes, ha="center",
+                  va="center", color="0.4")
+    ax_v.set_title(_wrap(f"{scene.scenario.title}: run-out after separation", 90), fontsize=10)
+    return axes[0].figure if new else axes
+
+
+def save_scene_figures(scene, path, *, histories_path=None, dpi: int = 150, interval: float | None = None,
+                       system: str | None = None) -> list:
+    """Write the scene diagram (and optionally the histories) to files; closes its figures.
+
+    Parameters
+    ----------
+    scene : SceneResult
+    path : str or Path
+        Scene diagram; the format follows the suffix: ``.png``, ``.svg`` or ``.pdf``.
+    histories_path : str or Path, optional
+        Run-out histories (:func:`plot_histories`), same suffixes; needs a run-out.
+    dpi : int
+        Resolution of raster output [dots per inch].
+    interval : float, optional
+        Ghost-outline interval [s] (see :func:`plot_scene`).
+    system : {"SI", "US"}, optional
+        Display units; default the scenario's.
+
+    Returns
+    -------
+    list of Path
+        The files written, scene diagram first. Parent directories are created.
+
+    Raises
+    ------
+    ScenarioError
+        For a suffix other than .png/.svg/.pdf (before anything is drawn or written), or
+        histories asked of a scene without a run-out.
+    """
+    from pathlib import Path
+
+    from .errors import ScenarioError
+
+    targets = [Path(path)] + ([Path(histories_path)] if histories_path is not None else [])
+    for p, key in zip(targets, ("path", "histories_path")):
+        if p.suffix.lower() not in SCENE_FIGURE_SUFFIXES:
+            raise ScenarioError(f"cannot write a figure to {str(p)!r}: unsupported suffix {p.suffix!r}; allowed "
+                                f"{', '.join(SCENE_FIGURE_SUFFIXES)}", field=key)
+    if histories_path is not None and not scene.runout:
+        raise ScenarioError(f"cannot write histories to {str(histories_path)!r}: scene "
+                            f"{scene.scenario.title!r} has no run-out (impact only)", field="histories_path")
+    plt = _plt()
+    written = []
+    ax = plot_scene(scene, interval=interval, system=system)
+    try:
+        targets[0].parent.mkdir(parents=True, exist_ok=True)
+        ax.figure.savefig(targets[0], dpi=dpi)
+        written.append(targets[0])
+    finally:
+        plt.close(ax.figure)
+    if histories_path is not None:
+        fig = plot_histories(scene, system=system)
+        try:
+            targets[1].parent.mkdir(parents=True, exist_ok=True)
+            fig.savefig(targets[1], dpi=dpi)
+            written.append(targets[1])
+        finally:
+            plt.close(fig)
+    return written

@@ -29,6 +29,8 @@ import math
 import numpy as np
 from hypothesis import given
 
+from crashsim.impact.core import MU_MAX_LIMIT
+
 from impact_scenes import (SETTINGS, cross, final_point_velocity, hitch_pins, impulse_scale, impulses_on_bodies,
                            initial_point_velocity, lever_length, scenes, velocity_at_arm, velocity_scale)
 
@@ -120,7 +122,8 @@ def test_restitution_at_the_contact(scene):
 @given(scenes())
 def test_tangential_law(scene):
     """Eqs. 4, 8: no_slide stops relative tangential motion; ratio gives P_t = mu P_n;
-    friction either sticks with |mu_max| <= f or slides throughout with mu = f sign(mu_max)."""
+    friction either sticks with |mu_max| <= f or slides throughout with mu = f sign(mu_max)
+    (or, where no impulse ratio up to MU_MAX_LIMIT can stop the sliding, mu = -f sign(u_t))."""
     p, r = scene.problem, scene.result
     law = p.surface.tangential
     t_angle = p.surface.normal_angle + p.surface.tangent_sign * math.pi / 2
@@ -140,8 +143,13 @@ def test_tangential_law(scene):
         f = law.value
         assert abs(Pt) <= f * abs(Pn) + CONDITION_RTOL * impulse_scale(r)
         if r.sliding:
-            assert abs(r.mu_max) > f
-            assert abs(Pt - f * math.copysign(1.0, r.mu_max) * Pn) <= CONDITION_RTOL * impulse_scale(r)
+            if math.isfinite(r.mu_max) and abs(r.mu_max) <= MU_MAX_LIMIT:
+                assert abs(r.mu_max) > f  # Eq. 8: the friction cannot stop the sliding
+                sign = math.copysign(1.0, r.mu_max)
+            else:  # sliding cannot be stopped at all: Coulomb friction opposes the initial slip
+                du = _relative_velocity(p, r, p.surface.point, after=False)
+                sign = -float(np.sign(du @ t))
+            assert abs(Pt - f * sign * Pn) <= CONDITION_RTOL * impulse_scale(r)
         else:
             assert abs(r.mu_max) <= f
             assert r.mu == r.mu_max

@@ -337,3 +337,21 @@ def test_batch_size():
     for n in (0, -3, 2.5):
         check(lambda: ImpactBatch.from_problem(p, n), "n", repr(n), ">= 1")
     check(lambda: ImpactBatch.from_problem(p, 2).body_index("A_dolly"), "body", "'A_dolly'", "B_car")
+
+
+def test_duplicate_constraint_names():
+    """Results are keyed by name: two constraints called 'lat' would lose one impulse."""
+    c = (VelocityConstraint("A_tractor", (0.0, 0.0), math.pi / 2, 0.0, "lat"),
+         VelocityConstraint("A_tractor", (1.0, 0.0), math.pi / 2, 0.0, "lat"))
+    check(lambda: scene(constraints=c), "impact.constraints", "['lat']", "unique")
+
+
+def test_duplicate_external_impulse_names():
+    x = (ExternalImpulse("A_trailer", (0.0, 0.0), (0.0, -1000.0), "tyre"),
+         ExternalImpulse("A_tractor", (0.0, 0.0), (0.0, -2000.0), "tyre"))
+    check(lambda: scene(external=x), "impact.external_impulses", "['tyre']", "unique")
+
+
+def test_unnamed_constraints_are_not_duplicates():
+    c = (VelocityConstraint("A_tractor", (0.0, 0.0), math.pi / 2), VelocityConstraint("A_tractor", (1.0, 0.0), math.pi / 2))
+    assert len(scene(constraints=c).constraints) == 2

@@ -190,37 +190,49 @@ def test_mass_ratios_conserve_momentum(ratio, law, ep):
     assert r.condition_number < 1e4  # equilibration keeps 12 decades of mass ratio harmless
 
 
-@pytest.mark.parametrize("ratio", [1e-6, 1e-4])
-def test_tiny_car_bounces_off_the_trailer_as_off_a_moving_wall(ratio):
-    """m_car / m_truck -> 0: the car's result tends to that against the trailer made rigid
-    (a barrier moving with the trailer's velocity), with an error of first order in the ratio."""
+def _light_car_vs_rigid_trailer(ratio):
+    """(car, trailer) deviations from the rigid-trailer limit, per unit mass ratio."""
     m = ratio * 15500.0
     p = side_impact(m, m * 2800.0 / 1500.0)
     r = solve_impact(p)
-    trailer = p.vehicles[0].bodies[1]
-    wall = Vehicle("W", (Body(trailer.name, math.inf, math.inf),))
+    wall = Vehicle("W", (Body("A_trailer", math.inf, math.inf),))
     limit = solve_impact(replace(p, vehicles=(wall, p.vehicles[1]),
                                  states={k: v for k, v in p.states.items() if k != "A_tractor"}))
     car_r, car_l = r.bodies["B_car"], limit.bodies["B_car"]
     scale = float(np.hypot(*car_l.delta_v))
-    assert np.hypot(*(car_r.velocity - car_l.velocity)) <= 10 * ratio * scale
-    assert abs(car_r.yaw_rate - car_l.yaw_rate) <= 10 * ratio * max(abs(car_l.delta_yaw_rate), 1.0)
-    # and the truck hardly notices: its velocity change is of the order of the ratio
-    assert np.hypot(*r.bodies["A_trailer"].delta_v) <= 10 * ratio * scale
+    return (float(np.hypot(*(car_r.velocity - car_l.velocity))) / (ratio * scale),
+            abs(car_r.yaw_rate - car_l.yaw_rate) / (ratio * abs(car_l.delta_yaw_rate)),
+            float(np.hypot(*r.bodies["A_trailer"].delta_v)) / (ratio * scale))
+
+
+def test_tiny_car_bounces_off_the_trailer_as_off_a_moving_wall():
+    """m_car / m_truck -> 0: the car's result tends to that against the trailer made rigid (a
+    barrier moving with the trailer), and the deviation is of first order in the mass ratio:
+    deviation / ratio is bounded and the same at ratio 1e-4 and 1e-6 (measured 4.67, 1.34 and
+    2.65 for the car's velocity, its yaw rate and the trailer's velocity change)."""
+    c4, c6 = _light_car_vs_rigid_trailer(1e-4), _light_car_vs_rigid_trailer(1e-6)
+    for a, b in zip(c4, c6):
+        assert 0 < b < 10
+        assert a == pytest.approx(b, rel=1e-3)
 
 
 def test_huge_car_pushes_the_truck_as_a_moving_wall():
-    """m_car / m_truck = 1e6: the truck's result tends to that against the car made rigid."""
-    ratio = 1e6
-    m = ratio * 15500.0
-    p = side_impact(m, m * 2800.0 / 1500.0)
-    r = solve_impact(p)
-    wall = Vehicle("W", (Body("B_car", math.inf, math.inf),))
-    limit = solve_impact(replace(p, vehicles=(p.vehicles[0], wall)))
-    for name in ("A_tractor", "A_trailer"):
-        dv = float(np.hypot(*limit.bodies[name].delta_v))
-        assert np.hypot(*(r.bodies[name].velocity - limit.bodies[name].velocity)) <= 10 / ratio * dv
-    assert np.hypot(*r.bodies["B_car"].delta_v) <= 10 / ratio * float(np.hypot(*limit.bodies["A_trailer"].delta_v))
+    """m_car / m_truck -> inf: the truck's result tends to that against the car made rigid, the
+    deviation again of first order in 1 / ratio (same coefficient at 1e4 and 1e6)."""
+    coef = []
+    for ratio in (1e4, 1e6):
+        m = ratio * 15500.0
+        p = side_impact(m, m * 2800.0 / 1500.0)
+        r = solve_impact(p)
+        limit = solve_impact(replace(p, vehicles=(p.vehicles[0], Vehicle("W", (Body("B_car", math.inf, math.inf),)))))
+        dev = [float(np.hypot(*(r.bodies[n].velocity - limit.bodies[n].velocity)))
+               / float(np.hypot(*limit.bodies[n].delta_v)) * ratio for n in ("A_tractor", "A_trailer")]
+        dev.append(float(np.hypot(*r.bodies["B_car"].delta_v)) / float(np.hypot(*limit.bodies["A_trailer"].delta_v))
+                   * ratio)
+        coef.append(dev)
+    for a, b in zip(*coef):
+        assert 0 < b < 10
+        assert a == pytest.approx(b, rel=1e-3)
 
 
 # ------------------------------------------------------------------------------------ restitution
@@ -452,10 +464,6 @@ def test_one_vehicle_at_rest():
     assert 0 < r.energy_loss["system"] < 1
 
 
-@pytest.mark.xfail(strict=True, reason="BUG: ImpactBatch.solve computes energy_loss under np.errstate(invalid, "
-                   "divide) but not over: a vehicle whose kinetic energy before is subnormal (1e-160 m/s) raises "
-                   "'RuntimeWarning: overflow encountered in divide' (an error under this project's pytest "
-                   "filterwarnings), while solve_impact returns -inf for the same item")
 def test_batch_energy_loss_of_a_vehicle_nearly_at_rest():
     import warnings
 
@@ -504,7 +512,8 @@ def test_condition_number_reported_for_ordinary_cases(make):
     assert 1.0 <= r.condition_number < 1e3
 
 
-# ------------------------------------------------------------------------------------ known bugs
+# ------------------------------------------------------------------------------------ bugs found here
+# Regression tests for bugs this tier found (fixed in src), and xfail(strict) tests for open ones.
 
 def _car_between_constraints(angle, law):
     """A car (heading +x, 10 m/s forward, 2 m/s left) strikes a wall ahead with its front-left
@@ -532,14 +541,36 @@ def test_ratio_law_does_not_depend_on_the_no_slide_system():
     assert r.separation_normal_velocity == pytest.approx(-0.1 * r.closing_velocity, rel=1e-12)
 
 
-def test_friction_law_outcome_does_not_depend_on_rounding():
+def _outcomes(law):
+    """Solve the scene of _car_between_constraints turned by four angles: what came out?"""
     outcomes = []
     for angle in (0.0, 0.3, 1.0, 2.0):
         try:
-            r = solve_impact(_car_between_constraints(angle, TangentialLaw("friction", 0.05)))
-            outcomes.append(("solved", round(float(np.hypot(*r.bodies["C_car"].velocity)), 9), r.sliding))
+            r = solve_impact(_car_between_constraints(angle, law))
+            outcomes.append(("solved", round(float(np.hypot(*r.bodies["C_car"].velocity)), 9), r.sliding,
+                             "mu_max nan" if math.isnan(r.mu_max) else "mu_max finite"))
         except IllConditionedError:
             outcomes.append(("refused",))
+    return outcomes
+
+
+_ROUNDING_BUG = pytest.mark.xfail(strict=True, reason=(
+    "BUG: the no-slide system of this scene is singular in exact arithmetic, but turned by 1 rad "
+    "LU does not hit an exact zero pivot: ok stays True, mu_max = 0.2419 is reported from a solve "
+    "with condition number 1.1e17, and with f >= 0.2419 the friction law keeps that solution and "
+    "refuses (other angles: mu_max NaN, slides). Needs a conditioning test on the no-slide solve, "
+    "not only LinAlgError."))
+
+
+@pytest.mark.parametrize("law", [
+    pytest.param(TangentialLaw("friction", 0.05), id="friction-0.05"),
+    pytest.param(TangentialLaw("friction", 0.5), id="friction-0.5"),
+    pytest.param(TangentialLaw("ratio", 0.1), id="ratio-0.1"),
+])
+def test_outcome_does_not_depend_on_rounding(law):
+    """Turning the scene must not change whether it solves, nor the answer, nor whether
+    mu_max is defined."""
+    outcomes = _outcomes(law)
     assert len(set(outcomes)) == 1, outcomes
 
 

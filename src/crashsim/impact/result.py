@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..geometry import rotate, wrap_angle
+from .core import energy_loss_fraction
 
 __all__ = ["ImpactResult", "BodyImpact", "HitchImpulse", "ConstraintImpulse", "clock_direction", "pdof_from_force"]
 
@@ -216,11 +217,11 @@ class ImpactResult:
             e1 = float(out["ke_after"][i, sel].sum())
             ke[vn] = {"before": e0, "after": e1}
             if not S.fixed[np.nonzero(sel)[0][0]]:
-                loss[vn] = (e0 - e1) / e0 if e0 > 0 else float("nan")
+                loss[vn] = float(energy_loss_fraction(e0, e1))
         e0 = float(out["ke_before"][i].sum())
         e1 = float(out["ke_after"][i].sum())
         ke["system"] = {"before": e0, "after": e1}
-        loss["system"] = (e0 - e1) / e0 if e0 > 0 else float("nan")
+        loss["system"] = float(energy_loss_fraction(e0, e1))
         return cls(
             body1=S.body_names[S.body1], body2=S.body_names[S.body2],
             normal=out["normal"][i].copy(), tangent=out["tangent"][i].copy(), point=A.point[i].copy(),

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import IllConditionedError, ScenarioError
-from .core import ImpactArrays, ImpactStructure, solve_arrays
+from .core import ImpactArrays, ImpactStructure, energy_loss_fraction, solve_arrays
 from .model import ImpactProblem
 from .result import ImpactResult
 
@@ -167,10 +167,8 @@ class ImpactBatch:
         out["delta_yaw_rate"] = out["yaw_rate"] - A.yaw_rate
         vidx = np.asarray(S.vehicle_index)
         ke0, ke1 = out["ke_before"], out["ke_after"]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            for k, vn in enumerate(S.vehicle_names):
-                sel = vidx == k
-                e0 = ke0[:, sel].sum(1)
-                out[f"energy_loss.{vn}"] = (e0 - ke1[:, sel].sum(1)) / e0
-            out["energy_loss.system"] = (ke0.sum(1) - ke1.sum(1)) / ke0.sum(1)
+        for k, vn in enumerate(S.vehicle_names):
+            sel = vidx == k
+            out[f"energy_loss.{vn}"] = energy_loss_fraction(ke0[:, sel].sum(1), ke1[:, sel].sum(1))
+        out["energy_loss.system"] = energy_loss_fraction(ke0.sum(1), ke1.sum(1))
         return out

@@ -1,8 +1,12 @@
 """Tyre force laws for the post-impact run-out: pure functions of NumPy arrays.
 
-Both the SciPy engine (:mod:`crashsim.motion.simulate`) and the pymunk cross-check
-(:mod:`crashsim.crosscheck.pymunk_runout`) call exactly these functions, so a difference
-between the two integrations is an integration difference, never a model difference.
+The SciPy engine (:mod:`crashsim.motion.simulate`), the pymunk cross-check
+(:mod:`crashsim.crosscheck.pymunk_runout`) and the compiled engine
+(:mod:`crashsim.motion.fast`) all evaluate the same source, :func:`tyre_kernel` (with
+:func:`fiala_curve` / :func:`linear_curve`): the SciPy engine and the cross-check on NumPy
+arrays, the compiled engine per contact after numba compiles that very function for scalars.
+A difference between the integrations is therefore an integration difference, never a model
+difference.
 
 Model (after SMAC / EDSMAC / PC-Crash, research note ``post-impact-dynamics.md`` sec. 2)
 -----------------------------------------------------------------------------------------
@@ -77,7 +81,7 @@ import numpy as np
 
 from ..errors import ScenarioError
 
-__all__ = ["LATERAL_MODELS", "lateral_force", "tyre_forces", "tyre_forces_core"]
+__all__ = ["LATERAL_MODELS", "lateral_force", "tyre_forces", "tyre_forces_core", "tyre_kernel", "fiala_curve", "linear_curve"]
 
 #: Names of the pure-slip lateral force curves.
 LATERAL_MODELS = ("fiala", "linear")
@@ -85,6 +89,30 @@ LATERAL_MODELS = ("fiala", "linear")
 # Smallest friction capacity mu*N [N] used as a divisor; a contact with zero load (lift-off)
 # then produces exactly zero force instead of a division by zero.
 _TINY_FORCE = 1e-12
+
+
+def _select(cond, if_true, if_false):
+    """Elementwise choice, ``np.where`` (the compiled engine registers a scalar overload)."""
+    return np.where(cond, if_true, if_false)
+
+
+def fiala_curve(tan_alpha, mu_load, cornering_stiffness):
+    """Fiala pure-slip lateral force [N] (see :func:`lateral_force`); arrays or scalars, no checks.
+
+    Written with NumPy ufuncs only, so the same source runs on arrays (SciPy engine) and,
+    compiled by numba, on scalars (:mod:`crashsim.motion.fast`).
+    """
+    # signed normalised slip z = C tan(a) / (3 mu N), clipped to [-1, 1];
+    # sgn(z) [1 - (1 - |z|)^3] = z (3 - 3 |z| + z^2)
+    z = tan_alpha * (cornering_stiffness / (3.0 * np.maximum(mu_load, _TINY_FORCE)))
+    z = np.minimum(np.maximum(z, -1.0), 1.0)
+    return (-mu_load) * z * (3.0 - 3.0 * np.abs(z) + z * z)
+
+
+def linear_curve(tan_alpha, mu_load, cornering_stiffness):
+    """Linear-saturated (PC-Crash style) pure-slip lateral force [N] (see :func:`lateral_force`)."""
+    alpha = np.arctan(tan_alpha)
+    return -np.sign(alpha) * np.minimum(cornering_stiffness * np.abs(alpha), mu_load)
 
 
 def lateral_force(tan_alpha, mu_load, cornering_stiffness, model: str = "fiala"):
@@ -117,14 +145,9 @@ def lateral_force(tan_alpha, mu_load, cornering_stiffness, model: str = "fiala")
     tan_alpha = np.asarray(tan_alpha, dtype=float)
     mu_load = np.asarray(mu_load, dtype=float)
     if model == "fiala":
-        # signed normalised slip z = C tan(a) / (3 mu N), clipped to [-1, 1];
-        # sgn(z) [1 - (1 - |z|)^3] = z (3 - 3 |z| + z^2)
-        z = tan_alpha * (cornering_stiffness / (3.0 * np.maximum(mu_load, _TINY_FORCE)))
-        z = np.minimum(np.maximum(z, -1.0), 1.0)
-        return (-mu_load) * z * (3.0 - 3.0 * np.abs(z) + z * z)
+        return fiala_curve(tan_alpha, mu_load, cornering_stiffness)
     if model == "linear":
-        alpha = np.arctan(tan_alpha)
-        return -np.sign(alpha) * np.minimum(cornering_stiffness * np.abs(alpha), mu_load)
+        return linear_curve(tan_alpha, mu_load, cornering_stiffness)
     raise ScenarioError(f"must be one of {LATERAL_MODELS}, got {model!r}", field="lateral_model")
 
 
@@ -193,6 +216,31 @@ def tyre_forces_core(u, w, mu_load, demand, cornering_stiffness, locked, eps, la
     """
     u = np.asarray(u, dtype=float)
     w = np.asarray(w, dtype=float)
+    if locked is True:
+        # every contact slides: the sliding branch of tyre_kernel alone
+        neg_scale = -mu_load / np.sqrt(u * u + w * w + eps * eps)
+        fx_lock, fy_lock = neg_scale * u, neg_scale * w
+        return fx_lock, fy_lock, np.ones(np.broadcast(fx_lock, fy_lock).shape, dtype=bool)
+    if lateral not in LATERAL_MODELS:
+        raise ScenarioError(f"must be one of {LATERAL_MODELS}, got {lateral!r}", field="lateral_model")
+    return tyre_kernel(u, w, mu_load, demand, cornering_stiffness, locked, eps, lateral == "fiala")
+
+
+def tyre_kernel(u, w, mu_load, demand, cornering_stiffness, locked, eps, fiala):
+    """The tyre force law itself: one source for both engines.
+
+    Written with NumPy ufuncs and :func:`_select` only, so it broadcasts over arrays (the
+    SciPy engine, through :func:`tyre_forces_core`) and, compiled by numba with a scalar
+    ``_select``, runs per contact in the compiled engine (:mod:`crashsim.motion.fast`).
+    Arguments as :func:`tyre_forces_core`, except ``locked`` (bool or bool array, never the
+    shortcut ``True`` object) and ``fiala`` (bool: Fiala curve, else the linear one).
+
+    Returns
+    -------
+    fx, fy : float or ndarray
+        Force in wheel axes [N].
+    sliding : bool or ndarray of bool
+    """
     u2 = u * u
     v2 = u2 + w * w
     eps2 = eps * eps
@@ -202,18 +250,19 @@ def tyre_forces_core(u, w, mu_load, demand, cornering_stiffness, locked, eps, la
     # sliding (locked) contact: opposite the contact velocity
     fx_lock = neg_scale * u
     fy_lock = neg_scale * w
-    if locked is True:
-        return fx_lock, fy_lock, np.ones(np.broadcast(fx_lock, fy_lock).shape, dtype=bool)
 
     # rolling / braked contact: braking priority inside the (regularised) friction circle
     fx_roll = u * (-demand / u_reg)
-    fy_demand = lateral_force(w / u_reg, mu_load, cornering_stiffness, lateral)
+    if fiala:
+        fy_demand = fiala_curve(w / u_reg, mu_load, cornering_stiffness)
+    else:
+        fy_demand = linear_curve(w / u_reg, mu_load, cornering_stiffness)
     available = np.sqrt(np.maximum(neg_scale * neg_scale * v2 - fx_roll * fx_roll, 0.0))
     saturated = np.abs(fy_demand) >= available
     fy_roll = np.minimum(np.maximum(fy_demand, -available), available)
     lock_up = saturated & (np.abs(fx_roll) >= np.abs(fx_lock))
 
     slide = locked | lock_up
-    fx = np.where(slide, fx_lock, fx_roll)
-    fy = np.where(slide, fy_lock, fy_roll)
+    fx = _select(slide, fx_lock, fx_roll)
+    fy = _select(slide, fy_lock, fy_roll)
     return fx, fy, locked | saturated

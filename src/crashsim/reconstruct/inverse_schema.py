@@ -1,0 +1,199 @@
+"""File schema of the inverse side: ``[fit]``, ``[uncertainty]`` and the evidence ``sigma`` keys.
+
+These are :class:`~crashsim.schema.Section` objects like the rest of the scenario schema, so
+they are validated and documented by the same machinery. :func:`with_inverse_sections`
+returns a scenario schema with them added (the ``[fit]`` and ``[uncertainty]`` tables at the
+end, the ``sigma`` keys in the evidence items); ``crashsim.scenario`` uses it for
+:data:`~crashsim.scenario.SCHEMA`.
+
+Values of unknowns and distributions
+------------------------------------
+An unknown or an uncertain input names a scenario input by its path in the file
+(``"vehicles.B.speed"``, ``"impact.point[0]"``, see :mod:`crashsim.reconstruct.overrides`).
+Its bounds and parameters are written like the value at that path, with its unit, **as
+strings**: ``lower = "20 mph"``, ``upper = "45 mph"``; plain numbers in quotes too:
+``lower = "0.02"`` (or ``"2 %"``). The unit kind depends on the path, so it is checked when
+the path is resolved, not by the schema's type check.
+
+Example
+-------
+.. code-block:: toml
+
+    [fit]
+    starts = 4
+    seed = 1
+
+    [[fit.unknowns]]
+    path = "vehicles.B.speed"
+    lower = "20 mph"
+    upper = "45 mph"
+    initial = "30 mph"
+
+    [uncertainty]
+    samples = 2000
+    seed = 7
+
+    [[uncertainty.inputs]]
+    path = "runout.road_friction"
+    distribution = "uniform"
+    lower = "0.6"
+    upper = "0.8"
+
+    [[evidence.rest]]
+    body = "car"
+    position = ["-6.7 m", "-0.6 m"]
+    tolerance = "0.5 m"
+    sigma = "0.2 m"           # standard uncertainty of each coordinate
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+from ..schema import ArrayOf, Field, Section, validate
+from ..units import Kind
+
+__all__ = ["UNKNOWN", "FIT", "INPUT", "UNCERTAINTY", "EVIDENCE_SIGMA_FIELDS", "DISTRIBUTIONS",
+           "with_inverse_sections", "validate_fit", "validate_uncertainty"]
+
+_VALUE = ('written like the value at path, with its unit, in quotes ("20 mph", "85 deg"; a plain '
+          'number also in quotes: "0.05")')
+
+UNKNOWN = Section("unknown", [
+    Field("path", "str", example="vehicles.B.speed",
+          description="Input to find, by its path in this file (key.key, key[i] for an array item or a vector "
+                      "component): vehicles.<v>.speed, vehicles.<v>.heading, impact.point[0], impact.restitution, "
+                      "impact.friction, impact.mu, impact.moment_restitution, runout.road_friction, "
+                      "vehicles.<v>.tyres.brake, vehicles.<v>.bodies[i].mass, ..."),
+    Field("name", "str", default="", description="Label for the report (default: the path)"),
+    Field("lower", "str", example="20 mph", description=f"Lower bound, {_VALUE}"),
+    Field("upper", "str", example="45 mph", description=f"Upper bound, {_VALUE}"),
+    Field("initial", "str", required=False, example="30 mph",
+          description=f"Start value of the first local fit (default: the file's value if within the bounds, "
+                      f"else the middle of the bounds), {_VALUE}"),
+], description="One unknown of the fit: an input of this file and its bounds")
+
+FIT = Section("fit", [
+    Field("starts", "int", default=4, minimum=1, maximum=1000,
+          description="Local least-squares fits: the first from the initial values, the others from points "
+                      "spread over the bounds (scrambled Sobol sequence); the report says how many agree"),
+    Field("screen", "int", default=0, minimum=0, maximum=100000,
+          description="Global stage: evaluate this many points spread over the bounds first and start the "
+                      "local fits (after the first) from the best of them (0: no screening)"),
+    Field("seed", "int", default=0, minimum=0, description="Seed of the start points (reproducible fits)"),
+    Field("method", choices=("trf", "dogbox"), default="trf",
+          description="Bounded least-squares method of scipy.optimize.least_squares"),
+    Field("max_evaluations", "int", default=200, minimum=5, maximum=100000,
+          description="Largest number of scene evaluations of one local fit (Jacobians not counted)"),
+    Field("diff_step", "float", default=1e-3, minimum=1e-8, maximum=0.1,
+          description="Finite-difference step of the Jacobian, as a fraction of each unknown's bound range "
+                      "(above the run-out solver's noise, rtol 1e-6)"),
+    Field("confidence", "float", default=0.95, minimum=0.5, maximum=0.9999,
+          description="Confidence level of the reported intervals"),
+    Field("covariance", choices=("absolute", "scaled"), default="absolute",
+          description="absolute: the evidence sigmas are the measurement uncertainties, covariance (J^T W J)^-1; "
+                      "scaled: multiplied by chi^2/dof (sigmas known only up to a common factor; Student t)"),
+    Field("sigma_from_tolerance", "float", required=False, minimum=0, exclusive_minimum=True, maximum=10,
+          example="0.5",
+          description="For evidence items without sigma: use this fraction of their tolerance as sigma "
+                      "(0.5 reads a tolerance as a 2-sigma bound); without it every item needs a sigma"),
+    Field("mark_points", "int", default=10, minimum=2, maximum=1000,
+          description="Points along each tyre mark at which its distance to the computed track is a residual "
+                      "(the mark weighs as one measurement with its sigma, whatever this number)"),
+], subsections=[ArrayOf("unknowns", UNKNOWN, min_items=1, description="The unknowns, with bounds")],
+   required=False, description="Least-squares fit of unknown inputs to the evidence (crashsim fit)")
+
+#: Distribution names and the keys each one needs (and allows).
+DISTRIBUTIONS = {
+    "uniform": (("lower", "upper"), ()),
+    "triangular": (("lower", "mode", "upper"), ()),
+    "normal": (("mean", "sd"), ("lower", "upper")),
+}
+
+INPUT = Section("input", [
+    Field("path", "str", example="vehicles.B.speed",
+          description="Input of this file to vary, by its path (as fit.unknowns[].path)"),
+    Field("name", "str", default="", description="Label for the report (default: the path)"),
+    Field("distribution", choices=tuple(DISTRIBUTIONS), example="uniform",
+          description="uniform (lower, upper); triangular (lower, mode, upper); normal (mean, sd; optional "
+                      "lower/upper truncate it)"),
+    Field("lower", "str", required=False, example="25 mph", description=f"Lower end, {_VALUE}"),
+    Field("upper", "str", required=False, example="35 mph", description=f"Upper end, {_VALUE}"),
+    Field("mode", "str", required=False, example="30 mph", description=f"Most likely value (triangular), {_VALUE}"),
+    Field("mean", "str", required=False, example="30 mph", description=f"Mean (normal), {_VALUE}"),
+    Field("sd", "str", required=False, example="2 mph", description=f"Standard deviation (normal), {_VALUE}"),
+], description="One uncertain input and its distribution")
+
+UNCERTAINTY = Section("uncertainty", [
+    Field("samples", "int", default=1000, minimum=1, maximum=10_000_000,
+          description="Number of Monte Carlo samples (crashsim mc --samples overrides it)"),
+    Field("seed", "int", default=0, minimum=0,
+          description="Seed: sample i depends only on (seed, i), so local, resumed and cluster runs agree"),
+], subsections=[ArrayOf("inputs", INPUT, min_items=1, description="The uncertain inputs")],
+   required=False, description="Monte Carlo propagation of input uncertainty through impact and run-out (crashsim mc)")
+
+#: The ``sigma`` keys of the evidence items (standard measurement uncertainties, used by the fit).
+EVIDENCE_SIGMA_FIELDS = {
+    "rest": (
+        Field("sigma", Kind.LENGTH, required=False, minimum=0, exclusive_minimum=True, example="0.2 m",
+              description="Standard uncertainty of each coordinate of the measured rest position (fit)"),
+        Field("heading_sigma", Kind.ANGLE, required=False, minimum=0, exclusive_minimum=True, example="2 deg",
+              description="Standard uncertainty of the measured rest heading (fit)"),
+    ),
+    "marks": (
+        Field("sigma", Kind.LENGTH, required=False, minimum=0, exclusive_minimum=True, example="0.15 m",
+              description="Standard uncertainty of the mark's position across its length (fit)"),
+    ),
+    "impact_point": (
+        Field("sigma", Kind.LENGTH, required=False, minimum=0, exclusive_minimum=True, example="0.3 m",
+              description="Standard uncertainty of each coordinate of the measured point of impact (fit)"),
+    ),
+    "delta_v": (
+        Field("sigma", Kind.SPEED, required=False, minimum=0, exclusive_minimum=True, example="0.5 mph",
+              description="Standard uncertainty of the recorded delta-v (fit)"),
+    ),
+}
+
+
+def _add_fields(section: Section, extra) -> Section:
+    have = set(section.keys)
+    new = [f for f in extra if f.name not in have]
+    return replace(section, fields=tuple(section.fields) + tuple(new)) if new else section
+
+
+def with_inverse_sections(schema: Section) -> Section:
+    """``schema`` (the scenario schema) with [fit], [uncertainty] and the evidence sigma keys.
+
+    Idempotent: keys and sections already present are left as they are.
+    """
+    subs = []
+    for s in schema.subsections:
+        if s.name == "evidence" and isinstance(s, Section):
+            ev_subs = []
+            for e in s.subsections:
+                extra = EVIDENCE_SIGMA_FIELDS.get(e.name, ())
+                if isinstance(e, ArrayOf):
+                    e = replace(e, entry=_add_fields(e.entry, extra))
+                elif isinstance(e, Section):
+                    e = _add_fields(e, extra)
+                ev_subs.append(e)
+            s = replace(s, subsections=tuple(ev_subs))
+        subs.append(s)
+    names = {s.name for s in subs}
+    subs += [sec for sec in (FIT, UNCERTAINTY) if sec.name not in names]
+    return replace(schema, subsections=tuple(subs))
+
+
+def _validate_one(section: Section, raw, file: str | None) -> dict:
+    root = Section("scenario file", subsections=[replace(section, required=True)], description="inverse sections")
+    return validate({section.name: raw}, root, file=file)[section.name]
+
+
+def validate_fit(raw: dict, *, file: str | None = None) -> dict:
+    """Validate a raw ``[fit]`` table alone (keys reported as ``fit.unknowns[0].lower``)."""
+    return _validate_one(FIT, raw, file)
+
+
+def validate_uncertainty(raw: dict, *, file: str | None = None) -> dict:
+    """Validate a raw ``[uncertainty]`` table alone."""
+    return _validate_one(UNCERTAINTY, raw, file)

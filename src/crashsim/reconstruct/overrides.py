@@ -1,0 +1,390 @@
+"""Inputs addressed by their path in the scenario file, overridden on the raw file dict.
+
+A fit's unknowns and a Monte Carlo run's uncertain inputs name scenario inputs by the
+dotted path of the file (``"vehicles.B.speed"``, ``"vehicles.A.bodies[1].mass"``,
+``"impact.point[0]"``, ``"runout.road_friction"``). A value is set by writing it into the
+*raw* file dict, as a file value with its unit (``"13.41 m/s"``), and the whole dict goes
+through :func:`crashsim.scenario.scenario_from_dict`: every override is validated and
+converted exactly like a value read from the file, so there is one path from the file to
+the physics.
+
+Per evaluation cost
+-------------------
+The presets are merged once (:class:`ScenarioOverrides` keeps the merged dict, without the
+``preset`` keys, so :func:`scenario_from_dict` does not read the preset library again);
+only the dicts and lists along the overridden paths are copied. What is left is the
+validation and construction of the scenario: about 3-6 ms for the shipped scenes
+(``benchmarks/fit_mc.py`` measures it), small beside a run-out.
+
+Path grammar
+------------
+``key(.key)*`` where a key may carry an index, ``name[i]``: into an array of tables
+(``bodies[1]``, ``wheels[0]``, ``zones[0]``) or into a vector value (``point[0]``,
+``position[1]``). The path must end at one number: a quantity (with a unit in the file) or
+a plain number. The entry names of a table of named entries (``vehicles.<name>``) are the
+names used in the file.
+"""
+
+from __future__ import annotations
+
+import copy
+import difflib
+import math
+import re
+from collections import OrderedDict
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+from ..errors import ScenarioError
+from ..schema import ArrayOf, Field, Section, Table
+from ..units import Kind, parse, si_unit
+
+__all__ = ["Target", "resolve_path", "parse_value", "format_value", "set_value", "get_value",
+           "ScenarioOverrides", "INVERSE_SECTIONS"]
+
+#: Top-level sections of a file that belong to the inverse side and not to the forward model;
+#: they are removed before the forward scenario is built.
+INVERSE_SECTIONS = ("fit", "uncertainty")
+
+_TOKEN = re.compile(r"^(?P<name>[A-Za-z_][A-Za-z0-9_\-]*)(?:\[(?P<index>\d+)\])?$")
+
+
+@dataclass(frozen=True)
+class Target:
+    """One scalar input of a scenario file, addressed by its path.
+
+    Attributes
+    ----------
+    path : str
+        As written (``"vehicles.A.bodies[1].mass"``).
+    steps : tuple
+        ``(key, index or None)`` per dotted part.
+    field : Field
+        The schema field the path ends at (its unit kind, range and description).
+    component : int or None
+        Index into a vector field (``point[0]``), else None.
+    """
+
+    path: str
+    steps: tuple
+    field: Field
+    component: int | None
+
+    @property
+    def kind(self) -> str:
+        """Unit kind of the value (``"speed"``, ``"angle"``, ...; ``"dimensionless"`` for a plain number)."""
+        return self.field.kind.value if isinstance(self.field.kind, Kind) else Kind.DIMENSIONLESS.value
+
+    @property
+    def label(self) -> str:
+        return self.path
+
+
+def _close(word: str, options) -> str:
+    near = difflib.get_close_matches(word, list(options), n=2)
+    return f"; did you mean {' or '.join(map(repr, near))}?" if near else ""
+
+
+def resolve_path(path: str, schema: Section | None = None, *, field: str = "path") -> Target:
+    """Check ``path`` against the scenario schema and return its :class:`Target`.
+
+    Parameters
+    ----------
+    path : str
+        Dotted path with optional indices, see the module notes.
+    schema : Section, optional
+        Root schema (default :data:`crashsim.scenario.SCHEMA`).
+    field : str
+        Where the path was written (``"fit.unknowns[0].path"``), for error messages.
+
+    Raises
+    ------
+    ScenarioError
+        Unknown key (with the nearest valid ones), a missing or superfluous index, or a path
+        that does not end at one number.
+    """
+    if schema is None:
+        from ..scenario import SCHEMA as schema
+    if not isinstance(path, str) or not path.strip():
+        raise ScenarioError(f"{path!r} is not a path such as \"vehicles.B.speed\"", field=field)
+    parts = path.strip().split(".")
+    steps = []
+    node: Any = schema
+    for k, part in enumerate(parts):
+        m = _TOKEN.match(part)
+        if m is None:
+            raise ScenarioError(f"{path!r}: {part!r} is not a key or key[index]", field=field)
+        name, index = m["name"], (None if m["index"] is None else int(m["index"]))
+        last = k == len(parts) - 1
+        if isinstance(node, Table):  # a user-chosen entry name
+            if index is not None:
+                raise ScenarioError(f"{path!r}: {name!r} names an entry of [{node.name}]; it takes no index",
+                                    field=field)
+            steps.append((name, None))
+            node = node.entry
+            if last:
+                raise ScenarioError(f"{path!r} ends at a table; name one of its numbers, e.g. {path}.{node.keys[0]}",
+                                    field=field)
+            continue
+        if not isinstance(node, Section):  # pragma: no cover - guarded below
+            raise ScenarioError(f"{path!r}: cannot descend into {part!r}", field=field)
+        fields = {f.name: f for f in node.fields}
+        subs = {s.name: s for s in node.subsections}
+        if name in fields:
+            f = fields[name]
+            if not last:
+                raise ScenarioError(f"{path!r}: {name!r} is a value, not a table", field=field)
+            if not (f.is_quantity or f.kind == "float"):
+                raise ScenarioError(f"{path!r} is a {f.kind} value, not a number; only numbers (quantities or "
+                                    "plain numbers) can be fitted or sampled", field=field)
+            if f.points:
+                raise ScenarioError(f"{path!r} is a list of points; it cannot be an unknown", field=field)
+            if f.n is not None and index is None:
+                raise ScenarioError(f"{path!r} is a vector of {f.n} values; name one component, e.g. "
+                                    f"{path}[0] and {path}[1]", field=field)
+            if f.n is None and index is not None:
+                raise ScenarioError(f"{path!r}: {name!r} is a single value; remove [{index}]", field=field)
+            if index is not None and index >= f.n:
+                raise ScenarioError(f"{path!r}: index {index} out of range; {name!r} has {f.n} components",
+                                    field=field)
+            steps.append((name, index))
+            return Target(path.strip(), tuple(steps), f, index)
+        if name in subs:
+            sub = subs[name]
+            if isinstance(sub, ArrayOf):
+                if index is None:
+                    raise ScenarioError(f"{path!r}: {name!r} is an array of tables; give the item, e.g. {name}[0]",
+                                        field=field)
+                steps.append((name, index))
+                node = sub.entry
+            else:
+                if index is not None:
+                    raise ScenarioError(f"{path!r}: {name!r} is a table; it takes no index", field=field)
+                steps.append((name, None))
+                node = sub
+            if last:
+                raise ScenarioError(f"{path!r} ends at a table; name one of its values", field=field)
+            continue
+        raise ScenarioError(f"{path!r}: unknown key {name!r}{_close(name, node.keys)} "
+                            f"Valid keys here: {', '.join(node.keys)}", field=field)
+    raise ScenarioError(f"{path!r} does not end at a value", field=field)  # pragma: no cover
+
+
+def parse_value(value: Any, target: Target, *, field: str) -> float:
+    """Read a value written like the file's value at ``target`` (``"25 mph"``, ``"0.05"``) into SI.
+
+    Quantities need their unit; plain numbers may be written as numbers or strings (``"5 %"``
+    is 0.05). Range checks are left to the scenario validation (the value is validated when
+    it is written into the file dict).
+    """
+    f = target.field
+    if isinstance(f.kind, Kind) and f.kind is not Kind.DIMENSIONLESS:
+        return parse(value, f.kind, field=field)
+    return parse(value, Kind.DIMENSIONLESS, field=field)
+
+
+def format_value(x: float, target: Target) -> Any:
+    """An SI value written as the file writes it at ``target`` (``"13.41 m/s"``, or a number)."""
+    f = target.field
+    if isinstance(f.kind, Kind) and f.kind is not Kind.DIMENSIONLESS:
+        return f"{float(x)!r} {si_unit(f.kind)}"
+    return float(x)
+
+
+def _container(data: dict, target: Target, *, create: bool, copy_path: bool):
+    """The dict holding the target's key (copied along the way when ``copy_path``)."""
+    node = data
+    for depth, (key, index) in enumerate(target.steps[:-1]):
+        where = ".".join(k if i is None else f"{k}[{i}]" for k, i in target.steps[:depth + 1])
+        if not isinstance(node, dict):
+            raise ScenarioError(f"{where} is not a table in the scenario", field=target.path)
+        nxt = node.get(key)
+        if nxt is None:
+            if not create or index is not None:
+                raise ScenarioError(f"the scenario has no {where}; {target.path!r} cannot be set", field=target.path)
+            nxt = {}
+            node[key] = nxt
+        if index is not None:
+            if not isinstance(nxt, list) or index >= len(nxt):
+                n = len(nxt) if isinstance(nxt, list) else 0
+                raise ScenarioError(f"the scenario has {n} item(s) in {where.rsplit('[', 1)[0]}; "
+                                    f"{target.path!r} names item {index}", field=target.path)
+            if copy_path:
+                nxt = list(nxt)
+                node[key] = nxt
+            item = nxt[index]
+            if copy_path:
+                item = dict(item) if isinstance(item, dict) else item
+                nxt[index] = item
+            node = item
+        else:
+            if copy_path and isinstance(nxt, dict):
+                nxt = dict(nxt)
+                node[key] = nxt
+            node = nxt
+    if not isinstance(node, dict):
+        raise ScenarioError(f"{target.path!r}: its parent is not a table in the scenario", field=target.path)
+    return node
+
+
+def get_value(data: dict, target: Target) -> Any:
+    """The raw value at ``target`` as written in the file (None if absent)."""
+    try:
+        node = _container(data, target, create=False, copy_path=False)
+    except ScenarioError:
+        return None
+    key, index = target.steps[-1]
+    v = node.get(key)
+    if v is None or index is None:
+        return v
+    return v[index] if isinstance(v, (list, tuple)) and index < len(v) else None
+
+
+def set_value(data: dict, target: Target, x: float, *, copy_path: bool = True) -> dict:
+    """Write SI value ``x`` at ``target`` into the raw dict ``data`` (as a file value with its unit).
+
+    With ``copy_path`` (default) ``data`` is not changed: the dicts and lists along the path
+    are copied (the rest is shared) and the new top-level dict is returned.
+    """
+    out = dict(data) if copy_path else data
+    node = _container(out, target, create=True, copy_path=copy_path)
+    key, index = target.steps[-1]
+    value = format_value(x, target)
+    if index is None:
+        node[key] = value
+    else:
+        vec = node.get(key)
+        if not isinstance(vec, (list, tuple)) or len(vec) != target.field.n:
+            raise ScenarioError(f"the scenario has no vector {target.path.rsplit('[', 1)[0]} of "
+                                f"{target.field.n} values to set component {index} of", field=target.path)
+        vec = list(vec)
+        vec[index] = value
+        node[key] = vec
+    return out
+
+
+def forward_data(data: dict, *, file: str | None = None) -> dict:
+    """The forward part of a raw scenario dict: without [fit]/[uncertainty], presets merged.
+
+    The ``preset`` keys are dropped after merging (their values are in the body now), so
+    building a scenario from the result does not read the preset library again.
+    """
+    from ..scenario import _apply_presets
+
+    base = {k: v for k, v in data.items() if k not in INVERSE_SECTIONS}
+    merged = _apply_presets(base, file)
+    if merged is base:
+        merged = copy.deepcopy(base)
+    for v in (merged.get("vehicles") or {}).values():
+        if isinstance(v, dict) and isinstance(v.get("bodies"), list):
+            v["bodies"] = [{k: x for k, x in b.items() if k != "preset"} if isinstance(b, dict) else b
+                           for b in v["bodies"]]
+    return merged
+
+
+def _engine_options(options, engine: str | None):
+    """RunoutOptions with ``engine`` set, if the installed RunoutOptions has that field."""
+    from dataclasses import replace
+
+    if engine is None:
+        return options
+    if "engine" in type(options).__dataclass_fields__:
+        return replace(options, engine=engine)
+    if engine != "scipy":
+        raise ScenarioError(f"run-out engine {engine!r} is not available in this crashsim "
+                            "(RunoutOptions has no engine field); use engine='scipy'", field="engine")
+    return options
+
+
+def default_engine() -> str:
+    """``"compiled"`` when the run-out has the compiled engine, else ``"scipy"``."""
+    from ..motion import RunoutOptions
+
+    return "compiled" if "engine" in RunoutOptions.__dataclass_fields__ else "scipy"
+
+
+class ScenarioOverrides:
+    """Build scenarios from one raw file dict with some inputs replaced.
+
+    Parameters
+    ----------
+    data : dict
+        The raw scenario (as from TOML); [fit] and [uncertainty] are ignored here.
+    paths : sequence of str
+        The inputs to override, in the order of the value vectors given to :meth:`scenario`.
+    engine : str or None
+        Run-out engine to set in every scenario's RunoutOptions (None: the file's).
+    file : str, optional
+        For error messages.
+    cache : int
+        Number of recent scenarios kept (keyed by the value vector).
+
+    Examples
+    --------
+    >>> ov = ScenarioOverrides(raw, ["vehicles.B.speed"])           # doctest: +SKIP
+    >>> sc = ov.scenario([15.0])    # B at 15 m/s, validated like "15.0 m/s" in the file  # doctest: +SKIP
+    """
+
+    def __init__(self, data: dict, paths: Sequence[str], *, engine: str | None = None, file: str | None = None,
+                 cache: int = 8, field_prefix: str = "path"):
+        from ..scenario import SCHEMA
+
+        self.file = file
+        self.engine = engine
+        self.base = forward_data(data, file=file)
+        self.targets = tuple(resolve_path(p, SCHEMA, field=f"{field_prefix}[{i}]" if len(paths) > 1 else field_prefix)
+                             for i, p in enumerate(paths))
+        seen = {}
+        for i, t in enumerate(self.targets):
+            if t.path in seen:
+                raise ScenarioError(f"{t.path!r} is named twice (items {seen[t.path]} and {i})", field=field_prefix)
+            seen[t.path] = i
+        for t in self.targets:  # fails early, with the path, if the file cannot hold it
+            _container(copy.deepcopy(self.base), t, create=True, copy_path=False)
+        self._cache: OrderedDict = OrderedDict()
+        self._cache_size = int(cache)
+
+    def data(self, values: Sequence[float]) -> dict:
+        """The raw forward dict with ``values`` (SI, one per path) written in."""
+        if len(values) != len(self.targets):
+            raise ValueError(f"expected {len(self.targets)} values, got {len(values)}")
+        out = self.base
+        for t, x in zip(self.targets, values):
+            if not math.isfinite(float(x)):
+                raise ScenarioError(f"{float(x)!r} is not a finite number", field=t.path)
+            out = set_value(out, t, float(x))
+        return out
+
+    def base_value(self, i: int) -> float | None:
+        """The file's own value of input ``i`` in SI (None if the file does not give it)."""
+        t = self.targets[i]
+        raw = get_value(self.base, t)
+        if raw is None:
+            return None
+        return parse_value(raw, t, field=t.path)
+
+    def scenario(self, values: Sequence[float] = ()):
+        """A validated :class:`~crashsim.scenario.Scenario` with ``values`` (SI) at the paths.
+
+        Raises
+        ------
+        ScenarioError
+            If a value is not valid there (out of range, inconsistent with other inputs),
+            exactly as if it had been written in the file.
+        """
+        from dataclasses import replace
+
+        from ..scenario import scenario_from_dict
+
+        key = tuple(float(v) for v in values)
+        hit = self._cache.get(key)
+        if hit is not None:
+            self._cache.move_to_end(key)
+            return hit
+        sc = scenario_from_dict(self.data(key), file=self.file)
+        if self.engine is not None and sc.runout is not None:
+            sc = replace(sc, runout=replace(sc.runout, options=_engine_options(sc.runout.options, self.engine)))
+        self._cache[key] = sc
+        while len(self._cache) > self._cache_size:
+            self._cache.popitem(last=False)
+        return sc

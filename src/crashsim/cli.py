@@ -55,6 +55,21 @@ def _cmd_run(args) -> int:
     return 0
 
 
+def _cmd_plot(args) -> int:
+    from .plotting import save_scene_figures
+    from .reconstruct import run_scene
+    from .scenario import load_scenario
+    from .units import Kind, parse
+
+    interval = None if args.interval is None else parse(args.interval, Kind.TIME, field="--interval")
+    scene = run_scene(load_scenario(args.file))
+    written = save_scene_figures(scene, Path(args.output), histories_path=args.histories and Path(args.histories),
+                                 dpi=args.dpi, interval=interval, system=args.units)
+    for path in written:
+        sys.stdout.write(f"wrote {path}\n")
+    return 0
+
+
 def _cmd_schema(args) -> int:
     from .scenario import schema_document
 
@@ -85,6 +100,15 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--csv", metavar="DIR", help="write time histories as CSV files into DIR")
     r.add_argument("--strict", action="store_true", help="exit with code 1 if an evidence item is out of tolerance")
     r.set_defaults(func=_cmd_run)
+
+    pl = sub.add_parser("plot", help="draw the scene diagram (and the run-out histories)")
+    pl.add_argument("file", help="scenario file (TOML)")
+    pl.add_argument("-o", "--output", required=True, help="scene diagram: .png, .svg or .pdf")
+    pl.add_argument("--histories", metavar="FILE", help="also draw speed, yaw rate and articulation histories")
+    pl.add_argument("--interval", metavar="TIME", help='time between ghost outlines, e.g. "0.5 s"')
+    pl.add_argument("--units", choices=("SI", "US"), default=None, help="units of the figure (default: the scenario's)")
+    pl.add_argument("--dpi", type=int, default=150)
+    pl.set_defaults(func=_cmd_plot)
 
     s = sub.add_parser("schema", help="print the documented scenario-file schema")
     s.add_argument("--format", choices=("text", "markdown"), default="text")

@@ -308,3 +308,22 @@ def test_save_rejects_other_suffixes(tmp_path, bad):
 def test_unknown_unit_system():
     with pytest.raises(ScenarioError, match="unit system"):
         plot_scene(_scene(INTERSECTION), system="imperial")
+
+
+def test_cli_plot_writes_both_figures(tmp_path, capsys):
+    from crashsim.cli import main
+
+    scene = Path(__file__).resolve().parents[2] / "scenarios" / "scenes" / "barrier_15deg.toml"
+    out, hist = tmp_path / "s.svg", tmp_path / "h.png"
+    assert main(["plot", str(scene), "-o", str(out), "--histories", str(hist), "--units", "US",
+                 "--interval", "0.05 s"]) == 0
+    assert out.stat().st_size > 1000 and hist.stat().st_size > 1000
+    assert "wrote" in capsys.readouterr().out
+
+
+def test_cli_plot_rejects_bad_suffix(tmp_path, capsys):
+    from crashsim.cli import main
+
+    scene = Path(__file__).resolve().parents[2] / "scenarios" / "scenes" / "barrier_15deg.toml"
+    assert main(["plot", str(scene), "-o", str(tmp_path / "s.bmp")]) == 2
+    assert ".bmp" in capsys.readouterr().err

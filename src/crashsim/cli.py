@@ -55,6 +55,77 @@ def _cmd_run(args) -> int:
     return 0
 
 
+def _cmd_fit(args) -> int:
+    from .reconstruct.fit import fit_scene
+    from .scenario import load_scenario
+    from .schema import load_toml
+
+    load_scenario(args.file)  # the whole file validated first ([fit] and evidence sigmas included)
+    result = fit_scene(load_toml(args.file), None, engine=args.engine, workers=args.workers,
+                       progress=args.progress, file=args.file)
+    if args.json:
+        json.dump(_clean(result.to_dict()), sys.stdout, indent=2)
+        sys.stdout.write("\n")
+    else:
+        sys.stdout.write(result.report(args.units) + "\n")
+    return 0
+
+
+def _cmd_mc(args) -> int:
+    from .reconstruct.montecarlo import monte_carlo
+    from .scenario import load_scenario
+    from .schema import load_toml
+
+    load_scenario(args.file)
+    try:
+        result = monte_carlo(load_toml(args.file), None, args.samples, seed=args.seed, engine=args.engine,
+                             workers=args.workers, dask_address=args.dask, out_path=args.out,
+                             progress=not args.quiet, file=args.file)
+    except KeyboardInterrupt:
+        kept = f"; the samples done are kept in {args.out}: run the same command again to resume" if args.out else ""
+        sys.stderr.write(f"crashsim: stopped{kept}\n")
+        return 130
+    if args.plots:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        from .reconstruct.mc_plots import save_mc_figures
+
+        save_mc_figures(result, Path(args.plots), system=args.units)
+    if args.json:
+        json.dump(_clean(result.to_dict()), sys.stdout, indent=2)
+        sys.stdout.write("\n")
+    else:
+        sys.stdout.write(result.report(args.units) + "\n")
+    return 0
+
+
+def _add_inverse_commands(sub):
+    engines = ("compiled", "scipy")
+    f = sub.add_parser("fit", help="find the [fit] unknowns from the evidence (weighted least squares, intervals)")
+    f.add_argument("file", help="scenario file (TOML) with a [fit] table and evidence sigmas")
+    f.add_argument("--json", action="store_true", help="print the full result as one JSON object (SI units)")
+    f.add_argument("--units", choices=("SI", "US"), default="SI", help="units of the readable report")
+    f.add_argument("--engine", choices=engines, default=None, help="run-out engine (default: compiled if available)")
+    f.add_argument("--workers", type=int, default=None, help="processes for the starts (default: all cores)")
+    f.add_argument("--progress", action="store_true", help="progress bar over the starts on stderr")
+    f.set_defaults(func=_cmd_fit)
+
+    m = sub.add_parser("mc", help="Monte Carlo of the [uncertainty] inputs through impact and run-out")
+    m.add_argument("file", help="scenario file (TOML) with an [uncertainty] table")
+    m.add_argument("--samples", type=int, default=None, help="number of samples (default: uncertainty.samples)")
+    m.add_argument("--seed", type=int, default=None, help="seed (default: uncertainty.seed)")
+    m.add_argument("--out", metavar="FILE", help="stream samples to this JSON-lines file; resume if it exists")
+    m.add_argument("--workers", type=int, default=None, help="local processes (default: all cores)")
+    m.add_argument("--dask", metavar="ADDRESS", help="run on an existing Dask cluster (scheduler address)")
+    m.add_argument("--plots", metavar="DIR", help="write histograms, rest clouds and tornado charts into DIR")
+    m.add_argument("--json", action="store_true", help="print the summary as one JSON object (SI units)")
+    m.add_argument("--units", choices=("SI", "US"), default="SI", help="units of the report and plots")
+    m.add_argument("--engine", choices=engines, default=None, help="run-out engine (default: compiled if available)")
+    m.add_argument("--quiet", action="store_true", help="no progress bar")
+    m.set_defaults(func=_cmd_mc)
+
+
 def _cmd_plot(args) -> int:
     from .plotting import save_scene_figures
     from .reconstruct import run_scene
@@ -100,6 +171,8 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--csv", metavar="DIR", help="write time histories as CSV files into DIR")
     r.add_argument("--strict", action="store_true", help="exit with code 1 if an evidence item is out of tolerance")
     r.set_defaults(func=_cmd_run)
+
+    _add_inverse_commands(sub)
 
     pl = sub.add_parser("plot", help="draw the scene diagram (and the run-out histories)")
     pl.add_argument("file", help="scenario file (TOML)")

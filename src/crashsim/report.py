@@ -70,6 +70,8 @@ def format_impact(result, system: str = "SI") -> str:
         lines.append(f"  {name:<14} {fmt(ke['before'], 'energy', s):>12} {fmt(ke['after'], 'energy', s):>12} "
                      f"{100 * result.energy_loss[name]:8.1f} %")
     lines.append(f"  condition number of the impulse equations: {result.condition_number:.3g}")
+    for w in result.warnings:
+        lines.append(f"  WARNING: {w}")
     return "\n".join(lines)
 
 

@@ -267,6 +267,11 @@ SCHEMA = Section("scenario file", subsections=[
     EVIDENCE,
 ], description="A crashsim scenario file (TOML)")
 
+# [fit], [uncertainty] and the evidence sigmas (crashsim fit / crashsim mc)
+from .reconstruct.inverse_schema import with_inverse_sections  # noqa: E402
+
+SCHEMA = with_inverse_sections(SCHEMA)
+
 
 def schema_document(fmt: str = "text") -> str:
     """The scenario-file reference, generated from the validating schema."""

@@ -14,9 +14,10 @@ Guaranteed (and tested here on random articulated scenes, e' = -1 or 0):
 2. no sliding at separation: U = (-e u_n, 0[, 0]), so dT(e) = dT(0) + e^2 (dT(1) - dT(0)) with
    dT(0) = -1/2 u^T K u <= 0 (a perfectly plastic impact never gains energy).
 3. e = 0 and an impulse ratio between 0 and mu_max (the ratio law, or the friction law, whose
-   mu is mu_max or f sign(mu_max) with f < |mu_max|), provided P_n is compressive both at
-   mu = 0 and at mu_max: dT <= 0. (P_n(mu) = -u_n / (K-dependent linear function of mu), so
-   U_t(mu) is monotone between its values at 0 and mu_max and dT(mu) <= dT(0) <= 0.)
+   mu is mu_max or f sign(mu_max) with f < |mu_max|), provided P_n is compressive (and above
+   rounding level) both at mu = 0 and at mu_max: dT <= 0. (P_n(mu) = -u_n / b(mu) with b linear
+   in mu, so U_t(mu) is monotone between its values at 0 and mu_max and, by (*) with U_n = 0,
+   dT(mu) <= dT(0) <= 0.)
 
 NOT guaranteed -- physics of the model, demonstrated by the deterministic tests at the end:
 

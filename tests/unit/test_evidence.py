@@ -44,3 +44,34 @@ def test_report_counts_failures():
     assert not rep.all_passed and rep.n_failed == 1
     d = rep.to_dict()
     assert d["n_checks"] == 2 and d["checks"][1]["passed"] is False
+
+
+def test_bbox_bound_is_a_lower_bound():
+    from crashsim.reconstruct.evidence import _bbox_lower_bound
+
+    rng = np.random.default_rng(3)
+    for _ in range(50):
+        line = rng.normal(size=(20, 2)) * 5
+        pts = rng.normal(size=(15, 2)) * 8
+        exact = float(np.max(distance_to_polyline(pts, line)))
+        assert _bbox_lower_bound(pts, line.min(0), line.max(0)) <= exact + 1e-12
+
+
+def test_tensile_normal_impulse_is_warned():
+    """A sideswipe (0.5 m/s into a wall, 10 m/s along it, contact at the rear-left corner) with
+    no sliding at separation needs a pulling normal impulse (found by the property tests): the
+    result must say so instead of passing it silently; the front-corner case is compressive."""
+    from crashsim import Body, BodyState, CrushSurface, ImpactProblem, TangentialLaw, Vehicle, solve_impact
+
+    car = Vehicle("A", (Body("car", 1500.0, 2800.0),))
+    wall = Vehicle("W", (Body("wall", math.inf, math.inf),))
+
+    def solve(cx):
+        st = {"car": BodyState((0.0, 0.0), 0.0, (10.0, 0.5)), "wall": BodyState((cx, 0.9), 0.0, (0.0, 0.0))}
+        return solve_impact(ImpactProblem((car, wall), st, "car", "wall",
+                                          CrushSurface((cx, 0.9), -math.pi / 2, 0.0, TangentialLaw("no_slide"), -1.0, 1)))
+
+    rear, front = solve(-2.0), solve(2.0)
+    assert rear.normal_impulse < 0 and any("tensile" in w for w in rear.warnings)
+    assert front.normal_impulse > 0 and not any("tensile" in w for w in front.warnings)
+    assert rear.to_dict()["warnings"] == list(rear.warnings)

@@ -465,6 +465,9 @@ def test_one_vehicle_at_rest():
 
 
 def test_batch_energy_loss_of_a_vehicle_nearly_at_rest():
+    """A vehicle at 1e-160 m/s (kinetic energy 1e-317 J, subnormal): the batch must not overflow
+    (a RuntimeWarning, an error under this project's filterwarnings) and must agree with the
+    single solve. Regression: ImpactBatch.solve once lacked np.errstate(over=...)."""
     import warnings
 
     from crashsim import ImpactBatch
@@ -513,7 +516,7 @@ def test_condition_number_reported_for_ordinary_cases(make):
 
 
 # ------------------------------------------------------------------------------------ bugs found here
-# Regression tests for bugs this tier found (fixed in src), and xfail(strict) tests for open ones.
+# Regression tests for the bugs this tier found (all fixed in src while it was written).
 
 def _car_between_constraints(angle, law):
     """A car (heading +x, 10 m/s forward, 2 m/s left) strikes a wall ahead with its front-left
@@ -552,14 +555,6 @@ def _outcomes(law):
         except IllConditionedError:
             outcomes.append(("refused",))
     return outcomes
-
-
-_ROUNDING_BUG = pytest.mark.xfail(strict=True, reason=(
-    "BUG: the no-slide system of this scene is singular in exact arithmetic, but turned by 1 rad "
-    "LU does not hit an exact zero pivot: ok stays True, mu_max = 0.2419 is reported from a solve "
-    "with condition number 1.1e17, and with f >= 0.2419 the friction law keeps that solution and "
-    "refuses (other angles: mu_max NaN, slides). Needs a conditioning test on the no-slide solve, "
-    "not only LinAlgError."))
 
 
 @pytest.mark.parametrize("law", [

@@ -173,6 +173,7 @@ class ImpactResult:
     condition_number: float
     success: bool = True
     message: str = "solved"
+    warnings: tuple[str, ...] = ()
 
     @classmethod
     def from_arrays(cls, problem, S, A, out, i: int) -> "ImpactResult":
@@ -222,6 +223,17 @@ class ImpactResult:
         e1 = float(out["ke_after"][i].sum())
         ke["system"] = {"before": e0, "after": e1}
         loss["system"] = float(energy_loss_fraction(e0, e1))
+        warn = []
+        pn = float(out["normal_impulse"][i])
+        if pn < 0:
+            warn.append(f"the normal crush impulse is tensile (P_n = {pn:.4g} N s < 0): the bodies would pull on "
+                        f"each other; the {S.tangential} law cannot hold here (e.g. no sliding at separation in a "
+                        "sideswipe): use a smaller impulse ratio or the friction law")
+        has_ext = bool(S.external_bodies) or bool(S.constraint_bodies)
+        if not has_ext and loss["system"] < -1e-9:
+            warn.append(f"the system gains kinetic energy ({-100 * loss['system']:.2f} %) without external "
+                        "impulses: check e, e' and the tangential law (Brach's model allows this outside "
+                        "0 <= e <= 1 with friction below mu_max)")
         return cls(
             body1=S.body_names[S.body1], body2=S.body_names[S.body2],
             normal=out["normal"][i].copy(), tangent=out["tangent"][i].copy(), point=A.point[i].copy(),
@@ -237,6 +249,7 @@ class ImpactResult:
             separation_tangential_velocity=float(out["separation_tangential"][i]),
             kinetic_energy=ke, energy_loss=loss,
             condition_number=float(out["condition"][i]) if "condition" in out else float("nan"),
+            warnings=tuple(warn),
         )
 
     @property
@@ -279,4 +292,5 @@ class ImpactResult:
             "kinetic_energy": self.kinetic_energy,
             "energy_loss": self.energy_loss,
             "condition_number": self.condition_number,
+            "warnings": list(self.warnings),
         }

@@ -2,4 +2,17 @@
 
 from .scene import SceneResult, run_scene
 
-__all__ = ["SceneResult", "run_scene"]
+__all__ = ["SceneResult", "run_scene", "fit_scene", "FitResult", "monte_carlo", "MCResult"]
+
+
+def __getattr__(name):
+    # fit and Monte Carlo are imported on first use (they pull in process pools and tqdm)
+    if name in ("fit_scene", "FitResult"):
+        from . import fit
+
+        return getattr(fit, name)
+    if name in ("monte_carlo", "MCResult"):
+        from . import montecarlo
+
+        return getattr(montecarlo, name)
+    raise AttributeError(name)

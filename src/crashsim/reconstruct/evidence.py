@@ -175,16 +175,29 @@ def _wheel_matches(track, selector: str | None) -> bool:
     return True
 
 
+def _bbox_lower_bound(pts: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> float:
+    """Largest distance of the points from a box: a lower bound of their one-sided
+    Hausdorff distance to anything inside the box."""
+    d = np.maximum(np.maximum(lo - pts, pts - hi), 0.0)
+    return float(np.max(np.hypot(d[:, 0], d[:, 1])))
+
+
 def _check_mark(ev: MarkEvidence, tracks: dict, index: int) -> Check:
     name = ev.name or f"mark {index + 1}"
     pts = _densify(ev.points, MARK_SPACING)
-    best = None
+    candidates = []
     for key, tr in tracks.items():
         if not _wheel_matches(tr, ev.wheel):
             continue
         pieces = [seg.points for seg in tr.segments if (seg.kind == "sliding" or not ev.sliding_only) and len(seg.points)]
         if not pieces:
             continue
+        allp = np.vstack(pieces)
+        candidates.append((_bbox_lower_bound(pts, allp.min(0), allp.max(0)), key, pieces))
+    best = None
+    for bound, key, pieces in sorted(candidates, key=lambda c: c[0]):
+        if best is not None and bound >= best[0]:
+            break  # no remaining wheel can match better (exact: the bound is a lower bound)
         d = np.min(np.stack([distance_to_polyline(pts, piece) for piece in pieces]), axis=0)
         cand = (float(np.max(d)), float(np.mean(d)), key)
         if best is None or cand[0] < best[0]:

@@ -298,9 +298,17 @@ def _engine_options(options, engine: str | None):
 
 def default_engine() -> str:
     """``"compiled"`` when the run-out has the compiled engine, else ``"scipy"``."""
+    import importlib.util
+
     from ..motion import RunoutOptions
 
-    return "compiled" if "engine" in RunoutOptions.__dataclass_fields__ else "scipy"
+    if "engine" not in RunoutOptions.__dataclass_fields__:
+        return "scipy"
+    try:
+        present = importlib.util.find_spec("crashsim.motion.fast") is not None
+    except (ImportError, ValueError):  # pragma: no cover
+        present = False
+    return "compiled" if present else "scipy"
 
 
 class ScenarioOverrides:

@@ -164,7 +164,7 @@ def run_scene(scenario) -> SceneResult:
         from .evidence import evaluate_evidence
 
         evidence = evaluate_evidence(scenario.evidence, impact, runout, scenario.impact.surface.point)
-    warnings = []
+    warnings = [f"impact: {w}" for w in impact.warnings]
     if runout is not None:
         warnings += barrier_crossings(scenario, runout)
         for vname, r in runout.items():

@@ -1,0 +1,982 @@
+"""The inverse side: find the unknown inputs that make impact + run-out agree with the scene.
+
+A fit minimises the weighted sum of squares of the evidence residuals,
+
+    chi^2(x) = sum_i (r_i(x) / sigma_i)^2,
+
+over the unknowns ``x`` inside their bounds (``scipy.optimize.least_squares``, bounded
+trust-region), where every evaluation of ``r`` runs the whole scene (impact, then each
+vehicle's run-out to rest) for a scenario built from the file with the unknowns written in
+(:mod:`crashsim.reconstruct.overrides`: validated exactly like file values).
+
+Residuals (one vector per evidence item, each component divided by its sigma)
+-----------------------------------------------------------------------------
+rest position    computed minus measured CG rest position, x and y [m]          (2)
+rest heading     computed minus measured heading, wrapped to (-pi, pi] [rad]     (1)
+point of impact  scenario contact point minus measured point, x and y [m]      (2)
+delta-v          computed minus recorded delta-v (as the evidence check) [m/s]  (1)
+tyre mark        signed distance of ``mark_points`` points spread evenly along the measured
+                 mark to the track of the matching wheel [m], each divided by
+                 ``sigma * sqrt(mark_points)`` so that the mark weighs as one measurement
+                 (its points are not independent): its term of chi^2 is the mean squared
+                 distance over sigma^2. Wheel chosen as the matching wheel whose sliding track
+                 (any track if no matching wheel slides) gives the least sum of squares.
+
+Uncertainty of the answer
+-------------------------
+At the best point the weighted Jacobian ``J`` (d r_i/sigma_i / d x_j, central differences
+with step ``diff_step`` times each bound range) gives the covariance ``C = (J^T J)^-1``
+(= (J^T W J)^-1 of the unweighted residuals, W = diag(1/sigma^2)): the linearised
+uncertainty of the unknowns when the sigmas are the measurement uncertainties
+(``covariance = "absolute"``, normal quantiles). With ``"scaled"`` C is multiplied by
+chi^2/dof and Student's t quantiles are used (sigmas known only up to a common factor).
+The intervals are linearised: they are good while the model is close to linear over them.
+
+Warnings
+--------
+* An unknown no evidence item depends on (a zero column of J).
+* Rank deficiency: the singular value decomposition of J with unit-norm columns; a relative
+  singular value below ``RANK_TOL`` means a combination of unknowns the evidence cannot
+  fix; the unknowns in that null-space direction are named. Their intervals are infinite.
+* An interval wider than the unknown's bounds (poorly determined).
+* A bound hit: the evidence pulls an unknown past its bound; its interval is not valid.
+* chi^2 improbably large for its degrees of freedom (p < 0.01): the sigmas are too small or
+  the model misses something; the absolute intervals are then too narrow.
+* Starts that ended in different minima (the report says how many agreed with the best).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+
+from ..errors import ScenarioError, SolverError
+from ..geometry import wrap_angle
+from .overrides import ScenarioOverrides, default_engine, parse_value
+
+__all__ = ["FitSpec", "Unknown", "FitProblem", "FitResult", "EvidenceResidual", "StartResult", "fit_scene",
+           "RANK_TOL", "PENALTY"]
+
+_log = logging.getLogger("crashsim")
+
+#: Relative singular value (columns of the weighted Jacobian scaled to unit norm) below which
+#: the evidence is taken not to determine a combination of unknowns. A product a*b that alone
+#: enters the residuals gives ~1e-6 with central differences; a pair correlated at 0.99995
+#: (still determined, with wide intervals) gives 1e-2.
+RANK_TOL = 1e-4
+
+#: Residual (in sigmas) given to every component when a scene cannot be evaluated (a value
+#: the scenario rejects in combination, a failed solver): keeps the optimiser away from it.
+PENALTY = 1e3
+
+
+def _bare(exc: ScenarioError) -> str:
+    """The message of a ScenarioError without its ``field: `` prefix."""
+    text = str(exc)
+    for part in (exc.file, exc.field):
+        if part and text.startswith(f"{part}: "):
+            text = text[len(part) + 2:]
+    return text
+
+
+# ---------------------------------------------------------------------------------------------
+# Specification
+# ---------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Unknown:
+    """One unknown: a scenario input, its bounds and start value (SI)."""
+
+    path: str
+    name: str
+    lower: float
+    upper: float
+    initial: float
+    kind: str  # unit kind ("speed", "angle", "dimensionless", ...)
+
+    @property
+    def span(self) -> float:
+        return self.upper - self.lower
+
+
+@dataclass(frozen=True)
+class FitSpec:
+    """A validated ``[fit]`` table: unknowns (SI) and options.
+
+    Build it with :meth:`from_dict` from the raw table (as in the file), or directly.
+    """
+
+    unknowns: tuple[Unknown, ...]
+    starts: int = 4
+    screen: int = 0
+    seed: int = 0
+    method: str = "trf"
+    max_evaluations: int = 200
+    diff_step: float = 1e-3
+    confidence: float = 0.95
+    covariance: str = "absolute"
+    sigma_from_tolerance: float | None = None
+    mark_points: int = 10
+
+    @property
+    def paths(self) -> tuple[str, ...]:
+        return tuple(u.path for u in self.unknowns)
+
+    @classmethod
+    def from_dict(cls, raw: dict, data: dict | None = None, *, file: str | None = None) -> "FitSpec":
+        """Validate a raw [fit] table (values with units, as in the file) and convert it to SI.
+
+        ``data`` (the raw scenario) supplies the default start values (the file's values).
+        """
+        from .inverse_schema import validate_fit
+        from .overrides import get_value, resolve_path, forward_data
+
+        d = validate_fit(raw, file=file)
+        base = forward_data(data, file=file) if data is not None else None
+        unknowns = []
+        for i, u in enumerate(d["unknowns"]):
+            key = f"fit.unknowns[{i}]"
+            t = resolve_path(u["path"], field=f"{key}.path")
+            lo = parse_value(u["lower"], t, field=f"{key}.lower")
+            hi = parse_value(u["upper"], t, field=f"{key}.upper")
+            if not lo < hi:
+                raise ScenarioError(f"lower {u['lower']!r} must be below upper {u['upper']!r}", field=f"{key}.upper",
+                                    file=file)
+            if u["initial"] is not None:
+                x0 = parse_value(u["initial"], t, field=f"{key}.initial")
+                if not lo <= x0 <= hi:
+                    raise ScenarioError(f"initial {u['initial']!r} lies outside [{u['lower']}, {u['upper']}]",
+                                        field=f"{key}.initial", file=file)
+            else:
+                x0 = None
+                if base is not None:
+                    raw_v = get_value(base, t)
+                    if raw_v is not None:
+                        x0 = parse_value(raw_v, t, field=t.path)
+                if x0 is None or not lo <= x0 <= hi:
+                    x0 = 0.5 * (lo + hi)
+            unknowns.append(Unknown(t.path, u["name"] or t.path, lo, hi, x0, t.kind))
+        return cls(tuple(unknowns), starts=d["starts"], screen=d["screen"], seed=d["seed"], method=d["method"],
+                   max_evaluations=d["max_evaluations"], diff_step=d["diff_step"], confidence=d["confidence"],
+                   covariance=d["covariance"], sigma_from_tolerance=d["sigma_from_tolerance"],
+                   mark_points=d["mark_points"])
+
+    def to_dict(self) -> dict:
+        return {"unknowns": [u.__dict__.copy() for u in self.unknowns],
+                **{k: getattr(self, k) for k in ("starts", "screen", "seed", "method", "max_evaluations", "diff_step",
+                                                 "confidence", "covariance", "sigma_from_tolerance", "mark_points")}}
+
+
+# ---------------------------------------------------------------------------------------------
+# Evidence residuals
+# ---------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class _Item:
+    kind: str            # "rest", "rest heading", "point of impact", "delta-v", "mark"
+    name: str
+    quantity: str        # "length", "angle", "speed"
+    sigma: float
+    sigma_source: str    # "sigma" or "tolerance x f"
+    size: int            # number of residual components
+    weight_size: float   # measurements it counts as (for dof)
+    index: int           # index of the evidence item in its list
+    body: str | None = None
+    measured: Any = None
+    mark: Any = None     # MarkEvidence
+
+
+def _resample(points: np.ndarray, k: int) -> np.ndarray:
+    """``k`` points evenly spaced by arc length along a polyline."""
+    pts = np.asarray(points, dtype=float)
+    seg = np.hypot(*np.diff(pts, axis=0).T)
+    s = np.concatenate([[0.0], np.cumsum(seg)])
+    if s[-1] <= 0:
+        return np.repeat(pts[:1], k, axis=0)
+    q = np.linspace(0.0, s[-1], k)
+    return np.column_stack([np.interp(q, s, pts[:, 0]), np.interp(q, s, pts[:, 1])])
+
+
+def signed_distance_to_polyline(points, polyline) -> np.ndarray:
+    """Signed distance of each point (n, 2) to a polyline (m, 2) [m]: positive on its left.
+
+    The sign is that of the nearest segment's cross product (direction x (p - a)).
+    """
+    p = np.asarray(points, dtype=float)[:, None, :]
+    line = np.asarray(polyline, dtype=float)
+    if len(line) == 1:
+        return np.hypot(*(p[:, 0, :] - line[0]).T)
+    a = line[:-1][None]
+    ab = (line[1:] - line[:-1])[None]
+    denom = np.sum(ab * ab, -1)
+    t = np.clip(np.sum((p - a) * ab, -1) / np.where(denom > 0, denom, 1.0), 0.0, 1.0)
+    d = p - (a + t[..., None] * ab)
+    dist = np.hypot(d[..., 0], d[..., 1])
+    j = np.argmin(dist, axis=1)
+    rows = np.arange(p.shape[0])
+    cross = ab[0, j, 0] * (p[:, 0, 1] - a[0, j, 1]) - ab[0, j, 1] * (p[:, 0, 0] - a[0, j, 0])
+    return np.where(cross >= 0, 1.0, -1.0) * dist[rows, j]
+
+
+def _mark_distances(item: _Item, tracks: dict, k: int) -> tuple[np.ndarray, str | None]:
+    from .evidence import _wheel_matches
+
+    ev = item.mark
+    pts = _resample(ev.points, k)
+    best = None
+    for sliding in ((True, False) if ev.sliding_only else (False,)):
+        for key, tr in tracks.items():
+            if not _wheel_matches(tr, ev.wheel):
+                continue
+            pieces = [s.points for s in tr.segments if (s.kind == "sliding" or not sliding) and len(s.points)]
+            if not pieces:
+                continue
+            ds = np.stack([signed_distance_to_polyline(pts, piece) for piece in pieces])
+            d = ds[np.argmin(np.abs(ds), axis=0), np.arange(len(pts))]
+            ss = float(np.sum(d * d))
+            if best is None or ss < best[0]:
+                best = (ss, d, key)
+        if best is not None:
+            break
+    if best is None:
+        return np.full(k, np.nan), None
+    return best[1], best[2]
+
+
+class EvidenceModel:
+    """The evidence of a scenario as a fixed-length vector of weighted residuals.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        Validated (its ``data`` holds the evidence ``sigma`` keys).
+    sigma_from_tolerance : float, optional
+        Fraction of the tolerance used as sigma where an item has none.
+    mark_points : int
+    """
+
+    def __init__(self, scenario, *, sigma_from_tolerance: float | None = None, mark_points: int = 10):
+        ev = scenario.evidence
+        raw = scenario.data.get("evidence") or {}
+        self.mark_points = int(mark_points)
+        items: list[_Item] = []
+
+        def sig(entry: dict, key: str, tol: float, where: str) -> tuple[float, str]:
+            s = entry.get(key) if entry else None
+            if s is not None:
+                return float(s), key
+            if sigma_from_tolerance is not None:
+                return float(sigma_from_tolerance * tol), f"tolerance x {sigma_from_tolerance:g}"
+            raise ScenarioError(f"the fit needs the measurement uncertainty of every evidence item: add {key} = ... "
+                                f"here, or fit.sigma_from_tolerance (e.g. 0.5: the tolerance is 2 sigma)",
+                                field=f"{where}.{key}", file=scenario.path)
+
+        if ev.impact_point is not None:
+            s, src = sig(raw.get("impact_point") or {}, "sigma", ev.impact_point.tolerance, "evidence.impact_point")
+            items.append(_Item("point of impact", ev.impact_point.name, "length", s, src, 2, 2.0, 0,
+                               measured=np.asarray(ev.impact_point.position, float)))
+        if ev.rest and scenario.runout is None:
+            raise ScenarioError("rest-position evidence needs a run-out: add [runout]", field="evidence.rest",
+                                file=scenario.path)
+        if ev.marks and scenario.runout is None:
+            raise ScenarioError("tyre-mark evidence needs a run-out: add [runout]", field="evidence.marks",
+                                file=scenario.path)
+        for i, r in enumerate(ev.rest):
+            entry = (raw.get("rest") or [{}] * (i + 1))[i]
+            name = r.name or f"rest of {r.body}"
+            s, src = sig(entry, "sigma", r.tolerance, f"evidence.rest[{i}]")
+            items.append(_Item("rest", name, "length", s, src, 2, 2.0, i, body=r.body,
+                               measured=np.asarray(r.position, float)))
+            if r.heading is not None:
+                s, src = sig(entry, "heading_sigma", r.heading_tolerance, f"evidence.rest[{i}]")
+                items.append(_Item("rest heading", f"{name} (heading)", "angle", s, src, 1, 1.0, i, body=r.body,
+                                   measured=float(r.heading)))
+        for i, m in enumerate(ev.marks):
+            entry = (raw.get("marks") or [{}] * (i + 1))[i]
+            s, src = sig(entry, "sigma", m.tolerance, f"evidence.marks[{i}]")
+            items.append(_Item("mark", m.name or f"mark {i + 1}", "length", s, src, self.mark_points, 1.0, i,
+                               mark=m))
+        for i, x in enumerate(ev.delta_v):
+            entry = (raw.get("delta_v") or [{}] * (i + 1))[i]
+            s, src = sig(entry, "sigma", x.tolerance, f"evidence.delta_v[{i}]")
+            items.append(_Item("delta-v", x.name or f"delta-v of {x.body} ({x.component})", "speed", s, src, 1, 1.0,
+                               i, body=x.body, measured=float(x.value)))
+        if not items:
+            raise ScenarioError("the scenario has no evidence to fit: add [evidence] items with their sigma",
+                                field="evidence", file=scenario.path)
+        self.items = tuple(items)
+        self.size = sum(it.size for it in items)
+        self.n_measurements = sum(it.weight_size for it in items)
+
+    def checks(self, scene) -> list:
+        """The evidence check (verdict against the tolerance) of each item, in item order.
+
+        Matched by kind and order (:func:`~crashsim.reconstruct.evidence.evaluate_evidence`
+        checks the items kind by kind in file order), so equal names do not mix them up.
+        """
+        by_kind: dict[str, list] = {}
+        for c in (scene.evidence.checks if scene.evidence is not None else ()):
+            by_kind.setdefault(c.kind, []).append(c)
+        seen: dict[str, int] = {}
+        out = []
+        for it in self.items:
+            k = seen.get(it.kind, 0)
+            seen[it.kind] = k + 1
+            lst = by_kind.get(it.kind, [])
+            out.append(lst[k] if k < len(lst) else None)
+        return out
+
+    def raw_residuals(self, scene) -> tuple[list[np.ndarray], list[dict]]:
+        """Per item: the unweighted residual vector (SI) and details (computed value, matched wheel)."""
+        item_checks = self.checks(scene)
+        bodies, tracks = {}, {}
+        for r in (scene.runout or {}).values():
+            bodies.update(r.bodies)
+            tracks.update(r.wheels)
+        out, det = [], []
+        for it, c in zip(self.items, item_checks):
+            if it.kind == "point of impact":
+                computed = np.asarray(scene.scenario.impact.surface.point, float)
+                out.append(computed - it.measured)
+                det.append({"computed": computed.tolist()})
+            elif it.kind == "rest":
+                b = bodies[it.body]
+                computed = np.asarray(b.rest_position, float)
+                out.append(computed - it.measured)
+                det.append({"computed": computed.tolist(), "at_rest": b.time_to_rest is not None})
+            elif it.kind == "rest heading":
+                b = bodies[it.body]
+                out.append(np.array([float(wrap_angle(b.rest_heading - it.measured))]))
+                det.append({"computed": float(wrap_angle(b.rest_heading))})
+            elif it.kind == "mark":
+                d, key = _mark_distances(it, tracks, self.mark_points)
+                out.append(d)
+                det.append({"matched_wheel": key, "rms_distance": float(np.sqrt(np.mean(d * d)))})
+            else:  # delta-v: the check's signed residual (one definition of the components)
+                out.append(np.array([c.residual]))
+                det.append({"computed": c.details.get("computed")})
+        return out, det
+
+    def weights(self) -> np.ndarray:
+        """1/sigma per residual component (marks: 1/(sigma sqrt(k)))."""
+        w = []
+        for it in self.items:
+            scale = it.sigma * (math.sqrt(it.size) if it.kind == "mark" else 1.0)
+            w += [1.0 / scale] * it.size
+        return np.asarray(w)
+
+    def weighted(self, scene) -> np.ndarray:
+        raw, _ = self.raw_residuals(scene)
+        r = np.concatenate(raw) * self.weights()
+        return np.where(np.isfinite(r), r, PENALTY)
+
+
+# ---------------------------------------------------------------------------------------------
+# The problem: unknowns (scaled to [0, 1]) -> weighted residuals
+# ---------------------------------------------------------------------------------------------
+
+class FitProblem:
+    """Unknowns scaled to ``z`` in [0, 1] (``x = lower + z * (upper - lower)``) -> weighted residuals.
+
+    Evaluations are cached (the optimiser asks for the residual and then the Jacobian at the
+    same point). Not thread-safe; each worker process builds its own.
+    """
+
+    def __init__(self, data: dict, spec: FitSpec, *, engine: str | None = None, file: str | None = None):
+        self.spec = spec
+        self.file = file
+        self.engine = default_engine() if engine is None else engine
+        self.overrides = ScenarioOverrides(data, spec.paths, engine=self.engine, file=file,
+                                           field_prefix="fit.unknowns")
+        self.lower = np.array([u.lower for u in spec.unknowns])
+        self.upper = np.array([u.upper for u in spec.unknowns])
+        self.span = self.upper - self.lower
+        x0 = np.array([u.initial for u in spec.unknowns])
+        try:
+            base = self.overrides.scenario(x0)
+        except ScenarioError as exc:
+            raise ScenarioError(f"the start values of the unknowns give an invalid scenario: {_bare(exc)}",
+                                field=exc.field, file=file) from None
+        self.evidence = EvidenceModel(base, sigma_from_tolerance=spec.sigma_from_tolerance,
+                                      mark_points=spec.mark_points)
+        self.nfev = 0
+        self.failures = 0
+        self._cache: dict[bytes, tuple[np.ndarray, Any]] = {}
+        self._order: list[bytes] = []
+
+    def check_bounds(self) -> None:
+        """Build the scenario with each unknown at each bound (others at their start): invalid -> ScenarioError."""
+        x0 = np.array([u.initial for u in self.spec.unknowns])
+        for j, u in enumerate(self.spec.unknowns):
+            for which, v in (("lower", u.lower), ("upper", u.upper)):
+                x = x0.copy()
+                x[j] = v
+                try:
+                    self.overrides.scenario(x)
+                except ScenarioError as exc:
+                    raise ScenarioError(f"{which} bound of {u.path} gives an invalid scenario: {exc.field}: {_bare(exc)}",
+                                        field=f"fit.unknowns[{j}].{which}", file=self.file) from None
+
+    def x_of(self, z) -> np.ndarray:
+        return self.lower + np.clip(np.asarray(z, float), 0.0, 1.0) * self.span
+
+    def z_of(self, x) -> np.ndarray:
+        return (np.asarray(x, float) - self.lower) / self.span
+
+    def scene(self, x):
+        """Run the scene at unknowns ``x`` (SI)."""
+        from .scene import run_scene
+
+        return run_scene(self.overrides.scenario(x))
+
+    def evaluate(self, z) -> tuple[np.ndarray, Any]:
+        """(weighted residuals, SceneResult or the error) at scaled point ``z``."""
+        z = np.asarray(z, float)
+        key = z.tobytes()
+        hit = self._cache.get(key)
+        if hit is not None:
+            return hit
+        self.nfev += 1
+        try:
+            scene = self.scene(self.x_of(z))
+            r = self.evidence.weighted(scene)
+            out = (r, scene)
+        except (ScenarioError, SolverError) as exc:
+            self.failures += 1
+            _log.debug("fit evaluation failed at %s: %s", self.x_of(z), exc)
+            out = (np.full(self.evidence.size, PENALTY), exc)
+        self._cache[key] = out
+        self._order.append(key)
+        if len(self._order) > 32:
+            self._cache.pop(self._order.pop(0), None)
+        return out
+
+    def residual(self, z) -> np.ndarray:
+        return self.evaluate(z)[0]
+
+    def cost(self, z) -> float:
+        r = self.residual(z)
+        return 0.5 * float(r @ r)
+
+    def jacobian(self, z, *, central: bool = False) -> np.ndarray:
+        """d(weighted residuals)/dz by finite differences, step ``diff_step`` (one-sided at a bound)."""
+        z = np.asarray(z, float)
+        h = self.spec.diff_step
+        f0 = self.residual(z)
+        J = np.empty((f0.size, z.size))
+        for j in range(z.size):
+            up, dn = z.copy(), z.copy()
+            if central and z[j] - h >= 0.0 and z[j] + h <= 1.0:
+                up[j] += h
+                dn[j] -= h
+                J[:, j] = (self.residual(up) - self.residual(dn)) / (2 * h)
+            else:
+                step = h if z[j] + h <= 1.0 else -h
+                up[j] += step
+                J[:, j] = (self.residual(up) - f0) / step
+        return J
+
+    def local_fit(self, z0) -> dict:
+        """One bounded least-squares fit from ``z0``; a plain dict (crosses process boundaries)."""
+        from scipy.optimize import least_squares
+
+        n0 = self.nfev
+        z0 = np.clip(np.asarray(z0, float), 1e-9, 1 - 1e-9)
+        res = least_squares(self.residual, z0, jac=lambda z: self.jacobian(z), bounds=(0.0, 1.0),
+                            method=self.spec.method, x_scale=1.0, ftol=1e-8, xtol=1e-7, gtol=1e-8,
+                            max_nfev=self.spec.max_evaluations)
+        return {"z0": z0.tolist(), "z": res.x.tolist(), "cost": float(res.cost), "status": int(res.status),
+                "message": str(res.message), "nfev": int(res.nfev), "njev": int(res.njev or 0),
+                "evaluations": self.nfev - n0, "active": [int(a) for a in res.active_mask]}
+
+
+# ---------------------------------------------------------------------------------------------
+# Results
+# ---------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class EvidenceResidual:
+    """Residual of one evidence item at the best fit.
+
+    ``residual`` is computed minus measured (SI, per component: x/y for positions, the
+    distances along a mark); ``normalized`` = residual / sigma (a mark's RMS distance / sigma);
+    ``chi2`` the item's share of chi^2; ``passed`` the verdict against its tolerance.
+    """
+
+    kind: str
+    name: str
+    quantity: str
+    residual: tuple[float, ...]
+    sigma: float
+    sigma_source: str
+    normalized: float
+    chi2: float
+    tolerance: float | None
+    passed: bool | None
+    details: dict = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        return {k: getattr(self, k) for k in ("kind", "name", "quantity", "residual", "sigma", "sigma_source",
+                                              "normalized", "chi2", "tolerance", "passed", "details")}
+
+
+@dataclass(frozen=True)
+class StartResult:
+    """One local fit: start and end (SI), cost (chi^2/2), whether it agrees with the best."""
+
+    x0: tuple[float, ...]
+    x: tuple[float, ...]
+    cost: float
+    evaluations: int
+    status: int
+    message: str
+    same_cost: bool
+    agrees: bool
+
+    def to_dict(self) -> dict:
+        return dict(self.__dict__)
+
+
+@dataclass(frozen=True)
+class FitResult:
+    """Outcome of :func:`fit_scene` (SI; ``report`` for display units).
+
+    Attributes
+    ----------
+    unknowns : tuple of Unknown
+    x : ndarray (n,)
+        Best values [SI].
+    stderr : ndarray (n,)
+        Standard errors (inf where the evidence does not determine the unknown).
+    interval : ndarray (n, 2)
+        ``confidence`` intervals (linearised; not clipped to the bounds).
+    covariance, correlation : ndarray (n, n)
+    residuals : tuple of EvidenceResidual
+    chi2, dof, p_value : float, int, float
+    singular_values : ndarray
+        Of the weighted Jacobian with unit-norm columns, relative to the largest, in decreasing
+        order (a zero for each unknown no evidence depends on).
+    null_space : list of dict
+        Each undetermined direction: ``{"singular_value", "unknowns": {path: component}}``.
+    starts : tuple of StartResult
+    n_agree : int
+        Starts that reached the best minimum (same cost and same point).
+    warnings : tuple of str
+    scene : SceneResult
+        The scene at the best values (not in ``to_dict``).
+    success : bool
+        False if the best start did not converge or evaluations failed at the best point.
+    """
+
+    unknowns: tuple
+    x: np.ndarray
+    stderr: np.ndarray
+    interval: np.ndarray
+    covariance: np.ndarray
+    correlation: np.ndarray
+    residuals: tuple
+    chi2: float
+    dof: int
+    p_value: float
+    confidence: float
+    covariance_mode: str
+    singular_values: np.ndarray
+    null_space: list
+    starts: tuple
+    n_agree: int
+    n_same_cost: int
+    warnings: tuple
+    evaluations: int
+    failures: int
+    elapsed: float
+    engine: str
+    success: bool
+    message: str
+    scene: Any = field(default=None, repr=False, compare=False)
+
+    @property
+    def values(self) -> dict:
+        """Best values by path [SI]."""
+        return {u.path: float(v) for u, v in zip(self.unknowns, self.x)}
+
+    def to_dict(self) -> dict:
+        n = len(self.unknowns)
+        fin = lambda v: float(v) if np.isfinite(v) else None  # noqa: E731
+        return {
+            "success": self.success, "message": self.message, "engine": self.engine,
+            "unknowns": [{"path": u.path, "name": u.name, "kind": u.kind, "value": float(self.x[i]),
+                          "stderr": fin(self.stderr[i]), "interval": [fin(self.interval[i, 0]), fin(self.interval[i, 1])],
+                          "lower": u.lower, "upper": u.upper, "initial": u.initial} for i, u in enumerate(self.unknowns)],
+            "confidence": self.confidence, "covariance_mode": self.covariance_mode,
+            "covariance": [[fin(self.covariance[i, j]) for j in range(n)] for i in range(n)],
+            "correlation": [[fin(self.correlation[i, j]) for j in range(n)] for i in range(n)],
+            "residuals": [r.to_dict() for r in self.residuals],
+            "chi2": self.chi2, "dof": self.dof, "p_value": fin(self.p_value),
+            "singular_values": [float(s) for s in self.singular_values], "null_space": self.null_space,
+            "starts": [s.to_dict() for s in self.starts], "n_starts": len(self.starts), "n_agree": self.n_agree,
+            "n_same_cost": self.n_same_cost, "warnings": list(self.warnings), "evaluations": self.evaluations,
+            "failures": self.failures, "elapsed": self.elapsed,
+        }
+
+    def report(self, system: str = "SI") -> str:
+        """Readable report: best values with intervals, correlations, residuals, warnings."""
+        from ..report import fmt
+
+        sc = self.scene.scenario if self.scene is not None else None
+        lines = [f"crashsim fit: {sc.title}" if sc is not None else "crashsim fit"]
+        if sc is not None and sc.path:
+            lines.append(f"file: {sc.path}")
+        pct = f"{100 * self.confidence:g} %"
+        lines.append(f"units: {system}; run-out engine: {self.engine}; {self.evaluations} scene evaluations "
+                     f"in {self.elapsed:.1f} s")
+        lines.append("")
+        lines.append(f"Unknowns (best fit, {pct} intervals, {'measurement sigmas' if self.covariance_mode == 'absolute' else 'scaled by chi^2/dof'})")
+        w = max(12, max(len(u.name) for u in self.unknowns))
+        lines.append(f"  {'unknown':<{w}}  {'best':>13}  {'std. error':>13}  {pct + ' interval':<31} bounds")
+        for i, u in enumerate(self.unknowns):
+            k = u.kind
+            lo, hi = self.interval[i]
+            iv = (f"[{fmt(lo, k, system)}, {fmt(hi, k, system)}]" if np.isfinite(lo) and np.isfinite(hi)
+                  else "not determined")
+            se = fmt(self.stderr[i], k, system) if np.isfinite(self.stderr[i]) else "inf"
+            lines.append(f"  {u.name:<{w}}  {fmt(self.x[i], k, system):>13}  {se:>13}  {iv:<31} "
+                         f"[{fmt(u.lower, k, system)}, {fmt(u.upper, k, system)}]")
+        n = len(self.unknowns)
+        if n > 1:
+            lines.append("")
+            lines.append("Correlation of the unknowns")
+            lines.append("  " + " " * w + "".join(f"{j + 1:>8d}" for j in range(n)))
+            for i, u in enumerate(self.unknowns):
+                row = "".join(f"{self.correlation[i, j]:8.3f}" if np.isfinite(self.correlation[i, j]) else "     n/a"
+                              for j in range(n))
+                lines.append(f"  {(str(i + 1) + ' ' + u.name):<{w}}{row}")
+        lines.append("")
+        lines.append(f"Evidence at the best fit: chi^2 = {self.chi2:.3g} for {self.dof} degrees of freedom"
+                     + (f" (p = {self.p_value:.2g})" if np.isfinite(self.p_value) else ""))
+        for r in self.residuals:
+            verdict = "    " if r.passed is None else ("PASS" if r.passed else "FAIL")
+            if r.kind == "mark":
+                res = f"rms distance {fmt(r.normalized * r.sigma, 'length', system)}"
+            else:
+                res = ", ".join(fmt(v, r.quantity, system) for v in r.residual)
+                res = f"residual ({res})" if len(r.residual) > 1 else f"residual {res}"
+            lines.append(f"  {verdict}  {r.kind:<15} {r.name:<32} {res:<34} sigma {fmt(r.sigma, r.quantity, system)}"
+                         f" -> {r.normalized:+.2f} sigma")
+        lines.append("")
+        same = (f"; {self.n_same_cost} reached its cost" if self.n_same_cost != self.n_agree else "")
+        lines.append(f"Starts: {self.n_agree} of {len(self.starts)} agreed with the best minimum{same}")
+        for k, s in enumerate(self.starts):
+            mark = "*" if s.agrees else ("=" if s.same_cost else " ")
+            lines.append(f"  {mark} start {k + 1}: chi^2 = {2 * s.cost:.4g}, {s.evaluations} evaluations, "
+                         + ", ".join(f"{u.name} {fmt(v, u.kind, system)}" for u, v in zip(self.unknowns, s.x)))
+        if self.warnings:
+            lines.append("")
+            lines.append("Warnings")
+            lines += [f"  - {w_}" for w_ in self.warnings]
+        return "\n".join(lines)
+
+
+# ---------------------------------------------------------------------------------------------
+# fit_scene
+# ---------------------------------------------------------------------------------------------
+
+_WORKER: dict = {}
+
+
+def _worker_init(data, spec, engine, file):
+    _WORKER["problem"] = FitProblem(data, spec, engine=engine, file=file)
+
+
+def _worker_local(z0):
+    return _WORKER["problem"].local_fit(z0)
+
+
+def _worker_cost(z):
+    return _WORKER["problem"].cost(z)
+
+
+def _start_points(spec: FitSpec, problem: FitProblem, pool, workers) -> list[np.ndarray]:
+    from scipy.stats import qmc
+
+    n = len(spec.unknowns)
+    first = problem.z_of([u.initial for u in spec.unknowns])
+    if spec.starts == 1:
+        return [first]
+    if spec.screen > 0:
+        cand = qmc.LatinHypercube(d=n, seed=spec.seed).random(spec.screen)
+        costs = list(pool.map(_worker_cost, list(cand))) if pool else [problem.cost(z) for z in cand]
+        order = np.argsort(costs, kind="stable")
+        rest = [cand[i] for i in order[:spec.starts - 1]]
+    else:
+        rest = list(qmc.LatinHypercube(d=n, seed=spec.seed).random(spec.starts - 1))
+    return [first] + rest
+
+
+def _progress(progress, total):
+    if progress is True:
+        try:
+            from tqdm import tqdm
+        except ImportError:  # pragma: no cover - tqdm is a dependency
+            return None
+        import sys
+
+        return tqdm(total=total, desc="fit starts", unit="start", file=sys.stderr)
+    return None
+
+
+def fit_scene(scenario_data: dict, fit_spec: FitSpec | dict | None = None, *, engine: str | None = None,
+              workers: int | None = None, progress: bool | Callable | None = None,
+              file: str | None = None) -> FitResult:
+    """Fit the unknowns of a scenario to its evidence (impact + run-out, weighted least squares).
+
+    Parameters
+    ----------
+    scenario_data : dict
+        The raw scenario (as from TOML, e.g. :func:`crashsim.schema.load_toml`), with
+        evidence items carrying ``sigma`` (or ``fit.sigma_from_tolerance``).
+    fit_spec : FitSpec or dict, optional
+        The unknowns and options: a :class:`FitSpec`, a raw [fit] table, or None for the
+        scenario's own ``[fit]`` table.
+    engine : {"compiled", "scipy"}, optional
+        Run-out engine; default the compiled one when this crashsim has it.
+    workers : int, optional
+        Processes for the starts (and the screening); default all cores; 1 runs in this
+        process.
+    progress : bool or callable, optional
+        True: a progress bar over the starts on stderr; a callable ``progress(done, total)``
+        is called after each start.
+    file : str, optional
+        File name for messages.
+
+    Returns
+    -------
+    FitResult
+
+    Raises
+    ------
+    ScenarioError
+        Invalid [fit] table, path, bounds, or evidence without sigma.
+    """
+    t0 = time.perf_counter()
+    if fit_spec is None:
+        if "fit" not in scenario_data:
+            raise ScenarioError("the scenario has no [fit] table naming the unknowns", field="fit", file=file)
+        fit_spec = scenario_data["fit"]
+    spec = fit_spec if isinstance(fit_spec, FitSpec) else FitSpec.from_dict(fit_spec, scenario_data, file=file)
+    engine = default_engine() if engine is None else engine
+    problem = FitProblem(scenario_data, spec, engine=engine, file=file)
+    problem.check_bounds()
+    # One scene in this process first: it checks that the scene runs, and it compiles the run-out
+    # engine here once, so that the forked workers inherit it instead of each compiling it.
+    problem.evaluate(problem.z_of([u.initial for u in spec.unknowns]))
+
+    workers = (os.cpu_count() or 1) if workers is None else max(1, int(workers))
+    n_tasks = max(spec.starts, 1)
+    use_pool = workers > 1 and (spec.starts > 1 or spec.screen > 1)
+    pool = None
+    bar = _progress(progress, spec.starts)
+    outcomes: list[dict] = []
+    evaluations = 0
+    try:
+        if use_pool:
+            import multiprocessing as mp
+            from concurrent.futures import ProcessPoolExecutor
+
+            ctx = mp.get_context("fork") if "fork" in mp.get_all_start_methods() else None
+            pool = ProcessPoolExecutor(max_workers=min(workers, max(n_tasks, spec.screen)), mp_context=ctx,
+                                       initializer=_worker_init, initargs=(scenario_data, spec, engine, file))
+        starts = _start_points(spec, problem, pool, workers)
+        evaluations += spec.screen if spec.starts > 1 else 0
+        if pool is not None:
+            futures = [pool.submit(_worker_local, z0) for z0 in starts]
+            for k, fut in enumerate(futures):
+                outcomes.append(fut.result())
+                if bar is not None:
+                    bar.update(1)
+                elif callable(progress):
+                    progress(k + 1, len(starts))
+        else:
+            for k, z0 in enumerate(starts):
+                outcomes.append(problem.local_fit(z0))
+                if bar is not None:
+                    bar.update(1)
+                elif callable(progress):
+                    progress(k + 1, len(starts))
+    finally:
+        if pool is not None:
+            pool.shutdown()
+        if bar is not None:
+            bar.close()
+    evaluations += sum(o["evaluations"] for o in outcomes)
+    n_before = problem.nfev
+    result = _analyse(problem, spec, outcomes, engine)
+    evaluations += problem.nfev - n_before
+    return _replace_timing(result, evaluations, time.perf_counter() - t0, problem.failures)
+
+
+def _replace_timing(result: FitResult, evaluations: int, elapsed: float, failures: int) -> FitResult:
+    from dataclasses import replace
+
+    return replace(result, evaluations=evaluations, elapsed=elapsed, failures=failures)
+
+
+def _analyse(problem: FitProblem, spec: FitSpec, outcomes: list[dict], engine: str) -> FitResult:
+    from scipy import stats
+
+    n = len(spec.unknowns)
+    costs = np.array([o["cost"] for o in outcomes])
+    best_k = int(np.argmin(costs))
+    zb = np.asarray(outcomes[best_k]["z"])
+    xb = problem.x_of(zb)
+    r, scene = problem.evaluate(zb)
+    warnings: list[str] = []
+    success = not isinstance(scene, Exception) and outcomes[best_k]["status"] > 0
+    message = outcomes[best_k]["message"]
+    if isinstance(scene, Exception):
+        raise SolverError(f"the scene cannot be evaluated at the best point found: {scene}")
+
+    # Weighted Jacobian in the scaled unknowns z (central differences); covariance converted to SI below.
+    Jz = problem.jacobian(zb, central=True)
+    chi2 = float(r @ r)
+    dof = int(round(problem.evidence.n_measurements)) - n
+
+    # Identifiability: zero columns, then SVD with unit-norm columns.
+    norms = np.linalg.norm(Jz, axis=0)
+    big = float(np.max(norms)) if norms.size else 0.0
+    undetermined = np.zeros(n, dtype=bool)
+    for j in range(n):
+        if norms[j] <= 1e-12 * max(big, 1e-300):
+            undetermined[j] = True
+            warnings.append(f"no evidence depends on {spec.unknowns[j].name} ({spec.unknowns[j].path}): the "
+                            "evidence cannot determine it (its value is the start value)")
+    live = ~undetermined
+    null_space = []
+    sv_rel = np.zeros(0)
+    cov = np.full((n, n), np.nan)
+    if live.any():
+        Jn = Jz[:, live] / norms[live]
+        U, S, Vt = np.linalg.svd(Jn, full_matrices=False)
+        sv_rel_live = S / S[0] if S[0] > 0 else S
+        sv_rel = np.concatenate([sv_rel_live, np.zeros(int(n - live.sum()))])
+        idx_live = np.nonzero(live)[0]
+        for k in np.nonzero(sv_rel_live < RANK_TOL)[0]:
+            v = Vt[k]
+            comp = {spec.unknowns[idx_live[j]].path: float(v[j]) for j in range(len(v)) if abs(v[j]) > 0.1}
+            for j in range(len(v)):
+                if abs(v[j]) > 0.1:
+                    undetermined[idx_live[j]] = True
+            null_space.append({"singular_value": float(sv_rel_live[k]), "unknowns": comp})
+            names = " and ".join(spec.unknowns[idx_live[j]].name for j in range(len(v)) if abs(v[j]) > 0.1)
+            warnings.append(f"rank deficiency: the evidence cannot determine {names} separately (relative singular "
+                            f"value {sv_rel_live[k]:.1e}; only a combination of them is fixed): their intervals "
+                            "are not given")
+        # covariance of the determined part, in x units: pseudo-inverse without the null space
+        keep = sv_rel_live >= RANK_TOL
+        Sk = S[keep]
+        Vk = Vt[keep]
+        cov_n = (Vk.T / Sk**2) @ Vk            # in unit-norm-column variables
+        scale = (norms[live] / problem.span[live])  # J_x column norms
+        cov_live = cov_n / np.outer(scale, scale)
+        cov[np.ix_(idx_live, idx_live)] = cov_live
+    if spec.covariance == "scaled":
+        factor = chi2 / dof if dof > 0 else np.nan
+        cov = cov * factor
+        q = stats.t.ppf(0.5 + spec.confidence / 2, dof) if dof > 0 else np.inf
+    else:
+        q = stats.norm.ppf(0.5 + spec.confidence / 2)
+    var = np.diag(cov).copy()
+    stderr = np.where(undetermined | ~np.isfinite(var), np.inf, np.sqrt(np.abs(var)))
+    interval = np.column_stack([xb - q * stderr, xb + q * stderr])
+    interval[~np.isfinite(stderr)] = np.nan
+    with np.errstate(invalid="ignore", divide="ignore"):
+        sd = np.sqrt(np.abs(np.diag(cov)))
+        corr = cov / np.outer(sd, sd)
+    corr[undetermined, :] = np.nan
+    corr[:, undetermined] = np.nan
+    for j in range(n):
+        if not undetermined[j]:
+            corr[j, j] = 1.0
+
+    for j, u in enumerate(spec.unknowns):
+        if undetermined[j]:
+            continue
+        a = outcomes[best_k]["active"][j] if outcomes[best_k]["active"] else 0
+        at_lo, at_hi = zb[j] <= 1e-4 or a == -1, zb[j] >= 1 - 1e-4 or a == 1
+        if at_lo or at_hi:
+            warnings.append(f"{u.name} ended at its {'lower' if at_lo else 'upper'} bound: the evidence pulls it "
+                            "beyond the bounds; its interval is not valid (widen the bounds or check the evidence)")
+        elif 2 * q * stderr[j] > u.span:
+            warnings.append(f"{u.name} is poorly determined: its {100 * spec.confidence:g} % interval is wider than "
+                            "its bounds")
+        elif interval[j, 0] < u.lower or interval[j, 1] > u.upper:
+            warnings.append(f"the interval of {u.name} reaches past its bounds (linearised; the bounds are not "
+                            "part of it)")
+    p_value = float(stats.chi2.sf(chi2, dof)) if dof > 0 else float("nan")
+    if dof > 0 and p_value < 0.01:
+        warnings.append(f"chi^2 = {chi2:.3g} is improbably large for {dof} degrees of freedom (p = {p_value:.1g}): "
+                        "the sigmas are too small or the model misses something; the intervals are too narrow"
+                        + (" (consider fit.covariance = \"scaled\")" if spec.covariance == "absolute" else ""))
+    if dof <= 0:
+        warnings.append(f"{problem.evidence.n_measurements:g} measurements for {n} unknowns: no degrees of freedom "
+                        "left to check the fit (chi^2 should be ~0)")
+    if problem.failures:
+        warnings.append(f"{problem.failures} scene evaluation(s) failed (invalid input combination or solver) and "
+                        "were penalised")
+    if scene.warnings:
+        warnings += [f"at the best fit: {w_}" for w_ in scene.warnings]
+
+    # Starts: same cost, and same point (within a quarter standard error or 1e-3 of the range).
+    tol_cost = 1e-3 * max(1.0, float(costs[best_k]))
+    se_z = np.where(np.isfinite(stderr), stderr / problem.span, np.inf)
+    tol_z = np.maximum(1e-3, 0.25 * np.where(np.isfinite(se_z), se_z, 0.0))
+    starts = []
+    for o in outcomes:
+        z = np.asarray(o["z"])
+        same_cost = bool(o["cost"] - costs[best_k] <= tol_cost)
+        det = ~undetermined
+        agrees = same_cost and bool(np.all(np.abs(z - zb)[det] <= tol_z[det]))
+        starts.append(StartResult(tuple(problem.x_of(o["z0"]).tolist()), tuple(problem.x_of(z).tolist()),
+                                  o["cost"], o["evaluations"], o["status"], o["message"], same_cost, agrees))
+    n_agree = sum(s.agrees for s in starts)
+    n_same = sum(s.same_cost for s in starts)
+    if n_agree < len(starts):
+        others = sorted({round(2 * s.cost, 3) for s in starts if not s.same_cost})
+        if others:
+            warnings.append(f"{len(starts) - n_same} of {len(starts)} starts ended in other minima (chi^2 "
+                            f"{', '.join(f'{c:g}' for c in others[:5])}); the best was kept")
+        if n_same > n_agree:
+            warnings.append(f"{n_same - n_agree} start(s) reached the best cost at a different point: the minimum "
+                            "is flat or not unique")
+
+    residuals = _residual_items(problem, scene)
+    return FitResult(
+        unknowns=spec.unknowns, x=xb, stderr=stderr, interval=interval, covariance=cov, correlation=corr,
+        residuals=residuals, chi2=chi2, dof=dof, p_value=p_value, confidence=spec.confidence,
+        covariance_mode=spec.covariance, singular_values=sv_rel, null_space=null_space, starts=tuple(starts),
+        n_agree=n_agree, n_same_cost=n_same, warnings=tuple(warnings), evaluations=0, failures=0, elapsed=0.0,
+        engine=engine, success=bool(success), message=message, scene=scene)
+
+
+def _residual_items(problem: FitProblem, scene) -> tuple[EvidenceResidual, ...]:
+    raw, det = problem.evidence.raw_residuals(scene)
+    out = []
+    for it, v, d, c in zip(problem.evidence.items, raw, det, problem.evidence.checks(scene)):
+        v = np.asarray(v, float)
+        if it.kind == "mark":
+            rms = float(np.sqrt(np.mean(v * v)))
+            normalized = rms / it.sigma
+            chi2 = normalized**2
+        else:
+            z = v / it.sigma
+            chi2 = float(z @ z)
+            normalized = float(z[0]) if z.size == 1 else float(np.sqrt(chi2 / z.size))
+        out.append(EvidenceResidual(it.kind, it.name, it.quantity, tuple(float(a) for a in v), it.sigma,
+                                    it.sigma_source, normalized, chi2, None if c is None else c.tolerance,
+                                    None if c is None else bool(c.passed), d))
+    return tuple(out)

@@ -1,0 +1,758 @@
+"""Monte Carlo propagation of input uncertainty through impact and run-out.
+
+Every sample draws the uncertain inputs (uniform, triangular or normal, in the units of the
+file), writes them into the scenario (:mod:`crashsim.reconstruct.overrides`, validated like
+file values) and runs the whole scene to rest. The result is a table: delta-v, speeds,
+energy loss and rest positions of every sample, and the verdict of every evidence item.
+
+Reproducibility
+---------------
+Sample ``i`` draws its inputs from ``numpy.random.default_rng(SeedSequence(seed,
+spawn_key=(i,)))`` (the i-th child of ``SeedSequence(seed).spawn``): its inputs depend only
+on ``(seed, i)``, not on the number of samples, the order in which samples finish, the
+number of workers or the machine. A local run, a resumed run and a Dask run with the same
+seed give the same numbers.
+
+Streaming and resume
+--------------------
+With ``out_path`` each sample is appended to a JSON-lines file as soon as it is done (first
+line: a header naming the scenario and the seed by a hash). A run that is stopped keeps what
+it wrote; running again with the same file computes only the samples not in it (a torn last
+line is dropped). A file written for another scenario or seed is refused.
+
+Parallelism
+-----------
+``workers`` processes (default all cores; ``concurrent.futures.ProcessPoolExecutor``), or an
+existing Dask cluster (``dask_address``; ``dask.distributed``), with samples sent in chunks.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+import math
+import os
+import sys
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+from ..errors import CrashsimError, ScenarioError
+from .overrides import ScenarioOverrides, default_engine, parse_value
+
+__all__ = ["InputDistribution", "UncertaintySpec", "MCResult", "monte_carlo", "sample_inputs", "load_results",
+           "DEFAULT_PERCENTILES"]
+
+_log = logging.getLogger("crashsim")
+
+DEFAULT_PERCENTILES = (5.0, 25.0, 50.0, 75.0, 95.0)
+_FORMAT = "crashsim-mc/1"
+
+
+# ---------------------------------------------------------------------------------------------
+# Specification
+# ---------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class InputDistribution:
+    """One uncertain input: a scenario path and its distribution (parameters in SI).
+
+    ``uniform``: lower, upper. ``triangular``: lower, mode, upper. ``normal``: mean, sd,
+    optionally truncated to [lower, upper] (by redrawing).
+    """
+
+    path: str
+    name: str
+    distribution: str
+    kind: str
+    lower: float | None = None
+    upper: float | None = None
+    mode: float | None = None
+    mean: float | None = None
+    sd: float | None = None
+
+    def sample(self, rng: np.random.Generator) -> float:
+        if self.distribution == "uniform":
+            return float(rng.uniform(self.lower, self.upper))
+        if self.distribution == "triangular":
+            if self.lower == self.upper:
+                return float(self.lower)
+            return float(rng.triangular(self.lower, self.mode, self.upper))
+        lo = -math.inf if self.lower is None else self.lower
+        hi = math.inf if self.upper is None else self.upper
+        for _ in range(10_000):
+            x = float(rng.normal(self.mean, self.sd))
+            if lo <= x <= hi:
+                return x
+        raise ScenarioError(f"the truncation [{lo}, {hi}] of {self.path} keeps almost none of its normal "
+                            "distribution", field=self.path)
+
+    def ppf(self, q: float) -> float:
+        """Quantile ``q`` in (0, 1) (for the one-at-a-time swings of the tornado chart)."""
+        from scipy import stats
+
+        if self.distribution == "uniform":
+            return self.lower + q * (self.upper - self.lower)
+        if self.distribution == "triangular":
+            w = self.upper - self.lower
+            if w == 0:
+                return self.lower
+            c = (self.mode - self.lower) / w
+            return float(stats.triang.ppf(q, c, loc=self.lower, scale=w))
+        lo = -np.inf if self.lower is None else (self.lower - self.mean) / self.sd
+        hi = np.inf if self.upper is None else (self.upper - self.mean) / self.sd
+        return float(stats.truncnorm.ppf(q, lo, hi, loc=self.mean, scale=self.sd))
+
+    @property
+    def median(self) -> float:
+        return self.ppf(0.5)
+
+
+@dataclass(frozen=True)
+class UncertaintySpec:
+    """A validated ``[uncertainty]`` table."""
+
+    inputs: tuple[InputDistribution, ...]
+    samples: int = 1000
+    seed: int = 0
+
+    @property
+    def paths(self) -> tuple[str, ...]:
+        return tuple(d.path for d in self.inputs)
+
+    @classmethod
+    def from_dict(cls, raw: dict, *, file: str | None = None) -> "UncertaintySpec":
+        """Validate a raw [uncertainty] table (values with units) and convert it to SI."""
+        from .inverse_schema import DISTRIBUTIONS, validate_uncertainty
+        from .overrides import resolve_path
+
+        d = validate_uncertainty(raw, file=file)
+        out = []
+        for i, e in enumerate(d["inputs"]):
+            key = f"uncertainty.inputs[{i}]"
+            t = resolve_path(e["path"], field=f"{key}.path")
+            need, allowed = DISTRIBUTIONS[e["distribution"]]
+            vals = {}
+            for k in ("lower", "upper", "mode", "mean", "sd"):
+                if e[k] is None:
+                    if k in need:
+                        raise ScenarioError(f"distribution {e['distribution']!r} needs {k} (and {', '.join(need)})",
+                                            field=f"{key}.{k}", file=file)
+                    continue
+                if k not in need and k not in allowed:
+                    raise ScenarioError(f"{k} does not belong to distribution {e['distribution']!r} (it takes "
+                                        f"{', '.join(need + allowed)})", field=f"{key}.{k}", file=file)
+                vals[k] = parse_value(e[k], t, field=f"{key}.{k}")
+            lo, hi = vals.get("lower"), vals.get("upper")
+            if lo is not None and hi is not None and not lo <= hi:
+                raise ScenarioError(f"lower {e['lower']!r} is above upper {e['upper']!r}", field=f"{key}.upper",
+                                    file=file)
+            if "mode" in vals and not lo <= vals["mode"] <= hi:
+                raise ScenarioError(f"mode {e['mode']!r} lies outside [{e['lower']}, {e['upper']}]",
+                                    field=f"{key}.mode", file=file)
+            if "sd" in vals and not vals["sd"] > 0:
+                raise ScenarioError(f"sd {e['sd']!r} must be positive", field=f"{key}.sd", file=file)
+            if e["distribution"] == "normal" and lo is not None and hi is not None and lo == hi:
+                raise ScenarioError("a truncated normal needs lower < upper", field=f"{key}.upper", file=file)
+            out.append(InputDistribution(t.path, e["name"] or t.path, e["distribution"], t.kind, **vals))
+        seen = set()
+        for i, dist in enumerate(out):
+            if dist.path in seen:
+                raise ScenarioError(f"{dist.path!r} is given twice", field=f"uncertainty.inputs[{i}].path", file=file)
+            seen.add(dist.path)
+        return cls(tuple(out), samples=d["samples"], seed=d["seed"])
+
+    def to_dict(self) -> dict:
+        return {"samples": self.samples, "seed": self.seed, "inputs": [dict(d.__dict__) for d in self.inputs]}
+
+
+def sample_inputs(spec: UncertaintySpec, seed: int, i: int) -> np.ndarray:
+    """The inputs of sample ``i`` (SI): a function of ``(seed, i)`` only."""
+    rng = np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(int(i),)))
+    return np.array([d.sample(rng) for d in spec.inputs])
+
+
+# ---------------------------------------------------------------------------------------------
+# One sample
+# ---------------------------------------------------------------------------------------------
+
+#: Unit kind of each output, by the prefix of its key ("delta_v.car").
+OUTPUT_KINDS = {"delta_v": "speed", "speed": "speed", "speed_after": "speed", "energy_loss": "dimensionless",
+                "rest_x": "length", "rest_y": "length", "rest_heading": "angle", "distance": "length"}
+
+
+def scene_outputs(scene) -> dict[str, float]:
+    """Flat outputs of one scene (SI): delta-v, speeds before/after, energy loss, rest positions."""
+    imp = scene.impact
+    out: dict[str, float] = {}
+    data = scene.scenario.data
+    for vname, v in (data.get("vehicles") or {}).items():
+        out[f"speed.{vname}"] = float(v["speed"])
+    for name, b in imp.bodies.items():
+        if b.fixed:
+            continue
+        out[f"delta_v.{name}"] = b.delta_v_magnitude
+        out[f"speed_after.{name}"] = float(np.hypot(*b.velocity))
+    for k, v in imp.energy_loss.items():
+        out[f"energy_loss.{k}"] = float(v)
+    for r in (scene.runout or {}).values():
+        for name, b in r.bodies.items():
+            out[f"rest_x.{name}"] = float(b.rest_position[0])
+            out[f"rest_y.{name}"] = float(b.rest_position[1])
+            out[f"rest_heading.{name}"] = float(b.rest_heading_wrapped)
+            out[f"distance.{name}"] = float(b.distance)
+    return out
+
+
+def _check_key(c) -> str:
+    return f"{c.kind}: {c.name}"
+
+
+class _Runner:
+    def __init__(self, data: dict, spec: UncertaintySpec, engine: str, file: str | None):
+        self.spec = spec
+        self.overrides = ScenarioOverrides(data, spec.paths, engine=engine, file=file, cache=1,
+                                           field_prefix="uncertainty.inputs")
+
+    def run(self, seed: int, i: int) -> dict:
+        from .scene import run_scene
+
+        x = sample_inputs(self.spec, seed, i)
+        row: dict[str, Any] = {"i": int(i), "x": [float(v) for v in x]}
+        try:
+            scene = run_scene(self.overrides.scenario(x))
+        except CrashsimError as exc:
+            row["error"] = f"{type(exc).__name__}: {exc}"
+            return row
+        row["out"] = scene_outputs(scene)
+        if scene.evidence is not None:
+            row["checks"] = {_check_key(c): [float(c.residual) if math.isfinite(c.residual) else None, bool(c.passed)]
+                             for c in scene.evidence.checks}
+        row["warnings"] = len(scene.warnings)
+        row["rest"] = all(r.success for r in (scene.runout or {}).values())
+        return row
+
+
+_LOCAL = threading.local()
+
+
+def _runner_for(payload: dict) -> _Runner:
+    cache = getattr(_LOCAL, "runners", None)
+    if cache is None:
+        cache = _LOCAL.runners = {}
+    r = cache.get(payload["hash"])
+    if r is None:
+        r = cache[payload["hash"]] = _Runner(payload["data"], payload["spec"], payload["engine"], payload["file"])
+    return r
+
+
+def _run_chunk(payload: dict, indices: Sequence[int]) -> list[dict]:
+    """Run samples ``indices`` (used by the process pool and by Dask workers)."""
+    runner = _runner_for(payload)
+    return [runner.run(payload["seed"], i) for i in indices]
+
+
+_POOL_PAYLOAD: dict = {}
+
+
+def _pool_init(payload):
+    _POOL_PAYLOAD["p"] = payload
+
+
+def _pool_chunk(indices):
+    return _run_chunk(_POOL_PAYLOAD["p"], indices)
+
+
+# ---------------------------------------------------------------------------------------------
+# Result
+# ---------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class MCResult:
+    """Outcome of :func:`monte_carlo` (SI).
+
+    Attributes
+    ----------
+    spec : UncertaintySpec
+    seed : int
+    n : int
+        Samples asked for; ``indices`` those present (all of them unless interrupted).
+    inputs : ndarray (n_done, k)
+        Sampled inputs [SI], rows in index order.
+    outputs : dict of ndarray (n_done,)
+        By key (``"delta_v.car"``, ``"rest_x.trailer"``, ...); NaN for failed samples.
+    checks : dict of (residuals, passed) arrays by evidence item (``"rest: rest of car"``).
+    errors : list of (index, message)
+    percentiles : dict
+        ``{key: {"p5": ..., ..., "mean": ..., "std": ...}}`` over successful samples.
+    pass_share : dict
+        Share of successful samples meeting each evidence tolerance, and ``"all evidence"``.
+    tornado : dict
+        By output key (delta-v of the bodies in contact): per input its Spearman rank
+        correlation with the output over the samples and the one-at-a-time swing of the output
+        (input at its 5th and 95th percentiles, others at their medians): ``low``, ``high``,
+        ``base``.
+    nominal : SceneResult or None
+        The scene with every input at its median (for plots; not in ``to_dict``).
+    """
+
+    spec: UncertaintySpec
+    seed: int
+    n: int
+    indices: np.ndarray
+    inputs: np.ndarray
+    outputs: dict
+    checks: dict
+    errors: list
+    percentiles: dict
+    pass_share: dict
+    tornado: dict
+    n_resumed: int
+    elapsed: float
+    engine: str
+    backend: str
+    workers: int
+    out_path: str | None
+    nominal: Any = field(default=None, repr=False, compare=False)
+
+    @property
+    def n_done(self) -> int:
+        return int(len(self.indices))
+
+    @property
+    def n_failed(self) -> int:
+        return len(self.errors)
+
+    @staticmethod
+    def kind_of(key: str) -> str:
+        return OUTPUT_KINDS.get(key.split(".", 1)[0], "dimensionless")
+
+    def to_dict(self) -> dict:
+        fin = lambda v: float(v) if v is not None and np.isfinite(v) else None  # noqa: E731
+        return {
+            "n": self.n, "n_done": self.n_done, "n_failed": self.n_failed, "n_resumed": self.n_resumed,
+            "seed": self.seed, "engine": self.engine, "backend": self.backend, "workers": self.workers,
+            "elapsed": self.elapsed, "out_path": self.out_path, "spec": self.spec.to_dict(),
+            "percentiles": {k: {q: fin(v) for q, v in p.items()} for k, p in self.percentiles.items()},
+            "pass_share": self.pass_share,
+            "tornado": self.tornado,
+            "errors": [{"i": int(i), "message": m} for i, m in self.errors[:50]],
+        }
+
+    def report(self, system: str = "SI") -> str:
+        from ..report import fmt
+
+        def show(v, kind):
+            if v is None or not np.isfinite(v):
+                return "n/a"
+            if kind == "dimensionless":
+                return f"{100 * v:.1f} %"
+            return fmt(v, kind, system)
+
+        title = self.nominal.scenario.title if self.nominal is not None else ""
+        lines = [f"crashsim Monte Carlo: {title}".rstrip()]
+        resumed = f", {self.n_resumed} resumed from the results file" if self.n_resumed else ""
+        lines.append(f"{self.n_done} of {self.n} samples ({self.n_failed} failed{resumed}); seed {self.seed}; "
+                     f"engine {self.engine}; {self.backend}, {self.workers} worker(s); {self.elapsed:.1f} s")
+        lines.append("")
+        lines.append("Uncertain inputs")
+        output_show = show
+
+        def show(v, kind):  # noqa: F811 - inputs: plain numbers stay plain (restitution, friction)
+            return f"{v:.4g}" if kind == "dimensionless" and v is not None else output_show(v, kind)
+
+        for d in self.spec.inputs:
+            k = d.kind
+            if d.distribution == "uniform":
+                par = f"uniform [{show(d.lower, k)}, {show(d.upper, k)}]"
+            elif d.distribution == "triangular":
+                par = f"triangular [{show(d.lower, k)}, {show(d.mode, k)}, {show(d.upper, k)}]"
+            else:
+                par = f"normal mean {show(d.mean, k)}, sd {show(d.sd, k)}"
+                if d.lower is not None or d.upper is not None:
+                    par += f", truncated to [{show(d.lower, k) if d.lower is not None else '-inf'}, " \
+                           f"{show(d.upper, k) if d.upper is not None else 'inf'}]"
+            lines.append(f"  {d.name:<34} {par}")
+        show = output_show
+        lines.append("")
+        qs = [q for q in next(iter(self.percentiles.values()), {}) if q.startswith("p")]
+        lines.append("Outputs (percentiles over the successful samples)")
+        lines.append(f"  {'output':<28}" + "".join(f"{q:>13}" for q in qs))
+        for key, p in self.percentiles.items():
+            kind = self.kind_of(key)
+            lines.append(f"  {key:<28}" + "".join(f"{show(p[q], kind):>13}" for q in qs))
+        if self.pass_share:
+            lines.append("")
+            lines.append("Share of samples within each evidence tolerance")
+            for k, s in self.pass_share.items():
+                lines.append(f"  {100 * s:6.1f} %  {k}")
+        if self.tornado:
+            lines.append("")
+            lines.append("What moves delta-v (one input from its 5th to its 95th percentile, the others at their "
+                         "medians; Spearman rank correlation over the samples)")
+            for key, rows in self.tornado.items():
+                lines.append(f"  {key} (all inputs at their medians: {show(rows[0]['base'], self.kind_of(key))})")
+                kind = self.kind_of(key)
+                for r in rows:
+                    rho = "n/a" if r["spearman"] is None else f"{r['spearman']:+.2f}"
+                    lines.append(f"    {r['input']:<34} {show(r['low'], kind):>12} .. {show(r['high'], kind):<12} "
+                                 f"swing {show(r['swing'], kind):>12}   rho {rho}")
+        if self.errors:
+            lines.append("")
+            lines.append(f"Failed samples ({len(self.errors)}), first: sample {self.errors[0][0]}: {self.errors[0][1]}")
+        return "\n".join(lines)
+
+
+# ---------------------------------------------------------------------------------------------
+# Results file
+# ---------------------------------------------------------------------------------------------
+
+def _run_hash(data: dict, spec: UncertaintySpec) -> str:
+    from .overrides import INVERSE_SECTIONS
+
+    forward = {k: v for k, v in data.items() if k not in INVERSE_SECTIONS}
+    blob = json.dumps({"data": forward, "inputs": spec.to_dict()["inputs"], "seed": spec.seed}, sort_keys=True,
+                      default=str)
+    return hashlib.sha256(blob.encode()).hexdigest()[:16]
+
+
+def _read_rows(path: Path, run_hash: str | None) -> tuple[dict | None, dict[int, dict]]:
+    """Header and rows of a results file; a torn last line is cut off the file."""
+    if not path.exists() or path.stat().st_size == 0:
+        return None, {}
+    raw = path.read_bytes()
+    if not raw.endswith(b"\n"):
+        cut = raw.rfind(b"\n") + 1
+        with path.open("r+b") as fh:
+            fh.truncate(cut)
+        raw = raw[:cut]
+    lines = raw.decode("utf-8").splitlines()
+    header = json.loads(lines[0]) if lines else None
+    if header is None or header.get("format") != _FORMAT:
+        raise ScenarioError(f"{path} is not a crashsim Monte Carlo results file", field="out_path")
+    if run_hash is not None and header.get("hash") != run_hash:
+        raise ScenarioError(f"{path} holds samples of another scenario or seed (hash {header.get('hash')}, this run "
+                            f"{run_hash}); delete it or choose another file", field="out_path")
+    rows = {}
+    for line in lines[1:]:
+        try:
+            row = json.loads(line)
+        except json.JSONDecodeError:
+            continue
+        rows[int(row["i"])] = row
+    return header, rows
+
+
+def load_results(path: str | Path, scenario_data: dict | None = None, spec: UncertaintySpec | dict | None = None,
+                 *, percentiles: Sequence[float] = DEFAULT_PERCENTILES) -> MCResult:
+    """An :class:`MCResult` from a results file alone (no evaluation; no tornado swings, no nominal scene)."""
+    header, rows = _read_rows(Path(path), None)
+    if header is None:
+        raise ScenarioError(f"{path} is empty", field="out_path")
+    spec = UncertaintySpec.from_dict(spec) if isinstance(spec, dict) else spec
+    if spec is None:
+        spec = _spec_from_header(header)
+    n = max([int(header.get("n", 0))] + [i + 1 for i in rows])
+    return _assemble(spec, header["seed"], n, rows, len(rows), 0.0, header.get("engine", "?"), "file", 0, str(path),
+                     percentiles, swings=None, nominal=None)
+
+
+def _spec_from_header(header: dict) -> UncertaintySpec:
+    ins = tuple(InputDistribution(**d) for d in header["spec"]["inputs"])
+    return UncertaintySpec(ins, samples=header["spec"]["samples"], seed=header["spec"]["seed"])
+
+
+# ---------------------------------------------------------------------------------------------
+# Aggregation
+# ---------------------------------------------------------------------------------------------
+
+def _spearman(a: np.ndarray, b: np.ndarray) -> float | None:
+    ok = np.isfinite(a) & np.isfinite(b)
+    if ok.sum() < 3 or np.ptp(a[ok]) == 0 or np.ptp(b[ok]) == 0:
+        return None
+    from scipy.stats import rankdata
+
+    ra, rb = rankdata(a[ok]), rankdata(b[ok])
+    return float(np.corrcoef(ra, rb)[0, 1])
+
+
+def _assemble(spec, seed, n, rows: dict, n_resumed, elapsed, engine, backend, workers, out_path, percentiles,
+              swings, nominal) -> MCResult:
+    idx = np.array(sorted(i for i in rows if i < n), dtype=int)
+    k = len(spec.inputs)
+    X = np.array([rows[i]["x"] for i in idx], dtype=float).reshape(len(idx), k)
+    keys: list[str] = []
+    ckeys: list[str] = []
+    for i in idx:
+        for key in rows[i].get("out", {}):
+            if key not in keys:
+                keys.append(key)
+        for key in rows[i].get("checks", {}):
+            if key not in ckeys:
+                ckeys.append(key)
+    outputs = {key: np.array([rows[i].get("out", {}).get(key, np.nan) for i in idx], dtype=float) for key in keys}
+    checks = {}
+    for key in ckeys:
+        res = np.array([(rows[i].get("checks", {}).get(key, [None, False])[0]) for i in idx], dtype=float)
+        ok = np.array([bool(rows[i].get("checks", {}).get(key, [None, False])[1]) for i in idx])
+        checks[key] = (res, ok)
+    errors = [(int(i), rows[i]["error"]) for i in idx if rows[i].get("error")]
+    good = np.array([not rows[i].get("error") for i in idx], dtype=bool)
+    pct = {}
+    for key, v in outputs.items():
+        vv = v[good & np.isfinite(v)]
+        if vv.size == 0:
+            continue
+        p = {f"p{q:g}": float(np.percentile(vv, q)) for q in percentiles}
+        p["mean"] = float(np.mean(vv))
+        p["std"] = float(np.std(vv, ddof=1)) if vv.size > 1 else 0.0
+        pct[key] = p
+    share = {}
+    if good.any():
+        for key, (_, ok) in checks.items():
+            share[key] = float(np.mean(ok[good]))
+        if checks:
+            share["all evidence"] = float(np.mean(np.all(np.column_stack([ok[good] for _, ok in checks.values()]),
+                                                         axis=1)))
+    tornado = {}
+    if swings is not None:
+        for key, (base, lowhigh) in swings.items():
+            rows_t = []
+            for j, d in enumerate(spec.inputs):
+                lo, hi = lowhigh[j]
+                rho = _spearman(X[good, j], outputs[key][good]) if key in outputs else None
+                rows_t.append({"input": d.name, "path": d.path, "low": lo, "high": hi, "base": base,
+                               "swing": float(abs(hi - lo)) if np.isfinite(hi - lo) else None, "spearman": rho})
+            rows_t.sort(key=lambda r: -(r["swing"] or 0.0))
+            tornado[key] = rows_t
+    return MCResult(spec=spec, seed=int(seed), n=int(n), indices=idx, inputs=X, outputs=outputs, checks=checks,
+                    errors=errors, percentiles=pct, pass_share=share, tornado=tornado, n_resumed=int(n_resumed),
+                    elapsed=float(elapsed), engine=engine, backend=backend, workers=int(workers),
+                    out_path=None if out_path is None else str(out_path), nominal=nominal)
+
+
+def _swings(data, spec: UncertaintySpec, engine, file, q=(0.05, 0.95)) -> tuple[dict, Any]:
+    """One-at-a-time swings of the contact bodies' delta-v (impact only) and the median scene."""
+    from ..impact import solve_impact
+    from .scene import run_scene
+
+    ov = ScenarioOverrides(data, spec.paths, engine=engine, file=file, cache=1, field_prefix="uncertainty.inputs")
+    med = np.array([d.median for d in spec.inputs])
+    nominal = None
+    try:
+        nominal = run_scene(ov.scenario(med))
+    except CrashsimError as exc:
+        _log.warning("the scene with every input at its median cannot be run: %s", exc)
+    try:
+        base_imp = solve_impact(ov.scenario(med).impact)
+    except CrashsimError:
+        return {}, nominal
+    keys = [f"delta_v.{base_imp.body1}", f"delta_v.{base_imp.body2}"]
+    keys = [k for k in keys if not base_imp.bodies[k.split(".", 1)[1]].fixed]
+
+    def dv(x):
+        try:
+            imp = solve_impact(ov.scenario(x).impact)
+        except CrashsimError:
+            return {k: float("nan") for k in keys}
+        return {k: imp.bodies[k.split(".", 1)[1]].delta_v_magnitude for k in keys}
+
+    base = dv(med)
+    out = {k: (base[k], []) for k in keys}
+    for j, d in enumerate(spec.inputs):
+        vals = []
+        for qq in q:
+            x = med.copy()
+            x[j] = d.ppf(qq)
+            vals.append(dv(x))
+        for k in keys:
+            out[k][1].append((vals[0][k], vals[1][k]))
+    return out, nominal
+
+
+# ---------------------------------------------------------------------------------------------
+# monte_carlo
+# ---------------------------------------------------------------------------------------------
+
+def _chunks(indices: list[int], size: int) -> list[list[int]]:
+    return [indices[a:a + size] for a in range(0, len(indices), size)]
+
+
+def monte_carlo(scenario_data: dict, spec: UncertaintySpec | dict | None = None, n: int | None = None, *,
+                seed: int | None = None, engine: str | None = None, workers: int | None = None,
+                dask_address: Any = None, out_path: str | Path | None = None,
+                progress: bool | Callable[[int, int], None] = True, chunk_size: int | None = None,
+                percentiles: Sequence[float] = DEFAULT_PERCENTILES, file: str | None = None) -> MCResult:
+    """Propagate the uncertain inputs through impact and run-out by Monte Carlo sampling.
+
+    Parameters
+    ----------
+    scenario_data : dict
+        The raw scenario (as from TOML).
+    spec : UncertaintySpec or dict, optional
+        The uncertain inputs: an :class:`UncertaintySpec`, a raw [uncertainty] table, or None
+        for the scenario's own ``[uncertainty]`` table.
+    n : int, optional
+        Number of samples (default ``spec.samples``); samples ``0 .. n-1`` are run.
+    seed : int, optional
+        Default ``spec.seed``. Sample i depends only on (seed, i).
+    engine : {"compiled", "scipy"}, optional
+        Run-out engine; default the compiled one when this crashsim has it.
+    workers : int, optional
+        Local processes (default all cores; 1 runs in this process). Ignored with ``dask_address``.
+    dask_address : str or distributed.Client, optional
+        Run on an existing Dask cluster (scheduler address such as ``"tcp://10.0.0.5:8786"``);
+        its workers need crashsim installed.
+    out_path : str or Path, optional
+        JSON-lines results file, written as samples complete; if it exists, the samples in it
+        are kept and only the others are run (resume).
+    progress : bool or callable
+        True: a tqdm progress bar on stderr; a callable ``progress(done, total)`` after each
+        chunk; False: silent.
+    chunk_size : int, optional
+        Samples per task (default: about 4 tasks per worker, at most 64 samples).
+    percentiles : sequence of float
+        Percentiles reported for every output.
+
+    Returns
+    -------
+    MCResult
+
+    Raises
+    ------
+    ScenarioError
+        Invalid [uncertainty] table or paths, or a results file of another run.
+    """
+    t0 = time.perf_counter()
+    if spec is None:
+        if "uncertainty" not in scenario_data:
+            raise ScenarioError("the scenario has no [uncertainty] table naming the uncertain inputs",
+                                field="uncertainty", file=file)
+        spec = scenario_data["uncertainty"]
+    spec = spec if isinstance(spec, UncertaintySpec) else UncertaintySpec.from_dict(spec, file=file)
+    seed = spec.seed if seed is None else int(seed)
+    if seed != spec.seed:
+        from dataclasses import replace
+
+        spec = replace(spec, seed=seed)
+    n = spec.samples if n is None else int(n)
+    if n < 1:
+        raise ScenarioError(f"the number of samples must be >= 1, got {n}", field="samples")
+    engine = default_engine() if engine is None else engine
+    # Fail early, in this process, on paths the scenario cannot hold or an invalid median scene.
+    ScenarioOverrides(scenario_data, spec.paths, engine=engine, file=file, field_prefix="uncertainty.inputs")
+    run_hash = _run_hash(scenario_data, spec)
+    payload = {"data": scenario_data, "spec": spec, "engine": engine, "file": file, "seed": seed, "hash": run_hash}
+
+    rows: dict[int, dict] = {}
+    fh = None
+    if out_path is not None:
+        out_path = Path(out_path)
+        header, rows = _read_rows(out_path, run_hash)
+        rows = {i: r for i, r in rows.items() if i < n}
+        fh = out_path.open("a", encoding="utf-8")
+        if header is None:
+            header = {"format": _FORMAT, "hash": run_hash, "seed": seed, "n": n, "engine": engine,
+                      "spec": spec.to_dict(), "paths": list(spec.paths)}
+            fh.write(json.dumps(header) + "\n")
+            fh.flush()
+    n_resumed = len(rows)
+    todo = [i for i in range(n) if i not in rows]
+    # The median scene and the tornado swings, in this process and first: this also compiles the
+    # run-out engine once here, before the worker processes are forked.
+    swings, nominal = _swings(scenario_data, spec, engine, file)
+
+    if dask_address is not None:
+        backend, nw = "dask", 0
+    else:
+        nw = (os.cpu_count() or 1) if workers is None else max(1, int(workers))
+        backend = "processes" if nw > 1 and len(todo) > 1 else "serial"
+    bar = None
+    if progress is True:
+        try:
+            from tqdm import tqdm
+
+            bar = tqdm(total=n, initial=n_resumed, desc="Monte Carlo", unit="sample", file=sys.stderr,
+                       dynamic_ncols=True)
+        except ImportError:  # pragma: no cover - tqdm is a dependency
+            bar = None
+
+    def take(new_rows: list[dict]) -> None:
+        for row in new_rows:
+            rows[row["i"]] = row
+            if fh is not None:
+                fh.write(json.dumps(row) + "\n")
+        if fh is not None:
+            fh.flush()
+        if bar is not None:
+            bar.update(len(new_rows))
+        elif callable(progress):
+            progress(len(rows), n)
+
+    try:
+        if todo:
+            if backend == "dask":
+                nw = _run_dask(dask_address, payload, todo, chunk_size, take)
+            elif backend == "processes":
+                size = chunk_size or max(1, min(64, math.ceil(len(todo) / (4 * nw))))
+                _run_pool(payload, _chunks(todo, size), nw, take)
+            else:
+                size = chunk_size or 1
+                for chunk in _chunks(todo, size):
+                    take(_run_chunk(payload, chunk))
+    finally:
+        if fh is not None:
+            fh.close()
+        if bar is not None:
+            bar.close()
+    return _assemble(spec, seed, n, rows, n_resumed, time.perf_counter() - t0, engine, backend, nw,
+                     out_path, percentiles, swings, nominal)
+
+
+def _run_pool(payload, chunks, workers, take) -> None:
+    import multiprocessing as mp
+    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+
+    ctx = mp.get_context("fork") if "fork" in mp.get_all_start_methods() else None
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_pool_init, initargs=(payload,))
+    try:
+        pending = {pool.submit(_pool_chunk, c) for c in chunks}
+        while pending:
+            done, pending = wait(pending, return_when=FIRST_COMPLETED)
+            for fut in done:
+                take(fut.result())
+    except BaseException:
+        for fut in pending:
+            fut.cancel()
+        pool.shutdown(wait=True, cancel_futures=True)
+        raise
+    pool.shutdown(wait=True)
+
+
+def _run_dask(address, payload, todo, chunk_size, take) -> int:
+    try:
+        from distributed import Client, as_completed
+    except ImportError as exc:  # pragma: no cover - depends on the environment
+        raise ScenarioError("--dask needs dask.distributed (pip install distributed)", field="dask") from exc
+    own = not isinstance(address, Client)
+    client = Client(address) if own else address
+    try:
+        nw = max(1, sum(w.get("nthreads", 1) for w in client.scheduler_info()["workers"].values()))
+        size = chunk_size or max(1, min(64, math.ceil(len(todo) / (4 * nw))))
+        remote = client.scatter([payload], broadcast=True)[0]
+        futures = [client.submit(_run_chunk, remote, c, pure=False) for c in _chunks(todo, size)]
+        try:
+            for fut in as_completed(futures):
+                take(fut.result())
+        except BaseException:
+            client.cancel(futures)
+            raise
+        return nw
+    finally:
+        if own:
+            client.close()

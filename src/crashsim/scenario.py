@@ -20,6 +20,7 @@ import numpy as np
 
 from .errors import ScenarioError
 from .geometry import rotate
+from .motion.levels import LEVELS
 from .motion import (LATERAL_MODELS, METHODS, WHEEL_STATES, FrictionZone, Road, RunoutOptions, ScheduledChange,
                      WheelSetting, WheelSettings)
 from .impact import (CrushSurface, ExternalImpulse, ImpactProblem, TangentialLaw, VelocityConstraint,
@@ -191,6 +192,17 @@ ZONE = Section("zone", [
 ], description="A friction zone (polygon with its own coefficient); later zones win where zones overlap")
 
 RUNOUT = Section("runout", [
+    Field("level", choices=LEVELS, default="articulated",
+          description="Model fidelity: impact (no run-out), energy (hand-calculation work model), rigid (bodies "
+                      "run out alone, hitch ignored), articulated (full, default), load_transfer (plus load transfer)"),
+    Field("accuracy", Kind.LENGTH, required=False, minimum=0, exclusive_minimum=True, example="1 cm",
+          description="Rest-position accuracy wanted: the solver picks the cheapest setting that meets it and "
+                      "reports its error estimate (then rtol, atol, eps and v_stop are its to choose)"),
+    Field("accuracy_heading", Kind.ANGLE, required=False, minimum=0, exclusive_minimum=True, example="0.5 deg",
+          description="Rest-heading accuracy wanted (with accuracy)"),
+    Field("engine", choices=("scipy", "compiled"), default="scipy",
+          description="Run-out integrator: scipy's solve_ivp (default) or crashsim's compiled engine (fast, "
+                      "same model; used by fit and mc)"),
     Field("road_friction", "float", minimum=0, maximum=2, exclusive_minimum=True, example="0.7",
           description="Tyre-road friction coefficient outside the zones"),
     Field("method", choices=METHODS, default=_OPT.method, description="solve_ivp method (LSODA: cheap also when stiff)"),
@@ -331,6 +343,9 @@ class RunoutSpec:
     road: Road
     options: RunoutOptions
     wheels: dict  # vehicle name -> WheelSettings
+    level: str = "articulated"
+    accuracy: float | None = None
+    accuracy_heading: float | None = None
 
 
 _WHEEL_KEYS = ("state", "brake", "steer", "cornering_coefficient", "cornering_stiffness", "rolling_resistance",
@@ -385,7 +400,24 @@ def _build_wheels(vehicle: Vehicle, v: dict, file: str | None) -> WheelSettings:
     return ws
 
 
-def _build_runout(r: dict, vehicles, raw_vehicles: dict, file: str | None) -> RunoutSpec:
+def _build_runout(r: dict, vehicles, raw_vehicles: dict, file: str | None, raw: dict | None = None) -> RunoutSpec:
+    raw = raw or {}
+    level = r["level"]
+    if r["load_transfer"] and level not in ("articulated", "load_transfer"):
+        raise _err(f"load_transfer = true asks for level \"load_transfer\", but level = {level!r}; give one of them",
+                   "runout.load_transfer", file)
+    if r["load_transfer"]:
+        level = "load_transfer"
+    if r["accuracy"] is None and r["accuracy_heading"] is not None:
+        raise _err("accuracy_heading needs accuracy (the rest-position target) too", "runout.accuracy_heading", file)
+    if r["accuracy"] is not None:
+        if level in ("impact", "energy"):
+            raise _err(f"accuracy = {r['accuracy']} m needs an integrated run-out; level {level!r} has no solver "
+                       "settings to choose", "runout.accuracy", file)
+        fixed = [k for k in ("rtol", "atol", "eps", "v_stop") if k in raw]
+        if fixed:
+            raise _err(f"accuracy chooses {', '.join(fixed)} itself; remove them or remove accuracy",
+                       f"runout.{fixed[0]}", file)
     try:
         zones = tuple(FrictionZone(tuple(z["polygon"]), z["friction"], z["name"] or f"zone {i + 1}")
                       for i, z in enumerate(r["zones"]))
@@ -393,19 +425,24 @@ def _build_runout(r: dict, vehicles, raw_vehicles: dict, file: str | None) -> Ru
     except ScenarioError as exc:
         raise _rewrap(exc, "runout.zones", file) from None
     try:
+        extra = {"engine": r["engine"]} if "engine" in RunoutOptions.__dataclass_fields__ else {}
+        if r["engine"] != "scipy" and not extra:
+            raise ScenarioError("the compiled engine is not available in this installation", field="engine")
         options = RunoutOptions(method=r["method"], rtol=r["rtol"], atol=r["atol"], eps=r["eps"], v_stop=r["v_stop"],
                                 max_step=r["max_step"], t_max=r["t_max"], sample_dt=r["sample_dt"],
-                                lateral_model=r["lateral_model"], load_transfer=r["load_transfer"])
+                                lateral_model=r["lateral_model"], load_transfer=level == "load_transfer", **extra)
     except ScenarioError as exc:
         raise _rewrap(exc, "runout", file) from None
     if options.load_transfer:
         for veh in vehicles:
             for i, b in enumerate(veh.bodies):
                 if b.cg_height is None and not b.is_fixed:
-                    raise _err(f"runout.load_transfer = true needs the CG height of body {b.name!r}",
+                    raise _err(f"level \"load_transfer\" needs the CG height of body {b.name!r}",
                                f"vehicles.{veh.name}.bodies[{i}].cg_height", file)
+    if level == "impact":
+        return RunoutSpec(road, options, {}, level)
     wheels = {veh.name: _build_wheels(veh, raw_vehicles[veh.name], file) for veh in vehicles if not veh.is_barrier}
-    return RunoutSpec(road, options, wheels)
+    return RunoutSpec(road, options, wheels, level, r["accuracy"], r["accuracy_heading"])
 
 
 def _err(msg: str, key: str, file: str | None) -> ScenarioError:
@@ -590,7 +627,8 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
         raise ScenarioError(str(exc), field=exc.field, file=file) from None
     runout = None
     if d["runout"] is not None:
-        runout = _build_runout(d["runout"], vehicles, d["vehicles"], file)
+        raw_runout = data.get("runout") if isinstance(data.get("runout"), dict) else {}
+        runout = _build_runout(d["runout"], vehicles, d["vehicles"], file, raw_runout)
     evidence = _build_evidence(d["evidence"], states, file)
     meta = d["scenario"]
     return Scenario(file, meta["title"], meta["source"], meta["units"], tuple(vehicles), states, problem, runout,

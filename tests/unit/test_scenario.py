@@ -205,3 +205,58 @@ def test_schema_command(capsys):
     assert main(["schema", "--format", "markdown"]) == 0
     out = capsys.readouterr().out
     assert "impact.restitution" in out and "|" in out
+
+
+SCENE = ROOT / "scenarios" / "scenes" / "intersection_car_trailer_wheels.toml"
+
+
+def _scene_data():
+    return tomllib.loads(SCENE.read_text())
+
+
+@pytest.mark.parametrize("level", ["impact", "energy", "rigid", "articulated"])
+def test_runout_levels_run_end_to_end(level, capsys):
+    import json
+
+    from crashsim.reconstruct import run_scene
+
+    d = _scene_data()
+    d["runout"]["level"] = level
+    scene = run_scene(scenario_from_dict(d))
+    out = scene.to_dict()
+    if level == "impact":
+        assert scene.runout is None and "runout" not in out
+        # the evidence that needs a run-out is reported as not computed, not silently dropped
+        assert any(c["residual"] is None or c["residual"] == float("inf") for c in out["evidence"]["checks"])
+    else:
+        assert out["runout_level"] == level
+        assert set(out["runout"]["bodies"]) == {"tractor", "trailer", "car"}
+        for b in out["runout"]["bodies"].values():
+            assert b["time_to_rest"] is not None and b["time_to_rest"] > 0
+
+
+def test_accuracy_target_reports_its_estimate():
+    from crashsim.reconstruct import run_scene
+
+    d = _scene_data()
+    d["runout"]["accuracy"] = "1 cm"
+    scene = run_scene(scenario_from_dict(d))
+    acc = scene.to_dict()["accuracy"]
+    assert set(acc) == {"A", "B"}
+    for rep in acc.values():
+        assert rep["met"] is True
+    assert "accuracy, vehicle A" in scene.report()
+
+
+@pytest.mark.parametrize("extra,key,words", [
+    ({"accuracy": "1 cm", "rtol": 1e-8}, "runout.rtol", "accuracy chooses"),
+    ({"accuracy": "1 cm", "level": "energy"}, "runout.accuracy", "energy"),
+    ({"accuracy_heading": "1 deg"}, "runout.accuracy_heading", "needs accuracy"),
+    ({"load_transfer": True, "level": "rigid"}, "runout.load_transfer", "rigid"),
+    ({"level": "articulatd"}, "runout.level", "articulated"),
+])
+def test_runout_option_conflicts(extra, key, words):
+    d = _scene_data()
+    d["runout"].update(extra)
+    msg = error_of(d)
+    assert key in msg and words in msg

@@ -3,7 +3,10 @@
 Public API
 ----------
 simulate_runout, simulate_scene
-    Integrate the run-out of one vehicle / all movable vehicles of a scene.
+    Integrate the run-out of one vehicle / all movable vehicles of a scene, with SciPy's
+    solve_ivp (``RunoutOptions(engine="scipy")``, the default) or the numba-compiled engine
+    of :mod:`crashsim.motion.fast` (``engine="compiled"``: same model and result, for fits and
+    Monte Carlo).
 make_hitch_consistent
     Project impact-solver velocities onto the hitch constraints.
 RunoutOptions, Road, FrictionZone, WheelSettings, WheelSetting, ScheduledChange
@@ -17,13 +20,14 @@ tyre_forces, lateral_force
 static_loads, StaticLoads
     Static wheel, axle and hitch loads.
 
-The numeric core never imports pymunk, matplotlib or file formats.
+The numeric core never imports pymunk, matplotlib or file formats; numba is imported only
+when the compiled engine is first used.
 """
 
 from .dynamics import make_hitch_consistent
 from .layout import StateLayout
 from .loads import StaticLoads, static_loads
-from .options import METHODS, RunoutOptions
+from .options import ENGINES, METHODS, SCHEMES, RunoutOptions
 from .result import BodyHistory, BodyRunout, HitchHistory, RunoutEvent, RunoutResult, TrackSegment, WheelTrack
 from .road import FrictionZone, Road
 from .simulate import simulate_runout, simulate_scene
@@ -36,6 +40,8 @@ __all__ = [
     "make_hitch_consistent",
     "RunoutOptions",
     "METHODS",
+    "ENGINES",
+    "SCHEMES",
     "Road",
     "FrictionZone",
     "WheelSettings",

@@ -52,6 +52,7 @@ __all__ = [
     "hitch_state",
     "check_pin_gaps",
     "project_velocities",
+    "reference_lengths",
 ]
 
 # Minimum rest reference length [m] (|yaw rate| * L_ref is compared with v_stop).
@@ -253,6 +254,29 @@ def make_hitch_consistent(
     return out
 
 
+def reference_lengths(vehicle: Vehicle, specs) -> np.ndarray:
+    """Rest reference length L_ref of every body [m]: half its length, else its farthest contact (>= 0.5 m).
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+    specs : sequence of WheelSpec
+        The vehicle's contacts (:func:`~crashsim.motion.wheels.enumerate_wheels`).
+
+    Returns
+    -------
+    ndarray, shape (n_bodies,)
+    """
+    out = []
+    for i, body in enumerate(vehicle.bodies):
+        if body.length is not None:
+            out.append(max(body.length / 2, _MIN_L_REF))
+        else:
+            reach = [math.hypot(*s.position) for s in specs if s.body_index == i]
+            out.append(max(max(reach, default=0.0), _MIN_L_REF))
+    return np.array(out, dtype=float)
+
+
 @dataclass(frozen=True, eq=False)
 class SegmentParams:
     """Inputs held constant over one integration segment (arrays per wheel, shape (n_wheels, 1)).
@@ -393,17 +417,9 @@ class RunoutModel:
         self._position_map = pmap
         self._alpha2 = 2.0 * options.baumgarte_zeta * options.baumgarte_omega
         self._beta2 = options.baumgarte_omega**2
-        self.l_ref = np.array([self._reference_length(i) for i in range(nb)])
+        self.l_ref = reference_lengths(vehicle, specs)
         self.eps = options.eps
         self.lateral = options.lateral_model
-
-    def _reference_length(self, i: int) -> float:
-        """Rest reference length L_ref of body i [m]: half its length, else its farthest contact."""
-        body = self.vehicle.bodies[i]
-        if body.length is not None:
-            return max(body.length / 2, _MIN_L_REF)
-        reach = [math.hypot(*s.position) for s in self.specs if s.body_index == i]
-        return max(max(reach, default=0.0), _MIN_L_REF)
 
     # ------------------------------------------------------------------ segment inputs
     def segment(

@@ -13,6 +13,7 @@ Units: m, rad, m/s, rad/s (world frame), m/s^2 (body axes).  The same slices wor
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Mapping
 
@@ -94,14 +95,27 @@ class StateLayout:
         return y
 
     def unpack(self, y) -> dict[str, BodyState]:
-        """Body states from a state vector."""
-        y = np.asarray(y, dtype=float)
-        return {
-            name: BodyState(
-                (y[self.x][i], y[self.y][i]), y[self.psi][i], (y[self.vx][i], y[self.vy][i]), y[self.w][i]
-            )
-            for i, name in enumerate(self.bodies)
-        }
+        """Body states from a state vector.
+
+        Finite values (every solver state) skip BodyState's input validation, which would only
+        convert the same floats again (a few microseconds per body, noticeable in run-outs of
+        a millisecond); anything else goes through the validating constructor (and its error).
+        """
+        values = np.asarray(y, dtype=float)[: 6 * len(self.bodies)].tolist()
+        n = len(self.bodies)
+        out = {}
+        for i, name in enumerate(self.bodies):
+            x, yy, psi, vx, vy, w = (values[k * n + i] for k in range(6))
+            if math.isfinite(x + yy + psi + vx + vy + w):
+                state = object.__new__(BodyState)
+                object.__setattr__(state, "position", (x, yy))
+                object.__setattr__(state, "heading", psi)
+                object.__setattr__(state, "velocity", (vx, vy))
+                object.__setattr__(state, "yaw_rate", w)
+            else:
+                state = BodyState((x, yy), psi, (vx, vy), w)
+            out[name] = state
+        return out
 
     def body_columns(self, y, body: str) -> np.ndarray:
         """The six fields of one body, shape ``(6,) + y.shape[1:]`` in :attr:`FIELDS` order."""

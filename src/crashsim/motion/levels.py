@@ -98,7 +98,8 @@ determinate, so the alternative of carrying its own weight on its own axles does
 This neglects the horizontal hitch force -- in a straight locked slide the trailer pushes the
 tractor with ``mu N_kp`` (note sec. 5 item 8); without it the tractor stops after
 ``v^2 m_1 / (2 mu (W_1 + N_kp))`` and the trailer after ``v^2 m_2 / (2 mu (W_2 - N_kp))`` -- and
-the yaw coupling through the hitch.  The pins drift apart; ``RunoutResult.max_hitch_gap``
+the yaw coupling through the hitch.  The bodies do not touch each other either (no contact
+model): they may pass through one another.  The pins drift apart; ``RunoutResult.max_hitch_gap``
 reports how far, which measures how much the hitch would have mattered.  Hitch histories
 carry the articulation angle and zero force.  Each body's ``time_to_rest`` is when its own
 rest measure ``max(|v_cg|, |yaw rate| L_ref)`` first falls to ``v_stop`` (the run itself ends
@@ -218,7 +219,7 @@ def simulate_level(
     >>> start = {"car": BodyState((0, 0), 0.0, (20.0, 0.0))}
     >>> res = simulate_level("energy", car, start, None, Road(mu=0.75))
     >>> res.status, round(res.bodies["car"].rest_position[0], 3)  # v^2 / (2 mu g)
-    ('rest', 27.189)
+    ('rest', 27.192)
     >>> simulate_level("impact", car, start, None, Road(mu=0.75)) is None
     True
     """
@@ -287,9 +288,9 @@ def _ray_breaks(road: Road, origin: np.ndarray, direction: np.ndarray) -> np.nda
 class _RigidMotion:
     """Kinematics of the energy model: straight CG track, constant decelerations (vectorised in t)."""
 
-    def __init__(self, layout, r_c0, psi_c0, rel0, psi0, u, pieces, w0, alpha, t_rot, t_end):
+    def __init__(self, layout, pos0, rel0, psi0, u, pieces, w0, alpha, t_rot, t_end):
         self.layout = layout
-        self.r_c0, self.psi_c0 = r_c0, psi_c0
+        self.pos0 = pos0  # body CG positions at t = 0
         self.rel0, self.psi0 = rel0, psi0  # body CG offsets from the combined CG (world, t=0), body headings
         self.u = u  # unit direction of the CG track
         # pieces: (t_start, s_start, v_start, decel)
@@ -327,14 +328,13 @@ class _RigidMotion:
         dpsi, w = self.yaw(flat)
         L = self.layout
         Y = np.zeros((L.size, flat.size))
-        xc = self.r_c0[0] + s * self.u[0]
-        yc = self.r_c0[1] + s * self.u[1]
         c, sn = np.cos(dpsi), np.sin(dpsi)
         for i in range(L.n_bodies):
+            # r_i(t) = r_i(0) + s u + (R(dpsi) - 1) rel_i: exact at t = 0 and without rotation
             rx = c * self.rel0[i, 0] - sn * self.rel0[i, 1]
             ry = sn * self.rel0[i, 0] + c * self.rel0[i, 1]
-            Y[L.x.start + i] = xc + rx
-            Y[L.y.start + i] = yc + ry
+            Y[L.x.start + i] = self.pos0[i, 0] + s * self.u[0] + (rx - self.rel0[i, 0])
+            Y[L.y.start + i] = self.pos0[i, 1] + s * self.u[1] + (ry - self.rel0[i, 1])
             Y[L.psi.start + i] = self.psi0[i] + dpsi
             Y[L.vx.start + i] = v * self.u[0] - w * ry
             Y[L.vy.start + i] = v * self.u[1] + w * rx
@@ -478,7 +478,7 @@ def energy_runout(
         status = "time_limit"
     t_end = opts.t_max if status == "time_limit" else max(t_trans, t_rot)
 
-    motion = _RigidMotion(L, r_c, psi0[0], rel0, psi0, u, pieces, w_c, alpha, t_rot, t_end)
+    motion = _RigidMotion(L, pos, rel0, psi0, u, pieces, w_c, alpha, t_rot, t_end)
 
     # ---- samples, tracks and energies
     dt_s = opts.sample_dt
@@ -609,14 +609,29 @@ def energy_runout(
 
 # ---------------------------------------------------------------------------------------------- rigid
 class _HitchlessModel(RunoutModel):
-    """The articulated model with the hitch constraints removed (loads stay those of the coupled vehicle)."""
+    """The articulated model with the hitch constraints switched off in the equations of motion.
+
+    Static loads are those of the coupled vehicle (kingpin load on the towing body) and
+    articulation stops are removed.  ``n_hitches`` keeps the true count, so the
+    post-processing still reports the articulation and the pin gap of every hitch; the
+    constraint multipliers (hitch forces) are zero.
+    """
 
     def __init__(self, vehicle, wheels, road, options):
         free = dataclasses.replace(
             vehicle, hitches=tuple(dataclasses.replace(h, articulation_limit=None) for h in vehicle.hitches)
         )
         super().__init__(free, wheels, road, options)
-        self.n_hitches = 0
+        self._true_hitches = self.n_hitches
+
+    def evaluate(self, y, seg, full=True):
+        self.n_hitches = 0  # no constraint rows: every body moves under its own tyre forces
+        try:
+            ev = super().evaluate(y, seg, full)
+        finally:
+            self.n_hitches = self._true_hitches
+        ev.lam = np.zeros((y.shape[1], 2 * self._true_hitches))
+        return ev
 
 
 def _own_rest_time(body: BodyRunout, l_ref: float, v_stop: float, t_end: float) -> float:
@@ -666,33 +681,12 @@ def rigid_runout(
     model = _HitchlessModel(vehicle, settings.resolve(vehicle), road, opts)
     y0 = model.layout.pack(initial)
     res = _simulate_model(model, y0, opts, f"rigid/scipy/{opts.method}")
-
-    # each body's own time to rest; hitch histories from the pins of the true vehicle
-    L = model.layout
+    # each body's own time to rest (the run ends when the last body stops)
     bodies = {}
     for i, (name, b) in enumerate(res.bodies.items()):
         ttr = _own_rest_time(b, float(model.l_ref[i]), opts.v_stop, res.t_end) if res.success else None
         bodies[name] = dataclasses.replace(b, time_to_rest=ttr)
-    first = next(iter(res.bodies.values())).history
-    Y = np.stack([np.stack([getattr(b.history, f) for f in ("x", "y", "heading")]) for b in res.bodies.values()])
-    hitches = []
-    max_gap = 0.0
-    for j, h in enumerate(vehicle.hitches):
-        xf, yf, pf = Y[j]
-        xr, yr, pr = Y[j + 1]
-        gx = xf + np.cos(pf) * h.front_point[0] - np.sin(pf) * h.front_point[1] - (
-            xr + np.cos(pr) * h.rear_point[0] - np.sin(pr) * h.rear_point[1])
-        gy = yf + np.sin(pf) * h.front_point[0] + np.cos(pf) * h.front_point[1] - (
-            yr + np.sin(pr) * h.rear_point[0] + np.cos(pr) * h.rear_point[1])
-        max_gap = max(max_gap, float(np.max(np.hypot(gx, gy))))
-        n = first.t.size
-        hitches.append(
-            HitchHistory(front=L.bodies[j], rear=L.bodies[j + 1], static_load=float(model.loads.hitch[j]), t=first.t,
-                         force=np.zeros((n, 2)), force_body=np.zeros((n, 2)), articulation=pf - pr,
-                         stop_moment=np.zeros(n))
-        )
-    return dataclasses.replace(res, bodies=bodies, hitches=tuple(hitches), max_hitch_gap=max_gap,
-                               options={**res.options, "level": "rigid"})
+    return dataclasses.replace(res, bodies=bodies, options={**res.options, "level": "rigid"})
 
 
 def _simulate_model(model: RunoutModel, y0: np.ndarray, options: RunoutOptions, method: str) -> RunoutResult:

@@ -8,10 +8,14 @@ from dataclasses import asdict, dataclass
 from ..errors import ScenarioError
 from .tyres import LATERAL_MODELS
 
-__all__ = ["RunoutOptions", "METHODS"]
+__all__ = ["RunoutOptions", "METHODS", "ENGINES", "SCHEMES"]
 
-#: solve_ivp methods accepted by :class:`RunoutOptions`.
+#: solve_ivp methods accepted by :class:`RunoutOptions` (``engine="scipy"``).
 METHODS = ("RK45", "DOP853", "LSODA", "Radau", "BDF")
+#: Run-out engines: SciPy's solve_ivp, or the numba-compiled integrator of :mod:`crashsim.motion.fast`.
+ENGINES = ("scipy", "compiled")
+#: Integration schemes of the compiled engine (``engine="compiled"``).
+SCHEMES = ("dopri5", "bs3")
 
 
 def _in_range(name, value, lo, hi, *, lo_open=True):
@@ -37,7 +41,8 @@ class RunoutOptions:
     Parameters
     ----------
     method : {"LSODA", "RK45", "DOP853", "Radau", "BDF"}
-        solve_ivp method.  LSODA (default) switches between Adams and BDF and stays cheap
+        solve_ivp method of the SciPy engine (not used by ``engine="compiled"``, which
+        integrates with ``scheme``).  LSODA (default) switches between Adams and BDF and stays cheap
         when free-rolling tyres make the equations stiff at low speed (stiffness
         ~ sum C_alpha/(m |u|)); RK45/DOP853 are fine for locked or braked run-outs (on the
         benchmark RK45 cost about the same as LSODA, DOP853 1.0-1.3x) but need ~10x more
@@ -84,6 +89,18 @@ class RunoutOptions:
         10 /s and 1 (critical damping), note sec. 1.4.
     max_segments : int
         Safety limit on restarts of the integration (events and scheduled changes).
+    engine : {"scipy", "compiled"}
+        ``"scipy"`` (default): ``scipy.integrate.solve_ivp`` with ``method``
+        (:mod:`crashsim.motion.simulate`).  ``"compiled"``: the same model, events and
+        result integrated by numba-compiled code (:mod:`crashsim.motion.fast`), about two
+        orders of magnitude faster per run-out (``plots/fast_path.md``), for fits and Monte
+        Carlo; the first call in a fresh environment compiles it (tens of seconds, then
+        cached on disk).  Every other option means the same for both engines.
+    scheme : {"dopri5", "bs3"}
+        Integration scheme of the compiled engine (ignored by the SciPy engine):
+        ``"dopri5"`` (default), Dormand-Prince 5(4) with 4th-order dense output (the
+        tableau of solve_ivp's RK45); ``"bs3"``, Bogacki-Shampine 3(2) (RK23's tableau),
+        cheaper at loose tolerances.  Both control the local error with ``rtol``/``atol``.
     """
 
     method: str = "LSODA"
@@ -101,8 +118,14 @@ class RunoutOptions:
     baumgarte_omega: float = 10.0
     baumgarte_zeta: float = 1.0
     max_segments: int = 10_000
+    engine: str = "scipy"
+    scheme: str = "dopri5"
 
     def __post_init__(self):
+        if self.engine not in ENGINES:
+            raise ScenarioError(f"must be one of {ENGINES}, got {self.engine!r}", field="options.engine")
+        if self.scheme not in SCHEMES:
+            raise ScenarioError(f"must be one of {SCHEMES}, got {self.scheme!r}", field="options.scheme")
         if self.method not in METHODS:
             raise ScenarioError(f"must be one of {METHODS}, got {self.method!r}", field="options.method")
         if self.lateral_model not in LATERAL_MODELS:

@@ -29,7 +29,7 @@ from .result import (
     WheelTrack,
 )
 
-__all__ = ["assemble_result", "gauss_legendre_chunks", "split_track"]
+__all__ = ["assemble_result", "build_result", "gauss_legendre_chunks", "split_track"]
 
 _GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(5)
 _log = logging.getLogger("crashsim")
@@ -62,16 +62,22 @@ def gauss_legendre_chunks(ts: np.ndarray, sol: Callable, seg: SegmentParams):
     return seg, weights, np.asarray(sol(nodes)).reshape(-1, nodes.size)
 
 
-def split_track(t: np.ndarray, points: np.ndarray, sliding: np.ndarray) -> tuple[TrackSegment, ...]:
-    """Split a sampled track into sliding and rolling stretches sharing their boundary samples."""
+def split_track(t: np.ndarray, points: np.ndarray, sliding: np.ndarray, starts=None) -> tuple[TrackSegment, ...]:
+    """Split a sampled track into sliding and rolling stretches sharing their boundary samples.
+
+    ``starts`` (optional): indices ``i`` where ``sliding[i] != sliding[i - 1]``, if the caller
+    has them already.  A track that never changes is one segment sharing ``t`` and ``points``.
+    """
     n = len(t)
     if n == 0:
         return ()
-    change = np.flatnonzero(sliding[1:] != sliding[:-1]) + 1
+    change = np.flatnonzero(sliding[1:] != sliding[:-1]) + 1 if starts is None else starts
+    if len(change) == 0:
+        return (TrackSegment(kind="sliding" if sliding[0] else "rolling", t=t, points=points),)
     starts = np.concatenate([[0], change])
     ends = np.concatenate([change, [n - 1]])
     out = []
-    for a, b in zip(starts, ends):
+    for a, b in zip(starts.tolist(), ends.tolist()):
         b = max(b, a)
         out.append(
             TrackSegment(kind="sliding" if sliding[a] else "rolling", t=t[a : b + 1].copy(), points=points[a : b + 1].copy())
@@ -141,17 +147,9 @@ def assemble_result(
         for n, (j, _) in enumerate(seg.locks):
             moments[:, j] = ev.lam[:, 2 * nh + n]
         stop_m.append(moments)
-    events = list(events)
+    missed = None
     if check_zones and model.road.zones:
         missed = _missed_zone_samples(model, samples, wx, wy)
-        if missed:
-            t_miss, key = missed
-            detail = (
-                f"wheel {key} is in a friction zone the integration did not register at t = {t_miss:.4f} s: "
-                "a zone narrower than speed x max_step was stepped over; reduce options.max_step"
-            )
-            _log.warning("run-out of %s: %s", model.vehicle.name, detail)
-            events.insert(-1, RunoutEvent(t_miss, "zone_missed", detail))
     t = np.concatenate(t_all)
     Y = np.concatenate(y_cols, axis=1)
     wx, wy, slide = np.concatenate(wx, 1), np.concatenate(wy, 1), np.concatenate(slide, 1)
@@ -172,6 +170,119 @@ def assemble_result(
         path += ev.wheel_speed @ w
         slide_len += (ev.wheel_speed * ev.sliding) @ w
         energy -= ev.tyre_power @ w
+
+    max_gap = 0.0
+    if nh:
+        psi = Y[L.psi]
+        _, g, _, _ = hitch_rows(
+            model.front_points, model.rear_points, np.cos(psi), np.sin(psi), Y[L.x], Y[L.y], Y[L.vx], Y[L.vy], Y[L.w]
+        )
+        max_gap = float(np.max(np.hypot(g[0::2], g[1::2])))
+    return build_result(
+        model,
+        t=t,
+        Y=Y,
+        points=np.stack([wx, wy], axis=-1),
+        sliding=slide,
+        load=loads,
+        hitch_force=lam_h,
+        stop_moment=stop_m,
+        distance=dist,
+        path_length=path,
+        sliding_length=slide_len,
+        energy=energy,
+        max_gap=max_gap,
+        missed=missed,
+        status=status,
+        message=message,
+        t_end=t_end,
+        y_initial=y_initial,
+        y_final=y_final,
+        sol=sol,
+        events=events,
+        nfev=nfev,
+        njev=njev,
+        nlu=nlu,
+        n_segments=n_segments,
+        method=method,
+    )
+
+
+def build_result(
+    model,
+    *,
+    t: np.ndarray,
+    Y: np.ndarray,
+    points: np.ndarray,
+    sliding: np.ndarray,
+    load: np.ndarray,
+    hitch_force: np.ndarray,
+    stop_moment: np.ndarray,
+    distance: np.ndarray,
+    path_length: np.ndarray,
+    sliding_length: np.ndarray,
+    energy: np.ndarray,
+    max_gap: float,
+    missed: tuple[float, str] | None,
+    status: str,
+    message: str,
+    t_end: float,
+    y_initial: np.ndarray,
+    y_final: np.ndarray,
+    sol: Callable,
+    events: Sequence[RunoutEvent],
+    nfev: int,
+    njev: int,
+    nlu: int,
+    n_segments: int,
+    method: str,
+    kinetic_energies: tuple[float, float] | None = None,
+) -> RunoutResult:
+    """The result objects from the computed arrays (shared by the SciPy and compiled engines).
+
+    Parameters
+    ----------
+    model : RunoutModel or compatible
+        Needs ``layout``, ``specs``, ``vehicle.name``, ``static_load``, ``loads.hitch``,
+        ``mass``, ``inertia`` and ``options``.
+    t : ndarray, shape (K,)
+        Sample times [s].
+    Y : ndarray, shape (n_state, K)
+        Sampled states.
+    points : ndarray, shape (n_wheels, K, 2)
+        Contact positions [m] at the samples.
+    sliding, load : ndarray, shape (n_wheels, K)
+        Sliding flags and normal loads [N] at the samples.
+    hitch_force : ndarray, shape (K, 2 n_hitches)
+        Hitch forces on the front bodies, world frame [N].
+    stop_moment : ndarray, shape (K, n_hitches)
+        Moments of closed articulation stops [N m].
+    distance : ndarray, shape (n_bodies,)
+        CG path lengths [m].
+    path_length, sliding_length, energy : ndarray, shape (n_wheels,)
+        Contact path lengths [m], their sliding parts [m], dissipated energies [J].
+    max_gap : float
+        Largest pin gap over the samples [m].
+    missed : (float, str) or None
+        Time [s] and wheel key of the first sample inside a zone the integration did not
+        register; adds a ``"zone_missed"`` event and logs a warning.
+    status, message, t_end, y_initial, y_final, sol, events, nfev, njev, nlu, n_segments, method
+        As :class:`~crashsim.motion.result.RunoutResult`.
+    kinetic_energies : (float, float), optional
+        Initial and final kinetic energy [J], if already computed.
+    """
+    L = model.layout
+    nh = len(L.bodies) - 1
+    specs = model.specs
+    events = list(events)
+    if missed:
+        t_miss, key = missed
+        detail = (
+            f"wheel {key} is in a friction zone the integration did not register at t = {t_miss:.4f} s: "
+            "a zone narrower than speed x max_step was stepped over; reduce options.max_step"
+        )
+        _log.warning("run-out of %s: %s", model.vehicle.name, detail)
+        events.insert(-1, RunoutEvent(t_miss, "zone_missed", detail))
 
     at_rest = status == "rest"
     initial = L.unpack(y_initial)
@@ -199,14 +310,18 @@ def assemble_result(
             rest_position=final[name].position,
             rest_heading=final[name].heading,
             time_to_rest=float(t_end) if at_rest else None,
-            distance=float(dist[i]),
+            distance=float(distance[i]),
             history=hist,
             sol=body_sol,
         )
 
     wheels = {}
+    # where each wheel's sliding flag changes (one vectorised pass over all wheels)
+    rows, cols = np.nonzero(sliding[:, 1:] != sliding[:, :-1])
+    bounds = np.searchsorted(rows, np.arange(len(specs) + 1)).tolist()
+    cols = cols + 1
     for k, s in enumerate(specs):
-        pts = np.stack([wx[k], wy[k]], 1)
+        pts = points[k]
         wheels[s.key] = WheelTrack(
             key=s.key,
             body=s.body,
@@ -216,26 +331,20 @@ def assemble_result(
             static_load=float(model.static_load[k]),
             t=t,
             points=pts,
-            sliding=slide[k].copy(),
-            load=loads[k].copy(),
-            segments=split_track(t, pts, slide[k]),
-            path_length=float(path[k]),
-            sliding_length=float(slide_len[k]),
+            sliding=sliding[k],
+            load=load[k],
+            segments=split_track(t, pts, sliding[k], cols[bounds[k] : bounds[k + 1]]),
+            path_length=float(path_length[k]),
+            sliding_length=float(sliding_length[k]),
             energy=float(energy[k]),
         )
 
     hitches = []
-    max_gap = 0.0
     if nh:
         psi = Y[L.psi]
-        c, s_ = np.cos(psi), np.sin(psi)
-        _, g, _, _ = hitch_rows(
-            model.front_points, model.rear_points, c, s_, Y[L.x], Y[L.y], Y[L.vx], Y[L.vy], Y[L.w]
-        )
-        max_gap = float(np.max(np.hypot(g[0::2], g[1::2])))
         for j in range(nh):
-            force = lam_h[:, 2 * j : 2 * j + 2]
-            cf, sf = c[j], s_[j]
+            force = hitch_force[:, 2 * j : 2 * j + 2]
+            cf, sf = np.cos(psi[j]), np.sin(psi[j])
             force_body = np.stack([cf * force[:, 0] + sf * force[:, 1], cf * force[:, 1] - sf * force[:, 0]], 1)
             hitches.append(
                 HitchHistory(
@@ -246,12 +355,17 @@ def assemble_result(
                     force=force.copy(),
                     force_body=force_body,
                     articulation=psi[j] - psi[j + 1],
-                    stop_moment=stop_m[:, j].copy(),
+                    stop_moment=stop_moment[:, j].copy(),
                 )
             )
 
-    ke0 = float(model.kinetic_energy(y_initial))
-    ke1 = float(model.kinetic_energy(y_final))
+    def kinetic(y):
+        return 0.5 * float(
+            np.dot(model.mass, y[L.vx] ** 2 + y[L.vy] ** 2) + np.dot(model.inertia, y[L.w] ** 2)
+        )
+
+    options = getattr(model, "options_dict", None)
+    ke0, ke1 = kinetic_energies if kinetic_energies is not None else (kinetic(y_initial), kinetic(y_final))
     return RunoutResult(
         vehicle=model.vehicle.name,
         success=at_rest,
@@ -266,13 +380,12 @@ def assemble_result(
         wheels=wheels,
         hitches=tuple(hitches),
         events=tuple(events),
-        kinetic_energy_initial=ke0,
-        kinetic_energy_final=ke1,
+        kinetic_energy_initial=float(ke0),
+        kinetic_energy_final=float(ke1),
         energy_dissipated=float(energy.sum()),
-        max_hitch_gap=max_gap,
+        max_hitch_gap=float(max_gap),
         method=method,
-        options=model.options.to_dict(),
+        options=dict(options) if options is not None else model.options.to_dict(),
         sol=sol,
         layout=L,
     )
-

@@ -81,7 +81,16 @@ import numpy as np
 
 from ..errors import ScenarioError
 
-__all__ = ["LATERAL_MODELS", "lateral_force", "tyre_forces", "tyre_forces_core", "tyre_kernel", "fiala_curve", "linear_curve"]
+__all__ = [
+    "LATERAL_MODELS",
+    "lateral_force",
+    "tyre_forces",
+    "tyre_forces_core",
+    "tyre_kernel",
+    "sliding_force",
+    "fiala_curve",
+    "linear_curve",
+]
 
 #: Names of the pure-slip lateral force curves.
 LATERAL_MODELS = ("fiala", "linear")
@@ -218,12 +227,25 @@ def tyre_forces_core(u, w, mu_load, demand, cornering_stiffness, locked, eps, la
     w = np.asarray(w, dtype=float)
     if locked is True:
         # every contact slides: the sliding branch of tyre_kernel alone
-        neg_scale = -mu_load / np.sqrt(u * u + w * w + eps * eps)
-        fx_lock, fy_lock = neg_scale * u, neg_scale * w
+        fx_lock, fy_lock = sliding_force(u, w, mu_load, eps)
         return fx_lock, fy_lock, np.ones(np.broadcast(fx_lock, fy_lock).shape, dtype=bool)
     if lateral not in LATERAL_MODELS:
         raise ScenarioError(f"must be one of {LATERAL_MODELS}, got {lateral!r}", field="lateral_model")
     return tyre_kernel(u, w, mu_load, demand, cornering_stiffness, locked, eps, lateral == "fiala")
+
+
+def sliding_force(u, w, mu_load, eps):
+    """Force of a sliding (locked or jammed) contact, ``-mu N v / sqrt(|v|^2 + eps^2)`` [N], wheel axes.
+
+    The sliding branch of :func:`tyre_kernel`, with the same arithmetic (so the same bits);
+    arrays or scalars.
+
+    Returns
+    -------
+    fx, fy : float or ndarray
+    """
+    neg_scale = -mu_load / np.sqrt(u * u + w * w + eps * eps)
+    return neg_scale * u, neg_scale * w
 
 
 def tyre_kernel(u, w, mu_load, demand, cornering_stiffness, locked, eps, fiala):

@@ -27,6 +27,7 @@ class SceneResult:
     runout: dict | None = None  # vehicle name -> RunoutResult
     evidence: Any = None  # EvidenceReport or None
     warnings: tuple[str, ...] = ()
+    accuracy: dict | None = None  # vehicle name -> AccuracyReport, when the scenario asks for an accuracy
 
     def runout_body(self, name: str):
         """The BodyRunout of a body (KeyError if the scene has no run-out or no such body)."""
@@ -62,6 +63,10 @@ class SceneResult:
             }
         if self.evidence is not None:
             out["evidence"] = self.evidence.to_dict()
+        if self.accuracy is not None:
+            out["accuracy"] = {name: rep.to_dict() for name, rep in self.accuracy.items()}
+        if self.scenario.runout is not None:
+            out["runout_level"] = self.scenario.runout.level
         out["warnings"] = list(self.warnings)
         return out
 
@@ -80,6 +85,9 @@ class SceneResult:
             from ..report import format_runout
 
             text += "\n\n" + format_runout(self.runout, system)
+            text += f"\n  model level: {self.scenario.runout.level}"
+            for name, rep in (self.accuracy or {}).items():
+                text += f"\n  accuracy, vehicle {name}: {rep.message}"
         if self.evidence is not None:
             from ..report import format_evidence
 
@@ -148,17 +156,27 @@ def run_scene(scenario) -> SceneResult:
     """Solve a loaded scenario: the impact, then the run-out of every vehicle if asked for."""
     impact = solve_impact(scenario.impact)
     runout = None
-    if scenario.runout is not None:
-        from ..motion import make_hitch_consistent, simulate_runout
+    accuracy = None
+    if scenario.runout is not None and scenario.runout.level != "impact":
+        from ..motion import make_hitch_consistent
+        from ..motion.accuracy import simulate_to_accuracy
+        from ..motion.levels import simulate_level
 
         states = separation_states(scenario, impact)
         spec = scenario.runout
         runout = {}
+        accuracy = {} if spec.accuracy is not None else None
         for veh in scenario.vehicles:
             if veh.is_barrier:
                 continue
             initial = make_hitch_consistent(veh, {b.name: states[b.name] for b in veh.bodies})
-            runout[veh.name] = simulate_runout(veh, initial, spec.wheels[veh.name], spec.road, spec.options)
+            if spec.accuracy is not None:
+                runout[veh.name], accuracy[veh.name] = simulate_to_accuracy(
+                    veh, initial, spec.wheels[veh.name], spec.road, spec.accuracy, spec.accuracy_heading,
+                    spec.options, level=spec.level)
+            else:
+                runout[veh.name] = simulate_level(spec.level, veh, initial, spec.wheels[veh.name], spec.road,
+                                                  spec.options)
     evidence = None
     if not scenario.evidence.empty:
         from .evidence import evaluate_evidence
@@ -170,7 +188,8 @@ def run_scene(scenario) -> SceneResult:
         for vname, r in runout.items():
             if not r.success:
                 warnings.append(f"the run-out of vehicle {vname!r} did not reach rest: {r.status} ({r.message})")
-    return SceneResult(scenario=scenario, impact=impact, runout=runout, evidence=evidence, warnings=tuple(warnings))
+    return SceneResult(scenario=scenario, impact=impact, runout=runout, evidence=evidence, warnings=tuple(warnings),
+                       accuracy=accuracy)
 
 
 #: Growth of a body's overlap with the barrier after separation [m] that is reported: the

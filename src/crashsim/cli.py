@@ -8,33 +8,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 from pathlib import Path
 
 from .errors import CrashsimError, ScenarioError, SolverError
+from .motion.result import _jsonable as _clean  # JSON-safe copy: numpy to Python, NaN/inf to None
 
 __all__ = ["main"]
-
-
-def _clean(obj):
-    """JSON-safe copy: numpy scalars/arrays to Python, NaN/inf to None."""
-    import numpy as np
-
-    if isinstance(obj, dict):
-        return {str(k): _clean(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_clean(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _clean(obj.tolist())
-    if isinstance(obj, (np.floating, float)):
-        v = float(obj)
-        return v if math.isfinite(v) else None
-    if isinstance(obj, (np.integer,)):
-        return int(obj)
-    if isinstance(obj, np.bool_):
-        return bool(obj)
-    return obj
 
 
 def _cmd_run(args) -> int:

@@ -75,3 +75,11 @@ def test_tensile_normal_impulse_is_warned():
     assert rear.normal_impulse < 0 and any("tensile" in w for w in rear.warnings)
     assert front.normal_impulse > 0 and not any("tensile" in w for w in front.warnings)
     assert rear.to_dict()["warnings"] == list(rear.warnings)
+
+
+def test_signed_distance_sides():
+    from crashsim.reconstruct.evidence import signed_distance_to_polyline
+
+    line = np.array([[0.0, 0.0], [10.0, 0.0]])
+    d = signed_distance_to_polyline(np.array([[5.0, 2.0], [5.0, -3.0]]), line)
+    assert d == pytest.approx([2.0, -3.0])

@@ -29,7 +29,8 @@ from ..geometry import rotate, wrap_angle
 
 __all__ = [
     "RestEvidence", "MarkEvidence", "ImpactPointEvidence", "DeltaVEvidence", "Evidence",
-    "Check", "EvidenceReport", "evaluate_evidence", "distance_to_polyline", "MARK_SPACING",
+    "Check", "EvidenceReport", "evaluate_evidence", "distance_to_polyline", "signed_distance_to_polyline",
+    "MARK_SPACING",
 ]
 
 #: Spacing [m] to which measured marks are densified before their distance to a track is taken.
@@ -148,18 +149,35 @@ def _densify(points: np.ndarray, spacing: float) -> np.ndarray:
     return np.vstack(out)
 
 
-def distance_to_polyline(points, polyline) -> np.ndarray:
-    """Distance of each point (n, 2) to a polyline (m, 2) [m]; a single vertex is a point."""
+def _nearest_on_polyline(points, polyline) -> tuple[np.ndarray, np.ndarray]:
+    """For each point (n, 2): its distance to a polyline (m, 2) [m] and the side it lies on
+    (+1 left of the nearest segment's direction, -1 right; +1 for a one-vertex polyline)."""
     p = np.asarray(points, dtype=float)[:, None, :]
     line = np.asarray(polyline, dtype=float)
     if len(line) == 1:
-        return np.hypot(*(p[:, 0, :] - line[0]).T)
+        return np.hypot(*(p[:, 0, :] - line[0]).T), np.ones(p.shape[0])
     a = line[:-1][None]
     ab = (line[1:] - line[:-1])[None]
     denom = np.sum(ab * ab, -1)
     t = np.clip(np.sum((p - a) * ab, -1) / np.where(denom > 0, denom, 1.0), 0.0, 1.0)
     d = p - (a + t[..., None] * ab)
-    return np.min(np.hypot(d[..., 0], d[..., 1]), axis=1)
+    dist = np.hypot(d[..., 0], d[..., 1])
+    j = np.argmin(dist, axis=1)
+    rows = np.arange(p.shape[0])
+    cross = ab[0, j, 0] * (p[:, 0, 1] - a[0, j, 1]) - ab[0, j, 1] * (p[:, 0, 0] - a[0, j, 0])
+    return dist[rows, j], np.where(cross >= 0, 1.0, -1.0)
+
+
+def distance_to_polyline(points, polyline) -> np.ndarray:
+    """Distance of each point (n, 2) to a polyline (m, 2) [m]; a single vertex is a point."""
+    return _nearest_on_polyline(points, polyline)[0]
+
+
+def signed_distance_to_polyline(points, polyline) -> np.ndarray:
+    """Signed distance of each point (n, 2) to a polyline (m, 2) [m]: positive on its left
+    (the side of the nearest segment's direction); a one-vertex polyline gives the distance."""
+    dist, side = _nearest_on_polyline(points, polyline)
+    return side * dist
 
 
 def _wheel_matches(track, selector: str | None) -> bool:

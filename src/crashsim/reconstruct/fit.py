@@ -56,8 +56,10 @@ from typing import Any, Callable
 
 import numpy as np
 
+
 from ..errors import ScenarioError, SolverError
 from ..geometry import wrap_angle
+from .evidence import signed_distance_to_polyline
 from .overrides import ScenarioOverrides, default_engine, parse_value
 
 __all__ = ["FitSpec", "Unknown", "FitProblem", "FitResult", "EvidenceResidual", "StartResult", "fit_scene",
@@ -201,27 +203,6 @@ def _resample(points: np.ndarray, k: int) -> np.ndarray:
         return np.repeat(pts[:1], k, axis=0)
     q = np.linspace(0.0, s[-1], k)
     return np.column_stack([np.interp(q, s, pts[:, 0]), np.interp(q, s, pts[:, 1])])
-
-
-def signed_distance_to_polyline(points, polyline) -> np.ndarray:
-    """Signed distance of each point (n, 2) to a polyline (m, 2) [m]: positive on its left.
-
-    The sign is that of the nearest segment's cross product (direction x (p - a)).
-    """
-    p = np.asarray(points, dtype=float)[:, None, :]
-    line = np.asarray(polyline, dtype=float)
-    if len(line) == 1:
-        return np.hypot(*(p[:, 0, :] - line[0]).T)
-    a = line[:-1][None]
-    ab = (line[1:] - line[:-1])[None]
-    denom = np.sum(ab * ab, -1)
-    t = np.clip(np.sum((p - a) * ab, -1) / np.where(denom > 0, denom, 1.0), 0.0, 1.0)
-    d = p - (a + t[..., None] * ab)
-    dist = np.hypot(d[..., 0], d[..., 1])
-    j = np.argmin(dist, axis=1)
-    rows = np.arange(p.shape[0])
-    cross = ab[0, j, 0] * (p[:, 0, 1] - a[0, j, 1]) - ab[0, j, 1] * (p[:, 0, 0] - a[0, j, 0])
-    return np.where(cross >= 0, 1.0, -1.0) * dist[rows, j]
 
 
 def _mark_distances(item: _Item, tracks: dict, k: int) -> tuple[np.ndarray, str | None]:

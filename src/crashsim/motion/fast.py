@@ -33,12 +33,15 @@ Design
   3(2), RK23's).  ``rtol``, ``atol``, ``max_step`` and ``first_step`` mean what they mean for
   solve_ivp.
 * **Stiffness.**  Free-rolling tyres make the equations stiff at low speed (eigenvalue
-  ``~ -sum C_alpha / (m |u|)``); the slip denominator ``sqrt(u^2 + eps^2)`` bounds it at
-  ``sum C_alpha / (m eps)`` and the rest event ends the run at ``v_stop``, so the explicit
-  scheme's steps shrink to the stability limit only over the last fraction of a second.
-  The compiled RHS costs well under a microsecond, so even a stability-limited stretch of
-  thousands of steps costs milliseconds (measured in ``plots/fast_path.md``: long
-  free-rolling run-outs); an implicit scheme would save steps but not time here.
+  ``~ -sum C_alpha / (m |u|)``).  The minimum slip denominator ``sqrt(u^2 + eps^2)`` of the
+  shared tyre law caps it at ``sum C_alpha / (m eps)`` and the rest event ends the run at
+  ``v_stop``, so the explicit steps shrink to the stability limit only late in a long
+  roll-out and never collapse.  Measured (``plots/fast_path.md``) on a 59 s free-rolling car:
+  dopri5 needs 9.5x LSODA's right-hand-side evaluations, yet at well under a microsecond per
+  evaluation the run-out takes ~4 ms against ~68 ms (17x; bs3, with the larger stability
+  region per evaluation, 20x).  No implicit scheme is included: a Rosenbrock step would need
+  a Jacobian (n extra evaluations) and an LU solve per step, and a third of that run-out's
+  time is the post-processing of its 5900 samples anyway.
 * **Events** exactly as :mod:`crashsim.motion.simulate`: the same event functions (rest
   measure with the same ``v_stop`` and ``L_ref``; per zone the minimum over wheels of the
   side-signed distance to the polygon plus the 0.1 nm overshoot; articulation angle against
@@ -58,15 +61,32 @@ Design
 
 Compile time
 ------------
-The first call in a fresh environment compiles the kernels (about a minute on a slow
-machine); later processes load them from numba's on-disk cache in about a second.
-:func:`compile_kernels` triggers this explicitly and reports the time.
+The first call in a fresh environment compiles the kernels (55-65 s on the 2-CPU benchmark
+machine); later processes load them from numba's on-disk cache (``__pycache__`` next to the
+module) in about a second.  :func:`compile_kernels` triggers this explicitly and reports the
+time.  The cache is keyed on the sources of the kernels *and* of :mod:`crashsim.motion.tyres`.
 
-Not supported
--------------
+Performance notes
+-----------------
+Per right-hand side the articulated truck of the Table 6 scene (10 contacts, one hitch)
+costs ~0.3 us, a car ~0.15 us; a whole run-out to rest including the result objects about
+1 ms (truck) and 0.3-0.6 ms (car).  What made the difference: no NRT reference counting in
+the hot functions (``_nrt=False``), small helpers and the right-hand side inlined into the
+RK step (numba passes tuples of arrays as hundreds of scalar arguments), path integrals
+accumulated from the RK stages instead of a quadrature pass, and cached set-up of the
+vehicle, road and options (keyed by object identity).
+
+Differences from the SciPy engine
+---------------------------------
 Nothing of the model is left out: every option of :class:`RunoutOptions` except ``method``
 (the solve_ivp method) acts identically; ``scheme`` selects the compiled scheme instead.
-``njev`` and ``nlu`` are always 0 (no Jacobians).
+``njev`` and ``nlu`` are always 0 (no Jacobians).  Path integrals on steps where no contact
+switches between rolling and sliding come from the RK stages (5th order, like the step);
+sliding lengths carry, in both engines, an error of about speed x step per switch (neither
+locates the switch).  When an event's sign change at a step end is not reproduced by the
+dense output (round-off at a root on the step start), the event is placed at the step end
+instead of failing as solve_ivp's brentq would.  Warnings logged while preparing a vehicle
+(negative hitch loads) appear once per cached vehicle, not on every call.
 """
 
 from __future__ import annotations

@@ -8,15 +8,17 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import IllConditionedError, ScenarioError
-from .core import ImpactArrays, ImpactStructure, energy_loss_fraction, solve_arrays
+from .core import COND_LIMIT, ImpactArrays, ImpactStructure, energy_loss_fraction, solve_arrays
 from .model import ImpactProblem
 from .result import ImpactResult
 
 __all__ = ["compile_problem", "solve_impact", "ImpactBatch", "CONDITION_LIMIT"]
 
-#: Condition number of the equilibrated impulse system above which a single solve is refused:
-#: past it, double precision leaves fewer than ~4 significant digits in the impulses.
-CONDITION_LIMIT = 1e12
+#: Condition number of the equilibrated impulse system above which a single solve is refused
+#: (the 2-norm value from an SVD; the batch path flags items by the exact 1-norm value against
+#: the same limit, core.COND_LIMIT): past it, double precision leaves fewer than ~4 significant
+#: digits in the impulses.
+CONDITION_LIMIT = COND_LIMIT
 
 
 def compile_problem(problem: ImpactProblem) -> tuple[ImpactStructure, ImpactArrays]:

@@ -1,7 +1,8 @@
 """Command line: load -> call the public API -> write -> exit code.
 
 Exit codes: 0 success, 1 a run finished but some evidence verdict failed (``run --strict``),
-2 bad input (scenario or arguments), 3 a computation failed (singular equations, solver).
+2 bad input (scenario or arguments), 3 a computation failed (singular equations, solver) or a
+run-out did not reach rest (a limit ended it; the results are still printed or written).
 """
 
 from __future__ import annotations
@@ -30,6 +31,11 @@ def _cmd_run(args) -> int:
         sys.stdout.write("\n")
     else:
         sys.stdout.write(result.report(args.units) + "\n")
+    if not result.at_rest:
+        stopped = [f"{v} ({r.status})" for v, r in result.runout.items() if not r.success]
+        sys.stderr.write(f"crashsim: the run-out did not reach rest: {', '.join(stopped)}; the positions reported "
+                         "are where it stopped\n")
+        return 3
     if args.strict and result.evidence is not None and not result.evidence.all_passed:
         return 1
     return 0
@@ -42,7 +48,7 @@ def _cmd_fit(args) -> int:
 
     load_scenario(args.file)  # the whole file validated first ([fit] and evidence sigmas included)
     result = fit_scene(load_toml(args.file), None, engine=args.engine, workers=args.workers,
-                       progress=args.progress, file=args.file)
+                       progress=args.progress, file=args.file, sample_time_limit=args.sample_time_limit)
     if args.json:
         json.dump(_clean(result.to_dict()), sys.stdout, indent=2)
         sys.stdout.write("\n")
@@ -60,7 +66,7 @@ def _cmd_mc(args) -> int:
     try:
         result = monte_carlo(load_toml(args.file), None, args.samples, seed=args.seed, engine=args.engine,
                              workers=args.workers, dask_address=args.dask, out_path=args.out,
-                             progress=not args.quiet, file=args.file)
+                             progress=not args.quiet, file=args.file, sample_time_limit=args.sample_time_limit)
     except KeyboardInterrupt:
         kept = f"; the samples done are kept in {args.out}: run the same command again to resume" if args.out else ""
         sys.stderr.write(f"crashsim: stopped{kept}\n")
@@ -89,6 +95,8 @@ def _add_inverse_commands(sub):
     f.add_argument("--engine", choices=engines, default=None, help="run-out engine (default: compiled if available)")
     f.add_argument("--workers", type=int, default=None, help="processes for the starts (default: all cores)")
     f.add_argument("--progress", action="store_true", help="progress bar over the starts on stderr")
+    f.add_argument("--sample-time-limit", type=float, default=30.0, metavar="SECONDS",
+                   help="wall-clock limit of one scene evaluation's run-out (default 30 s); a slower one is penalised")
     f.set_defaults(func=_cmd_fit)
 
     m = sub.add_parser("mc", help="Monte Carlo of the [uncertainty] inputs through impact and run-out")
@@ -103,6 +111,9 @@ def _add_inverse_commands(sub):
     m.add_argument("--units", choices=("SI", "US"), default="SI", help="units of the report and plots")
     m.add_argument("--engine", choices=engines, default=None, help="run-out engine (default: compiled if available)")
     m.add_argument("--quiet", action="store_true", help="no progress bar")
+    m.add_argument("--sample-time-limit", type=float, default=30.0, metavar="SECONDS",
+                   help="wall-clock limit of one sample's run-out (default 30 s); a slower sample fails with that "
+                        "reason and the run goes on")
     m.set_defaults(func=_cmd_mc)
 
 

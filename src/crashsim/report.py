@@ -4,20 +4,12 @@ from __future__ import annotations
 
 import math
 
-from .units import Kind, to_unit
+from .units import Kind, format_value, to_unit
 
 __all__ = ["format_impact", "format_runout", "format_evidence", "fmt"]
 
 
-def fmt(value: float, kind: Kind | str, system: str = "SI", digits: int = 4) -> str:
-    """Format an SI value in the display unit of ``system``, e.g. ``fmt(13.41, "speed", "US")``."""
-    if value is None or (isinstance(value, float) and math.isnan(value)):
-        return "n/a"
-    if Kind(kind) is Kind.ANGLE:
-        return f"{math.degrees(value):.1f} deg"
-    v, label = to_unit(value, kind, system)
-    text = f"{v:.{digits}g}" if abs(v) >= 1e-9 else "0"
-    return f"{text} {label}".rstrip()
+fmt = format_value  # an SI value in the display unit of a system (crashsim.units.format_value)
 
 
 def _vec(values, kind, system):
@@ -82,9 +74,13 @@ def format_runout(runout: dict, system: str = "SI") -> str:
     for vname, r in runout.items():
         lines.append(f"  vehicle {vname}: {r.status} after {fmt(r.t_end, 'time', s)} ({r.message}); "
                      f"method {r.method}, {r.nfev} right-hand-side evaluations")
+        if not r.success:
+            lines.append(f"    NOT AT REST ({r.status}): the positions below are where the run stopped, not rest "
+                         "positions")
         for name, b in r.bodies.items():
             ttr = "n/a" if b.time_to_rest is None else fmt(b.time_to_rest, "time", s)
-            lines.append(f"    {name:<14} rest at {_vec(b.rest_position, 'length', s):<22} heading "
+            where = "rest at   " if b.time_to_rest is not None else "stopped at"
+            lines.append(f"    {name:<14} {where} {_vec(b.rest_position, 'length', s):<22} heading "
                          f"{math.degrees(b.rest_heading_wrapped):7.1f} deg, travelled {fmt(b.distance, 'length', s)}, "
                          f"time to rest {ttr}")
     return "\n".join(lines)

@@ -23,6 +23,7 @@ from .geometry import rotate
 from .motion.levels import LEVELS
 from .motion import (LATERAL_MODELS, METHODS, WHEEL_STATES, FrictionZone, Road, RunoutOptions, ScheduledChange,
                      WheelSetting, WheelSettings)
+from .motion.wheels import _select, enumerate_wheels
 from .impact import (CrushSurface, ExternalImpulse, ImpactProblem, TangentialLaw, VelocityConstraint,
                      tyre_friction_impulse)
 from .schema import ArrayOf, Field, Section, Table, document, load_toml, validate
@@ -35,10 +36,23 @@ __all__ = ["SCHEMA", "Scenario", "RunoutSpec", "load_scenario", "presets", "scen
 # ----------------------------------------------------------------------------------------
 # The schema (validates and documents)
 
+# Plausibility bounds (SI): far outside anything on a road, so a typing slip ("1e6 mph") is an
+# error at load instead of a run-out that never ends.  The fastest production cars reach about
+# 135 m/s; heavy-haulage combinations about 200 t; a 20 m trailer of 40 t has a yaw inertia of
+# about 1.5e6 kg m^2.
+MAX_SPEED = 150.0           # m/s (335.5 mph)
+MAX_YAW_RATE = 15.0         # rad/s (860 deg/s)
+MAX_MASS = 250_000.0        # kg
+MAX_YAW_INERTIA = 5.0e7     # kg m^2
+MAX_LENGTH = 40.0           # m (body length, axle offset)
+MAX_WIDTH = 6.0             # m
+MAX_TRACK = 4.0             # m
+
 AXLE = Section("axle", [
     Field("name", "str", default="", description="Label (\"steer\", \"drive 1\"); selects wheels as <body>/<name>"),
-    Field("x", Kind.LENGTH, example="-3.2 m", description="Axle position from the body CG, forward positive"),
-    Field("track", Kind.LENGTH, minimum=0, exclusive_minimum=True, example="2.05 m",
+    Field("x", Kind.LENGTH, minimum=-MAX_LENGTH, maximum=MAX_LENGTH, example="-3.2 m",
+          description="Axle position from the body CG, forward positive"),
+    Field("track", Kind.LENGTH, minimum=0, maximum=MAX_TRACK, exclusive_minimum=True, example="2.05 m",
           description="Distance between the left and right tyre contact centres"),
     Field("dual", "bool", default=False, description="Dual tyres on each side (one contact per side, summed)"),
 ], description="One axle (each axle of a tandem group separately), for the run-out")
@@ -48,15 +62,18 @@ BODY = Section("body", [
           description="Name of a parameter set of crashsim's vehicle library (crashsim presets); keys given here override it"),
     Field("name", "str", description="Body name, unique in the scene (results are keyed by it)",
           example='tractor'),
-    Field("mass", Kind.MASS, minimum=0, exclusive_minimum=True, example="9500 kg",
+    Field("mass", Kind.MASS, minimum=0, maximum=MAX_MASS, exclusive_minimum=True, example="9500 kg",
           description="Mass (a weight such as \"20945 lbf\" is accepted and divided by g0)"),
-    Field("yaw_inertia", Kind.YAW_INERTIA, minimum=0, exclusive_minimum=True, example="21000 kg m^2",
+    Field("yaw_inertia", Kind.YAW_INERTIA, minimum=0, maximum=MAX_YAW_INERTIA, exclusive_minimum=True,
+          example="21000 kg m^2",
           description="Yaw moment of inertia about the CG"),
-    Field("yaw_rate", Kind.ANGULAR_VELOCITY, default="0 rad/s",
+    Field("yaw_rate", Kind.ANGULAR_VELOCITY, minimum=-MAX_YAW_RATE, maximum=MAX_YAW_RATE, default="0 rad/s",
           description="Yaw rate just before the impact (counter-clockwise positive)"),
-    Field("length", Kind.LENGTH, required=False, minimum=0, exclusive_minimum=True, example="6.0 m",
+    Field("length", Kind.LENGTH, required=False, minimum=0, maximum=MAX_LENGTH, exclusive_minimum=True,
+          example="6.0 m",
           description="Overall length of the outline (plots)"),
-    Field("width", Kind.LENGTH, required=False, minimum=0, exclusive_minimum=True, example="2.5 m",
+    Field("width", Kind.LENGTH, required=False, minimum=0, maximum=MAX_WIDTH, exclusive_minimum=True,
+          example="2.5 m",
           description="Overall width of the outline (plots)"),
     Field("outline_center", Kind.LENGTH, n=2, default=["0 m", "0 m"],
           description="Centre of the outline rectangle in body axes"),
@@ -110,7 +127,8 @@ VEHICLE = Section("vehicle", [
     Field("position", Kind.LENGTH, n=2, example='["0 m", "0 m"]',
           description="CG of the first (front) body at impact, world frame"),
     Field("heading", Kind.ANGLE, example="90 deg", description="Heading of the first body at impact"),
-    Field("speed", Kind.SPEED, minimum=0, example="30 mph", description="CG speed of the first body at impact"),
+    Field("speed", Kind.SPEED, minimum=0, maximum=MAX_SPEED, example="30 mph",
+          description="CG speed of the first body at impact"),
     Field("course", Kind.ANGLE, required=False, example="95 deg",
           description="Direction of the first body's CG velocity (default: its heading, no side slip)"),
 ], subsections=[
@@ -161,6 +179,9 @@ IMPACT = Section("impact", [
     Field("point", Kind.LENGTH, n=2, example='["-2.517 m", "-1.157 m"]',
           description="Contact point: where the resultant crush impulse acts"),
     Field("point_frame", "str", default="world", description="Frame of point: \"world\" or a body name"),
+    Field("contact_tolerance", Kind.LENGTH, minimum=0, default="0.5 m",
+          description="How far the contact point may lie outside either contacting body's outline (a check "
+                      "of the geometry: the point must be in or near the crush zone of both bodies)"),
     Field("normal", Kind.ANGLE, example="90 deg",
           description="Direction of the crush-surface normal n, pointing from body2 into body1"),
     Field("normal_frame", "str", default="world", description="Frame of normal: \"world\" or a body name"),
@@ -625,17 +646,43 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
                                 tuple(constraints), tuple(external))
     except ScenarioError as exc:
         raise ScenarioError(str(exc), field=exc.field, file=file) from None
+    _check_contact_point(problem, imp["contact_tolerance"], d["scenario"]["units"], file)
     runout = None
     if d["runout"] is not None:
         raw_runout = data.get("runout") if isinstance(data.get("runout"), dict) else {}
         runout = _build_runout(d["runout"], vehicles, d["vehicles"], file, raw_runout)
-    evidence = _build_evidence(d["evidence"], states, file)
+    evidence = _build_evidence(d["evidence"], states, file, vehicles)
     meta = d["scenario"]
     return Scenario(file, meta["title"], meta["source"], meta["units"], tuple(vehicles), states, problem, runout,
                     evidence, d)
 
 
-def _build_evidence(e: dict | None, states: dict, file: str | None) -> Evidence:
+def _check_contact_point(problem: ImpactProblem, tolerance: float, system: str, file: str | None) -> None:
+    """The contact point must lie in or near (``tolerance``) the outline of both contacting bodies."""
+    from .motion.road import signed_distance
+    from .units import format_value
+
+    point = np.asarray(problem.surface.point)
+    far = []
+    for name in (problem.body1, problem.body2):
+        body = next(b for v in problem.vehicles for b in v.bodies if b.name == name)
+        corners = body.outline()
+        if body.is_fixed or corners is None:
+            continue
+        st = problem.states[name]
+        world = np.asarray(st.position) + rotate(corners, st.heading)
+        gap = max(0.0, -float(signed_distance(point[None], world)[0]))
+        if gap > tolerance:
+            far.append(f"{format_value(gap, Kind.LENGTH, system)} outside the outline of {name!r}")
+    if far:
+        shown = ", ".join(format_value(float(c), Kind.LENGTH, system) for c in point)
+        raise _err(f"the contact point ({shown}) lies " + " and ".join(far)
+                   + f" at impact (allowed: within impact.contact_tolerance = {format_value(tolerance, Kind.LENGTH, system)} "
+                   "of both outlines); check impact.point and its point_frame, and the vehicles' positions and headings",
+                   "impact.point", file)
+
+
+def _build_evidence(e: dict | None, states: dict, file: str | None, vehicles=()) -> Evidence:
     if e is None:
         return Evidence()
     import difflib
@@ -658,7 +705,12 @@ def _build_evidence(e: dict | None, states: dict, file: str | None) -> Evidence:
     for i, m in enumerate(e["marks"]):
         sel = m["wheel"]
         if sel != "*":
-            body(sel.split("/")[0], f"evidence.marks[{i}].wheel")
+            key = f"evidence.marks[{i}].wheel"
+            vehicle = next(v for v in vehicles if body(sel.split("/")[0], key) in {b.name for b in v.bodies})
+            try:  # the wheels the selector names must exist (as for wheel settings)
+                _select(vehicle, enumerate_wheels(vehicle), sel, key)
+            except ScenarioError as exc:
+                raise _err(str(exc).removeprefix(f"{key}: "), key, file) from None
         marks.append(MarkEvidence(np.asarray(m["points"], dtype=float), m["tolerance"], sel, m["sliding_only"],
                                   m["name"]))
     poi = None

@@ -317,15 +317,34 @@ def _number(value: object, path: str, integer: bool, problems: _Problems) -> flo
     return value if integer else float(value)
 
 
+def _interval_in(f: Field, unit: str) -> str | None:
+    """The allowed range of ``f`` in the unit the user wrote (None if that unit is the SI one)."""
+    if not unit or unit == units.si_unit(f.kind):
+        return None
+    try:
+        lo = None if f.minimum is None else units.convert(f.minimum, units.si_unit(f.kind), unit, f.kind)
+        hi = None if f.maximum is None else units.convert(f.maximum, units.si_unit(f.kind), unit, f.kind)
+    except ScenarioError:
+        return None
+    left = "(" if f.exclusive_minimum or lo is None else "["
+    right = ")" if f.exclusive_maximum or hi is None else "]"
+    return f"{left}{'-inf' if lo is None else format(lo, '.4g')}, {'inf' if hi is None else format(hi, '.4g')}{right} {unit}"
+
+
 def _check_range(x: float, raw: object, f: Field, path: str, problems: _Problems) -> None:
     if _in_range(x, f):
         return
     shown = toml_repr(raw)
+    allowed = _interval(f)
     if f.is_quantity and isinstance(raw, str):
         si = f"{_num(x)} {units.si_unit(f.kind)}".strip()
-        if raw.strip() != si:
+        match = units._NUMBER.fullmatch(raw)
+        own = _interval_in(f, match.group("unit")) if match else None
+        if own:  # the range in the user's unit first, then in SI
+            allowed = f"{own} ({allowed})"
+        elif raw.strip() != si:
             shown += f" (= {si})"
-    problems.append((path, f"{shown} is out of range; allowed {_interval(f)}"))
+    problems.append((path, f"{shown} is out of range; allowed {allowed}"))
 
 
 def _field(value: object, f: Field, path: str, problems: _Problems) -> Any:

@@ -459,6 +459,27 @@ def to_unit(si_value: float, kind: Kind | str, system: System = "SI") -> tuple[f
     return float(si_value) / _si_factor(label, kind), label
 
 
+def format_value(value: float, kind: Kind | str, system: System = "SI", digits: int = 4) -> str:
+    """An SI value as text in the display unit of ``system``, e.g. ``format_value(13.41, "speed", "US")``.
+
+    Angles are always shown in degrees; NaN and None as ``"n/a"``.
+
+    Examples
+    --------
+    >>> format_value(13.41, "speed", "US")
+    '30 mph'
+    >>> format_value(0.5, "length", "US")
+    '1.64 ft'
+    """
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return "n/a"
+    if _kind(kind) is Kind.ANGLE:
+        return f"{math.degrees(value):.{max(digits - 3, 1)}f} deg"
+    v, label = to_unit(value, kind, system)
+    text = f"{v:.{digits}g}" if abs(v) >= 1e-9 else "0"
+    return f"{text} {label}".rstrip()
+
+
 def convert(value: float, from_unit: str, to_unit: str, kind: Kind | str | None = None) -> float:
     """Convert a number between two units, with the conventions of this module.
 

@@ -45,7 +45,7 @@ def car_trailer() -> dict:
                        "bodies": [{"name": "car", "preset": "car-midsize", "rear_hitch": ["-2.55 m", "0 m"]},
                                   {"name": "trailer", "preset": "car-trailer"}],
                        "tyres": dict(LOCKED)},
-            "striking": {"position": ["-0.50 m", "-4.10 m"], "heading": "90 deg", "speed": "11 m/s",
+            "striking": {"position": ["-0.50 m", "-3.45 m"], "heading": "90 deg", "speed": "11 m/s",
                          "bodies": [{"name": "striker", "preset": "car-midsize"}], "tyres": dict(LOCKED)},
         },
         "impact": {"body1": "car", "body2": "striker", "point": ["-0.5 m", "-0.9 m"], "point_frame": "car",

@@ -115,13 +115,57 @@ def test_spec_errors():
         UncertaintySpec.from_dict(bad)
 
 
-def test_failed_samples_are_recorded(data):
+def test_a_distribution_beyond_the_allowed_range_is_refused_not_dropped(data):
+    """A sample outside an input's allowed range would be invalid: such a distribution is refused
+    at load (naming the bound and the range), never sampled and silently dropped."""
     spec = {"inputs": [{"path": "impact.restitution", "distribution": "uniform", "lower": "0.5", "upper": "1.5"}]}
-    res = monte_carlo(data, spec, 6, seed=3, workers=1, progress=False, engine=ENGINE)
-    bad = res.inputs[:, 0] > 1.0
-    assert bad.any() and res.n_failed == int(bad.sum())
-    assert all("restitution" in m for _, m in res.errors)
-    assert np.isnan(res.outputs["delta_v.carA"][bad]).all()
+    with pytest.raises(ScenarioError, match=r"uncertainty.inputs\[0\].upper: upper = '1.5' lies outside the allowed "
+                                            r"range of impact.restitution, \[0, 1\]"):
+        monte_carlo(data, spec, 6, seed=3, workers=1, progress=False, engine=ENGINE)
+    wide = {"inputs": [{"path": "runout.road_friction", "distribution": "normal", "mean": "0.3", "sd": "0.35"}]}
+    with pytest.raises(ScenarioError, match=r"puts 19.6 % of its samples outside the allowed range \(0, 2\]"):
+        UncertaintySpec.from_dict(wide)
+
+
+def test_a_normal_distribution_with_a_small_tail_outside_is_truncated_and_said_so(data):
+    """0.62 % of N(0.1, 0.04) lies below e = 0: truncated to [0, 1], the report says so, and
+    every sample is valid (none fails)."""
+    spec = {"inputs": [{"path": "impact.restitution", "distribution": "normal", "mean": "0.1", "sd": "0.04"}]}
+    d = UncertaintySpec.from_dict(spec).inputs[0]
+    assert (d.lower, d.upper) == (0.0, 1.0) and "truncated to the allowed range [0, 1] (0.62 %" in d.note
+    xs = np.array([sample_inputs(UncertaintySpec.from_dict(spec), 5, i)[0] for i in range(3000)])
+    assert xs.min() >= 0.0 and (xs < 0.005).any()
+    res = monte_carlo(data, spec, 4, seed=3, workers=1, progress=False, engine=ENGINE)
+    assert res.n_failed == 0 and "truncated to the allowed range" in res.report()
+
+
+def test_failed_samples_are_recorded_with_their_reason(data):
+    """An impulse ratio beyond mu_max is inadmissible: those samples fail with that reason, are
+    kept out of the figures, and the report tallies them; the run goes on."""
+    from crashsim import solve_impact
+    from crashsim.scenario import scenario_from_dict
+
+    ratio = dict(data, impact=dict(data["impact"], tangential="ratio", mu=-0.1))
+    ratio["impact"].pop("friction")
+    no_slide = dict(data, impact={k: v for k, v in data["impact"].items() if k != "friction"} | {"tangential": "no_slide"})
+    mu_max = solve_impact(scenario_from_dict(no_slide).impact).mu_max
+    spec = {"inputs": [{"path": "impact.mu", "distribution": "uniform", "lower": "-1.2", "upper": "0.0"}]}
+    res = monte_carlo(ratio, spec, 8, seed=3, workers=1, progress=False, engine=ENGINE)
+    bad = res.inputs[:, 0] < mu_max
+    assert -1.2 < mu_max < 0 and bad.any() and (~bad).any()
+    assert res.n_failed == int(bad.sum())
+    assert res.failure_reasons == {"inadmissible impact: impulse ratio beyond mu_max (sliding reverses)": int(bad.sum())}
+    assert all("exceeds mu_max" in m for _, m in res.errors)
+    assert np.isnan(res.outputs["delta_v.carA"][bad]).all() and np.isfinite(res.outputs["delta_v.carA"][~bad]).all()
+    text = res.report()
+    assert f"{int(bad.sum()):6d}  inadmissible impact: impulse ratio beyond mu_max" in text
+    assert res.to_dict()["failure_reasons"] == res.failure_reasons
+
+
+def test_a_sample_over_its_time_limit_fails_with_that_reason_and_the_run_goes_on(data):
+    res = monte_carlo(data, SPEC, 3, workers=1, progress=False, engine="scipy", sample_time_limit=1e-9)
+    assert res.n_failed == 3 and res.failure_reasons == {"run-out: wall_time_limit": 3}
+    assert all("max_wall_time = 1e-09 s of computing time used up" in m for _, m in res.errors)
 
 
 def test_dask_cluster_equals_local(data):

@@ -57,23 +57,29 @@ def test_bbox_bound_is_a_lower_bound():
         assert _bbox_lower_bound(pts, line.min(0), line.max(0)) <= exact + 1e-12
 
 
-def test_tensile_normal_impulse_is_warned():
+def test_tensile_normal_impulse_is_refused():
     """A sideswipe (0.5 m/s into a wall, 10 m/s along it, contact at the rear-left corner) with
-    no sliding at separation needs a pulling normal impulse (found by the property tests): the
-    result must say so instead of passing it silently; the front-corner case is compressive."""
+    no sliding at separation needs a pulling normal impulse (found by the property tests): it is
+    refused, naming the tangential law; with the check off the result warns; the front-corner
+    case is compressive and passes."""
     from crashsim import Body, BodyState, CrushSurface, ImpactProblem, TangentialLaw, Vehicle, solve_impact
+    from crashsim.errors import InadmissibleImpactError
 
     car = Vehicle("A", (Body("car", 1500.0, 2800.0),))
     wall = Vehicle("W", (Body("wall", math.inf, math.inf),))
 
-    def solve(cx):
+    def solve(cx, check=True):
         st = {"car": BodyState((0.0, 0.0), 0.0, (10.0, 0.5)), "wall": BodyState((cx, 0.9), 0.0, (0.0, 0.0))}
         return solve_impact(ImpactProblem((car, wall), st, "car", "wall",
-                                          CrushSurface((cx, 0.9), -math.pi / 2, 0.0, TangentialLaw("no_slide"), -1.0, 1)))
+                                          CrushSurface((cx, 0.9), -math.pi / 2, 0.0, TangentialLaw("no_slide"), -1.0, 1)),
+                            check=check)
 
-    rear, front = solve(-2.0), solve(2.0)
+    with pytest.raises(InadmissibleImpactError, match="tensile") as err:
+        solve(-2.0)
+    assert err.value.field == "impact.tangential" and err.value.reason == "tensile normal impulse"
+    rear, front = solve(-2.0, check=False), solve(2.0)
     assert rear.normal_impulse < 0 and any("tensile" in w for w in rear.warnings)
-    assert front.normal_impulse > 0 and not any("tensile" in w for w in front.warnings)
+    assert front.normal_impulse > 0 and not front.warnings
     assert rear.to_dict()["warnings"] == list(rear.warnings)
 
 

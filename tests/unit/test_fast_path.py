@@ -203,7 +203,7 @@ def test_statuses_time_limit_max_segments_and_rest_at_start():
     assert res.message.split("(")[0] == ref.message.split("(")[0]
     wheels = WheelSettings(default=WheelSetting("locked"), schedule=[ScheduledChange(0.2, "car", {"state": "jammed"})])
     res = simulate_runout(car(), start, wheels, Road(0.7), dataclasses.replace(COMPILED, max_segments=1))
-    assert res.status == "solver_failure" and "max_segments" in res.message
+    assert res.status == "event_limit" and "max_segments" in res.message
     still = simulate_runout(car(), {"car": BodyState((1.0, 2.0), 0.5, (0.0, 0.0))}, None, Road(0.7), COMPILED)
     assert still.status == "rest" and still.n_segments == 0 and still.t_end == 0.0
     assert still.bodies["car"].rest_position == (1.0, 2.0)

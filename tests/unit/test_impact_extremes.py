@@ -179,10 +179,12 @@ def test_barrier_keeps_its_velocity_and_takes_the_crush_impulse():
 @pytest.mark.parametrize("ep", [-1.0, 0.0])
 def test_mass_ratios_conserve_momentum(ratio, law, ep):
     """Car mass = ratio x truck mass (15500 kg), inertia scaled alike: momentum and angular
-    momentum are conserved, the pins move together and Eq. 5 holds over 12 decades."""
+    momentum are conserved, the pins move together and Eq. 5 holds over 12 decades.  The laws
+    hold for any input the equations accept, so the admissibility check is off: mu = 0.2 has
+    the sign opposite to mu_max here (an inadmissible impact, refused by default)."""
     m = ratio * 15500.0
     p = side_impact(m, m * 2800.0 / 1500.0, law=law, ep=ep)
-    r = solve_impact(p)
+    r = solve_impact(p, check=False)
     assert_finite(r)
     assert_momentum_conserved(p, r)
     assert_pins_move_together(p, r)

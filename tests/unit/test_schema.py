@@ -285,13 +285,15 @@ def test_out_of_range_plain_number():
     assert only(data) == "impact.restitution: 1.5 is out of range; allowed [0, 1]"
 
 
-def test_out_of_range_quantity_shows_the_si_value_and_unit():
+def test_out_of_range_quantity_shows_the_range_in_the_users_unit_and_in_si():
     data = good()
     data["vehicles"]["A"]["bodies"]["tractor"]["mass"] = "-5 lbf"
     assert only(data) == (
-        'vehicles.A.bodies.tractor.mass: "-5 lbf" (= -2.26796185 kg) is out of range; '
-        "allowed (0, inf) kg"
+        'vehicles.A.bodies.tractor.mass: "-5 lbf" is out of range; allowed (0, inf) lbf ((0, inf) kg)'
     )
+    data["vehicles"]["A"]["bodies"]["tractor"]["mass"] = "-5 g"  # an SI unit other than the display one
+    assert only(data) == 'vehicles.A.bodies.tractor.mass: "-5 g" is out of range; allowed (0, inf) g ((0, inf) kg)'
+
 
 
 def test_exclusive_minimum_rejects_the_bound_itself():

@@ -13,6 +13,13 @@ from .core import energy_loss_fraction
 __all__ = ["ImpactResult", "BodyImpact", "HitchImpulse", "ConstraintImpulse", "clock_direction", "pdof_from_force"]
 
 
+def _row(A, i: int):
+    """Batch item ``i`` of ImpactArrays as a batch of one."""
+    from dataclasses import fields, replace
+
+    return replace(A, **{f.name: getattr(A, f.name)[i : i + 1] for f in fields(A)})
+
+
 def clock_direction(pdof: float) -> int:
     """Clock direction of a principal direction of force [rad] (0 -> 12 o'clock, +90 deg -> 3)."""
     h = int(round(math.degrees(pdof) / 30.0)) % 12
@@ -174,9 +181,10 @@ class ImpactResult:
     success: bool = True
     message: str = "solved"
     warnings: tuple[str, ...] = ()
+    work: dict = field(default_factory=dict)
 
     @classmethod
-    def from_arrays(cls, problem, S, A, out, i: int) -> "ImpactResult":
+    def from_arrays(cls, problem, S, A, out, i: int, work: dict | None = None) -> "ImpactResult":
         P = out["normal_impulse"][i] * out["normal"][i] + out["tangential_impulse"][i] * out["tangent"][i]
         bodies = {}
         vnames = S.vehicle_names
@@ -223,17 +231,18 @@ class ImpactResult:
         e1 = float(out["ke_after"][i].sum())
         ke["system"] = {"before": e0, "after": e1}
         loss["system"] = float(energy_loss_fraction(e0, e1))
+        from .admissible import REASONS, admissibility, impulse_work
+
+        if work is None:
+            work = impulse_work(S, A, out)
+        sl = slice(i, i + 1)
+        one = {k: v[sl] for k, v in out.items() if isinstance(v, np.ndarray) and v.ndim and v.shape[0] == out["ok"].shape[0]}
+        ok, reason = admissibility(S, _row(A, i), one, {k: v[sl] for k, v in work.items()})
         warn = []
-        pn = float(out["normal_impulse"][i])
-        if pn < 0:
-            warn.append(f"the normal crush impulse is tensile (P_n = {pn:.4g} N s < 0): the bodies would pull on "
-                        f"each other; the {S.tangential} law cannot hold here (e.g. no sliding at separation in a "
-                        "sideswipe): use a smaller impulse ratio or the friction law")
-        has_ext = bool(S.external_bodies) or bool(S.constraint_bodies)
-        if not has_ext and loss["system"] < -1e-9:
-            warn.append(f"the system gains kinetic energy ({-100 * loss['system']:.2f} %) without external "
-                        "impulses: check e, e' and the tangential law (Brach's model allows this outside "
-                        "0 <= e <= 1 with friction below mu_max)")
+        if not ok[0] and reason[0] != 5:
+            warn.append(f"inadmissible impact ({REASONS[int(reason[0])]}): solved with the admissibility check "
+                        "switched off; no collision produces these coefficients for this geometry")
+        work_i = {k: float(v[i]) for k, v in work.items()}
         return cls(
             body1=S.body_names[S.body1], body2=S.body_names[S.body2],
             normal=out["normal"][i].copy(), tangent=out["tangent"][i].copy(), point=A.point[i].copy(),
@@ -250,7 +259,28 @@ class ImpactResult:
             kinetic_energy=ke, energy_loss=loss,
             condition_number=float(out["condition"][i]) if "condition" in out else float("nan"),
             warnings=tuple(warn),
+            work=work_i,
         )
+
+    @property
+    def energy_loss_normal(self) -> float:
+        """Energy lost at the crush surface by the normal impulse, ``-P_n (u_n^- + u_n^+)/2`` [J]."""
+        return -self.work.get("normal", math.nan)
+
+    @property
+    def energy_loss_tangential(self) -> float:
+        """Energy lost at the crush surface by the tangential impulse, ``-P_t (u_t^- + u_t^+)/2`` [J]."""
+        return -self.work.get("tangential", math.nan)
+
+    @property
+    def energy_loss_moment(self) -> float:
+        """Energy lost by the moment impulse, ``-M (Omega^- + Omega^+)/2`` [J] (0 when e' = -1)."""
+        return -self.work.get("moment", math.nan)
+
+    @property
+    def energy_loss_crush(self) -> float:
+        """Energy lost at the crush surface [J]: normal + tangential + moment parts."""
+        return self.energy_loss_normal + self.energy_loss_tangential + self.energy_loss_moment
 
     @property
     def crush_impulse(self) -> np.ndarray:
@@ -291,6 +321,12 @@ class ImpactResult:
                                       "point": [float(v) for v in x["point"]]} for n, x in self.external.items()},
             "kinetic_energy": self.kinetic_energy,
             "energy_loss": self.energy_loss,
+            "energy_loss_normal": self.energy_loss_normal,
+            "energy_loss_tangential": self.energy_loss_tangential,
+            "energy_loss_moment": self.energy_loss_moment,
+            "energy_loss_crush": self.energy_loss_crush,
+            "work_external": self.work.get("external", 0.0),
+            "work_constraints": self.work.get("constraints", 0.0),
             "condition_number": self.condition_number,
             "warnings": list(self.warnings),
         }

@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import IllConditionedError, ScenarioError
+from .admissible import check_admissible, impulse_work
 from .core import COND_LIMIT, ImpactArrays, ImpactStructure, energy_loss_fraction, solve_arrays
 from .model import ImpactProblem
 from .result import ImpactResult
@@ -89,12 +90,17 @@ def _dependent_rows(Ms: np.ndarray, labels: tuple[str, ...]) -> tuple[str, ...]:
     return tuple(lbl for lbl, w in zip(labels, left) if w > 1e-3)
 
 
-def solve_impact(problem: ImpactProblem) -> ImpactResult:
+def solve_impact(problem: ImpactProblem, *, check: bool = True) -> ImpactResult:
     """Solve one impact of articulated vehicles (paper Eqs. 1-8).
 
     Parameters
     ----------
     problem : ImpactProblem
+    check : bool
+        Refuse an inadmissible impact (default): a tensile normal impulse, an impulse ratio
+        beyond mu_max or against the sliding, or energy created at the crush surface
+        (:mod:`crashsim.impact.admissible`).  ``check=False`` returns the equations' answer
+        anyway (for studies of the model itself), with a warning in ``result.warnings``.
 
     Returns
     -------
@@ -104,6 +110,9 @@ def solve_impact(problem: ImpactProblem) -> ImpactResult:
     ------
     ScenarioError
         The bodies are not approaching at the contact point.
+    InadmissibleImpactError
+        (a ScenarioError) The coefficients cannot happen for this geometry; the message names
+        the coefficient, its value and its admissible range here.
     IllConditionedError
         The equations are singular (conflicting or redundant constraints) or their
         condition number exceeds ``CONDITION_LIMIT``; the message names the equations involved.
@@ -127,7 +136,10 @@ def solve_impact(problem: ImpactProblem) -> ImpactResult:
             condition_number=cond,
             dependent=dep,
         )
-    return ImpactResult.from_arrays(problem, S, A, out, 0)
+    work = impulse_work(S, A, out)
+    if check:
+        check_admissible(S, A, out, work=work)
+    return ImpactResult.from_arrays(problem, S, A, out, 0, work=work)
 
 
 @dataclass

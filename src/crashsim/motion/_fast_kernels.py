@@ -32,12 +32,14 @@ source the SciPy engine runs on arrays) is compiled for scalars through the over
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
-from numba import njit, types
+from numba import njit, objmode, types
 from numba.extending import overload
 
 from . import tyres
+from .options import MAX_STILL_SEGMENTS, STOP_HYSTERESIS  # the same constants as the SciPy engine
 
 # ----------------------------------------------------------------------------- the shared tyre law
 # The tyre module is written with NumPy ufuncs and tyres._select (np.where).  For scalars
@@ -90,8 +92,8 @@ _INLINE = dict(_HOT, inline="always")
 C_EPS, C_ALPHA2, C_BETA2, C_TAU, C_VSTOP, C_RTOL, C_ATOL, C_MAXSTEP, C_FIRST, C_TMAX, C_SDT, C_ROADMU = range(12)
 N_CFG = 12
 # icfg (int options)
-I_FIALA, I_LT, I_MAXSEG, I_ORDER, I_NSTAGES = range(5)
-N_ICFG = 5
+I_FIALA, I_LT, I_MAXSEG, I_ORDER, I_NSTAGES, I_MAXEVAL = range(6)
+N_ICFG = 6
 # phase_w columns (per phase and wheel)
 P_MUF, P_BRAKE, P_FROLL, P_CFIX, P_CCOEF, P_CD, P_SD, P_LOCKED = range(8)
 N_P = 8
@@ -107,7 +109,10 @@ EV_REST, EV_ZONE, EV_STOP, EV_RELEASE = range(4)
 # log record kinds
 LOG_ZONE_ENTER, LOG_ZONE_EXIT, LOG_SCHEDULE, LOG_STOP_CLOSED, LOG_STOP_IMPACT, LOG_STOP_OPEN = range(6)
 # run status
-ST_REST, ST_TIME_LIMIT, ST_MAX_SEGMENTS, ST_STEP_TOO_SMALL, ST_NONFINITE = range(5)
+ST_REST, ST_TIME_LIMIT, ST_MAX_SEGMENTS, ST_STEP_TOO_SMALL, ST_NONFINITE, ST_MAX_EVAL, ST_WALL_TIME, ST_NO_PROGRESS = range(8)
+
+# The wall clock is read every this many solver steps.
+WALL_CHECK_STEPS = 256
 
 # zone-crossing tolerances: identical to crashsim.motion.simulate
 ZONE_TOL = 1e-9
@@ -673,7 +678,7 @@ def _rms_scaled(a, y0, y1, use_both, rtol, atol):
 
 
 # evaluate() compiled into rk_step itself (one call site: the stage loop)
-_evaluate_inline = njit(**_INLINE)(evaluate.py_func)
+_evaluate_inline = njit(**_INLINE)(getattr(evaluate, "py_func", evaluate))  # plain function under NUMBA_DISABLE_JIT
 
 
 @njit(**_HOT)
@@ -833,8 +838,22 @@ def make_work(M):
     )
 
 
+@njit(**_HOT)
+def _left_stop_shift(y, nb, j, offset, lim, shift):
+    """Raised threshold of the stop of hitch ``j`` when it is left: past where it was left, plus STOP_HYSTERESIS."""
+    excess = abs(y[2 * nb + j] - y[2 * nb + j + 1] - offset) - lim
+    return max(shift, excess) + STOP_HYSTERESIS
+
+
+@njit(cache=True)  # object-mode block: no nogil
+def _wall_clock():
+    with objmode(now="float64"):
+        now = time.perf_counter()
+    return now
+
+
 @njit(**_JIT)
-def run(y0, M, stops, gl_x, gl_w):
+def run(y0, M, stops, gl_x, gl_w, deadline):
     """Integrate one vehicle's run-out to rest: the segment loop of :func:`crashsim.motion.simulate._integrate`.
 
     Parameters
@@ -844,6 +863,12 @@ def run(y0, M, stops, gl_x, gl_w):
     stops : sorted segment end times [s] (scheduled changes before t_max, then t_max)
     gl_x, gl_w : Gauss-Legendre nodes and weights on [-1, 1] (path integrals over the part of
         a step cut short by an event)
+    deadline : ``time.perf_counter()`` value after which the run stops (``ST_WALL_TIME``)
+
+    Bounds (each ends the run with its own status): ``max_segments`` segments (every restart
+    counts, also one that ends where it starts), ``MAX_STILL_SEGMENTS`` consecutive segments
+    without progress in time, ``max_evaluations`` right-hand-side evaluations (which also
+    bounds the stored steps, so the memory), and the wall-clock ``deadline``.
 
     Returns
     -------
@@ -873,6 +898,7 @@ def run(y0, M, stops, gl_x, gl_w):
     order = icfg[I_ORDER]
     err_exp = -1.0 / (order + 1)
     max_segments = icfg[I_MAXSEG]
+    max_eval = icfg[I_MAXEVAL]
 
     W = make_work(M)
     sw = np.zeros((nw, N_S))
@@ -939,14 +965,21 @@ def run(y0, M, stops, gl_x, gl_w):
         consistent_accelerations(y, M, sw, lk_j, lk_th, nlk, dydt, W)
     y_initial = y.copy()
     status = -1
+    shift = np.zeros(max(nh, 1))  # raised stop thresholds (STOP_HYSTERESIS)
+    n_restarts = 0
+    n_still = 0
 
     while True:
         if rest_measure(y, M) <= v_stop:
             status = ST_REST
             break
-        if n_seg >= max_segments:
+        if n_restarts >= max_segments:
             status = ST_MAX_SEGMENTS
             break
+        if n_still >= MAX_STILL_SEGMENTS:
+            status = ST_NO_PROGRESS
+            break
+        n_restarts += 1
         t_stop = t_max
         for s_ in stops:
             if s_ > t:
@@ -974,12 +1007,12 @@ def run(y0, M, stops, gl_x, gl_w):
                 continue
             ev_kind[n_ev] = EV_STOP
             ev_idx[n_ev] = j
-            ev_val[n_ev] = offsets[j] + lim
+            ev_val[n_ev] = offsets[j] + lim + shift[j]
             ev_dir[n_ev] = 1.0
             n_ev += 1
             ev_kind[n_ev] = EV_STOP
             ev_idx[n_ev] = j
-            ev_val[n_ev] = offsets[j] - lim
+            ev_val[n_ev] = offsets[j] - lim - shift[j]
             ev_dir[n_ev] = -1.0
             n_ev += 1
         for q in range(nlk):
@@ -1017,6 +1050,9 @@ def run(y0, M, stops, gl_x, gl_w):
                 if h_abs < min_step:
                     seg_status = -ST_STEP_TOO_SMALL
                     break
+                if nfev >= max_eval:
+                    seg_status = -ST_MAX_EVAL
+                    break
                 t_new = t + h_abs
                 if t_new - t_stop > 0:
                     t_new = t_stop
@@ -1046,6 +1082,9 @@ def run(y0, M, stops, gl_x, gl_w):
                     h_abs *= max(MIN_FACTOR, SAFETY * err_norm**err_exp)
                     rejected = True
             if seg_status < 0:
+                break
+            if n_steps % WALL_CHECK_STEPS == 0 and _wall_clock() > deadline:
+                seg_status = -ST_WALL_TIME
                 break
             # ---- store the step (start time, size, start state, dense output Q = K^T P)
             if n_steps == st_t.shape[0]:
@@ -1146,8 +1185,10 @@ def run(y0, M, stops, gl_x, gl_w):
                 sg_lkj[n_seg, q] = lk_j[q]
                 sg_lkth[n_seg, q] = lk_th[q]
             n_seg += 1
+            n_still = 0
         else:
             n_steps = seg_first_step
+            n_still += 1
         if seg_status < 0:
             status = -seg_status
             break
@@ -1192,6 +1233,7 @@ def run(y0, M, stops, gl_x, gl_w):
                     nlk += 1
                 else:
                     lg_kind[lg_n] = LOG_STOP_IMPACT
+                    shift[j] = _left_stop_shift(y, nb, j, offsets[j], lim, shift[j])
                 lg_n += 1
             elif kind == EV_RELEASE:
                 q0 = ev_idx[fired]
@@ -1199,6 +1241,8 @@ def run(y0, M, stops, gl_x, gl_w):
                 lg_kind[lg_n] = LOG_STOP_OPEN
                 lg_i[lg_n] = lk_j[q0]
                 lg_n += 1
+                jq = lk_j[q0]
+                shift[jq] = _left_stop_shift(y, nb, jq, offsets[jq], hitch[jq, 4], shift[jq])
                 for q in range(q0, nlk - 1):
                     lk_j[q] = lk_j[q + 1]
                     lk_th[q] = lk_th[q + 1]

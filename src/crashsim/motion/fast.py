@@ -109,7 +109,7 @@ from .layout import StateLayout
 from .loads import StaticLoads, load_transfer_matrix, static_loads
 from .options import RunoutOptions
 from .postprocess import _GL_NODES, _GL_WEIGHTS, build_result
-from .result import RunoutEvent, RunoutResult
+from .result import RunoutEvent, RunoutResult, limit_message
 from .road import Road
 from .wheels import ResolvedWheels, WheelSettings
 
@@ -249,6 +249,7 @@ def _option_arrays(options: RunoutOptions, road: Road):
     icfg[k.I_FIALA] = 1 if options.lateral_model == "fiala" else 0
     icfg[k.I_LT] = 1 if options.load_transfer else 0
     icfg[k.I_MAXSEG] = int(options.max_segments)
+    icfg[k.I_MAXEVAL] = int(options.max_evaluations)
     icfg[k.I_ORDER] = scheme.error_estimator_order
     icfg[k.I_NSTAGES] = scheme.n_stages
     tab = (
@@ -383,7 +384,8 @@ def compile_report() -> dict:
 
 
 # ----------------------------------------------------------------------------- the engine
-_STATUS = {0: "rest", 1: "time_limit", 2: "solver_failure", 3: "solver_failure", 4: "solver_failure"}
+_STATUS = {0: "rest", 1: "time_limit", 2: "event_limit", 3: "solver_failure", 4: "solver_failure",
+           5: "evaluation_limit", 6: "wall_time_limit", 7: "event_limit"}
 
 
 @dataclass(eq=False)
@@ -460,20 +462,19 @@ def simulate_runout_compiled(
 
     (status_code, t_end, y_end, y_initial, nfev, n_steps, n_seg, quad, ke0, ke1, st_t, st_h, st_y, st_q,
      sg_t, sg_s, sg_phase, sg_memb, sg_nlk, sg_lkj, sg_lkth,
-     lg_n, lg_t, lg_kind, lg_i, lg_j, lg_x, lg_e) = k.run(y0, M, stops, _GL_NODES, _GL_WEIGHTS)
+     lg_n, lg_t, lg_kind, lg_i, lg_j, lg_x, lg_e) = k.run(y0, M, stops, _GL_NODES, _GL_WEIGHTS,
+                                                          time.perf_counter() + options.max_wall_time)
     (T, Y, P, SL, LD, LAMH, STOPM, max_gap, miss_t, miss_k) = k.postprocess(
         M, t_end, y_end, st_t, st_h, st_y, st_q, sg_t, sg_s, sg_phase, sg_memb, sg_nlk, sg_lkj, sg_lkth,
         options.sample_dt, True,
     )
     nb, nw = len(vehicle.bodies), len(pack.specs)
     status = _STATUS[int(status_code)]
-    message = _message(int(status_code), options, t_end, y_end, k, M)
     events = _events(pack, road, lg_t, lg_kind, lg_i, lg_j, lg_x, lg_e, k)
+    message = _message(int(status_code), options, t_end, y_end, k, M, events)
     events.append(RunoutEvent(float(t_end), status, message))
-    if status == "time_limit":
-        _log.warning("run-out of %s stopped at the time limit: %s", vehicle.name, message)
-    elif status == "solver_failure":
-        _log.warning("run-out of %s failed: %s", vehicle.name, message)
+    if status != "rest":
+        _log.warning("run-out of %s did not reach rest (%s): %s", vehicle.name, status, message)
     _log.debug("run-out of %s: %s after %d segments, nfev=%d (compiled)", vehicle.name, status, n_seg, nfev)
     view = _ModelView(vehicle, layout, pack.specs, pack.static_load, pack.loads, pack.mass, pack.inertia,
                       _options_dict(options))
@@ -543,16 +544,19 @@ def _check_hitches(vehicle, initial, road, options, pack, y0):
         )
 
 
-def _message(code, options, t_end, y_end, k, M) -> str:
+def _message(code, options, t_end, y_end, k, M, events) -> str:
     if code == k.ST_REST:
         return f"all bodies below v_stop = {options.v_stop} m/s at t = {t_end:.4f} s"
     if code == k.ST_TIME_LIMIT:
-        return (
-            f"t_max = {options.t_max} s reached before rest (max speed measure "
-            f"{k.rest_measure(y_end, M):.4g} m/s > v_stop = {options.v_stop} m/s)"
-        )
+        return limit_message("time_limit", options, t_end, k.rest_measure(y_end, M))
     if code == k.ST_MAX_SEGMENTS:
-        return f"more than max_segments = {options.max_segments} integration segments (event chattering?)"
+        return limit_message("event_limit", options, t_end, last_event=events[-1].detail if events else None)
+    if code == k.ST_NO_PROGRESS:
+        return limit_message("no_progress", options, t_end, last_event=events[-1].detail if events else None)
+    if code == k.ST_MAX_EVAL:
+        return limit_message("evaluation_limit", options, t_end)
+    if code == k.ST_WALL_TIME:
+        return limit_message("wall_time_limit", options, t_end)
     if code == k.ST_STEP_TOO_SMALL:
         return f"compiled/{options.scheme} failed at t = {t_end:.6g} s: required step size is less than spacing between numbers"
     return f"compiled/{options.scheme} failed at t = {t_end:.6g} s: non-finite state derivative"

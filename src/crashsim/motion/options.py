@@ -8,7 +8,17 @@ from dataclasses import asdict, dataclass
 from ..errors import ScenarioError
 from .tyres import LATERAL_MODELS
 
-__all__ = ["RunoutOptions", "METHODS", "ENGINES", "SCHEMES"]
+__all__ = ["RunoutOptions", "METHODS", "ENGINES", "SCHEMES", "STOP_HYSTERESIS", "MAX_STILL_SEGMENTS"]
+
+#: An articulation stop that is left (struck and left, or released) engages again only past its
+#: limit plus a threshold raised this much [rad] above where it was left: an articulation that
+#: rests on the limit when the stop opens cannot fire the stop event again at the same instant
+#: (the cause of an endless loop of stop impacts, fixed in both engines).  1e-7 rad is 0.5 um
+#: at a 5 m lever.
+STOP_HYSTERESIS = 1e-7
+#: Consecutive integration segments that end where they start before a run stops with status
+#: ``"event_limit"`` (event chattering), in both engines.
+MAX_STILL_SEGMENTS = 50
 
 #: solve_ivp methods accepted by :class:`RunoutOptions` (``engine="scipy"``).
 METHODS = ("RK45", "DOP853", "LSODA", "Radau", "BDF")
@@ -88,7 +98,18 @@ class RunoutOptions:
         Hitch-constraint stabilisation ``g'' + 2 zeta omega g' + omega^2 g = 0``; default
         10 /s and 1 (critical damping), note sec. 1.4.
     max_segments : int
-        Safety limit on restarts of the integration (events and scheduled changes).
+        Safety limit on restarts of the integration (events and scheduled changes; a restart
+        that ends where it started counts too).  Reaching it ends the run with status
+        ``"event_limit"``, as do 50 consecutive restarts without progress in time.
+    max_evaluations : int
+        Right-hand-side evaluations allowed per run-out, default 1 000 000 (a 120 s
+        free-rolling run-out needs well under 100 000).  Bounds the work and, in the compiled
+        engine, the memory of the stored steps.  Reaching it ends the run with status
+        ``"evaluation_limit"``.
+    max_wall_time : float
+        Wall-clock seconds allowed per run-out, default 120 (a run-out takes milliseconds
+        compiled, well under 10 s with SciPy).  Reaching it ends the run with status
+        ``"wall_time_limit"``; fits and Monte Carlo set it per sample.
     engine : {"scipy", "compiled"}
         ``"scipy"`` (default): ``scipy.integrate.solve_ivp`` with ``method``
         (:mod:`crashsim.motion.simulate`).  ``"compiled"``: the same model, events and
@@ -118,6 +139,8 @@ class RunoutOptions:
     baumgarte_omega: float = 10.0
     baumgarte_zeta: float = 1.0
     max_segments: int = 10_000
+    max_evaluations: int = 1_000_000
+    max_wall_time: float = 120.0
     engine: str = "scipy"
     scheme: str = "dopri5"
 
@@ -152,6 +175,9 @@ class RunoutOptions:
         _in_range("baumgarte_zeta", self.baumgarte_zeta, 0.0, 100.0, lo_open=False)
         if int(self.max_segments) < 1:
             raise ScenarioError(f"must be >= 1, got {self.max_segments!r}", field="options.max_segments")
+        if int(self.max_evaluations) < 100:
+            raise ScenarioError(f"must be >= 100, got {self.max_evaluations!r}", field="options.max_evaluations")
+        _in_range("max_wall_time", self.max_wall_time, 0.0, 1e6)
         object.__setattr__(self, "load_transfer", bool(self.load_transfer))
 
     def to_dict(self) -> dict:

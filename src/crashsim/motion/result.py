@@ -25,10 +25,53 @@ __all__ = [
     "RunoutEvent",
     "RunoutResult",
     "STATUSES",
+    "STATUS_MEANING",
+    "limit_message",
 ]
 
-#: Why a run-out stopped.
-STATUSES = ("rest", "time_limit", "solver_failure")
+#: Why a run-out stopped: at rest, or which limit or failure ended it (only ``"rest"`` is a success).
+STATUSES = ("rest", "time_limit", "event_limit", "evaluation_limit", "wall_time_limit", "solver_failure")
+
+#: What each status means, for reports.
+STATUS_MEANING = {
+    "rest": "at rest",
+    "time_limit": "simulated time limit t_max reached while still moving",
+    "event_limit": "too many events or restarts (event chattering)",
+    "evaluation_limit": "work limit max_evaluations reached",
+    "wall_time_limit": "computing-time limit max_wall_time reached",
+    "solver_failure": "the integrator failed",
+}
+
+
+def limit_message(kind: str, options, t: float, speed: float | None = None, last_event: str | None = None) -> str:
+    """The message of a run-out ended by a limit, the same for every engine.
+
+    Parameters
+    ----------
+    kind : {"time_limit", "event_limit", "no_progress", "evaluation_limit", "wall_time_limit"}
+    options : RunoutOptions
+    t : float
+        Simulated time at which the run stopped [s].
+    speed : float, optional
+        Rest measure at that time [m/s] (time limit).
+    last_event : str, optional
+        Description of the last event (event limits).
+    """
+    where = f"stopped at t = {t:.4g} s (simulated) before rest: "
+    last = f"; last event: {last_event}" if last_event else ""
+    if kind == "time_limit":
+        return (f"t_max = {options.t_max} s reached before rest (max speed measure {speed:.4g} m/s > "
+                f"v_stop = {options.v_stop} m/s)")
+    if kind == "event_limit":
+        return where + f"more than max_segments = {options.max_segments} integration segments (event chattering){last}"
+    if kind == "no_progress":
+        return where + f"events repeat at the same instant without progress in time (event chattering){last}"
+    if kind == "evaluation_limit":
+        return where + (f"max_evaluations = {options.max_evaluations} right-hand-side evaluations used up "
+                        "(raise max_evaluations or loosen rtol)")
+    if kind == "wall_time_limit":
+        return where + f"max_wall_time = {options.max_wall_time:g} s of computing time used up"
+    raise ValueError(kind)
 
 
 def _jsonable(value: Any) -> Any:

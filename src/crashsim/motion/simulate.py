@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import logging
 import math
+import time
 from dataclasses import dataclass, field
 from typing import Callable, Iterable, Mapping
 
@@ -47,9 +48,9 @@ from scipy.integrate import solve_ivp
 from ..errors import ScenarioError, SolverError
 from ..vehicles import BodyState, Vehicle
 from .dynamics import RunoutModel, SegmentParams, check_pin_gaps, hitch_state, project_velocities
-from .options import RunoutOptions
+from .options import MAX_STILL_SEGMENTS, STOP_HYSTERESIS, RunoutOptions
 from .postprocess import assemble_result, gauss_legendre_chunks
-from .result import RunoutEvent, RunoutResult
+from .result import RunoutEvent, RunoutResult, limit_message
 from .road import Road
 from .wheels import WheelSettings
 
@@ -66,6 +67,8 @@ _ZONE_OVERSHOOT = 1e-10
 _PIN_VELOCITY_TOL = 1e-6
 # Initial pin gap accepted [m].
 _PIN_GAP_TOL = 1e-3
+# The wall clock is read every this many right-hand-side evaluations.
+_WALL_CHECK_EVALUATIONS = 256
 
 
 def check_hitch_consistency(model: RunoutModel, y: np.ndarray) -> None:
@@ -92,7 +95,8 @@ def check_hitch_consistency(model: RunoutModel, y: np.ndarray) -> None:
         theta = math.remainder(float(psi[j] - psi[j + 1]), 2 * math.pi)
         if abs(theta) > hitch.articulation_limit + 1e-9:
             raise ScenarioError(
-                f"initial articulation {theta:.4f} rad exceeds the limit +-{hitch.articulation_limit} rad",
+                f"initial articulation {math.degrees(theta):.2f} deg exceeds the limit "
+                f"+-{math.degrees(hitch.articulation_limit):.2f} deg (articulation_limit)",
                 field=f"initial[{names[j + 1]!r}].heading",
             )
 
@@ -199,7 +203,36 @@ class _PiecewiseSolution:
         return out[:, 0] if t_arr.ndim == 0 else out.reshape((self._y_end.size,) + t_arr.shape)
 
 
-def _segment_events(model: RunoutModel, seg: SegmentParams, offsets: np.ndarray) -> list[_Event]:
+class _Budget(Exception):
+    """Raised inside the right-hand side when a run-out exhausts a work limit (``kind``)."""
+
+    def __init__(self, kind: str):
+        self.kind = kind
+
+
+class _Meter:
+    """Counts right-hand-side evaluations over a whole run and watches the wall clock."""
+
+    def __init__(self, options: RunoutOptions):
+        self.max_evaluations = int(options.max_evaluations)
+        self.deadline = time.perf_counter() + options.max_wall_time
+        self.nfev = 0
+
+    def tick(self, k: int = 1) -> None:
+        self.nfev += k
+        if self.nfev >= self.max_evaluations:
+            raise _Budget("evaluation_limit")
+        if self.nfev % _WALL_CHECK_EVALUATIONS == 1 and time.perf_counter() > self.deadline:
+            raise _Budget("wall_time_limit")
+
+
+def _left_stop_shift(y: np.ndarray, layout, j: int, offset: float, limit: float, shift: float) -> float:
+    """Raised threshold of the stop of hitch ``j`` when it is left: past where it was left, plus STOP_HYSTERESIS."""
+    excess = abs(float(y[layout.psi][j] - y[layout.psi][j + 1]) - offset) - limit
+    return max(shift, excess) + STOP_HYSTERESIS
+
+
+def _segment_events(model: RunoutModel, seg: SegmentParams, offsets: np.ndarray, shifts: np.ndarray) -> list[_Event]:
     L = model.layout
     v_stop = model.options.v_stop
     events = [_Event(lambda t, y: model.rest_measure(y) - v_stop, -1.0, "rest")]
@@ -219,12 +252,13 @@ def _segment_events(model: RunoutModel, seg: SegmentParams, offsets: np.ndarray)
             continue
         psi = L.psi
         off = offsets[j]
-        # bind j, off and lim now (a closure would see the last hitch's values)
+        reach = lim + shifts[j]  # the stop fires past its limit plus the threshold raised when it was last left
+        # bind j, off and reach now (a closure would see the last hitch's values)
         events.append(
-            _Event(lambda t, y, j=j, off=off, lim=lim: y[psi][j] - y[psi][j + 1] - off - lim, 1.0, "stop", (j, 1.0))
+            _Event(lambda t, y, j=j, off=off, r=reach: y[psi][j] - y[psi][j + 1] - off - r, 1.0, "stop", (j, 1.0))
         )
         events.append(
-            _Event(lambda t, y, j=j, off=off, lim=lim: y[psi][j] - y[psi][j + 1] - off + lim, -1.0, "stop", (j, -1.0))
+            _Event(lambda t, y, j=j, off=off, r=reach: y[psi][j] - y[psi][j + 1] - off + r, -1.0, "stop", (j, -1.0))
         )
     nh = model.n_hitches
     for n, (j, theta_lock) in enumerate(seg.locks):
@@ -253,22 +287,36 @@ def _integrate(model: RunoutModel, y0: np.ndarray) -> tuple[_Run, float, np.ndar
     if L.accel is not None:
         y = model.consistent_accelerations(y, model.segment(t, membership, locks))
     y_initial = y.copy()
+    shifts = np.zeros(model.n_hitches)
+    meter = _Meter(o)
+    restarts = still = 0
+
+    def last_event():
+        return run.events[-1].detail if run.events else None
 
     while True:
         if model.rest_measure(y) <= o.v_stop:
             run.status, run.message = "rest", f"all bodies below v_stop = {o.v_stop} m/s at t = {t:.4f} s"
             break
-        if len(run.segments) >= o.max_segments:
-            run.status = "solver_failure"
-            run.message = f"more than max_segments = {o.max_segments} integration segments (event chattering?)"
+        if restarts >= o.max_segments:
+            run.status, run.message = "event_limit", limit_message("event_limit", o, t, last_event=last_event())
             break
+        if still >= MAX_STILL_SEGMENTS:
+            run.status, run.message = "event_limit", limit_message("no_progress", o, t, last_event=last_event())
+            break
+        restarts += 1
         t_stop = next(s for s in stops if s > t)
         seg = model.segment(t, membership, locks)
-        events = _segment_events(model, seg, offsets)
+        events = _segment_events(model, seg, offsets, shifts)
         first = None if o.first_step is None else min(o.first_step, t_stop - t)
+
+        def rhs(tt, yy, seg=seg):
+            meter.tick(1 if yy.ndim == 1 else yy.shape[1])
+            return model.rhs(tt, yy, seg)
+
         try:
             sol = solve_ivp(
-                lambda tt, yy: model.rhs(tt, yy, seg),
+                rhs,
                 (t, t_stop),
                 y,
                 method=o.method,
@@ -283,12 +331,18 @@ def _integrate(model: RunoutModel, y0: np.ndarray) -> tuple[_Run, float, np.ndar
         except SolverError as err:
             run.status, run.message = "solver_failure", f"{o.method}: {err} (integration stopped at segment start t = {t:.6g} s)"
             break
+        except _Budget as limit:
+            # the segment is lost up to the limit; the run ends at its start (both limits are failures)
+            run.status, run.message = limit.kind, limit_message(limit.kind, o, t)
+            run.nfev = meter.nfev
+            break
         run.nfev += int(sol.nfev)
         run.njev += int(sol.njev)
         run.nlu += int(sol.nlu)
         t_new = float(sol.t[-1])
         if sol.sol is not None and t_new > t:
             run.segments.append((t, t_new, sol.sol, seg))
+        still = 0 if t_new > t else still + 1
         y = sol.y[:, -1].copy()
         if sol.status == -1:
             run.status, run.message = "solver_failure", f"solve_ivp ({o.method}) failed at t = {t_new:.6g} s: {sol.message}"
@@ -303,17 +357,19 @@ def _integrate(model: RunoutModel, y0: np.ndarray) -> tuple[_Run, float, np.ndar
                 break
             if ev.kind == "stop":
                 locks = _close_stop(model, run, y, t, ev.index, locks, membership, offsets)
+                j = ev.index[0]
+                if all(jl != j for jl, _ in locks):  # struck and left
+                    lim = model.vehicle.hitches[j].articulation_limit
+                    shifts[j] = _left_stop_shift(y, L, j, offsets[j], lim, shifts[j])
             elif ev.kind == "release":
                 n, j = ev.index
                 run.events.append(RunoutEvent(t, "stop_open", f"articulation stop of hitch {j} opens"))
                 locks = [lk for i, lk in enumerate(locks) if i != n]
+                lim = model.vehicle.hitches[j].articulation_limit
+                shifts[j] = _left_stop_shift(y, L, j, offsets[j], lim, shifts[j])
         else:
             if t >= o.t_max:
-                run.status = "time_limit"
-                run.message = (
-                    f"t_max = {o.t_max} s reached before rest (max speed measure "
-                    f"{model.rest_measure(y):.4g} m/s > v_stop = {o.v_stop} m/s)"
-                )
+                run.status, run.message = "time_limit", limit_message("time_limit", o, t, model.rest_measure(y))
                 break
             run.events.append(RunoutEvent(t, "schedule", "wheel settings change"))
         new_membership = zone_membership(model, y)
@@ -435,10 +491,8 @@ def simulate_runout(
     check_hitch_consistency(model, y0)
 
     run, t_end, y_end, y_initial = _integrate(model, y0)
-    if run.status == "time_limit":
-        _log.warning("run-out of %s stopped at the time limit: %s", vehicle.name, run.message)
-    elif run.status == "solver_failure":
-        _log.warning("run-out of %s failed: %s", vehicle.name, run.message)
+    if run.status != "rest":
+        _log.warning("run-out of %s did not reach rest (%s): %s", vehicle.name, run.status, run.message)
 
     sol = _PiecewiseSolution(run.segments, y_end, t_end)
     samples = _sample_chunks(run, options.sample_dt, t_end, y_end)

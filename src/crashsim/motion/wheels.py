@@ -116,7 +116,8 @@ class WheelSetting:
         object.__setattr__(self, "brake", brake)
         steer = float(self.steer)
         if not (math.isfinite(steer) and abs(steer) <= math.pi / 2):
-            raise ScenarioError(f"must lie in [-pi/2, pi/2] rad, got {self.steer!r}", field="steer")
+            shown = f"{math.degrees(steer):.4g} deg" if math.isfinite(steer) else repr(self.steer)
+            raise ScenarioError(f"must lie in [-90, 90] deg, got {shown}", field="steer")
         object.__setattr__(self, "steer", steer)
         for name in ("cornering_stiffness", "cornering_coefficient"):
             value = getattr(self, name)

@@ -244,10 +244,12 @@ def evaluate_evidence(evidence: Evidence, impact, runout: dict | None, contact_p
     checks: list[Check] = []
     bodies = {}
     tracks = {}
+    stopped = {}
     if runout is not None:
         for r in runout.values():
             bodies.update(r.bodies)
             tracks.update(r.wheels)
+            stopped.update({name: r.status for name in r.bodies})
     if evidence.impact_point is not None:
         ev = evidence.impact_point
         d = float(np.hypot(*(np.asarray(contact_point) - np.asarray(ev.position))))
@@ -262,14 +264,17 @@ def evaluate_evidence(evidence: Evidence, impact, runout: dict | None, contact_p
             continue
         d = float(np.hypot(*(np.asarray(b.rest_position) - np.asarray(ev.position))))
         at_rest = b.time_to_rest is not None
+        extra = {} if at_rest else {"reason": f"not at rest: the run-out stopped ({stopped.get(ev.body, 'unknown')}) "
+                                              "with the body still moving"}
         checks.append(Check("rest", name, d, ev.tolerance, d <= ev.tolerance and at_rest, "length",
                             {"computed": [float(v) for v in b.rest_position], "measured": list(ev.position),
-                             "at_rest": at_rest}))
+                             "at_rest": at_rest, **extra}))
         if ev.heading is not None:
             err = float(wrap_angle(b.rest_heading - ev.heading))
             checks.append(Check("rest heading", f"{name} (heading)", err, ev.heading_tolerance,
-                                abs(err) <= ev.heading_tolerance, "angle",
-                                {"computed": float(wrap_angle(b.rest_heading)), "measured": ev.heading}))
+                                abs(err) <= ev.heading_tolerance and at_rest, "angle",
+                                {"computed": float(wrap_angle(b.rest_heading)), "measured": ev.heading,
+                                 "at_rest": at_rest, **extra}))
     for i, ev in enumerate(evidence.marks):
         checks.append(_check_mark(ev, tracks, i))
     for i, ev in enumerate(evidence.delta_v):

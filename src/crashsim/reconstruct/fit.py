@@ -57,7 +57,7 @@ from typing import Any, Callable
 import numpy as np
 
 
-from ..errors import ScenarioError, SolverError
+from ..errors import ScenarioError, SolverError, failure_reason
 from ..geometry import wrap_angle
 from .evidence import signed_distance_to_polyline
 from .overrides import ScenarioOverrides, default_engine, parse_value
@@ -107,6 +107,16 @@ class Unknown:
         return self.upper - self.lower
 
 
+def _check_bounds_allowed(target, lo: float, hi: float, raw: dict, key: str, file: str | None) -> None:
+    """The bounds of an unknown must lie in the allowed range of its input (every evaluation is then valid)."""
+    from ..schema import _in_range, _interval
+
+    for which, x in (("lower", lo), ("upper", hi)):
+        if not _in_range(x, target.field):
+            raise ScenarioError(f"{which} = {raw[which]!r} lies outside the allowed range of {target.path}, "
+                                f"{_interval(target.field)}", field=f"{key}.{which}", file=file)
+
+
 @dataclass(frozen=True)
 class FitSpec:
     """A validated ``[fit]`` table: unknowns (SI) and options.
@@ -150,6 +160,7 @@ class FitSpec:
             if not lo < hi:
                 raise ScenarioError(f"lower {u['lower']!r} must be below upper {u['upper']!r}", field=f"{key}.upper",
                                     file=file)
+            _check_bounds_allowed(t, lo, hi, u, key, file)
             if u["initial"] is not None:
                 x0 = parse_value(u["initial"], t, field=f"{key}.initial")
                 if not lo <= x0 <= hi:
@@ -362,6 +373,14 @@ class EvidenceModel:
 # The problem: unknowns (scaled to [0, 1]) -> weighted residuals
 # ---------------------------------------------------------------------------------------------
 
+class _NotAtRest(Exception):
+    """A scene evaluation whose run-out a limit ended (a failed evaluation of the fit)."""
+
+    def __init__(self, status: str, message: str):
+        self.status = status
+        super().__init__(message)
+
+
 class FitProblem:
     """Unknowns scaled to ``z`` in [0, 1] (``x = lower + z * (upper - lower)``) -> weighted residuals.
 
@@ -369,12 +388,13 @@ class FitProblem:
     same point). Not thread-safe; each worker process builds its own.
     """
 
-    def __init__(self, data: dict, spec: FitSpec, *, engine: str | None = None, file: str | None = None):
+    def __init__(self, data: dict, spec: FitSpec, *, engine: str | None = None, file: str | None = None,
+                 sample_time_limit: float | None = None):
         self.spec = spec
         self.file = file
         self.engine = default_engine() if engine is None else engine
         self.overrides = ScenarioOverrides(data, spec.paths, engine=self.engine, file=file,
-                                           field_prefix="fit.unknowns")
+                                           field_prefix="fit.unknowns", max_wall_time=sample_time_limit)
         self.lower = np.array([u.lower for u in spec.unknowns])
         self.upper = np.array([u.upper for u in spec.unknowns])
         self.span = self.upper - self.lower
@@ -388,6 +408,7 @@ class FitProblem:
                                       mark_points=spec.mark_points)
         self.nfev = 0
         self.failures = 0
+        self.failure_reasons: dict[str, int] = {}
         self._cache: dict[bytes, tuple[np.ndarray, Any]] = {}
         self._order: list[bytes] = []
 
@@ -426,17 +447,27 @@ class FitProblem:
         self.nfev += 1
         try:
             scene = self.scene(self.x_of(z))
+            if not scene.at_rest:  # a limit ended the run-out: its positions are not rest positions
+                bad = next(r_ for r_ in scene.runout.values() if not r_.success)
+                raise _NotAtRest(bad.status, f"the run-out of {bad.vehicle!r} did not reach rest: {bad.message}")
             r = self.evidence.weighted(scene)
             out = (r, scene)
+        except _NotAtRest as exc:
+            self._fail(f"run-out: {exc.status}", exc)
+            out = (np.full(self.evidence.size, PENALTY), exc)
         except (ScenarioError, SolverError) as exc:
-            self.failures += 1
-            _log.debug("fit evaluation failed at %s: %s", self.x_of(z), exc)
+            self._fail(failure_reason(exc), exc)
             out = (np.full(self.evidence.size, PENALTY), exc)
         self._cache[key] = out
         self._order.append(key)
         if len(self._order) > 32:
             self._cache.pop(self._order.pop(0), None)
         return out
+
+    def _fail(self, reason: str, exc: Exception) -> None:
+        self.failures += 1
+        self.failure_reasons[reason] = self.failure_reasons.get(reason, 0) + 1
+        _log.debug("fit evaluation failed (%s): %s", reason, exc)
 
     def residual(self, z) -> np.ndarray:
         return self.evaluate(z)[0]
@@ -474,7 +505,8 @@ class FitProblem:
                             max_nfev=self.spec.max_evaluations)
         return {"z0": z0.tolist(), "z": res.x.tolist(), "cost": float(res.cost), "status": int(res.status),
                 "message": str(res.message), "nfev": int(res.nfev), "njev": int(res.njev or 0),
-                "evaluations": self.nfev - n0, "active": [int(a) for a in res.active_mask]}
+                "evaluations": self.nfev - n0, "active": [int(a) for a in res.active_mask],
+                "failure_reasons": dict(self.failure_reasons)}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -549,6 +581,9 @@ class FitResult:
     n_agree : int
         Starts that reached the best minimum (same cost and same point).
     warnings : tuple of str
+    failures, failure_reasons : int, dict
+        Scene evaluations that failed (penalised), and their number by reason (an inadmissible
+        impact, a run-out ended by a limit, ...), over every start and process.
     scene : SceneResult
         The scene at the best values (not in ``to_dict``).
     success : bool
@@ -580,6 +615,7 @@ class FitResult:
     success: bool
     message: str
     scene: Any = field(default=None, repr=False, compare=False)
+    failure_reasons: dict = field(default_factory=dict)
 
     @property
     def values(self) -> dict:
@@ -602,7 +638,7 @@ class FitResult:
             "singular_values": [float(s) for s in self.singular_values], "null_space": self.null_space,
             "starts": [s.to_dict() for s in self.starts], "n_starts": len(self.starts), "n_agree": self.n_agree,
             "n_same_cost": self.n_same_cost, "warnings": list(self.warnings), "evaluations": self.evaluations,
-            "failures": self.failures, "elapsed": self.elapsed,
+            "failures": self.failures, "failure_reasons": dict(self.failure_reasons), "elapsed": self.elapsed,
         }
 
     def report(self, system: str = "SI") -> str:
@@ -670,8 +706,8 @@ class FitResult:
 _WORKER: dict = {}
 
 
-def _worker_init(data, spec, engine, file):
-    _WORKER["problem"] = FitProblem(data, spec, engine=engine, file=file)
+def _worker_init(data, spec, engine, file, sample_time_limit=None):
+    _WORKER["problem"] = FitProblem(data, spec, engine=engine, file=file, sample_time_limit=sample_time_limit)
 
 
 def _worker_local(z0):
@@ -713,7 +749,7 @@ def _progress(progress, total):
 
 def fit_scene(scenario_data: dict, fit_spec: FitSpec | dict | None = None, *, engine: str | None = None,
               workers: int | None = None, progress: bool | Callable | None = None,
-              file: str | None = None) -> FitResult:
+              file: str | None = None, sample_time_limit: float | None = None) -> FitResult:
     """Fit the unknowns of a scenario to its evidence (impact + run-out, weighted least squares).
 
     Parameters
@@ -734,6 +770,10 @@ def fit_scene(scenario_data: dict, fit_spec: FitSpec | dict | None = None, *, en
         is called after each start.
     file : str, optional
         File name for messages.
+    sample_time_limit : float, optional
+        Wall-clock seconds allowed for the run-out of one scene evaluation (default
+        :data:`crashsim.reconstruct.montecarlo.DEFAULT_SAMPLE_TIME_LIMIT`); an evaluation that
+        needs longer is penalised like any failed one, and the fit goes on.
 
     Returns
     -------
@@ -751,7 +791,11 @@ def fit_scene(scenario_data: dict, fit_spec: FitSpec | dict | None = None, *, en
         fit_spec = scenario_data["fit"]
     spec = fit_spec if isinstance(fit_spec, FitSpec) else FitSpec.from_dict(fit_spec, scenario_data, file=file)
     engine = default_engine() if engine is None else engine
-    problem = FitProblem(scenario_data, spec, engine=engine, file=file)
+    if sample_time_limit is None:
+        from .montecarlo import DEFAULT_SAMPLE_TIME_LIMIT as sample_time_limit
+    if not (sample_time_limit > 0):
+        raise ScenarioError(f"the sample time limit must be > 0 s, got {sample_time_limit!r}", field="sample_time_limit")
+    problem = FitProblem(scenario_data, spec, engine=engine, file=file, sample_time_limit=sample_time_limit)
     problem.check_bounds()
     # One scene in this process first: it checks that the scene runs, and it compiles the run-out
     # engine here once, so that the forked workers inherit it instead of each compiling it.
@@ -771,7 +815,8 @@ def fit_scene(scenario_data: dict, fit_spec: FitSpec | dict | None = None, *, en
 
             ctx = mp.get_context("fork") if "fork" in mp.get_all_start_methods() else None
             pool = ProcessPoolExecutor(max_workers=min(workers, max(n_tasks, spec.screen)), mp_context=ctx,
-                                       initializer=_worker_init, initargs=(scenario_data, spec, engine, file))
+                                       initializer=_worker_init,
+                                       initargs=(scenario_data, spec, engine, file, sample_time_limit))
         starts = _start_points(spec, problem, pool, workers)
         evaluations += spec.screen if spec.starts > 1 else 0
         if pool is not None:
@@ -801,10 +846,18 @@ def fit_scene(scenario_data: dict, fit_spec: FitSpec | dict | None = None, *, en
     return _replace_timing(result, evaluations, time.perf_counter() - t0, problem.failures)
 
 
+def _merge_reasons(tallies) -> dict[str, int]:
+    out: dict[str, int] = {}
+    for t in tallies:
+        for k, v in t.items():
+            out[k] = out.get(k, 0) + int(v)
+    return out
+
+
 def _replace_timing(result: FitResult, evaluations: int, elapsed: float, failures: int) -> FitResult:
     from dataclasses import replace
 
-    return replace(result, evaluations=evaluations, elapsed=elapsed, failures=failures)
+    return replace(result, evaluations=evaluations, elapsed=elapsed, failures=sum(result.failure_reasons.values()))
 
 
 def _analyse(problem: FitProblem, spec: FitSpec, outcomes: list[dict], engine: str) -> FitResult:
@@ -906,9 +959,11 @@ def _analyse(problem: FitProblem, spec: FitSpec, outcomes: list[dict], engine: s
     if dof <= 0:
         warnings.append(f"{problem.evidence.n_measurements:g} measurements for {n} unknowns: no degrees of freedom "
                         "left to check the fit (chi^2 should be ~0)")
-    if problem.failures:
-        warnings.append(f"{problem.failures} scene evaluation(s) failed (invalid input combination or solver) and "
-                        "were penalised")
+    reasons = _merge_reasons([problem.failure_reasons] + [o.get("failure_reasons", {}) for o in outcomes])
+    if reasons:
+        listed = "; ".join(f"{k}: {v}" for k, v in sorted(reasons.items(), key=lambda kv: -kv[1]))
+        warnings.append(f"{sum(reasons.values())} scene evaluation(s) failed and were penalised ({listed}); the fit "
+                        "stayed where the scene can be evaluated")
     if scene.warnings:
         warnings += [f"at the best fit: {w_}" for w_ in scene.warnings]
 
@@ -941,7 +996,7 @@ def _analyse(problem: FitProblem, spec: FitSpec, outcomes: list[dict], engine: s
         residuals=residuals, chi2=chi2, dof=dof, p_value=p_value, confidence=spec.confidence,
         covariance_mode=spec.covariance, singular_values=sv_rel, null_space=null_space, starts=tuple(starts),
         n_agree=n_agree, n_same_cost=n_same, warnings=tuple(warnings), evaluations=0, failures=0, elapsed=0.0,
-        engine=engine, success=bool(success), message=message, scene=scene)
+        engine=engine, success=bool(success), message=message, scene=scene, failure_reasons=reasons)
 
 
 def _residual_items(problem: FitProblem, scene) -> tuple[EvidenceResidual, ...]:

@@ -42,15 +42,18 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from ..errors import CrashsimError, ScenarioError
+from ..errors import CrashsimError, ScenarioError, failure_reason
 from .overrides import ScenarioOverrides, default_engine, parse_value
 
 __all__ = ["InputDistribution", "UncertaintySpec", "MCResult", "monte_carlo", "sample_inputs", "load_results",
-           "DEFAULT_PERCENTILES"]
+           "DEFAULT_PERCENTILES", "DEFAULT_SAMPLE_TIME_LIMIT"]
 
 _log = logging.getLogger("crashsim")
 
 DEFAULT_PERCENTILES = (5.0, 25.0, 50.0, 75.0, 95.0)
+#: Wall-clock seconds allowed for one sample's run-out by default (a compiled run-out takes
+#: milliseconds, a SciPy one well under 10 s).
+DEFAULT_SAMPLE_TIME_LIMIT = 30.0
 _FORMAT = "crashsim-mc/1"
 
 
@@ -75,6 +78,7 @@ class InputDistribution:
     mode: float | None = None
     mean: float | None = None
     sd: float | None = None
+    note: str = ""  # how the distribution was fitted to the input's allowed range, for the report
 
     def sample(self, rng: np.random.Generator) -> float:
         if self.distribution == "uniform":
@@ -159,7 +163,8 @@ class UncertaintySpec:
                 raise ScenarioError(f"sd {e['sd']!r} must be positive", field=f"{key}.sd", file=file)
             if e["distribution"] == "normal" and lo is not None and hi is not None and lo == hi:
                 raise ScenarioError("a truncated normal needs lower < upper", field=f"{key}.upper", file=file)
-            out.append(InputDistribution(t.path, e["name"] or t.path, e["distribution"], t.kind, **vals))
+            vals, note = _fit_to_range(e["distribution"], vals, t, key, e, file)
+            out.append(InputDistribution(t.path, e["name"] or t.path, e["distribution"], t.kind, note=note, **vals))
         seen = set()
         for i, dist in enumerate(out):
             if dist.path in seen:
@@ -169,6 +174,63 @@ class UncertaintySpec:
 
     def to_dict(self) -> dict:
         return {"samples": self.samples, "seed": self.seed, "inputs": [dict(d.__dict__) for d in self.inputs]}
+
+
+#: Largest share of a normal distribution outside its input's allowed range that is cut off
+#: (the distribution is then truncated to the range and the report says so); beyond it the
+#: distribution does not describe the input and is refused.
+MAX_TRUNCATED = 0.01
+
+
+def _fit_to_range(distribution: str, vals: dict, target, key: str, raw: dict, file: str | None):
+    """Keep a distribution inside the allowed range of its input (the schema's minimum/maximum).
+
+    Uniform and triangular bounds must lie inside the range.  A normal distribution is
+    truncated to the range when at most :data:`MAX_TRUNCATED` of it lies outside (the report
+    notes it), and refused otherwise: never does a sample fall outside and get dropped.
+    Returns ``(values, note)``.
+    """
+    from scipy import stats
+
+    from ..schema import _interval
+
+    f = target.field
+    lo_ok = -math.inf if f.minimum is None else float(f.minimum)
+    hi_ok = math.inf if f.maximum is None else float(f.maximum)
+    if lo_ok == -math.inf and hi_ok == math.inf:
+        return vals, ""
+    allowed = _interval(f)
+    # an exclusive end is kept off by a relative 1e-9 (a value there would be refused)
+    lo_in = lo_ok if not f.exclusive_minimum else lo_ok + 1e-9 * max(1.0, abs(lo_ok), abs(hi_ok) if hi_ok < math.inf else 1.0)
+    hi_in = hi_ok if not f.exclusive_maximum else hi_ok - 1e-9 * max(1.0, abs(hi_ok))
+    if distribution in ("uniform", "triangular"):
+        for k in ("lower", "upper"):
+            v = vals[k]
+            if not lo_in <= v <= hi_in:
+                raise ScenarioError(f"{k} = {raw[k]!r} lies outside the allowed range of {target.path}, {allowed}: "
+                                    "every sample must be a valid input", field=f"{key}.{k}", file=file)
+        return vals, ""
+    mean, sd = vals["mean"], vals["sd"]
+    lo_user = vals.get("lower", -math.inf)
+    hi_user = vals.get("upper", math.inf)
+    lo_eff, hi_eff = max(lo_user, lo_in), min(hi_user, hi_in)
+    if not lo_eff < hi_eff:
+        raise ScenarioError(f"the truncation [{raw.get('lower')}, {raw.get('upper')}] lies outside the allowed range "
+                            f"of {target.path}, {allowed}", field=f"{key}.lower", file=file)
+    # share of the (user-truncated) normal that falls outside the allowed range
+    dist = stats.norm(mean, sd)
+    kept_user = dist.cdf(hi_user) - dist.cdf(lo_user)
+    cut = 1.0 - (dist.cdf(hi_eff) - dist.cdf(lo_eff)) / kept_user
+    if cut <= 1e-12:
+        return vals, ""
+    if cut > MAX_TRUNCATED:
+        raise ScenarioError(f"the normal distribution of {target.path} (mean {raw['mean']}, sd {raw['sd']}) puts "
+                            f"{100 * cut:.3g} % of its samples outside the allowed range {allowed}; narrow it, or "
+                            "truncate it yourself with lower and upper inside the range",
+                            field=f"{key}.sd", file=file)
+    out = dict(vals, lower=lo_eff, upper=hi_eff)
+    return out, (f"truncated to the allowed range {allowed} ({100 * cut:.2g} % of the normal distribution lay "
+                 "outside it)")
 
 
 def sample_inputs(spec: UncertaintySpec, seed: int, i: int) -> np.ndarray:
@@ -214,10 +276,11 @@ def _check_key(c) -> str:
 
 
 class _Runner:
-    def __init__(self, data: dict, spec: UncertaintySpec, engine: str, file: str | None):
+    def __init__(self, data: dict, spec: UncertaintySpec, engine: str, file: str | None,
+                 sample_time_limit: float | None = None):
         self.spec = spec
         self.overrides = ScenarioOverrides(data, spec.paths, engine=engine, file=file, cache=1,
-                                           field_prefix="uncertainty.inputs")
+                                           field_prefix="uncertainty.inputs", max_wall_time=sample_time_limit)
 
     def run(self, seed: int, i: int) -> dict:
         from .scene import run_scene
@@ -228,6 +291,12 @@ class _Runner:
             scene = run_scene(self.overrides.scenario(x))
         except CrashsimError as exc:
             row["error"] = f"{type(exc).__name__}: {exc}"
+            row["reason"] = failure_reason(exc)
+            return row
+        if not scene.at_rest:  # a run-out ended by a limit: its positions are not rest positions
+            bad = [(v, r) for v, r in scene.runout.items() if not r.success]
+            row["error"] = "run-out did not reach rest: " + "; ".join(f"{v}: {r.message}" for v, r in bad)
+            row["reason"] = f"run-out: {bad[0][1].status}"
             return row
         row["out"] = scene_outputs(scene)
         if scene.evidence is not None:
@@ -245,9 +314,11 @@ def _runner_for(payload: dict) -> _Runner:
     cache = getattr(_LOCAL, "runners", None)
     if cache is None:
         cache = _LOCAL.runners = {}
-    r = cache.get(payload["hash"])
+    key = (payload["hash"], payload["engine"], payload.get("time_limit"))
+    r = cache.get(key)
     if r is None:
-        r = cache[payload["hash"]] = _Runner(payload["data"], payload["spec"], payload["engine"], payload["file"])
+        r = cache[key] = _Runner(payload["data"], payload["spec"], payload["engine"], payload["file"],
+                                             payload.get("time_limit"))
     return r
 
 
@@ -288,6 +359,8 @@ class MCResult:
         By key (``"delta_v.car"``, ``"rest_x.trailer"``, ...); NaN for failed samples.
     checks : dict of (residuals, passed) arrays by evidence item (``"rest: rest of car"``).
     errors : list of (index, message)
+    failure_reasons : dict
+        Number of failed samples by reason (``"inadmissible impact: ..."``, ``"run-out: wall_time_limit"``, ...).
     percentiles : dict
         ``{key: {"p5": ..., ..., "mean": ..., "std": ...}}`` over successful samples.
     pass_share : dict
@@ -319,6 +392,7 @@ class MCResult:
     workers: int
     out_path: str | None
     nominal: Any = field(default=None, repr=False, compare=False)
+    failure_reasons: dict = field(default_factory=dict)
 
     @property
     def n_done(self) -> int:
@@ -342,6 +416,7 @@ class MCResult:
             "pass_share": self.pass_share,
             "tornado": self.tornado,
             "errors": [{"i": int(i), "message": m} for i, m in self.errors[:50]],
+            "failure_reasons": dict(self.failure_reasons),
         }
 
     def report(self, system: str = "SI") -> str:
@@ -378,6 +453,8 @@ class MCResult:
                     par += f", truncated to [{show(d.lower, k) if d.lower is not None else '-inf'}, " \
                            f"{show(d.upper, k) if d.upper is not None else 'inf'}]"
             lines.append(f"  {d.name:<34} {par}")
+            if d.note:
+                lines.append(f"  {'':<34} ({d.note})")
         show = output_show
         lines.append("")
         qs = [q for q in next(iter(self.percentiles.values()), {}) if q.startswith("p")]
@@ -404,7 +481,10 @@ class MCResult:
                                  f"swing {show(r['swing'], kind):>12}   rho {rho}")
         if self.errors:
             lines.append("")
-            lines.append(f"Failed samples ({len(self.errors)}), first: sample {self.errors[0][0]}: {self.errors[0][1]}")
+            lines.append(f"Failed samples ({len(self.errors)}) by reason (they are left out of every figure above)")
+            for reason, count in sorted(self.failure_reasons.items(), key=lambda kv: -kv[1]):
+                lines.append(f"  {count:6d}  {reason}")
+            lines.append(f"  first: sample {self.errors[0][0]}: {self.errors[0][1]}")
         return "\n".join(lines)
 
 
@@ -502,6 +582,11 @@ def _assemble(spec, seed, n, rows: dict, n_resumed, elapsed, engine, backend, wo
         ok = np.array([bool(rows[i].get("checks", {}).get(key, [None, False])[1]) for i in idx])
         checks[key] = (res, ok)
     errors = [(int(i), rows[i]["error"]) for i in idx if rows[i].get("error")]
+    reasons: dict[str, int] = {}
+    for i in idx:
+        if rows[i].get("error"):
+            why = rows[i].get("reason") or rows[i]["error"].split(":", 1)[0]  # files written before reasons
+            reasons[why] = reasons.get(why, 0) + 1
     good = np.array([not rows[i].get("error") for i in idx], dtype=bool)
     pct = {}
     for key, v in outputs.items():
@@ -533,7 +618,7 @@ def _assemble(spec, seed, n, rows: dict, n_resumed, elapsed, engine, backend, wo
     return MCResult(spec=spec, seed=int(seed), n=int(n), indices=idx, inputs=X, outputs=outputs, checks=checks,
                     errors=errors, percentiles=pct, pass_share=share, tornado=tornado, n_resumed=int(n_resumed),
                     elapsed=float(elapsed), engine=engine, backend=backend, workers=int(workers),
-                    out_path=None if out_path is None else str(out_path), nominal=nominal)
+                    out_path=None if out_path is None else str(out_path), nominal=nominal, failure_reasons=reasons)
 
 
 def _swings(data, spec: UncertaintySpec, engine, file, q=(0.05, 0.95)) -> tuple[dict, Any]:
@@ -587,7 +672,8 @@ def monte_carlo(scenario_data: dict, spec: UncertaintySpec | dict | None = None,
                 seed: int | None = None, engine: str | None = None, workers: int | None = None,
                 dask_address: Any = None, out_path: str | Path | None = None,
                 progress: bool | Callable[[int, int], None] = True, chunk_size: int | None = None,
-                percentiles: Sequence[float] = DEFAULT_PERCENTILES, file: str | None = None) -> MCResult:
+                percentiles: Sequence[float] = DEFAULT_PERCENTILES, file: str | None = None,
+                sample_time_limit: float = DEFAULT_SAMPLE_TIME_LIMIT) -> MCResult:
     """Propagate the uncertain inputs through impact and run-out by Monte Carlo sampling.
 
     Parameters
@@ -618,6 +704,13 @@ def monte_carlo(scenario_data: dict, spec: UncertaintySpec | dict | None = None,
         Samples per task (default: about 4 tasks per worker, at most 64 samples).
     percentiles : sequence of float
         Percentiles reported for every output.
+    sample_time_limit : float
+        Wall-clock seconds allowed for the run-out of one sample (default
+        :data:`DEFAULT_SAMPLE_TIME_LIMIT`); a sample that needs longer fails with the reason
+        ``"run-out: wall_time_limit"`` and the run goes on.
+
+    Failed samples (an inadmissible impact, a run-out that did not reach rest, ...) are kept
+    with their reason; ``MCResult.failure_reasons`` tallies them and the report lists them.
 
     Returns
     -------
@@ -647,7 +740,10 @@ def monte_carlo(scenario_data: dict, spec: UncertaintySpec | dict | None = None,
     # Fail early, in this process, on paths the scenario cannot hold or an invalid median scene.
     ScenarioOverrides(scenario_data, spec.paths, engine=engine, file=file, field_prefix="uncertainty.inputs")
     run_hash = _run_hash(scenario_data, spec)
-    payload = {"data": scenario_data, "spec": spec, "engine": engine, "file": file, "seed": seed, "hash": run_hash}
+    if not (sample_time_limit > 0):
+        raise ScenarioError(f"the sample time limit must be > 0 s, got {sample_time_limit!r}", field="sample_time_limit")
+    payload = {"data": scenario_data, "spec": spec, "engine": engine, "file": file, "seed": seed, "hash": run_hash,
+               "time_limit": float(sample_time_limit)}
 
     rows: dict[int, dict] = {}
     fh = None

@@ -69,6 +69,7 @@ class Target:
     steps: tuple
     field: Field
     component: int | None
+    entries: tuple = ()  # indices of the steps that name an entry of a table of named entries
 
     @property
     def kind(self) -> str:
@@ -109,6 +110,7 @@ def resolve_path(path: str, schema: Section | None = None, *, field: str = "path
         raise ScenarioError(f"{path!r} is not a path such as \"vehicles.B.speed\"", field=field)
     parts = path.strip().split(".")
     steps = []
+    entries: list[int] = []
     node: Any = schema
     for k, part in enumerate(parts):
         m = _TOKEN.match(part)
@@ -117,6 +119,7 @@ def resolve_path(path: str, schema: Section | None = None, *, field: str = "path
         name, index = m["name"], (None if m["index"] is None else int(m["index"]))
         last = k == len(parts) - 1
         if isinstance(node, Table):  # a user-chosen entry name
+            entries.append(len(steps))
             if index is not None:
                 raise ScenarioError(f"{path!r}: {name!r} names an entry of [{node.name}]; it takes no index",
                                     field=field)
@@ -148,7 +151,7 @@ def resolve_path(path: str, schema: Section | None = None, *, field: str = "path
                 raise ScenarioError(f"{path!r}: index {index} out of range; {name!r} has {f.n} components",
                                     field=field)
             steps.append((name, index))
-            return Target(path.strip(), tuple(steps), f, index)
+            return Target(path.strip(), tuple(steps), f, index, tuple(entries))
         if name in subs:
             sub = subs[name]
             if isinstance(sub, ArrayOf):
@@ -199,6 +202,12 @@ def _container(data: dict, target: Target, *, create: bool, copy_path: bool):
         if not isinstance(node, dict):
             raise ScenarioError(f"{where} is not a table in the scenario", field=target.path)
         nxt = node.get(key)
+        if nxt is None and depth in target.entries:
+            table = ".".join(k for k, _ in target.steps[:depth]) or "the file"
+            names = [str(k) for k in node]
+            raise ScenarioError(f"{target.path!r} names {key!r}, but the scenario has no entry {key!r} in [{table}]"
+                                f"{_close(key, names)} Entries: {', '.join(map(repr, names)) or 'none'}",
+                                field=target.path)
         if nxt is None:
             if not create or index is not None:
                 raise ScenarioError(f"the scenario has no {where}; {target.path!r} cannot be set", field=target.path)
@@ -326,6 +335,8 @@ class ScenarioOverrides:
         For error messages.
     cache : int
         Number of recent scenarios kept (keyed by the value vector).
+    max_wall_time : float, optional
+        Wall-clock limit [s] of each run-out (``RunoutOptions.max_wall_time``); None: the file's.
 
     Examples
     --------
@@ -334,11 +345,12 @@ class ScenarioOverrides:
     """
 
     def __init__(self, data: dict, paths: Sequence[str], *, engine: str | None = None, file: str | None = None,
-                 cache: int = 8, field_prefix: str = "path"):
+                 cache: int = 8, field_prefix: str = "path", max_wall_time: float | None = None):
         from ..scenario import SCHEMA
 
         self.file = file
         self.engine = engine
+        self.max_wall_time = max_wall_time
         self.base = forward_data(data, file=file)
         self.targets = tuple(resolve_path(p, SCHEMA, field=f"{field_prefix}[{i}]" if len(paths) > 1 else field_prefix)
                              for i, p in enumerate(paths))
@@ -347,8 +359,13 @@ class ScenarioOverrides:
             if t.path in seen:
                 raise ScenarioError(f"{t.path!r} is named twice (items {seen[t.path]} and {i})", field=field_prefix)
             seen[t.path] = i
-        for t in self.targets:  # fails early, with the path, if the file cannot hold it
-            _container(copy.deepcopy(self.base), t, create=True, copy_path=False)
+        for i, t in enumerate(self.targets):  # fails early, with the path, if the file cannot hold it
+            try:
+                _container(copy.deepcopy(self.base), t, create=True, copy_path=False)
+            except ScenarioError as exc:
+                where = f"{field_prefix}[{i}]" if len(self.targets) > 1 else field_prefix
+                msg = str(exc).removeprefix(f"{exc.field}: ") if exc.field else str(exc)
+                raise ScenarioError(msg, field=where, file=file) from None
         self._cache: OrderedDict = OrderedDict()
         self._cache_size = int(cache)
 
@@ -390,8 +407,11 @@ class ScenarioOverrides:
             self._cache.move_to_end(key)
             return hit
         sc = scenario_from_dict(self.data(key), file=self.file)
-        if self.engine is not None and sc.runout is not None:
-            sc = replace(sc, runout=replace(sc.runout, options=_engine_options(sc.runout.options, self.engine)))
+        if sc.runout is not None and (self.engine is not None or self.max_wall_time is not None):
+            options = _engine_options(sc.runout.options, self.engine)
+            if self.max_wall_time is not None:
+                options = replace(options, max_wall_time=float(self.max_wall_time))
+            sc = replace(sc, runout=replace(sc.runout, options=options))
         self._cache[key] = sc
         while len(self._cache) > self._cache_size:
             self._cache.popitem(last=False)

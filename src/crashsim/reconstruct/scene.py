@@ -29,6 +29,11 @@ class SceneResult:
     warnings: tuple[str, ...] = ()
     accuracy: dict | None = None  # vehicle name -> AccuracyReport, when the scenario asks for an accuracy
 
+    @property
+    def at_rest(self) -> bool:
+        """True if there is no run-out or every run-out ended at rest."""
+        return self.runout is None or all(r.success for r in self.runout.values())
+
     def runout_body(self, name: str):
         """The BodyRunout of a body (KeyError if the scene has no run-out or no such body)."""
         if self.runout is None:
@@ -50,13 +55,17 @@ class SceneResult:
             bodies = {}
             for r in self.runout.values():
                 for name, b in r.bodies.items():
+                    at_rest = b.time_to_rest is not None
                     bodies[name] = {
                         "vehicle": r.vehicle,
+                        "at_rest": at_rest,
                         "rest": {"x": float(b.rest_position[0]), "y": float(b.rest_position[1]),
                                  "heading": float(b.rest_heading_wrapped)},
                         "time_to_rest": b.time_to_rest,
                         "distance": float(b.distance),
                     }
+                    if not at_rest:
+                        bodies[name]["reason"] = f"{r.status}: {r.message}"
             out["runout"] = {
                 "bodies": bodies,
                 "vehicles": {name: r.to_dict(history=history) for name, r in self.runout.items()},
@@ -153,8 +162,20 @@ def separation_states(scenario, impact: ImpactResult) -> dict:
 
 
 def run_scene(scenario) -> SceneResult:
-    """Solve a loaded scenario: the impact, then the run-out of every vehicle if asked for."""
-    impact = solve_impact(scenario.impact)
+    """Solve a loaded scenario: the impact, then the run-out of every vehicle if asked for.
+
+    Raises
+    ------
+    ScenarioError
+        (naming the scenario file) The impact cannot be solved as given: the bodies are not
+        approaching, or the coefficients are inadmissible for this geometry.
+    """
+    from ..errors import ScenarioError, with_file
+
+    try:
+        impact = solve_impact(scenario.impact)
+    except ScenarioError as exc:
+        raise with_file(exc, scenario.path) from None
     runout = None
     accuracy = None
     if scenario.runout is not None and scenario.runout.level != "impact":

@@ -42,7 +42,7 @@ from ..motion.options import RunoutOptions
 from ..motion.postprocess import assemble_result
 from ..motion.result import RunoutEvent, RunoutResult
 from ..motion.road import Road
-from ..motion.simulate import check_hitch_consistency
+from ..motion.engine import check_scene_hitches
 from ..motion.wheels import WheelSettings
 from ..vehicles import BodyState, Vehicle
 
@@ -119,7 +119,7 @@ def simulate_runout_pymunk(
         )
     L = model.layout
     y = L.pack(initial)
-    check_hitch_consistency(model, y)
+    check_scene_hitches(model.scene, y)
     y_initial = y.copy()
 
     space = pymunk.Space()

@@ -3,15 +3,19 @@
 Public API
 ----------
 simulate_runout, simulate_scene
-    Integrate the run-out of one vehicle / all movable vehicles of a scene, with SciPy's
-    solve_ivp (``RunoutOptions(engine="scipy")``, the default) or the numba-compiled engine
-    of :mod:`crashsim.motion.fast` (``engine="compiled"``: same model and result, for fits and
-    Monte Carlo).
+    Integrate the run-out of one vehicle / of a whole scene (every vehicle together, with
+    contact between them and with fixed obstacles: secondary impacts by the impulse solver,
+    sustained contact as a force), with SciPy's integrators (``RunoutOptions(engine="scipy")``,
+    the default) or the numba-compiled engine (``engine="compiled"``: same model, events and
+    result, for fits and Monte Carlo).
+ContactModel, Obstacle
+    How bodies meet (restitution, friction, thresholds), and fixed obstacles.
 make_hitch_consistent
     Project impact-solver velocities onto the hitch constraints.
 RunoutOptions, Road, FrictionZone, WheelSettings, WheelSetting, ScheduledChange
     Inputs.
-RunoutResult, BodyRunout, WheelTrack, TrackSegment, HitchHistory, RunoutEvent, BodyHistory
+SceneRunout, RunoutResult, SecondaryImpact, PairSummary, BodyRunout, WheelTrack, TrackSegment,
+HitchHistory, RunoutEvent, BodyHistory
     Results.
 StateLayout
     The named state vector.
@@ -24,11 +28,13 @@ The numeric core never imports pymunk, matplotlib or file formats; numba is impo
 when the compiled engine is first used.
 """
 
+from .contact import ContactModel, Obstacle
 from .dynamics import make_hitch_consistent
 from .layout import StateLayout
 from .loads import StaticLoads, static_loads
 from .options import ENGINES, METHODS, SCHEMES, RunoutOptions
-from .result import BodyHistory, BodyRunout, HitchHistory, RunoutEvent, RunoutResult, TrackSegment, WheelTrack
+from .result import (BodyHistory, BodyRunout, HitchHistory, PairSummary, RunoutEvent, RunoutResult, SceneRunout,
+                     SecondaryImpact, TrackSegment, WheelTrack)
 from .road import FrictionZone, Road
 from .simulate import simulate_runout, simulate_scene
 from .tyres import LATERAL_MODELS, lateral_force, tyre_forces
@@ -38,6 +44,11 @@ __all__ = [
     "simulate_runout",
     "simulate_scene",
     "make_hitch_consistent",
+    "ContactModel",
+    "Obstacle",
+    "SceneRunout",
+    "SecondaryImpact",
+    "PairSummary",
     "RunoutOptions",
     "METHODS",
     "ENGINES",

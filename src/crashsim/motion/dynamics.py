@@ -21,8 +21,10 @@ acceleration constraint ``g'' + 2 zeta omega0 g' + omega0^2 g = 0``::
 rear body receives ``-lambda_j``.  A stop row's multiplier is the stop moment on the front
 body [N m].
 
-Everything is vectorised over a trailing axis of states, so the same code is the
-right-hand side (one column) and the post-processor (many columns).
+The engines evaluate these equations in the compiled kernels (:mod:`crashsim.motion._kernels`,
+the one source of the run-out physics).  This module keeps the hitch geometry in NumPy for
+preparing inputs (:func:`make_hitch_consistent`, the consistency checks) and offers
+:class:`RunoutModel`, one vehicle's equations for NumPy callers, evaluated by the kernels.
 """
 
 from __future__ import annotations
@@ -40,7 +42,6 @@ from .layout import StateLayout
 from .loads import StaticLoads, load_transfer_matrix, static_loads
 from .options import RunoutOptions
 from .road import Road
-from .tyres import tyre_forces_core
 from .wheels import ResolvedWheels, WheelSetting
 
 __all__ = [
@@ -279,48 +280,28 @@ def reference_lengths(vehicle: Vehicle, specs) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class SegmentParams:
-    """Inputs held constant over one integration segment (arrays per wheel, shape (n_wheels, 1)).
+    """Inputs held constant over one integration segment of a :class:`RunoutModel`.
 
     Attributes
     ----------
+    phase : int
+        Wheel-setting phase (index into ``model.wheels.phases``).
     settings : tuple of WheelSetting
+        The wheel settings of that phase.
     membership : ndarray of bool, shape (n_wheels, n_zones)
-        Which zone each wheel is in (fixed within a segment; flipped at crossing events).
+        Which zone each wheel is in.
     locks : tuple of (int, float)
         Closed articulation stops: (hitch index, locked angle [rad]).
-    mu, locked, c_fixed, c_coeff : ndarray
-        Friction coefficient, sliding flag, cornering stiffness [N/rad] (fixed part and
-        per-load part [1/rad]).
-    demand_coef : ndarray
-        ``min(b mu + f_r, mu)``: longitudinal demand per unit load of a rolling/braked wheel.
-    kin : ndarray, shape (2 n_wheels, 3 n_bodies)
-        Linear map from the body-axes CG velocities ``(v_x..., v_y..., w...)`` to the
-        contact-point velocities in wheel axes ``(u..., w_lat...)``.  By the principle of
-        virtual power its transpose maps the wheel-axes tyre forces ``(F_x..., F_y...)`` to
-        the body-axes forces and yaw moments of the bodies.
-    kin_t : ndarray
-        ``kin.T`` (C-contiguous).
-    locked_arg : ndarray of bool or True
-        ``locked``, or True when every wheel slides (fast path of the tyre function).
-    mu_load, demand, c_alpha : ndarray or None
-        With static loads: ``mu N`` [N], ``demand_coef N`` [N] and the cornering stiffness
-        [N/rad], precomputed for the segment.
+    road_mu : ndarray or None
+        Per-wheel road friction replacing the membership's (the pymunk cross-check blends mu
+        over a step that crosses a zone edge), or None.
     """
 
-    settings: tuple[WheelSetting, ...]
+    phase: int
+    settings: tuple
     membership: np.ndarray
-    locks: tuple[tuple[int, float], ...]
-    mu: np.ndarray
-    locked: np.ndarray
-    c_fixed: np.ndarray
-    c_coeff: np.ndarray
-    demand_coef: np.ndarray
-    kin: np.ndarray
-    kin_t: np.ndarray
-    locked_arg: np.ndarray | bool
-    mu_load: np.ndarray | None
-    demand: np.ndarray | None
-    c_alpha: np.ndarray | None
+    locks: tuple
+    road_mu: np.ndarray | None = None
 
 
 @dataclass(eq=False, slots=True)
@@ -332,8 +313,8 @@ class Evaluation:
     y_dot : ndarray, shape (n_state, K)
     body_force : ndarray, shape (3 n_bodies, K)
         Sum of tyre forces and moments per body, z order (F_X..., F_Y..., M_z...) [N, N m].
-    wheel_x, wheel_y : ndarray, shape (n_wheels, K) or None
-        Contact positions [m] (only with ``full=True``).
+    wheel_x, wheel_y : ndarray, shape (n_wheels, K)
+        Contact positions [m].
     wheel_speed : ndarray, shape (n_wheels, K)
         Contact-point speed [m/s].
     tyre_power : ndarray, shape (n_wheels, K)
@@ -343,151 +324,98 @@ class Evaluation:
         Normal loads [N].
     lam : ndarray, shape (K, m)
         Constraint multipliers (hitch forces on the front body [N], stop moments [N m]).
-    accel_body : ndarray, shape (2 n_bodies, K) or None
-        Body-axes CG accelerations (a_x..., a_y...) [m/s^2] (with ``full=True`` or load transfer).
+    accel_body : ndarray, shape (2 n_bodies, K)
+        Body-axes CG accelerations (a_x..., a_y...) [m/s^2].
     """
 
     y_dot: np.ndarray
     body_force: np.ndarray
-    wheel_x: np.ndarray | None
-    wheel_y: np.ndarray | None
-    wheel_speed: np.ndarray | None
-    tyre_power: np.ndarray | None
+    wheel_x: np.ndarray
+    wheel_y: np.ndarray
+    wheel_speed: np.ndarray
+    tyre_power: np.ndarray
     sliding: np.ndarray
     load: np.ndarray
     lam: np.ndarray
-    accel_body: np.ndarray | None
+    accel_body: np.ndarray
 
 
 class RunoutModel:
-    """A vehicle compiled into arrays for fast evaluation of the run-out equations.
+    """One vehicle's run-out equations, evaluated by the compiled kernels, for NumPy callers.
+
+    The pymunk cross-check, the rigid and energy levels and the tests use it; the engines
+    integrate the same kernels directly (:mod:`crashsim.motion.engine`).  There is no second
+    copy of the equations here: :meth:`evaluate` calls
+    :func:`crashsim.motion._kernels.evaluate_columns`.
 
     Parameters
     ----------
     vehicle : Vehicle
         A movable vehicle.
-    wheels : ResolvedWheels
+    wheels : ResolvedWheels or WheelSettings
         Its wheel settings over time.
     road : Road
     options : RunoutOptions
+    hitches : bool
+        False: the hitches are removed (each body runs out alone, static loads those of the
+        coupled vehicle; the ``rigid`` level).
     """
 
-    def __init__(self, vehicle: Vehicle, wheels: ResolvedWheels, road: Road, options: RunoutOptions):
+    def __init__(self, vehicle: Vehicle, wheels, road: Road, options: RunoutOptions, *, hitches: bool = True):
+        from .contact import ContactModel
+        from .model import SceneModel
+
         if vehicle.is_barrier:
             raise ScenarioError("a barrier (infinite mass) has no run-out", field=f"{vehicle.name}.bodies")
+        self.scene = SceneModel([vehicle], {vehicle.name: wheels}, road, options, contact=ContactModel(enabled=False),
+                                hitches=hitches)
         self.vehicle = vehicle
-        self.wheels = wheels
+        self.wheels = self.scene.resolved[vehicle.name]
         self.road = road
         self.options = options
-        bodies = vehicle.bodies
-        nb = len(bodies)
-        self.layout = StateLayout(tuple(b.name for b in bodies), accel_filter=options.load_transfer)
-        self.mass = np.array([b.mass for b in bodies])
-        self.inertia = np.array([b.yaw_inertia for b in bodies])
-        self.minv = np.concatenate([1 / self.mass, 1 / self.mass, 1 / self.inertia])
-        self._minv_col = self.minv[:, None]
-        self._minv_list = self.minv.tolist()
-        specs = wheels.specs
-        self.specs = specs
-        nw = len(specs)
-        if nw == 0:
-            raise ScenarioError("a run-out needs at least one axle", field=f"{vehicle.name}.bodies")
-        self.wheel_body = np.array([s.body_index for s in specs], dtype=int)
-        rho = np.array([s.position for s in specs], dtype=float)
-        self._rx = rho[:, 0:1]
-        self._ry = rho[:, 1:2]
-        self.tyres = np.array([s.tyres for s in specs], dtype=float)
-        self.loads: StaticLoads = static_loads(vehicle)
-        self.static_load = self.loads.wheel.copy()
-        self._n_static = self.static_load[:, None]
-        self.transfer = load_transfer_matrix(vehicle, self.loads) if options.load_transfer else None
+        self.layout = self.scene.layout
+        self.specs = self.scene.specs
+        self.mass = self.scene.mass
+        self.inertia = self.scene.inertia
+        self.minv = self.scene.minv
+        self.loads: StaticLoads = self.scene.loads[vehicle.name]
+        self.static_load = self.scene.static_load.copy()
+        self.n_hitches = self.scene.n_hitches
+        self.wheel_body = np.array([s.body_index for s in self.specs], dtype=int)
         self.front_points = np.array([h.front_point for h in vehicle.hitches], dtype=float).reshape(-1, 2)
         self.rear_points = np.array([h.rear_point for h in vehicle.hitches], dtype=float).reshape(-1, 2)
-        self.n_hitches = len(vehicle.hitches)
-        self._hitch_points = (*self.front_points[0], *self.rear_points[0]) if self.n_hitches == 1 else None
-        # contact positions: x_k = X_i + cos(psi_i) rho_x - sin(psi_i) rho_y, y_k = Y_i + sin(psi_i) rho_x + cos(psi_i) rho_y
-        pmap = np.zeros((2 * nw, 4 * nb))
-        k, bi = np.arange(nw), self.wheel_body
-        pmap[k, bi] = 1.0
-        pmap[k, 2 * nb + bi] = rho[:, 0]
-        pmap[k, 3 * nb + bi] = -rho[:, 1]
-        pmap[nw + k, nb + bi] = 1.0
-        pmap[nw + k, 2 * nb + bi] = rho[:, 1]
-        pmap[nw + k, 3 * nb + bi] = rho[:, 0]
-        self._position_map = pmap
-        self._alpha2 = 2.0 * options.baumgarte_zeta * options.baumgarte_omega
-        self._beta2 = options.baumgarte_omega**2
-        self.l_ref = reference_lengths(vehicle, specs)
-        self.eps = options.eps
-        self.lateral = options.lateral_model
+        self.l_ref = self.scene.M[0][:, 2].copy()
+        rho = np.array([s.position for s in self.specs], dtype=float).reshape(-1, 2)
+        self._rx, self._ry = rho[:, 0:1], rho[:, 1:2]
 
     # ------------------------------------------------------------------ segment inputs
-    def segment(
-        self,
-        t: float,
-        membership: np.ndarray,
-        locks: Sequence[tuple[int, float]] = (),
-        road_mu: np.ndarray | None = None,
-    ) -> SegmentParams:
-        """Inputs in force from time ``t`` [s] for given zone membership and closed stops.
-
-        ``road_mu`` (per wheel), if given, replaces the road friction coefficient derived from
-        ``membership`` (the pymunk cross-check blends mu over a step that crosses a zone edge).
-        """
+    def segment(self, t: float, membership: np.ndarray, locks: Sequence[tuple[int, float]] = (),
+                road_mu: np.ndarray | None = None) -> SegmentParams:
+        """Inputs in force from time ``t`` [s] for given zone membership and closed stops."""
+        phase = int(np.searchsorted(self.scene.phase_times, t, side="right") - 1)
         settings = self.wheels.at(t)
-        col = lambda values: np.asarray(values, dtype=float)[:, None]  # noqa: E731
-        if road_mu is None:
-            road_mu = self.road.mu_from_membership(membership)
-        mu = col(np.asarray(road_mu, dtype=float) * np.array([s.mu_factor for s in settings]))
-        brake = col([s.brake for s in settings])
-        f_roll = col([s.rolling_resistance or 0.0 for s in settings])
-        c_fixed = col([(s.cornering_stiffness or 0.0) * n for s, n in zip(settings, self.tyres)])
-        c_coeff = col([s.cornering_coefficient or 0.0 for s in settings])
-        demand_coef = np.minimum(brake * mu + f_roll, mu)
-        static = self.transfer is None
-        # contact velocity in wheel axes: u = cos(d) cvx + sin(d) cvy, w = -sin(d) cvx + cos(d) cvy,
-        # with cvx = v_x - rho_y w and cvy = v_y + rho_x w (body axes)
-        nb, nw = self.layout.n_bodies, len(self.specs)
-        cd = np.array([math.cos(s.steer) for s in settings])
-        sd = np.array([math.sin(s.steer) for s in settings])
-        rx, ry = self._rx[:, 0], self._ry[:, 0]
-        k, bi = np.arange(nw), self.wheel_body
-        kin = np.zeros((2 * nw, 3 * nb))
-        kin[k, bi] = cd
-        kin[k, nb + bi] = sd
-        kin[k, 2 * nb + bi] = sd * rx - cd * ry
-        kin[nw + k, bi] = -sd
-        kin[nw + k, nb + bi] = cd
-        kin[nw + k, 2 * nb + bi] = cd * rx + sd * ry
-        locked = np.array([s.is_sliding for s in settings], dtype=bool)[:, None]
-        return SegmentParams(
-            settings=settings,
-            membership=membership.copy(),
-            locks=tuple(locks),
-            mu=mu,
-            locked=locked,
-            c_fixed=c_fixed,
-            c_coeff=c_coeff,
-            demand_coef=demand_coef,
-            kin=kin,
-            kin_t=np.ascontiguousarray(kin.T),
-            locked_arg=True if locked.all() else locked,
-            mu_load=mu * self._n_static if static else None,
-            demand=demand_coef * self._n_static if static else None,
-            c_alpha=c_fixed + c_coeff * self._n_static if static else None,
-        )
+        mu = None if road_mu is None else np.asarray(road_mu, dtype=float).reshape(-1)
+        return SegmentParams(phase, settings, np.asarray(membership, dtype=bool).copy(), tuple(locks), mu)
+
+    def _mode(self, seg: SegmentParams):
+        D = self.scene.fresh_mode()
+        if seg.membership.size:
+            D[0][:] = seg.membership
+        for n, (j, theta) in enumerate(seg.locks):
+            D[1][n] = j
+            D[2][n] = theta
+        D[3][0] = len(seg.locks)
+        return D
 
     # ------------------------------------------------------------------ kinematics
     def wheel_positions(self, y: np.ndarray) -> np.ndarray:
-        """Contact positions for one state, shape (n_wheels, 2) [m].
-
-        One product with the constant map from ``(X, Y, cos psi, sin psi)`` of the bodies to
-        ``(x..., y...)`` of the contacts (events call this at every solver step).
-        """
+        """Contact positions for one state, shape (n_wheels, 2) [m]."""
         L = self.layout
-        psi = y[L.psi]
-        xy = self._position_map @ np.concatenate([y[L.x], y[L.y], np.cos(psi), np.sin(psi)])
-        return xy.reshape(2, -1).T
+        bi = self.wheel_body
+        psi = y[L.psi][bi]
+        c, s = np.cos(psi), np.sin(psi)
+        rx, ry = self._rx[:, 0], self._ry[:, 0]
+        return np.stack([y[L.x][bi] + c * rx - s * ry, y[L.y][bi] + s * rx + c * ry], 1)
 
     def wheel_velocities(self, y: np.ndarray) -> np.ndarray:
         """Contact-point velocities for one state, shape (n_wheels, 2) [m/s]."""
@@ -499,6 +427,15 @@ class RunoutModel:
         dx, dy = c * rx - s * ry, s * rx + c * ry
         w = y[L.w][bi]
         return np.stack([y[L.vx][bi] - w * dy, y[L.vy][bi] + w * dx], 1)
+
+    def membership(self, y: np.ndarray) -> np.ndarray:
+        """Zone membership of every wheel (the kernels' rule: a wheel on an edge goes where it heads)."""
+        from .model import kernels
+
+        out = np.zeros((len(self.specs), len(self.road.zones)), dtype=bool)
+        kernels().membership(np.ascontiguousarray(y, dtype=float), self.scene.M, out,
+                             np.zeros((2, self.layout.n_bodies)))
+        return out
 
     def rest_measure(self, y: np.ndarray) -> float:
         """``max over bodies of max(|v_cg|, |yaw rate| L_ref)`` [m/s] for one state."""
@@ -516,161 +453,40 @@ class RunoutModel:
         )
 
     # ------------------------------------------------------------------ forces and accelerations
-    def _tyres(self, y: np.ndarray, seg: SegmentParams):
-        """Tyre forces of K states: world-frame body forces ``f`` (3 n_bodies, K) and wheel-axes quantities.
+    def evaluate(self, y: np.ndarray, seg: SegmentParams, full: bool = True) -> Evaluation:
+        """Evaluate the model (the compiled kernels) for K states ``y`` of shape (n_state, K)."""
+        from .model import kernels
 
-        Contact velocities come from one matrix product with the segment's map ``kin`` and
-        the body forces from one product with its transpose (fewest NumPy calls); the body
-        sums are rotated to the world frame.
-        """
+        k = kernels()
+        Y = np.ascontiguousarray(np.asarray(y, dtype=float).reshape(self.layout.size, -1))
+        mu = np.full(len(self.specs), np.nan) if seg.road_mu is None else seg.road_mu
+        ydot, wk, lam, f = k.evaluate_columns(Y, self.scene.M, seg.phase, self._mode(seg), mu)
         L = self.layout
-        nb, nw = L.n_bodies, len(self.specs)
-        psi, vx, vy, w = y[L.psi], y[L.vx], y[L.vy], y[L.w]
+        nb = L.n_bodies
+        psi = Y[L.psi]
         c, s = np.cos(psi), np.sin(psi)
-        uv = seg.kin @ np.concatenate([c * vx + s * vy, c * vy - s * vx, w])
-        u, v_lat = uv[:nw], uv[nw:]
-        if self.transfer is None:
-            load = self._n_static
-            mu_load, demand, c_alpha = seg.mu_load, seg.demand, seg.c_alpha
-        else:
-            load = np.maximum(self._n_static + self.transfer @ y[L.accel], 0.0)
-            mu_load = seg.mu * load
-            demand = seg.demand_coef * load
-            c_alpha = seg.c_fixed + seg.c_coeff * load
-        fx, fy, sliding = tyre_forces_core(u, v_lat, mu_load, demand, c_alpha, seg.locked_arg, self.eps, self.lateral)
-        gen = seg.kin_t @ np.concatenate([fx, fy])
-        sum_x, sum_y = gen[:nb], gen[nb : 2 * nb]
-        f = np.concatenate([c * sum_x - s * sum_y, s * sum_x + c * sum_y, gen[2 * nb :]])
-        return f, c, s, u, v_lat, fx, fy, sliding, load
-
-    def _single_hitch(self, y: np.ndarray, c: np.ndarray, s: np.ndarray, f: np.ndarray):
-        """Constraint solve of one state of a two-body vehicle in scalar arithmetic.
-
-        The same equations as :func:`hitch_rows` plus the Schur-complement solve, written out
-        for the right-hand side's most common case (one hitch, no closed stop, one state),
-        where NumPy's per-call overhead on 2x6 arrays would dominate.  Tested against the
-        general path.
-        """
-        L = self.layout
-        X0, X1 = y[L.x].tolist()
-        Y0, Y1 = y[L.y].tolist()
-        U0, U1 = y[L.vx].tolist()
-        V0, V1 = y[L.vy].tolist()
-        W0, W1 = y[L.w].tolist()
-        c0, c1 = c.tolist()
-        s0, s1 = s.tolist()
-        FX0, FX1, FY0, FY1, M0, M1 = f.tolist()
-        m0, m1, _, _, i0, i1 = self._minv_list
-        hfx, hfy, hrx, hry = self._hitch_points
-        ax, ay = c0 * hfx - s0 * hfy, s0 * hfx + c0 * hfy
-        bx, by = c1 * hrx - s1 * hry, s1 * hrx + c1 * hry
-        al, be = self._alpha2, self._beta2
-        # G rows (z order X0 X1 Y0 Y1 psi0 psi1): x = [1, -1, 0, 0, -ay, by]; y = [0, 0, 1, -1, ax, -bx]
-        rx = -(
-            FX0 * m0 - FX1 * m1 - ay * M0 * i0 + by * M1 * i1
-            + (W1 * W1 * bx - W0 * W0 * ax)
-            + al * (U0 - W0 * ay - U1 + W1 * by)
-            + be * (X0 + ax - X1 - bx)
-        )
-        ry = -(
-            FY0 * m0 - FY1 * m1 + ax * M0 * i0 - bx * M1 * i1
-            + (W1 * W1 * by - W0 * W0 * ay)
-            + al * (V0 + W0 * ax - V1 - W1 * bx)
-            + be * (Y0 + ay - Y1 - by)
-        )
-        a00 = m0 + m1 + ay * ay * i0 + by * by * i1
-        a11 = m0 + m1 + ax * ax * i0 + bx * bx * i1
-        a01 = -ax * ay * i0 - bx * by * i1
-        det = a00 * a11 - a01 * a01
-        lx = (a11 * rx - a01 * ry) / det
-        ly = (a00 * ry - a01 * rx) / det
-        acc = np.array(
-            [
-                [(FX0 + lx) * m0],
-                [(FX1 - lx) * m1],
-                [(FY0 + ly) * m0],
-                [(FY1 - ly) * m1],
-                [(M0 - ay * lx + ax * ly) * i0],
-                [(M1 + by * lx - bx * ly) * i1],
-            ]
-        )
-        return acc, np.array([[lx, ly]])
+        acc_x, acc_y = ydot[3 * nb: 4 * nb], ydot[4 * nb: 5 * nb]
+        pos = np.stack([self.wheel_positions(Y[:, j]) for j in range(Y.shape[1])], axis=-1)  # (nw, 2, K)
+        u, v = wk[:, :, k.W_U].T, wk[:, :, k.W_V].T
+        fx, fy = wk[:, :, k.W_FX].T, wk[:, :, k.W_FY].T
+        return Evaluation(
+            y_dot=ydot, body_force=f.T.copy(), wheel_x=pos[:, 0], wheel_y=pos[:, 1], wheel_speed=np.hypot(u, v),
+            tyre_power=fx * u + fy * v, sliding=wk[:, :, k.W_SLIDE].T != 0.0, load=wk[:, :, k.W_LOAD].T.copy(),
+            lam=lam, accel_body=np.concatenate([c * acc_x + s * acc_y, c * acc_y - s * acc_x]))
 
     def tyre_body_forces(self, y: np.ndarray, seg: SegmentParams) -> np.ndarray:
         """Sum of tyre forces and moments per body for K states, z order, shape (3 n_bodies, K) [N, N m]."""
-        return self._tyres(y, seg)[0]
-
-    def evaluate(self, y: np.ndarray, seg: SegmentParams, full: bool = True) -> Evaluation:
-        """Evaluate the model for K states ``y`` of shape (n_state, K).
-
-        ``full=False`` (the right-hand side) skips the contact positions, speeds and powers.
-        """
-        L = self.layout
-        f, c, s, u, v_lat, fx, fy, sliding, load = self._tyres(y, seg)
-        vx, vy, w = y[L.vx], y[L.vy], y[L.w]
-        if self.n_hitches == 1 and y.shape[1] == 1 and not seg.locks:
-            acc, lam = self._single_hitch(y[:, 0], c[:, 0], s[:, 0], f[:, 0])
-        elif self.n_hitches:
-            G, g, g_dot, gamma = hitch_rows(self.front_points, self.rear_points, c, s, y[L.x], y[L.y], vx, vy, w, seg.locks)
-            gm = G * self.minv
-            rhs = -((gm @ f.T[:, :, None])[..., 0] + (gamma + self._alpha2 * g_dot + self._beta2 * g).T)
-            lam = _solve_small(gm @ G.transpose(0, 2, 1), rhs)
-            acc = self._minv_col * (f + (G.transpose(0, 2, 1) @ lam[:, :, None])[..., 0].T)
-        else:
-            lam = np.zeros((y.shape[1], 0))
-            acc = self._minv_col * f
-        accel_body = None
-        if full or L.accel is not None:
-            nb = L.n_bodies
-            acc_x, acc_y = acc[:nb], acc[nb : 2 * nb]
-            accel_body = np.concatenate([c * acc_x + s * acc_y, c * acc_y - s * acc_x])
-        if L.accel is None:
-            y_dot = np.concatenate([y[L.velocity], acc])
-        else:
-            y_dot = np.concatenate([y[L.velocity], acc, (accel_body - y[L.accel]) / self.options.load_transfer_tau])
-        wheel_x = wheel_y = speed = power = None
-        if full:
-            bi = self.wheel_body
-            cb, sb = c[bi], s[bi]
-            wheel_x = y[L.x][bi] + cb * self._rx - sb * self._ry
-            wheel_y = y[L.y][bi] + sb * self._rx + cb * self._ry
-            speed = np.hypot(u, v_lat)
-            power = fx * u + fy * v_lat
-            load = np.broadcast_to(load, u.shape)
-        return Evaluation(
-            y_dot=y_dot,
-            body_force=f,
-            wheel_x=wheel_x,
-            wheel_y=wheel_y,
-            wheel_speed=speed,
-            tyre_power=power,
-            sliding=sliding,
-            load=load,
-            lam=lam,
-            accel_body=accel_body,
-        )
+        return self.evaluate(y, seg).body_force
 
     def rhs(self, t: float, y: np.ndarray, seg: SegmentParams) -> np.ndarray:
-        """Right-hand side ``y' = f(t, y)`` for one state (n_state,) or a batch (n_state, K).
-
-        Raises
-        ------
-        SolverError
-            If the derivative is not finite (never for valid inputs).
-        """
+        """Right-hand side ``y' = f(t, y)`` for one state (n_state,) or a batch (n_state, K)."""
         y_dot = self.evaluate(y[:, None] if y.ndim == 1 else y, seg, full=False).y_dot
         if not np.isfinite(y_dot).all():
-            # solve_ivp can loop forever on NaN; stop with a clear message instead
             raise SolverError(f"non-finite state derivative at t = {t:.6g} s (state {np.asarray(y).ravel().tolist()})")
         return y_dot[:, 0] if y.ndim == 1 else y_dot
 
     def consistent_accelerations(self, y: np.ndarray, seg: SegmentParams, iterations: int = 50) -> np.ndarray:
-        """State with the filtered accelerations set to their quasi-static fixed point.
-
-        Used at the start of a run with load transfer, so the loads start consistent with
-        the initial accelerations instead of lagging in from the static loads.  The
-        iteration ``a_f <- a(a_f)`` contracts (mu h / L < 1, note sec. 2.6).
-        """
+        """State with the filtered accelerations set to their quasi-static fixed point (load transfer)."""
         L = self.layout
         if L.accel is None:
             return y

@@ -608,32 +608,6 @@ def energy_runout(
 
 
 # ---------------------------------------------------------------------------------------------- rigid
-class _HitchlessModel(RunoutModel):
-    """The articulated model with the hitch constraints switched off in the equations of motion.
-
-    Static loads are those of the coupled vehicle (kingpin load on the towing body) and
-    articulation stops are removed.  ``n_hitches`` keeps the true count, so the
-    post-processing still reports the articulation and the pin gap of every hitch; the
-    constraint multipliers (hitch forces) are zero.
-    """
-
-    def __init__(self, vehicle, wheels, road, options):
-        free = dataclasses.replace(
-            vehicle, hitches=tuple(dataclasses.replace(h, articulation_limit=None) for h in vehicle.hitches)
-        )
-        super().__init__(free, wheels, road, options)
-        self._true_hitches = self.n_hitches
-
-    def evaluate(self, y, seg, full=True):
-        self.n_hitches = 0  # no constraint rows: every body moves under its own tyre forces
-        try:
-            ev = super().evaluate(y, seg, full)
-        finally:
-            self.n_hitches = self._true_hitches
-        ev.lam = np.zeros((y.shape[1], 2 * self._true_hitches))
-        return ev
-
-
 def _own_rest_time(body: BodyRunout, l_ref: float, v_stop: float, t_end: float) -> float:
     """First time the body's own rest measure falls to v_stop (from its dense solution)."""
 
@@ -670,6 +644,9 @@ def rigid_runout(
         ``method`` ``"rigid/scipy/<method>"``; hitch histories with the articulation angle
         and zero force; ``max_hitch_gap`` the largest pin separation reached.
     """
+    from .contact import ContactModel
+    from .engine import run_model
+    from .model import SceneModel
     from .simulate import simulate_runout
 
     settings = _check_inputs(vehicle, road, options, wheels)
@@ -677,35 +654,28 @@ def rigid_runout(
     if len(vehicle.bodies) == 1:
         res = simulate_runout(vehicle, initial, settings, road, opts)
         return dataclasses.replace(res, options={**res.options, "level": "rigid"})
-    opts = _scipy_engine(opts)
-    model = _HitchlessModel(vehicle, settings.resolve(vehicle), road, opts)
-    y0 = model.layout.pack(initial)
-    res = _simulate_model(model, y0, opts, f"rigid/scipy/{opts.method}")
+    model = SceneModel([vehicle], {vehicle.name: settings}, road, opts, contact=ContactModel(enabled=False),
+                       hitches=False)
+    res = run_model(model, initial).vehicles[vehicle.name]
     # each body's own time to rest (the run ends when the last body stops)
+    l_ref = model.M[0][:, 2]
     bodies = {}
     for i, (name, b) in enumerate(res.bodies.items()):
-        ttr = _own_rest_time(b, float(model.l_ref[i]), opts.v_stop, res.t_end) if res.success else None
+        ttr = _own_rest_time(b, float(l_ref[i]), opts.v_stop, res.t_end) if res.success else None
         bodies[name] = dataclasses.replace(b, time_to_rest=ttr)
-    return dataclasses.replace(res, bodies=bodies, options={**res.options, "level": "rigid"})
-
-
-def _simulate_model(model: RunoutModel, y0: np.ndarray, options: RunoutOptions, method: str) -> RunoutResult:
-    """:func:`~crashsim.motion.simulate_runout` for a prepared model (the engine's own steps)."""
-    from .postprocess import assemble_result, gauss_legendre_chunks
-    from .simulate import _integrate, _PiecewiseSolution, _sample_chunks, check_hitch_consistency, zone_membership
-
-    check_hitch_consistency(model, y0)
-    run, t_end, y_end, y_initial = _integrate(model, y0)
-    if run.status != "rest":
-        _log.warning("run-out of %s (%s): %s", model.vehicle.name, method, run.message)
-    sol = _PiecewiseSolution(run.segments, y_end, t_end)
-    samples = _sample_chunks(run, options.sample_dt, t_end, y_end)
-    if not samples:
-        seg = model.segment(t_end, zone_membership(model, y_end))
-        samples = [(seg, np.array([t_end]), y_end[:, None])]
-    quadrature = [gauss_legendre_chunks(np.asarray(s.ts), s, seg) for _, _, s, seg in run.segments]
-    return assemble_result(
-        model, samples=samples, quadrature=quadrature, status=run.status, message=run.message, t_end=t_end,
-        y_initial=y_initial, y_final=y_end, sol=sol, events=run.events, nfev=run.nfev, njev=run.njev, nlu=run.nlu,
-        n_segments=len(run.segments), method=method, check_zones=True,
-    )
+    # the hitches: the articulation and how far the pins drift apart (no force: they are ignored)
+    hitches, gap = [], 0.0
+    loads = model.loads[vehicle.name]
+    for j, h in enumerate(vehicle.hitches):
+        f, r = res.bodies[vehicle.bodies[j].name], res.bodies[vehicle.bodies[j + 1].name]
+        hf, hr = f.history, r.history
+        pin_f = np.stack([hf.x + np.cos(hf.heading) * h.front_point[0] - np.sin(hf.heading) * h.front_point[1],
+                          hf.y + np.sin(hf.heading) * h.front_point[0] + np.cos(hf.heading) * h.front_point[1]], 1)
+        pin_r = np.stack([hr.x + np.cos(hr.heading) * h.rear_point[0] - np.sin(hr.heading) * h.rear_point[1],
+                          hr.y + np.sin(hr.heading) * h.rear_point[0] + np.cos(hr.heading) * h.rear_point[1]], 1)
+        gap = max(gap, float(np.max(np.hypot(*(pin_f - pin_r).T))))
+        hitches.append(HitchHistory(front=f.name, rear=r.name, static_load=float(loads.hitch[j]), t=hf.t,
+                                    force=np.zeros((hf.t.size, 2)), force_body=np.zeros((hf.t.size, 2)),
+                                    articulation=hf.heading - hr.heading, stop_moment=np.zeros(hf.t.size)))
+    return dataclasses.replace(res, bodies=bodies, hitches=tuple(hitches), max_hitch_gap=gap,
+                               method=f"rigid/{res.method}", options={**res.options, "level": "rigid"})

@@ -110,6 +110,10 @@ class RunoutOptions:
         Wall-clock seconds allowed per run-out, default 120 (a run-out takes milliseconds
         compiled, well under 10 s with SciPy).  Reaching it ends the run with status
         ``"wall_time_limit"``; fits and Monte Carlo set it per sample.
+    max_impacts : int
+        Secondary impacts allowed in one run-out, default 100 (real scenes have a handful;
+        sustained contact is a force, not a chain of impacts).  Exceeding it ends the run with
+        status ``"event_limit"``.
     engine : {"scipy", "compiled"}
         ``"scipy"`` (default): ``scipy.integrate.solve_ivp`` with ``method``
         (:mod:`crashsim.motion.simulate`).  ``"compiled"``: the same model, events and
@@ -141,6 +145,7 @@ class RunoutOptions:
     max_segments: int = 10_000
     max_evaluations: int = 1_000_000
     max_wall_time: float = 120.0
+    max_impacts: int = 100
     engine: str = "scipy"
     scheme: str = "dopri5"
 
@@ -178,6 +183,8 @@ class RunoutOptions:
         if int(self.max_evaluations) < 100:
             raise ScenarioError(f"must be >= 100, got {self.max_evaluations!r}", field="options.max_evaluations")
         _in_range("max_wall_time", self.max_wall_time, 0.0, 1e6)
+        if int(self.max_impacts) < 0:
+            raise ScenarioError(f"must be >= 0, got {self.max_impacts!r}", field="options.max_impacts")
         object.__setattr__(self, "load_transfer", bool(self.load_transfer))
 
     def to_dict(self) -> dict:

@@ -14,6 +14,8 @@ segment inputs (:class:`~crashsim.motion.dynamics.SegmentParams`).
 from __future__ import annotations
 
 import logging
+import math
+from dataclasses import dataclass
 from typing import Callable, Sequence
 
 import numpy as np
@@ -272,7 +274,7 @@ def build_result(
         Initial and final kinetic energy [J], if already computed.
     """
     L = model.layout
-    nh = len(L.bodies) - 1
+    nh = hitch_force.shape[1] // 2  # the hitches modelled (none at the rigid level)
     specs = model.specs
     events = list(events)
     if missed:
@@ -389,3 +391,167 @@ def build_result(
         sol=sol,
         layout=L,
     )
+
+
+# ============================================================================= the scene
+def _sample_times(table, sample_dt: float, t_end: float):
+    """Sample times (segment starts, the ``sample_dt`` grid strictly inside, the run's end) and their segment."""
+    T, seg = [], []
+    for g, (t0, t1, _) in enumerate(table):
+        k0 = math.ceil(t0 / sample_dt - 1e-9)
+        grid = np.arange(k0, math.floor(t1 / sample_dt) + 1) * sample_dt
+        grid = grid[(grid > t0) & (grid < t1)]
+        T += [t0, *grid.tolist()]
+        seg += [g] * (1 + len(grid))
+    if table:
+        T.append(table[-1][1])
+        seg.append(len(table) - 1)
+    else:
+        T, seg = [t_end], [0]
+    return np.array(T, dtype=float), np.array(seg, dtype=np.int64)
+
+
+@dataclass(eq=False)
+class _VehicleView:
+    """What :func:`build_result` needs of one vehicle of a scene."""
+
+    vehicle: object
+    layout: object
+    specs: tuple
+    static_load: np.ndarray
+    loads: object
+    mass: np.ndarray
+    inertia: np.ndarray
+    options_dict: dict
+
+
+def _vehicle_rows(model, name: str) -> np.ndarray:
+    """Rows of a vehicle's state vector (its own layout) in the scene's state vector."""
+    b0, b1 = model.body_range[name]
+    nb = model.n_bodies
+    fields = 8 if model.options.load_transfer else 6
+    return np.concatenate([np.arange(f * nb + b0, f * nb + b1) for f in range(fields)])
+
+
+def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_end, quad, events, impacts, nfev, mode):
+    """The :class:`~crashsim.motion.result.SceneRunout` of a run (per vehicle, impacts, pairs, ledger)."""
+    from .engine import _segment_arrays, _snapshot
+    from .layout import StateLayout
+    from .model import kernels
+    from .result import PairSummary, SceneRunout
+
+    k = kernels()
+    o = model.options
+    M = model.M
+    table = integrator.segment_table()
+    T, seg_of = _sample_times(table, o.sample_dt, t_end)
+    Y = integrator.sample(T, seg_of, y_end)
+    arrays = _segment_arrays(table if table else [(t_end, t_end, _snapshot(0, mode))], model)
+    P, SL, LD, LAMH, STOPM, CF, max_gap, pen = k.evaluate_samples(np.ascontiguousarray(Y), seg_of, M, *arrays)
+    sol = integrator.solution(y_end, t_end)
+    missed = None
+    if model.road.zones and table:
+        miss_t, miss_k = k.missed_zone(M, T, P, seg_of, arrays[1])
+        if miss_k >= 0:
+            missed = (float(miss_t), int(miss_k))
+    nb, nw = model.n_bodies, model.n_wheels
+    opts = o.to_dict()
+
+    # ---- per vehicle
+    rest_time = {}
+    for e in events:
+        if e.kind == "vehicle_rest":
+            rest_time[e.vehicles[0]] = e.t
+    vehicles = {}
+    parked = mode[7]
+    for vi, v in enumerate(model.vehicles):
+        at_rest = bool(parked[vi])
+        t_v = rest_time.get(v.name, t_end) if at_rest else t_end
+        keep = T <= t_v + 1e-12
+        cols = np.nonzero(keep)[0]
+        if cols.size == 0 or T[cols[-1]] < t_v - 1e-12:
+            after = np.nonzero(T > t_v)[0]
+            cols = np.concatenate([cols, after[:1]]) if after.size else cols
+        Tv = T[cols].copy()
+        if Tv.size:
+            Tv[-1] = min(Tv[-1], t_v) if at_rest else Tv[-1]
+        rows = _vehicle_rows(model, v.name)
+        b0, b1 = model.body_range[v.name]
+        w0, w1 = model.wheel_range[v.name]
+        h0, h1 = model.hitch_range[v.name]
+        layout = StateLayout(tuple(b.name for b in v.bodies), accel_filter=o.load_transfer)
+        view = _VehicleView(v, layout, model.specs[w0:w1], model.static_load[w0:w1], model.loads[v.name],
+                            model.mass[b0:b1], model.inertia[b0:b1], opts)
+        v_events = [e for e in events if not e.vehicles or v.name in e.vehicles]
+        if at_rest:
+            v_status, v_message = "rest", f"all bodies below v_stop = {o.v_stop} m/s at t = {t_v:.4f} s"
+            v_events = [e for e in v_events if e.kind != status or e.t < t_end]
+            v_events.append(RunoutEvent(t_v, "rest", v_message))
+        else:
+            v_status, v_message = status, message
+        v_missed = None
+        if missed and w0 <= missed[1] < w1:
+            v_missed = (missed[0], model.specs[missed[1]].key)
+        quad_b = quad[b0:b1]
+        quad_w = lambda c: quad[nb + c * nw + w0: nb + c * nw + w1]  # noqa: E731
+        vehicles[v.name] = build_result(
+            view, t=Tv, Y=Y[rows][:, cols], points=P[w0:w1][:, cols], sliding=SL[w0:w1][:, cols],
+            load=LD[w0:w1][:, cols], hitch_force=LAMH[cols][:, 2 * h0:2 * h1], stop_moment=STOPM[cols][:, h0:h1],
+            distance=quad_b, path_length=quad_w(0), sliding_length=quad_w(1), energy=quad_w(2),
+            max_gap=_vehicle_gap(model, Y[:, cols], h0, h1), missed=v_missed, status=v_status, message=v_message,
+            t_end=t_v, y_initial=y_initial[rows], y_final=y_end[rows],
+            sol=lambda tq, rows=rows: np.asarray(sol(tq))[rows], events=v_events, nfev=nfev, njev=integrator.njev,
+            nlu=integrator.nlu, n_segments=len(table), method=integrator.method,
+            kinetic_energies=(_ke(model, y_initial, b0, b1), _ke(model, y_end, b0, b1)))
+
+    # ---- pairs and the ledger
+    n_imp = {}
+    for imp in impacts:
+        n_imp[f"{imp.body1}|{imp.body2}"] = n_imp.get(f"{imp.body1}|{imp.body2}", 0) + 1
+    pstate = arrays[5]
+    dt = np.diff(T, append=T[-1]) if T.size else np.zeros(0)
+    pairs = []
+    for p, pair in enumerate(model.pairs):
+        in_contact = pstate[seg_of, p] == k.PS_CONTACT
+        pairs.append(PairSummary(pair.name, pair.a, pair.b, n_imp.get(pair.name, 0), float(np.sum(dt[in_contact])),
+                                 float(CF[:, p].max()) if CF.shape[0] else 0.0, float(pen[p]),
+                                 float(quad[nb + 3 * nw + p])))
+    ke0, ke1 = model.kinetic_energy(y_initial), model.kinetic_energy(y_end)
+    tyres = float(np.sum(quad[nb + 2 * nw: nb + 3 * nw]))
+    stops = float(sum(e.energy for e in events if e.kind in ("stop_closed", "stop_impact")))
+    hits = float(sum(i.energy_loss for i in impacts))
+    contacts = -float(np.sum(quad[nb + 3 * nw:]))
+    ledger = {"initial": ke0, "impacts": hits, "tyres": tyres, "stops": stops, "contacts": contacts, "final": ke1,
+              "closing_error": ke0 - (hits + tyres + stops + contacts + ke1)}
+    if missed:
+        key = model.specs[missed[1]].key
+        detail = (f"wheel {key} is in a friction zone the integration did not register at t = {missed[0]:.4f} s: "
+                  "a zone corner clipped by less than the zone resolution; lower options.max_step if it matters")
+        events.insert(-1, RunoutEvent(missed[0], "zone_missed", detail))
+    return SceneRunout(vehicles=vehicles, impacts=tuple(impacts), pairs=tuple(pairs), events=tuple(events),
+                       energy=ledger, status=status, message=message, t_end=float(t_end), nfev=int(nfev),
+                       n_segments=len(table), method=integrator.method, sol=sol, layout=model.layout)
+
+
+def _ke(model, y, b0, b1) -> float:
+    L = model.layout
+    vx, vy, w = y[L.vx][b0:b1], y[L.vy][b0:b1], y[L.w][b0:b1]
+    return 0.5 * float(np.dot(model.mass[b0:b1], vx**2 + vy**2) + np.dot(model.inertia[b0:b1], w**2))
+
+
+def _vehicle_gap(model, Y, h0, h1) -> float:
+    """Largest pin gap of a vehicle's hitches over the sampled states [m]."""
+    if h1 <= h0:
+        return 0.0
+    L = model.layout
+    hb = model.M[20]
+    hitch = model.M[3]
+    out = 0.0
+    for j in range(h0, h1):
+        f, r = hb[j]
+        cf, sf = np.cos(Y[L.psi][f]), np.sin(Y[L.psi][f])
+        cr, sr = np.cos(Y[L.psi][r]), np.sin(Y[L.psi][r])
+        gx = Y[L.x][f] + cf * hitch[j, 0] - sf * hitch[j, 1] - Y[L.x][r] - (cr * hitch[j, 2] - sr * hitch[j, 3])
+        gy = Y[L.y][f] + sf * hitch[j, 0] + cf * hitch[j, 1] - Y[L.y][r] - (sr * hitch[j, 2] + cr * hitch[j, 3])
+        out = max(out, float(np.max(np.hypot(gx, gy))))
+    return out

@@ -8,7 +8,7 @@ ends with a heading 3 pi away from its initial one.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Callable
 
 import numpy as np
@@ -27,6 +27,9 @@ __all__ = [
     "STATUSES",
     "STATUS_MEANING",
     "limit_message",
+    "SecondaryImpact",
+    "PairSummary",
+    "SceneRunout",
 ]
 
 #: Why a run-out stopped: at rest, or which limit or failure ended it (only ``"rest"`` is a success).
@@ -273,20 +276,31 @@ class RunoutEvent:
     Attributes
     ----------
     t : float
-        Time [s].
+        Time [s] after the first separation.
     kind : str
-        ``"zone_enter"``, ``"zone_exit"``, ``"schedule"``, ``"stop_closed"``,
-        ``"stop_impact"``, ``"stop_open"``, ``"rest"``, ``"time_limit"`` or ``"solver_failure"``.
+        ``"zone_enter"``, ``"zone_exit"``, ``"schedule"`` (wheel settings change),
+        ``"stop_closed"``, ``"stop_impact"``, ``"stop_open"`` (articulation stops),
+        ``"vehicle_rest"`` (a vehicle comes to rest), ``"impact"`` (a secondary impact),
+        ``"contact"`` (sustained contact begins), ``"contact_pressed"`` (a pair pressed deeper
+        than its crush), ``"contact_end"``, ``"armed"`` (a pair that touched at separation has
+        separated), ``"zone_missed"``, and the run's end: ``"rest"`` or a limit status.
     detail : str
-        Human-readable description (wheel, zone, ...).
+        Human-readable description (wheel, zone, bodies, values in SI).
     energy : float
-        Kinetic energy dissipated by the event [J] (articulation-stop impacts; else 0).
+        Kinetic energy dissipated by the event [J] (articulation-stop and secondary impacts).
+    vehicles : tuple of str
+        The vehicles the event concerns (empty: the whole scene).
+    data : dict
+        The event's numbers (SI), for reports in other units: e.g. ``{"angle": ...}`` for a
+        stop, ``{"speed": ...}`` for a contact.
     """
 
     t: float
     kind: str
     detail: str
     energy: float = 0.0
+    vehicles: tuple = ()
+    data: dict = field(default_factory=dict, compare=False)
 
 
 @dataclass(frozen=True, eq=False)
@@ -360,7 +374,11 @@ class RunoutResult:
 
     @property
     def energy_residual(self) -> float:
-        """``(KE_0 - KE_end - tyre dissipation - stop-impact losses) / KE_0``: spurious work (constraint drift, solver error)."""
+        """``(KE_0 - KE_end - tyre dissipation - stop-impact losses) / KE_0``: spurious work (constraint drift, solver error).
+
+        Closes only for a vehicle that meets nobody after separation; the scene's energy
+        ledger (:attr:`SceneRunout.energy`) closes always.
+        """
         ke0 = self.kinetic_energy_initial
         impacts = sum(e.energy for e in self.events)
         return (ke0 - self.kinetic_energy_final - self.energy_dissipated - impacts) / ke0 if ke0 > 0 else 0.0
@@ -472,6 +490,155 @@ class RunoutResult:
                 "bodies": bodies,
                 "wheels": wheels,
                 "hitches": hitches,
-                "events": [{"t_s": e.t, "kind": e.kind, "detail": e.detail, "energy_J": e.energy} for e in self.events],
+                "events": [{"t_s": e.t, "kind": e.kind, "detail": e.detail, "energy_J": e.energy, **e.data}
+                           for e in self.events],
             }
         )
+
+
+@dataclass(frozen=True, eq=False)
+class SecondaryImpact:
+    """An impact during the run-out, solved by the impulse solver (SI, world frame).
+
+    Attributes
+    ----------
+    t : float
+        Time after the first separation [s].
+    body1, body2 : str
+        The bodies in contact (``body2`` may be a fixed obstacle); the normal points from body2
+        into body1 and the impulse acts on body1.
+    point, normal : ndarray (2,)
+        Contact point [m] and crush-surface normal.
+    closing_speed : float
+        Approach speed of the contact points along the normal before the impact [m/s].
+    normal_impulse, tangential_impulse : float
+        [N s].
+    energy_loss : float
+        Kinetic energy lost in the impact [J].
+    delta_v : dict
+        Velocity change of every body of the two vehicles [m/s], world frame, ``{body: (dvx, dvy)}``.
+    law : str
+        ``"friction"`` with the pair's coefficients, or ``"frictionless"`` where those were
+        inadmissible for the geometry (``warning`` says why).
+    restitution, friction : float
+        The coefficients used.
+    result : ImpactResult
+        The impulse solver's full answer.
+    warning : str
+    """
+
+    t: float
+    body1: str
+    body2: str
+    point: np.ndarray
+    normal: np.ndarray
+    closing_speed: float
+    normal_impulse: float
+    tangential_impulse: float
+    energy_loss: float
+    delta_v: dict
+    law: str
+    restitution: float
+    friction: float
+    result: Any = None
+    warning: str = ""
+
+    def to_dict(self) -> dict:
+        return _jsonable({
+            "time": self.t, "body1": self.body1, "body2": self.body2, "point": self.point, "normal": self.normal,
+            "closing_speed": self.closing_speed, "normal_impulse": self.normal_impulse,
+            "tangential_impulse": self.tangential_impulse, "energy_loss": self.energy_loss,
+            "delta_v": {k: {"vector": list(v), "magnitude": float(np.hypot(*v))} for k, v in self.delta_v.items()},
+            "law": self.law, "restitution": self.restitution, "friction": self.friction, "warning": self.warning,
+        })
+
+
+@dataclass(frozen=True, eq=False)
+class PairSummary:
+    """What happened between two bodies (or a body and an obstacle) during the run-out.
+
+    Attributes
+    ----------
+    name, body1, body2 : str
+    impacts : int
+        Secondary impacts of the pair.
+    contact_time : float
+        Time spent in sustained contact [s] (at the samples' resolution).
+    peak_force : float
+        Largest sustained-contact force [N] over the samples.
+    max_penetration : float
+        Largest depth of one body in the other beyond the allowance [m] over the samples:
+        ``F / k`` while in sustained contact, round-off while apart; the crush of the first
+        impact is the allowance of a pair that started overlapped.
+    contact_work : float
+        Work of the pair's contact forces on the bodies [J] (<= 0: dissipated, less the
+        energy still stored in the penalty spring).
+    """
+
+    name: str
+    body1: str
+    body2: str
+    impacts: int
+    contact_time: float
+    peak_force: float
+    max_penetration: float
+    contact_work: float
+
+    def to_dict(self) -> dict:
+        return _jsonable(dict(self.__dict__))
+
+
+@dataclass(frozen=True, eq=False)
+class SceneRunout:
+    """The run-out of a whole scene: every vehicle integrated together from the first separation.
+
+    Attributes
+    ----------
+    vehicles : dict of str to RunoutResult
+        Per vehicle, as :func:`~crashsim.motion.simulate_runout` returns it (its own status:
+        ``"rest"`` if it came to rest, else the run's status).
+    impacts : tuple of SecondaryImpact
+        The impacts during the run-out, in time order.
+    pairs : tuple of PairSummary
+    events : tuple of RunoutEvent
+        Every event of the scene in time order.
+    energy : dict
+        The energy ledger [J]: ``initial`` kinetic energy = ``impacts`` (losses) + ``tyres``
+        (tyre work) + ``stops`` (articulation-stop impacts) + ``contacts`` (sustained-contact
+        work) + ``final`` kinetic energy + ``closing_error``.
+    status, message, t_end, nfev, n_segments, method
+        Of the whole run.
+    sol : callable
+        ``sol(t)`` -> the scene's state vector(s).
+    layout : StateLayout
+    """
+
+    vehicles: dict
+    impacts: tuple
+    pairs: tuple
+    events: tuple
+    energy: dict
+    status: str
+    message: str
+    t_end: float
+    nfev: int
+    n_segments: int
+    method: str
+    sol: Callable[[Any], np.ndarray]
+    layout: Any
+
+    @property
+    def success(self) -> bool:
+        return self.status == "rest"
+
+    def to_dict(self, *, history: bool = True) -> dict:
+        return _jsonable({
+            "status": self.status, "message": self.message, "t_end_s": self.t_end, "method": self.method,
+            "nfev": self.nfev, "n_segments": self.n_segments,
+            "impacts": [i.to_dict() for i in self.impacts],
+            "pairs": [p.to_dict() for p in self.pairs],
+            "energy_J": self.energy,
+            "events": [{"t_s": e.t, "kind": e.kind, "detail": e.detail, "energy_J": e.energy,
+                        "vehicles": list(e.vehicles), **e.data} for e in self.events],
+            "vehicles": {name: r.to_dict(history=history) for name, r in self.vehicles.items()},
+        })

@@ -1,0 +1,613 @@
+"""One run-out for the whole scene, on either engine: integration, secondary impacts, results.
+
+How a run proceeds (both engines)
+---------------------------------
+The time axis is cut into **segments** in which every input is constant: the wheel-setting
+phase (cut at the scheduled change times of every vehicle), the friction zone each wheel is
+in, the closed articulation stops, the contact state of every pair and which vehicles are
+parked.  A segment ends at the first event (:mod:`crashsim.motion._kernels`: a vehicle's rest,
+a zone crossing, an articulation stop or its release, a touch, the arming or pressing of a
+pair), located on the integrator's dense output, or at a scheduled change.  What happens at an
+event is the kernels' :func:`~crashsim.motion._kernels.handle_event` and
+:func:`~crashsim.motion._kernels.settle`, the same code for both engines.
+
+A touch at speed stops the integration: the impact is solved here by the impulse solver
+(:func:`_secondary_impact`), the velocities jump, the pair enters sustained contact, and the
+integration goes on.  A vehicle whose bodies are all below ``v_stop`` is parked (frozen) until
+a contact or an impact moves it again; the run ends when every vehicle is parked.
+
+The engines differ only in the integrator of a segment: SciPy's ``LSODA`` (or another
+solve_ivp method) stepped from Python (``engine="scipy"``), or the compiled explicit
+Runge-Kutta loop of :func:`crashsim.motion._kernels.run` (``engine="compiled"``), which
+returns to Python only for an impact.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Mapping
+
+import numpy as np
+
+from ..errors import InadmissibleImpactError, ScenarioError, SolverError
+from ..vehicles import Body, BodyState, Vehicle
+from .model import SceneModel, kernels
+from .options import MAX_STILL_SEGMENTS
+from .result import (BodyHistory, BodyRunout, HitchHistory, PairSummary, RunoutEvent, RunoutResult, SceneRunout,
+                     SecondaryImpact, limit_message)
+from .postprocess import _GL_NODES, _GL_WEIGHTS, split_track
+
+__all__ = ["run_model", "STATUS_OF_CODE"]
+
+_log = logging.getLogger("crashsim")
+
+# The wall clock is read every this many right-hand-side evaluations (SciPy engine).
+_WALL_CHECK_EVALUATIONS = 256
+# Initial pin gap [m] and pin velocity mismatch (relative to 1 + speed) [m/s] accepted.
+_PIN_GAP_TOL = 1e-3
+_PIN_VELOCITY_TOL = 1e-6
+
+
+def _status_names():
+    k = kernels()
+    return {k.ST_REST: "rest", k.ST_TIME_LIMIT: "time_limit", k.ST_MAX_SEGMENTS: "event_limit",
+            k.ST_STEP_TOO_SMALL: "solver_failure", k.ST_NONFINITE: "solver_failure", k.ST_MAX_EVAL: "evaluation_limit",
+            k.ST_WALL_TIME: "wall_time_limit", k.ST_NO_PROGRESS: "event_limit"}
+
+
+STATUS_OF_CODE = None  # filled on first use (importing the kernels compiles nothing, but imports numba)
+
+
+class _Budget(Exception):
+    def __init__(self, code: int):
+        self.code = code
+
+
+# ============================================================================= integrators
+class _ScipyIntegrator:
+    """Segments integrated by SciPy's ODE solvers, stepped from Python (one step at a time)."""
+
+    def __init__(self, model: SceneModel):
+        from scipy.integrate import BDF, DOP853, LSODA, RK45, Radau
+
+        self.model = model
+        self.solver_cls = {"LSODA": LSODA, "RK45": RK45, "DOP853": DOP853, "Radau": Radau, "BDF": BDF}[model.options.method]
+        self.segments: list[dict] = []
+        self.njev = 0
+        self.nlu = 0
+        self.message = ""
+
+    def integrate(self, t, y, D, offsets, deadline, counters, quad, log):
+        k = kernels()
+        model = self.model
+        M = model.M
+        o = model.options
+        stops = sorted({tc for tc in model.change_times if tc < o.t_max} | {o.t_max})
+        max_eval = int(o.max_evaluations)
+        while True:
+            if bool(np.all(D[7] != 0)):
+                return k.ST_REST, t, y, None
+            if counters[0] >= o.max_segments:
+                return k.ST_MAX_SEGMENTS, t, y, None
+            if counters[1] >= MAX_STILL_SEGMENTS:
+                return k.ST_NO_PROGRESS, t, y, None
+            counters[0] += 1
+            t_stop = next(s for s in stops if s > t)
+            phase = int(k.phase_at(t, M[6]))
+            ev_kind, ev_idx, ev_val, ev_dir = k.segment_events(M, D, offsets)
+            g_old, r_old = k.event_values(y, M, phase, D, ev_kind, ev_idx, ev_val)
+            resolution = k.event_resolutions(M, ev_kind, ev_idx)
+            snapshot = _snapshot(phase, D)
+
+            def fun(tt, yy, phase=phase):
+                n_cols = 1 if yy.ndim == 1 else yy.shape[1]
+                counters[2] += n_cols
+                if counters[2] >= max_eval:
+                    raise _Budget(k.ST_MAX_EVAL)
+                crossed = counters[2] // _WALL_CHECK_EVALUATIONS != (counters[2] - n_cols) // _WALL_CHECK_EVALUATIONS
+                if (crossed or counters[2] <= n_cols) and time.perf_counter() > deadline:
+                    raise _Budget(k.ST_WALL_TIME)
+                out = k.rhs(yy, M, phase, D) if yy.ndim == 1 else k.rhs_many(np.ascontiguousarray(yy), M, phase, D)
+                if not np.all(np.isfinite(out)):
+                    raise _Budget(k.ST_NONFINITE)
+                return out
+
+            first = None if o.first_step is None else min(o.first_step, t_stop - t)
+            t_seg0 = t
+            steps = []
+            fired = -1
+            failure = None
+            try:
+                solver = self.solver_cls(fun, t, y, t_stop, rtol=o.rtol, atol=o.atol, max_step=o.max_step,
+                                         first_step=first, vectorized=o.method in ("Radau", "BDF"))
+                while solver.status == "running":
+                    message = solver.step()
+                    if solver.status == "failed":
+                        failure = (k.ST_STEP_TOO_SMALL, message)
+                        break
+                    t_old, t_new = solver.t_old, solver.t
+                    dense = solver.dense_output()
+                    g_new, r_new = k.event_values(solver.y, M, phase, D, ev_kind, ev_idx, ev_val)
+                    root, e = _first_root(k, M, phase, D, t_old, t_new, dense, g_old, g_new, r_old, r_new,
+                                          ev_kind, ev_idx, ev_val, ev_dir, resolution)
+                    if e >= 0:
+                        steps.append((t_old, root, dense))
+                        t = root
+                        y = np.array(dense(root), dtype=float)
+                        fired = e
+                        break
+                    steps.append((t_old, t_new, dense))
+                    t = t_new
+                    y = np.array(solver.y, dtype=float)
+                    g_old, r_old = g_new, r_new
+                self.njev += int(getattr(solver, "njev", 0) or 0)
+                self.nlu += int(getattr(solver, "nlu", 0) or 0)
+            except _Budget as b:
+                failure = (b.code, "")
+            if t > t_seg0:
+                seg = dict(t0=t_seg0, t1=t, steps=steps, mode=snapshot)
+                self.segments.append(seg)
+                _add_quadrature(k, M, seg, quad)
+                counters[1] = 0
+            else:
+                counters[1] += 1
+            if failure is not None:
+                self.message = failure[1]
+                return failure[0], t, y, None
+            if fired >= 0:
+                impact, recs, geo = k.apply_event(fired, t, y, M, phase, D, offsets, ev_kind, ev_idx, ev_val, ev_dir)
+                _log_records(model, t, recs, log)
+                if impact:
+                    return k.ST_IMPACT, t, y, geo
+                continue
+            if t >= o.t_max:
+                return k.ST_TIME_LIMIT, t, y, None
+            _log_records(model, t, k.schedule_change(y, M, D), log)
+
+    # ------------------------------------------------------------------ results
+    def segment_table(self):
+        return [(s["t0"], s["t1"], s["mode"]) for s in self.segments]
+
+    def sample(self, T, seg_of, y_end):
+        Y = np.empty((y_end.size, T.size))
+        if not self.segments:  # at rest from the start
+            Y[:] = y_end[:, None]
+            return Y
+        for g in np.unique(seg_of):
+            mask = seg_of == g
+            Y[:, mask] = _segment_dense(self.segments[g])(T[mask])
+        if T.size:
+            Y[:, -1] = y_end
+        return Y
+
+    def solution(self, y_end, t_end):
+        return _PiecewiseSolution([(s["t0"], _segment_dense(s)) for s in self.segments], y_end, t_end)
+
+    @property
+    def method(self):
+        return f"scipy/{self.model.options.method}"
+
+
+class _CompiledIntegrator:
+    """Segments integrated by the compiled loop (:func:`crashsim.motion._kernels.run`)."""
+
+    def __init__(self, model: SceneModel):
+        self.model = model
+        self.parts: list[tuple] = []
+        self.njev = 0
+        self.nlu = 0
+        self.message = ""
+
+    def integrate(self, t, y, D, offsets, deadline, counters, quad, log):
+        k = kernels()
+        model = self.model
+        o = model.options
+        stops = np.array(sorted({tc for tc in model.change_times if tc < o.t_max} | {o.t_max}), dtype=float)
+        out = k.run(float(t), np.ascontiguousarray(y, dtype=float), model.M, D, offsets, stops, _GL_NODES, _GL_WEIGHTS,
+                    float(deadline), counters, quad)
+        status, t_end, y_end = int(out[0]), float(out[1]), np.array(out[2])
+        self.parts.append(out[3:17])
+        lg_t, lg_rec, geo = out[17], out[18], out[19]
+        for tt, row in zip(lg_t.tolist(), lg_rec):
+            _log_records(model, tt, row[None, :], log)
+        return status, t_end, y_end, geo if status == k.ST_IMPACT else None
+
+    def _joined(self):
+        if getattr(self, "_cache", None) is not None and self._cache[0] == len(self.parts):
+            return self._cache[1]
+        st = [np.concatenate([p[i] for p in self.parts]) for i in range(4)] if self.parts else None
+        offs = np.cumsum([0] + [len(p[0]) for p in self.parts[:-1]]) if self.parts else []
+        sg_s = np.concatenate([p[5] + off for p, off in zip(self.parts, offs)]) if self.parts else np.zeros((0, 2), np.int64)
+        sg = [np.concatenate([p[i] for p in self.parts]) for i in range(4, 14)] if self.parts else None
+        joined = (st, sg_s, sg)
+        self._cache = (len(self.parts), joined)
+        return joined
+
+    def segment_table(self):
+        st, sg_s, sg = self._joined()
+        if sg is None:
+            return []
+        sg_t, _, phase, memb, nlk, lkj, lkth, pstate, pref, parked = sg
+        return [(float(sg_t[i, 0]), float(sg_t[i, 1]),
+                 (int(phase[i]), memb[i], int(nlk[i]), lkj[i], lkth[i], pstate[i], pref[i], parked[i]))
+                for i in range(len(sg_t))]
+
+    def sample(self, T, seg_of, y_end):
+        st, sg_s, _ = self._joined()
+        if st is None or not len(T):
+            return np.repeat(y_end[:, None], len(T), axis=1)
+        return kernels().interpolate_samples(T, seg_of, sg_s, st[0], st[1], st[2], st[3], y_end, len(T))
+
+    def solution(self, y_end, t_end):
+        from .fast import CompiledSolution
+
+        st, _, _ = self._joined()
+        if st is None:
+            n = y_end.size
+            return CompiledSolution(np.zeros(0), np.zeros(0), np.zeros((0, n)), np.zeros((0, n, 1)), y_end, t_end)
+        return CompiledSolution(st[0], st[1], st[2], st[3], y_end, t_end)
+
+    @property
+    def method(self):
+        return f"compiled/{self.model.options.scheme}"
+
+
+def _snapshot(phase, D):
+    memb, lk_j, lk_th, lk_n, _, pstate, pref, parked = D
+    return (int(phase), memb.copy(), int(lk_n[0]), lk_j.copy(), lk_th.copy(), pstate.copy(), pref.copy(), parked.copy())
+
+
+def _segment_arrays(table, model):
+    """Stacked mode arrays of the segments (``sg_phase, sg_memb, ...``) for the kernels' post-processing."""
+    k = kernels()
+    if not table:
+        D = model.fresh_mode()
+        table = [(0.0, 0.0, _snapshot(0, D))]
+    modes = [m for _, _, m in table]
+    return (np.array([m[0] for m in modes], dtype=np.int64), np.stack([m[1] for m in modes]),
+            np.array([m[2] for m in modes], dtype=np.int64), np.stack([m[3] for m in modes]),
+            np.stack([m[4] for m in modes]), np.stack([m[5] for m in modes]).astype(np.int64),
+            np.stack([m[6] for m in modes]), np.stack([m[7] for m in modes]).astype(np.int64))
+
+
+def _segment_dense(seg):
+    """Dense output of one SciPy segment: ``f(t)`` -> states (n, len(t))."""
+    starts = np.array([a for a, _, _ in seg["steps"]])
+    denses = [d for _, _, d in seg["steps"]]
+
+    def f(tq):
+        tq = np.atleast_1d(np.asarray(tq, dtype=float))
+        idx = np.clip(np.searchsorted(starts, tq, side="right") - 1, 0, len(denses) - 1)
+        out = np.empty((len(denses[0](starts[0])), tq.size))
+        for i in np.unique(idx):
+            mask = idx == i
+            out[:, mask] = np.asarray(denses[i](tq[mask])).reshape(out.shape[0], -1)
+        return out
+
+    return f
+
+
+class _PiecewiseSolution:
+    """Dense solution over all segments: ``sol(t)`` -> state(s), clipped to ``[0, t_end]``.
+
+    At a segment boundary the later segment is used (the state after a stop impact or a
+    secondary impact).
+    """
+
+    def __init__(self, pieces, y_end: np.ndarray, t_end: float):
+        self._starts = np.array([p[0] for p in pieces]) if pieces else np.zeros(0)
+        self._sols = [p[1] for p in pieces]
+        self._y_end = y_end
+        self._t_end = t_end
+
+    def __call__(self, t):
+        t_arr = np.asarray(t, dtype=float)
+        flat = np.clip(np.atleast_1d(t_arr).ravel(), 0.0, self._t_end)
+        out = np.empty((self._y_end.size, flat.size))
+        if not self._sols:
+            out[:] = self._y_end[:, None]
+        else:
+            idx = np.clip(np.searchsorted(self._starts, flat, side="right") - 1, 0, len(self._sols) - 1)
+            for i in np.unique(idx):
+                mask = idx == i
+                out[:, mask] = self._sols[i](flat[mask])
+            out[:, flat >= self._t_end] = self._y_end[:, None]
+        return out[:, 0] if t_arr.ndim == 0 else out.reshape((self._y_end.size,) + t_arr.shape)
+
+
+def _first_root(k, M, phase, D, t, t_new, dense, g_old, g_new, r_old, r_new, ev_kind, ev_idx, ev_val, ev_dir,
+                resolution):
+    """The SciPy engine's :func:`crashsim.motion._kernels.first_root`: the same rule, SciPy's brentq."""
+    from scipy.optimize import brentq
+
+    h = t_new - t
+    t_first, fired = math.inf, -1
+    eps4 = 4 * np.finfo(float).eps
+    for e in range(len(ev_kind)):
+        a, b, d = g_old[e], g_new[e], ev_dir[e]
+        reach = max(r_old[e], r_new[e]) * 1.5 * h
+        n_sub = 1
+        if reach > 0.0 and min(abs(a), abs(b)) < reach:
+            n_sub = min(k.MAX_SUBSAMPLES, max(1, math.ceil(reach / max(resolution[e], 1e-9))))
+
+        def g(tq, e=e):
+            return k.event_value_at(e, np.asarray(dense(tq), dtype=float), M, phase, D, ev_kind, ev_idx, ev_val)
+
+        ta, fa = t, a
+        for j in range(1, n_sub + 1):
+            if j == n_sub:
+                tb, fb = t_new, b
+            else:
+                tb = t + (t_new - t) * j / n_sub
+                if tb >= t_first:
+                    break
+                fb = g(tb)
+            if (d > 0 and fa <= 0.0 <= fb) or (d < 0 and fa >= 0.0 >= fb):
+                if fa == 0.0:
+                    root = ta
+                elif fb == 0.0:
+                    root = tb
+                elif (fa < 0) == (fb < 0):
+                    root = tb
+                else:
+                    root = brentq(g, ta, tb, xtol=eps4, rtol=eps4)
+                if root < t_first:
+                    t_first, fired = root, e
+                break
+            ta, fa = tb, fb
+    return t_first, fired
+
+
+def _add_quadrature(k, M, seg, quad):
+    """Path integrals of a SciPy segment: 5-point Gauss-Legendre on each of its steps' dense output."""
+    nodes, weights, owner = [], [], []
+    for a, b, dense in seg["steps"]:
+        half = 0.5 * (b - a)
+        if half <= 0:
+            continue
+        tq = 0.5 * (a + b) + half * _GL_NODES
+        nodes.append(np.asarray(dense(tq)).reshape(-1, tq.size))
+        weights.append(half * _GL_WEIGHTS)
+    if not nodes:
+        return
+    Yq = np.ascontiguousarray(np.concatenate(nodes, axis=1))
+    wq = np.concatenate(weights)
+    arrays = _segment_arrays([(seg["t0"], seg["t1"], seg["mode"])], None)
+    quad += k.quad_sums(Yq, wq, np.zeros(wq.size, dtype=np.int64), M, *arrays)
+
+
+# ============================================================================= events and their words
+def _log_records(model: SceneModel, t: float, recs, log: list) -> None:
+    """Run-out events (:class:`RunoutEvent`) from the kernels' log records (rows: kind, i, j, x, energy)."""
+    k = kernels()
+    for row in np.atleast_2d(recs):
+        kind, i, j, x, e = int(row[0]), int(row[1]), int(row[2]), float(row[3]), float(row[4])
+        if kind in (k.LOG_ZONE_ENTER, k.LOG_ZONE_EXIT):
+            spec = model.specs[i]
+            word = "enter" if kind == k.LOG_ZONE_ENTER else "exit"
+            zone = model.road.zones[j]
+            veh = model.vehicle_of_body(spec.body_index).name
+            log.append(RunoutEvent(t, f"zone_{word}", f"wheel {spec.key} {word}s zone {j} {zone.name!r}", 0.0, (veh,),
+                                   {"wheel": spec.key, "zone": zone.name}))
+        elif kind == k.LOG_SCHEDULE:
+            changing = tuple(v.name for v in model.vehicles if any(abs(tc - t) < 1e-12
+                                                                  for tc in model.resolved[v.name].change_times))
+            log.append(RunoutEvent(t, "schedule", "wheel settings change" + (f" ({', '.join(changing)})" if changing else ""),
+                                   0.0, changing))
+        elif kind in (k.LOG_STOP_CLOSED, k.LOG_STOP_IMPACT, k.LOG_STOP_OPEN):
+            front, rear = model.hitch_names[i]
+            veh = model.vehicle_of_body(model.layout.bodies.index(front)).name
+            if kind == k.LOG_STOP_OPEN:
+                log.append(RunoutEvent(t, "stop_open", f"articulation stop of hitch {front}-{rear} opens", 0.0, (veh,),
+                                       {"hitch": f"{front}-{rear}"}))
+            else:
+                how = "closes" if kind == k.LOG_STOP_CLOSED else "struck and left"
+                log.append(RunoutEvent(t, "stop_closed" if kind == k.LOG_STOP_CLOSED else "stop_impact",
+                                       f"articulation stop of hitch {front}-{rear} {how} at {math.degrees(x):+.1f} deg "
+                                       f"(impact dissipates {e:.1f} J)", e, (veh,),
+                                       {"hitch": f"{front}-{rear}", "angle_rad": x}))
+        elif kind == k.LOG_REST:
+            v = model.vehicles[i]
+            log.append(RunoutEvent(t, "vehicle_rest", f"vehicle {v.name} at rest (all bodies below v_stop = "
+                                                      f"{model.options.v_stop} m/s)", 0.0, (v.name,)))
+        else:
+            pair = model.pairs[i]
+            vehs = _pair_vehicles(model, pair)
+            if kind == k.LOG_ARMED:
+                log.append(RunoutEvent(t, "armed", f"{pair.a} and {pair.b} have separated by "
+                                                   f"{pair.contact.arm_distance:g} m: a later touch is an impact",
+                                       0.0, vehs, {"pair": pair.name}))
+            elif kind == k.LOG_CONTACT:
+                log.append(RunoutEvent(t, "contact", f"{pair.a} touches {pair.b} at {abs(x):.3g} m/s (below the "
+                                                     f"impulse threshold {pair.contact.velocity_threshold:g} m/s): "
+                                                     "sustained contact", 0.0, vehs,
+                                       {"pair": pair.name, "speed_m_s": abs(x)}))
+            elif kind == k.LOG_PRESS:
+                log.append(RunoutEvent(t, "contact_pressed", f"{pair.a} is pressed into {pair.b} beyond the crush of "
+                                                             f"the impact ({x:.3g} m deep): sustained contact", 0.0,
+                                       vehs, {"pair": pair.name, "depth_m": x}))
+            elif kind == k.LOG_CONTACT_END:
+                log.append(RunoutEvent(t, "contact_end", f"{pair.a} and {pair.b} separate", 0.0, vehs,
+                                       {"pair": pair.name}))
+
+
+def _pair_vehicles(model: SceneModel, pair) -> tuple:
+    names = model.layout.bodies
+    out = [model.vehicle_of_body(names.index(pair.a)).name]
+    if not pair.obstacle:
+        out.append(model.vehicle_of_body(names.index(pair.b)).name)
+    return tuple(out)
+
+
+# ============================================================================= secondary impacts
+def _secondary_impact(model: SceneModel, t: float, y: np.ndarray, geo: np.ndarray, D) -> tuple[SecondaryImpact, RunoutEvent]:
+    """Solve the impact of a touch with the impulse solver; update ``y`` and the mode ``D`` in place."""
+    from ..impact import CrushSurface, ImpactProblem, TangentialLaw, solve_impact
+    from .dynamics import make_hitch_consistent
+
+    p = int(geo[0])
+    pair = model.pairs[p]
+    names = model.layout.bodies
+    ia = names.index(pair.a)
+    va = model.vehicle_of_body(ia)
+    states = model.layout.unpack(y)
+    involved = [va]
+    if pair.obstacle:
+        vb = Vehicle(pair.b, (Body(pair.b, math.inf, math.inf),))
+        states[pair.b] = BodyState((float(geo[1]), float(geo[2])), 0.0, (0.0, 0.0), 0.0)
+    else:
+        vb = model.vehicle_of_body(names.index(pair.b))
+        involved.append(vb)
+    sub = {}
+    for v in involved:
+        sub.update(make_hitch_consistent(v, {b.name: states[b.name] for b in v.bodies}, position_tol=0.05))
+    if pair.obstacle:
+        sub[pair.b] = states[pair.b]
+    point = (float(geo[1]), float(geo[2]))
+    angle = math.atan2(float(geo[4]), float(geo[3]))
+    c = pair.contact
+    law, warning = "friction", ""
+
+    def problem(tangential):
+        return ImpactProblem((va, vb), sub, pair.a, pair.b, CrushSurface(point, angle, c.restitution, tangential, -1.0, 1))
+
+    try:
+        result = solve_impact(problem(TangentialLaw("friction", c.friction)))
+    except InadmissibleImpactError as exc:
+        law = "frictionless"
+        warning = (f"the contact coefficients are inadmissible for this geometry ({exc.reason}); solved "
+                   "frictionless (mu = 0) instead")
+        result = solve_impact(problem(TangentialLaw("ratio", 0.0)))
+    L = model.layout
+    ke_before = model.kinetic_energy(y)
+    delta_v = {}
+    for v in involved:
+        for b in v.bodies:
+            i = names.index(b.name)
+            bi = result.bodies[b.name]
+            delta_v[b.name] = (float(bi.velocity[0] - y[L.vx][i]), float(bi.velocity[1] - y[L.vy][i]))
+            y[L.vx.start + i], y[L.vy.start + i], y[L.w.start + i] = bi.velocity[0], bi.velocity[1], bi.yaw_rate
+    loss = ke_before - model.kinetic_energy(y)
+    D[5][p] = kernels().PS_CONTACT
+    D[6][p] = 0.0
+    for v in involved:
+        D[7][model.vehicles.index(v)] = 0
+    record = SecondaryImpact(t=t, body1=pair.a, body2=pair.b, point=np.array(point), normal=np.array(geo[3:5]),
+                             closing_speed=float(-geo[5]), normal_impulse=result.normal_impulse,
+                             tangential_impulse=result.tangential_impulse, energy_loss=float(loss), delta_v=delta_v,
+                             law=law, restitution=c.restitution, friction=0.0 if law == "frictionless" else c.friction,
+                             result=result, warning=warning)
+    dv = ", ".join(f"{n} {math.hypot(*d):.3g} m/s" for n, d in delta_v.items() if n in (pair.a, pair.b))
+    event = RunoutEvent(t, "impact", f"{pair.a} strikes {pair.b} at {-geo[5]:.3g} m/s: normal impulse "
+                                     f"{result.normal_impulse:.4g} N s, delta-v {dv}, {loss:.4g} J lost"
+                                     + (f" ({warning})" if warning else ""),
+                        float(loss), tuple(v.name for v in involved),
+                        {"pair": pair.name, "speed_m_s": float(-geo[5]), "normal_impulse_N_s": result.normal_impulse})
+    return record, event
+
+
+# ============================================================================= the run
+def check_scene_hitches(model: SceneModel, y: np.ndarray) -> None:
+    """Pins together, pin velocities equal, articulation inside its limit, for every hitch (else ScenarioError)."""
+    L = model.layout
+    hb = model.M[20]
+    hitch = model.M[3]
+    for j in range(model.n_hitches):
+        f, r = hb[j]
+        front, rear = L.bodies[f], L.bodies[r]
+        cf, sf = math.cos(y[L.psi][f]), math.sin(y[L.psi][f])
+        cr, sr = math.cos(y[L.psi][r]), math.sin(y[L.psi][r])
+        ax, ay = cf * hitch[j, 0] - sf * hitch[j, 1], sf * hitch[j, 0] + cf * hitch[j, 1]
+        bx, by = cr * hitch[j, 2] - sr * hitch[j, 3], sr * hitch[j, 2] + cr * hitch[j, 3]
+        gap = math.hypot(y[L.x][f] + ax - y[L.x][r] - bx, y[L.y][f] + ay - y[L.y][r] - by)
+        if gap > _PIN_GAP_TOL:
+            raise ScenarioError(f"pin points of {front!r} and {rear!r} are {gap:.4g} m apart (allowed <= {_PIN_GAP_TOL} m): "
+                                "positions are not hitch-consistent", field=f"initial[{rear!r}].position")
+        wf, wr = y[L.w][f], y[L.w][r]
+        dvx = y[L.vx][f] - wf * ay - y[L.vx][r] + wr * by
+        dvy = y[L.vy][f] + wf * ax - y[L.vy][r] - wr * bx
+        speed = float(np.max(np.hypot(y[L.vx], y[L.vy])))
+        allowed = _PIN_VELOCITY_TOL * (1.0 + speed)
+        if math.hypot(dvx, dvy) > allowed:
+            raise ScenarioError(
+                f"pin velocities of {front!r} and {rear!r} differ by {math.hypot(dvx, dvy):.4g} m/s (allowed <= "
+                f"{allowed:.3g} m/s); make the states hitch-consistent first with crashsim.motion.make_hitch_consistent()",
+                field=f"initial[{rear!r}].velocity")
+        lim = hitch[j, 4]
+        if not math.isnan(lim):
+            theta = math.remainder(float(y[L.psi][f] - y[L.psi][r]), 2 * math.pi)
+            if abs(theta) > lim + 1e-9:
+                raise ScenarioError(f"initial articulation {math.degrees(theta):.2f} deg exceeds the limit "
+                                    f"+-{math.degrees(lim):.2f} deg (articulation_limit)",
+                                    field=f"initial[{rear!r}].heading")
+
+
+def run_model(model: SceneModel, initial: Mapping[str, BodyState]) -> SceneRunout:
+    """Integrate the scene from separation to rest (or a limit); see the module docstring."""
+    k = kernels()
+    o = model.options
+    M = model.M
+    y = model.pack(initial)
+    check_scene_hitches(model, y)
+    D = model.fresh_mode()
+    k.start(y, M, D, 0.0)
+    k.arming(y, M, D)
+    y_initial = y.copy()
+    offsets = model.offsets(y)
+    log: list[RunoutEvent] = []
+    _log_records(model, 0.0, k.settle_at(y, M, D), log)
+    integrator = _CompiledIntegrator(model) if o.engine == "compiled" else _ScipyIntegrator(model)
+    deadline = time.perf_counter() + o.max_wall_time
+    counters = np.zeros(3, dtype=np.int64)
+    npairs = len(model.pairs)
+    quad = np.zeros(model.n_bodies + 3 * model.n_wheels + npairs)
+    impacts: list[SecondaryImpact] = []
+    t = 0.0
+    names = _status_names()
+    while True:
+        code, t, y, geo = integrator.integrate(t, y, D, offsets, deadline, counters, quad, log)
+        if code != k.ST_IMPACT:
+            break
+        if len(impacts) >= o.max_impacts:
+            status = "event_limit"
+            message = (f"stopped at t = {t:.4g} s (simulated) before rest: more than max_impacts = {o.max_impacts} "
+                       f"secondary impacts; the last between {model.pairs[int(geo[0])].name}")
+            code = None
+            break
+        record, event = _secondary_impact(model, t, y, geo, D)
+        impacts.append(record)
+        log.append(event)
+        _log_records(model, t, k.settle_at(y, M, D), log)
+    if code is not None:
+        status = names[code]
+        message = _message(code, o, t, y, k, M, log, integrator)
+    log.append(RunoutEvent(t, status, message))
+    if status != "rest":
+        _log.warning("run-out did not reach rest (%s): %s", status, message)
+    from .postprocess import assemble_scene
+
+    return assemble_scene(model, integrator, status=status, message=message, t_end=t, y_initial=y_initial, y_end=y,
+                          quad=quad, events=log, impacts=impacts, nfev=int(counters[2]), mode=D)
+
+
+def _message(code, o, t, y, k, M, log, integrator) -> str:
+    last = next((e.detail for e in reversed(log) if e.kind not in ("zone_enter", "zone_exit")), None)
+    if code == k.ST_REST:
+        return f"all bodies below v_stop = {o.v_stop} m/s at t = {t:.4f} s"
+    if code == k.ST_TIME_LIMIT:
+        return limit_message("time_limit", o, t, float(k.rest_measure(y, M, -1)))
+    if code == k.ST_MAX_SEGMENTS:
+        return limit_message("event_limit", o, t, last_event=last)
+    if code == k.ST_NO_PROGRESS:
+        return limit_message("no_progress", o, t, last_event=last)
+    if code == k.ST_MAX_EVAL:
+        return limit_message("evaluation_limit", o, t)
+    if code == k.ST_WALL_TIME:
+        return limit_message("wall_time_limit", o, t)
+    if code == k.ST_NONFINITE:
+        return f"{integrator.method} failed at t = {t:.6g} s: non-finite state derivative"
+    extra = f": {integrator.message}" if integrator.message else ": required step size is less than spacing between numbers"
+    return f"{integrator.method} failed at t = {t:.6g} s{extra}"

@@ -630,6 +630,10 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     if arrows:
         _draw_arrows(S)
 
+    # -- obstacles and numbered impacts -------------------------------------------------------
+    _draw_obstacles(S)
+    _draw_impacts(S)
+
     # -- barrier (after everything else: an endless barrier spans the drawn extent) -----------
     _draw_barrier(S)
 
@@ -798,6 +802,44 @@ def _draw_arrows(S: _Scene) -> None:
         S.labels.append(lab)
     S.legend_entry("PDOF: crush force on each body in contact",
                    Line2D([], [], ls="none", marker=r"$\Rightarrow$", ms=12, color="0.15"))
+
+
+def _draw_obstacles(S: _Scene) -> None:
+    """Fixed obstacles of the scene (guardrails, walls, poles), hatched, with their names."""
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch, Polygon
+
+    spec = S.sc.runout
+    barrier = next((v.bodies[0].name for v in S.sc.vehicles if v.is_barrier), None)
+    obstacles = [o for o in (spec.obstacles if spec is not None else ()) if o.name != barrier]
+    for o in obstacles:
+        for piece in o.pieces():
+            xy = S.d(piece)
+            S.ax.add_patch(Polygon(xy, closed=True, facecolor="0.78", edgecolor="0.25", lw=0.8, hatch="xxx",
+                                   zorder=_Z_BARRIER, gid=f"obstacle:{o.name}"))
+            S.add(xy)
+        mid = S.d(np.asarray(o.points)[len(o.points) // 2])
+        S.text(mid, o.name, fontsize=7, color="0.15", ha="center", va="bottom", zorder=_Z_TEXT, path_effects=_halo())
+    if obstacles:
+        S.legend_entry("fixed obstacle", Patch(facecolor="0.78", edgecolor="0.25", hatch="xxx", lw=0.8))
+
+
+def _draw_impacts(S: _Scene) -> None:
+    """Every impact as a numbered marker at its contact point, in time order (1 = the first impact)."""
+    from matplotlib.lines import Line2D
+
+    joint = getattr(S.scene, "joint", None)
+    later = joint.impacts if joint is not None else ()
+    points = [S.scene.impact.point] + [i.point for i in later]
+    if len(points) < 2:
+        return
+    for n, p in enumerate(points, start=1):
+        xy = S.d(np.asarray(p, dtype=float))
+        S.ax.plot(*xy, "o", ms=11, mfc="#ffd54f", mec="0.1", mew=1.0, zorder=_Z_ARROW + 1, gid=f"impact:{n}")
+        S.ax.text(*xy, str(n), fontsize=7, fontweight="bold", ha="center", va="center", zorder=_Z_ARROW + 2)
+        S.add(xy)
+    S.legend_entry("impacts in time order (1: the first; the report lists them)",
+                   Line2D([], [], ls="none", marker="o", ms=9, mfc="#ffd54f", mec="0.1"))
 
 
 def _draw_barrier(S: _Scene) -> None:

@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from .units import Kind, format_value, to_unit
 
-__all__ = ["format_impact", "format_runout", "format_evidence", "fmt"]
+__all__ = ["format_impact", "format_runout", "format_joint", "format_events", "format_evidence", "fmt"]
 
 
 fmt = format_value  # an SI value in the display unit of a system (crashsim.units.format_value)
@@ -83,6 +85,50 @@ def format_runout(runout: dict, system: str = "SI") -> str:
             lines.append(f"    {name:<14} {where} {_vec(b.rest_position, 'length', s):<22} heading "
                          f"{math.degrees(b.rest_heading_wrapped):7.1f} deg, travelled {fmt(b.distance, 'length', s)}, "
                          f"time to rest {ttr}")
+    return "\n".join(lines)
+
+
+def format_joint(scene, system: str = "SI") -> str:
+    """Later impacts, contacts, events and the energy ledger of a scene's joint run-out."""
+    s = system
+    j = scene.joint
+    lines = []
+    if j.impacts:
+        lines.append("Impacts after the first (solved by the impulse solver)")
+        for n, i in enumerate(j.impacts, start=2):
+            dv = ", ".join(f"{b} {fmt(float(np.hypot(*d)), 'speed', s)}" for b, d in i.delta_v.items()
+                           if b in (i.body1, i.body2))
+            lines.append(f"  #{n} at {fmt(i.t, 'time', s)}: {i.body1} against {i.body2}, closing "
+                         f"{fmt(i.closing_speed, 'speed', s)}, point {_vec(i.point, 'length', s)}, normal impulse "
+                         f"{fmt(i.normal_impulse, 'impulse', s)}, tangential {fmt(i.tangential_impulse, 'impulse', s)}, "
+                         f"energy lost {fmt(i.energy_loss, 'energy', s)}; delta-v {dv} (e = {i.restitution:g}, "
+                         f"{i.law}{'' if i.law == 'frictionless' else f' f = {i.friction:g}'})")
+            if i.warning:
+                lines.append(f"     {i.warning}")
+    touched = [p for p in j.pairs if p.contact_time > 0 or p.impacts]
+    if touched:
+        lines.append("Contacts")
+        for p in touched:
+            lines.append(f"  {p.name}: {p.impacts} impact(s), sustained contact {fmt(p.contact_time, 'time', s)}, "
+                         f"peak force {fmt(p.peak_force, 'force', s)}, deepest {fmt(p.max_penetration, 'length', s)} "
+                         "beyond the crush")
+    ledger = scene.energy_ledger()
+    if ledger:
+        lines.append("Energy from the first impact to rest")
+        labels = [("before_impact", "kinetic energy before the impact"), ("first_impact", "lost in the first impact"),
+                  ("later_impacts", "lost in later impacts"), ("tyres", "tyre work"),
+                  ("stops", "articulation-stop impacts"), ("contacts", "sustained contact"),
+                  ("final", "kinetic energy left"), ("closing_error", "closing error")]
+        for key, label in labels:
+            lines.append(f"  {label:<34} {fmt(ledger[key], 'energy', s):>14}")
+    return "\n".join(lines)
+
+
+def format_events(events, system: str = "SI") -> str:
+    """The run-out's events, one line each (time, kind, what happened)."""
+    lines = ["Run-out events"]
+    for e in events:
+        lines.append(f"  {fmt(e.t, 'time', system):>10}  {e.kind:<15} {e.detail}")
     return "\n".join(lines)
 
 

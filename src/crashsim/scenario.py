@@ -21,8 +21,9 @@ import numpy as np
 from .errors import ScenarioError
 from .geometry import rotate
 from .motion.levels import LEVELS
-from .motion import (LATERAL_MODELS, METHODS, WHEEL_STATES, FrictionZone, Road, RunoutOptions, ScheduledChange,
-                     WheelSetting, WheelSettings)
+from .motion import (LATERAL_MODELS, METHODS, WHEEL_STATES, ContactModel, FrictionZone, Obstacle, Road, RunoutOptions,
+                     ScheduledChange, WheelSetting, WheelSettings)
+from .motion.contact import CONTACT_KEYS
 from .motion.wheels import _select, enumerate_wheels
 from .impact import (CrushSurface, ExternalImpulse, ImpactProblem, TangentialLaw, VelocityConstraint,
                      tyre_friction_impulse)
@@ -276,6 +277,9 @@ EV_DV = Section("delta_v", [
     Field("component", choices=("magnitude", "longitudinal", "lateral"), default="magnitude",
           description="What was recorded: the magnitude, or the component along the body's x or y axis"),
     Field("tolerance", Kind.SPEED, minimum=0, example="1 mph", description="Largest acceptable difference"),
+    Field("impacts", choices=("first", "all"), default="first",
+          description="Which impacts the recorder saw: the first (default: a recorder records one event, normally the "
+                      "first impact) or all of the body's impacts summed (a later secondary impact in the same event)"),
 ], description="A delta-v recorded by an event data recorder")
 EVIDENCE = Section("evidence", [], subsections=[
     ArrayOf("rest", EV_REST, required=False, description="Rest positions"),
@@ -283,6 +287,55 @@ EVIDENCE = Section("evidence", [], subsections=[
     EV_POI,
     ArrayOf("delta_v", EV_DV, required=False, description="Recorded delta-v"),
 ], required=False, description="What was found at the scene; each item is checked against its tolerance")
+
+_CM = ContactModel()
+
+
+def _contact_fields(defaults: bool) -> list[Field]:
+    """The contact-model keys: with the scene's defaults, or all optional (a pair's overrides)."""
+    d = (lambda v: {"default": v}) if defaults else (lambda v: {"required": False})  # noqa: E731
+    return [
+        Field("restitution", "float", minimum=0, maximum=1, **d(_CM.restitution), example="0.2",
+              description="Coefficient of restitution e of a secondary impact (low-speed impacts: about 0.1-0.3)"),
+        Field("friction", "float", minimum=0, maximum=5, **d(_CM.friction), example="0.6",
+              description="Crush-surface friction f of a secondary impact (friction law), and the friction of "
+                          "sustained contact"),
+        Field("velocity_threshold", Kind.SPEED, minimum=0, exclusive_minimum=True, maximum=50,
+              **d(f"{_CM.velocity_threshold} m/s"), example="0.5 m/s",
+              description="Approach speed from which a touch is an impact (impulse); slower: sustained contact"),
+        Field("stiffness", "float", minimum=0, exclusive_minimum=True, maximum=1e12, **d(_CM.stiffness),
+              example="1e7", description="Penalty stiffness of sustained contact per contact point [N/m]: bodies "
+                                         "stay within force / stiffness of each other"),
+        Field("damping_ratio", "float", minimum=0, maximum=100, **d(_CM.damping_ratio), example="1.0",
+              description="Damping of sustained contact relative to critical (1: no bounce)"),
+        Field("arm_distance", Kind.LENGTH, minimum=0, exclusive_minimum=True, maximum=10,
+              **d(f"{_CM.arm_distance} m"), example="0.05 m",
+              description="Gap at which a pair leaves sustained contact, or is armed after the crush of the impact"),
+        Field("enabled", "bool", **d(True), example="true",
+              description="false: the bodies pass through each other (no contact modelled)"),
+    ]
+
+
+CONTACT_PAIR = Section("pair", [
+    Field("first", "str", example="trailer", description="A body, a vehicle or an obstacle"),
+    Field("second", "str", example="car",
+          description="Another body, vehicle or obstacle (of another vehicle); the most specific override wins: "
+                      "body-body over body-vehicle over vehicle-vehicle"),
+] + _contact_fields(False), description="Contact coefficients for one pair (overrides the scene's)")
+
+CONTACTS = Section("contacts", _contact_fields(True), subsections=[
+    ArrayOf("pairs", CONTACT_PAIR, required=False, description="Overrides for some pairs"),
+], required=False, description="How vehicles meet again after the first impact, and meet obstacles (run-out)")
+
+OBSTACLE = Section("obstacle", [
+    Field("name", "str", example="guardrail", description="Name of the obstacle, unique in the scene"),
+    Field("points", Kind.LENGTH, n=2, points=True, min_points=2, example='[["0 m", "-5 m"], ["80 m", "-5 m"]]',
+          description="Centre line of the obstacle (a polyline), or with closed = true its outline, world frame"),
+    Field("thickness", Kind.LENGTH, minimum=0, exclusive_minimum=True, maximum=50, default="0.3 m",
+          description="Width of a polyline obstacle (its faces lie half of it either side of the line)"),
+    Field("closed", "bool", default=False, description="The points outline a solid obstacle (a pier, a pole)"),
+    Field("description", "str", default="", description="Free text for the report"),
+], description="A fixed obstacle: guardrail, wall, pole, pier")
 
 META = Section("scenario", [
     Field("title", "str", example='Car into trailer wheels', description="Title of the scene"),
@@ -297,6 +350,8 @@ SCHEMA = Section("scenario file", subsections=[
     BARRIER,
     IMPACT,
     RUNOUT,
+    CONTACTS,
+    ArrayOf("obstacles", OBSTACLE, required=False, description="Fixed obstacles of the scene (run-out)"),
     EVIDENCE,
 ], description="A crashsim scenario file (TOML)")
 
@@ -367,6 +422,9 @@ class RunoutSpec:
     level: str = "articulated"
     accuracy: float | None = None
     accuracy_heading: float | None = None
+    contact: ContactModel = field(default_factory=ContactModel)
+    pair_contact: dict = field(default_factory=dict)  # (name, name) -> ContactModel
+    obstacles: tuple = ()  # Obstacle, the barrier of the impact first
 
 
 _WHEEL_KEYS = ("state", "brake", "steer", "cornering_coefficient", "cornering_stiffness", "rolling_resistance",
@@ -464,6 +522,71 @@ def _build_runout(r: dict, vehicles, raw_vehicles: dict, file: str | None, raw: 
         return RunoutSpec(road, options, {}, level)
     wheels = {veh.name: _build_wheels(veh, raw_vehicles[veh.name], file) for veh in vehicles if not veh.is_barrier}
     return RunoutSpec(road, options, wheels, level, r["accuracy"], r["accuracy_heading"])
+
+
+def _contact_model(base: ContactModel, entry: dict, key: str, file: str | None) -> ContactModel:
+    changes = {k: entry[k] for k in CONTACT_KEYS if entry.get(k) is not None}
+    try:
+        return base.updated(**changes)
+    except ScenarioError as exc:
+        raise _rewrap(exc, key, file) from None
+
+
+def _with_contact(spec: "RunoutSpec", d: dict, vehicles, problem: ImpactProblem, file: str | None) -> "RunoutSpec":
+    """The run-out's contact model, pair overrides and obstacles (the barrier of the impact first)."""
+    from dataclasses import replace as _replace
+
+    c = d["contacts"] or {}
+    contact = _contact_model(ContactModel(), c, "contacts", file)
+    bodies = {b.name for v in vehicles for b in v.bodies if not b.is_fixed}
+    vnames = {v.name for v in vehicles if not v.is_barrier}
+    obstacles = []
+    barrier = d["barrier"]
+    if barrier is not None:
+        surf = problem.surface
+        into_vehicle = surf.normal if problem.body2 == barrier["name"] else -surf.normal
+        tangent = surf.tangent
+        extent = None if barrier["extent"] is None else tuple(barrier["extent"])
+        if extent is not None and problem.body2 != barrier["name"]:
+            extent = (-extent[1], -extent[0]) if surf.tangent_sign < 0 else extent
+        obstacles.append(Obstacle.barrier(barrier["name"], surf.point, into_vehicle, tangent, extent))
+    taken = bodies | vnames | {o.name for o in obstacles}
+    for i, o in enumerate(d["obstacles"]):
+        key = f"obstacles[{i}]"
+        if o["name"] in taken:
+            raise _err(f"name {o['name']!r} is already a body, vehicle or obstacle name; names must be unique",
+                       f"{key}.name", file)
+        taken.add(o["name"])
+        try:
+            obstacles.append(Obstacle(o["name"], tuple(o["points"]), o["thickness"], o["closed"]))
+        except ScenarioError as exc:
+            msg = str(exc)
+            if exc.field and msg.startswith(f"{exc.field}: "):
+                msg = msg[len(exc.field) + 2:]
+            raise _err(msg, f"{key}.points", file) from None
+    names = bodies | vnames | {o.name for o in obstacles}
+    owner = {b.name: v.name for v in vehicles for b in v.bodies}
+    pairs = {}
+    for i, p in enumerate(c.get("pairs", []) or []):
+        key = f"contacts.pairs[{i}]"
+        for which in ("first", "second"):
+            if p[which] not in names:
+                import difflib
+
+                near = difflib.get_close_matches(p[which], sorted(names), n=1)
+                hint = f"; did you mean {near[0]!r}?" if near else ""
+                raise _err(f"{p[which]!r} names no body, vehicle or obstacle of the scene{hint} Names: "
+                           f"{', '.join(map(repr, sorted(names)))}", f"{key}.{which}", file)
+        a, b = p["first"], p["second"]
+        va, vb = owner.get(a, a if a in vnames else None), owner.get(b, b if b in vnames else None)
+        if a == b or (va is not None and va == vb):
+            raise _err(f"{a!r} and {b!r} are not a pair that can meet: they are the same vehicle or body "
+                       "(contact is between bodies of different vehicles, or a body and an obstacle)",
+                       f"{key}.second", file)
+        if va is None and vb is None:
+            raise _err(f"{a!r} and {b!r} are both obstacles: obstacles do not meet each other", f"{key}.second", file)
+        pairs[(a, b)] = _contact_model(contact, p, key, file)
+    return _replace(spec, contact=contact, pair_contact=pairs, obstacles=tuple(obstacles))
 
 
 def _err(msg: str, key: str, file: str | None) -> ScenarioError:
@@ -583,10 +706,7 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
         bname = d["barrier"]["name"]
         if bname in states:
             raise _err(f"barrier name {bname!r} is also a body name", "barrier.name", file)
-        if len(vehicles) != 1:
-            raise _err(f"a scene with a barrier has exactly one vehicle, got {len(vehicles)}: "
-                       f"{[v.name for v in vehicles]}", "vehicles", file)
-    elif len(vehicles) != 2:
+    elif len(vehicles) < 2:
         raise _err(f"an impact needs two vehicles, or one and a [barrier]; got {len(vehicles)}: "
                    f"{[v.name for v in vehicles]}", "vehicles", file)
     for k in ("body1", "body2"):
@@ -597,6 +717,10 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
             near = difflib.get_close_matches(imp[k], allowed, n=1)
             hint = f"; did you mean {near[0]!r}?" if near else ""
             raise _err(f"unknown body {imp[k]!r}{hint} Bodies: {', '.join(map(repr, allowed))}", f"impact.{k}", file)
+    if d["barrier"] is not None and d["barrier"]["name"] not in (imp["body1"], imp["body2"]):
+        raise _err(f"the barrier {d['barrier']['name']!r} is neither impact.body1 ({imp['body1']!r}) nor impact.body2 "
+                   f"({imp['body2']!r}); [barrier] is the rigid body of the impact (fixed obstacles met in the "
+                   "run-out go in [[obstacles]])", "barrier.name", file)
     point = _point(imp["point"], imp["point_frame"], states, "impact.point_frame", file)
     _, nang = _frame_xform(imp["normal_frame"], states, "impact.normal_frame", file)
     if d["barrier"] is not None:
@@ -641,9 +765,24 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
                        key, file)
         external.append(ExternalImpulse(x["body"], tuple(origin + rotate(np.asarray(x["point"]), ang)), tuple(vec),
                                         x["name"] or f"impulse {i + 1}"))
+    # the impact involves the two vehicles of body1 and body2; any others wait for the run-out
+    owner = {b.name: v for v in vehicles for b in v.bodies}
+    involved = []
+    for k in ("body1", "body2"):
+        v = owner[imp[k]]
+        if v not in involved:
+            involved.append(v)
+    for i, c in enumerate(imp["constraints"]):
+        if c["body"] in owner and owner[c["body"]] not in involved:
+            raise _err(f"body {c['body']!r} is not in the impact (vehicles {[v.name for v in involved]})",
+                       f"impact.constraints[{i}].body", file)
+    for i, x in enumerate(imp["external_impulses"]):
+        if x["body"] in owner and owner[x["body"]] not in involved:
+            raise _err(f"body {x['body']!r} is not in the impact (vehicles {[v.name for v in involved]})",
+                       f"impact.external_impulses[{i}].body", file)
     try:
-        problem = ImpactProblem(tuple(vehicles), states, imp["body1"], imp["body2"], surface,
-                                tuple(constraints), tuple(external))
+        problem = ImpactProblem(tuple(involved), {b.name: states[b.name] for v in involved for b in v.bodies},
+                                imp["body1"], imp["body2"], surface, tuple(constraints), tuple(external))
     except ScenarioError as exc:
         raise ScenarioError(str(exc), field=exc.field, file=file) from None
     _check_contact_point(problem, imp["contact_tolerance"], d["scenario"]["units"], file)
@@ -651,6 +790,7 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
     if d["runout"] is not None:
         raw_runout = data.get("runout") if isinstance(data.get("runout"), dict) else {}
         runout = _build_runout(d["runout"], vehicles, d["vehicles"], file, raw_runout)
+        runout = _with_contact(runout, d, vehicles, problem, file)
     evidence = _build_evidence(d["evidence"], states, file, vehicles)
     meta = d["scenario"]
     return Scenario(file, meta["title"], meta["source"], meta["units"], tuple(vehicles), states, problem, runout,
@@ -717,7 +857,7 @@ def _build_evidence(e: dict | None, states: dict, file: str | None, vehicles=())
     if e["impact_point"] is not None:
         poi = ImpactPointEvidence(tuple(e["impact_point"]["position"]), e["impact_point"]["tolerance"])
     dv = [DeltaVEvidence(body(x["body"], f"evidence.delta_v[{i}].body"), x["value"], x["tolerance"], x["component"],
-                         x["name"]) for i, x in enumerate(e["delta_v"])]
+                         x["name"], x["impacts"]) for i, x in enumerate(e["delta_v"])]
     return Evidence(tuple(rest), tuple(marks), poi, tuple(dv))
 
 

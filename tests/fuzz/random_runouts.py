@@ -170,3 +170,108 @@ def random_case(seed: int, i: int, *, engine: str = "scipy", kinds=KINDS) -> Cas
     options = RunoutOptions(engine=engine, load_transfer=lt)
     label = f"seed {seed} case {i}: {kind}, {speed:.1f} m/s" + (", load transfer" if lt else "")
     return Case(label, vehicle, initial, _wheels(rng, vehicle), _road(rng, np.zeros(2), course, speed), options)
+
+
+@dataclass(frozen=True)
+class SceneCase:
+    """A random scene: inputs of :func:`crashsim.motion.simulate_scene` and a label."""
+
+    label: str
+    vehicles: tuple
+    initial: dict
+    wheels: dict
+    road: Road
+    options: RunoutOptions
+    obstacles: tuple
+
+
+def _renamed(vehicle: Vehicle, tag: str) -> Vehicle:
+    from dataclasses import replace
+
+    return Vehicle(f"{tag}", tuple(replace(b, name=f"{tag}_{b.name}") for b in vehicle.bodies), vehicle.hitches)
+
+
+def _outline_world(body, state):
+    c, s = math.cos(state.heading), math.sin(state.heading)
+    o = body.outline()
+    return np.asarray(state.position) + o @ np.array([[c, s], [-s, c]])
+
+
+def _apart(polys_a, polys_b, margin) -> bool:
+    """True if every pair of convex outlines is separated by more than ``margin`` (separating axes)."""
+    for p in polys_a:
+        for q in polys_b:
+            best = -math.inf
+            for poly, other in ((p, q), (q, p)):
+                d = np.roll(poly, -1, axis=0) - poly
+                n = np.stack([d[:, 1], -d[:, 0]], 1) / np.hypot(d[:, 0], d[:, 1])[:, None]
+                for k in range(len(poly)):
+                    best = max(best, float(np.min((other - poly[k]) @ n[k])))
+            if best <= margin:
+                return False
+    return True
+
+
+def random_scene(seed: int, i: int, *, engine: str = "scipy", kinds=KINDS, n_vehicles=None) -> SceneCase:
+    """Random scene ``i`` of ``seed``: 2 or 3 vehicles on crossing paths, some obstacles.
+
+    Vehicles start apart (no overlap, more than 0.5 m between outlines) and move towards a
+    common area, so that many scenes have impacts and contacts; some start at rest.
+    """
+    from crashsim.motion import Obstacle
+
+    rng = np.random.default_rng([seed, i, 7])
+    nv = int(n_vehicles or rng.integers(2, 4))
+    for attempt in range(200):
+        vehicles, initial, wheels, polys = [], {}, {}, []
+        ok = True
+        for k in range(nv):
+            kind = kinds[int(rng.integers(len(kinds)))]
+            v = _renamed(_vehicle(rng, kind), f"v{k}")
+            if k == 0:
+                pos, heading = np.zeros(2), _u(rng, -math.pi, math.pi)
+            else:
+                bearing = _u(rng, -math.pi, math.pi)
+                pos = _u(rng, 8.0, 22.0) * np.array([math.cos(bearing), math.sin(bearing)])
+                heading = math.atan2(-pos[1], -pos[0]) + _u(rng, -0.6, 0.6)  # towards the first vehicle
+            speed = 0.0 if (k > 0 and rng.random() < 0.25) else _u(rng, 3.0, 25.0)
+            slip = math.radians(_u(rng, -20, 20)) if rng.random() < 0.4 else 0.0
+            course = heading + slip
+            art = [float(rng.uniform(-0.3, 0.3) * h.articulation_limit) for h in v.hitches]
+            yaw = [float(rng.normal(0, 0.3)) for _ in v.bodies]
+            st = chain_states(v, pos, heading, speed * np.array([math.cos(course), math.sin(course)]), yaw, art)
+            st = make_hitch_consistent(v, st)
+            mine = [_outline_world(b, st[b.name]) for b in v.bodies]
+            if any(not _apart(mine, other, 0.5) for other in polys):
+                ok = False
+                break
+            polys.append(mine)
+            vehicles.append(v)
+            initial.update(st)
+            wheels[v.name] = _wheels(rng, v)
+        if ok:
+            break
+    obstacles = []
+    if rng.random() < 0.5:  # a guardrail beside the area
+        off = _u(rng, 6.0, 14.0)
+        ang = _u(rng, 0, math.pi)
+        d = np.array([math.cos(ang), math.sin(ang)])
+        n = np.array([-d[1], d[0]])
+        a, b = off * n - 40 * d, off * n + 40 * d
+        rail = Obstacle("rail", (tuple(a), tuple(b)), thickness=0.3)
+        if all(_apart(p, rail.pieces(), 0.5) for p in polys):
+            obstacles.append(rail)
+    if rng.random() < 0.3:  # a pole
+        c = rng.normal(0, 6, 2)
+        pole = Obstacle("pole", tuple(map(tuple, c + 0.2 * np.array([[1, 1], [-1, 1], [-1, -1], [1, -1]]))), closed=True)
+        if all(_apart(p, pole.pieces(), 0.5) for p in polys):
+            obstacles.append(pole)
+    speed0 = max(float(np.hypot(*initial[v.bodies[0].name].velocity)) for v in vehicles)
+    lt = rng.random() < 0.2
+    if lt:  # every body has a CG height (the generator sets them)
+        pass
+    options = RunoutOptions(engine=engine, load_transfer=lt)
+    label = (f"seed {seed} scene {i}: {nv} vehicles ({', '.join(str(len(v.bodies)) + ' bodies' for v in vehicles)}), "
+             f"{len(obstacles)} obstacle(s), fastest {speed0:.1f} m/s" + (", load transfer" if lt else ""))
+    return SceneCase(label, tuple(vehicles), initial, wheels, _road(rng, np.zeros(2), 0.0, 10.0), options,
+                     tuple(obstacles))

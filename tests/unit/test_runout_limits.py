@@ -25,7 +25,7 @@ import pytest
 from crashsim.cli import main
 from crashsim.motion import Road, RunoutOptions, simulate_runout
 from crashsim.reconstruct.scene import run_scene
-from crashsim.scenario import load_scenario
+from crashsim.scenario import load_scenario, scenario_from_dict
 from crashsim.vehicles import BodyState
 
 HERE = Path(__file__).resolve().parent
@@ -34,9 +34,16 @@ REGRESSION = sorted((HERE.parent / "regression").glob("hang_*.toml"))
 ENGINES = ("scipy", "compiled")
 
 
-def _scene(path: Path, engine: str):
-    sc = load_scenario(path)
+def _scene(path: Path, engine: str, *, contact: bool = True, rtol: float | None = None):
+    if contact:
+        sc = load_scenario(path)
+    else:
+        data = tomllib.loads(path.read_text())
+        data["contacts"] = {"enabled": False}
+        sc = scenario_from_dict(data, file=str(path))
     opts = dataclasses.replace(sc.runout.options, engine=engine, max_wall_time=60.0)
+    if rtol is not None:
+        opts = dataclasses.replace(opts, rtol=rtol, atol=rtol / 100)
     return run_scene(dataclasses.replace(sc, runout=dataclasses.replace(sc.runout, options=opts)))
 
 
@@ -58,12 +65,25 @@ def test_the_scenes_that_hung_finish_at_rest_on_both_engines_and_agree(path):
 
 def test_the_stop_that_opened_on_its_limit_closes_again_later():
     """The pickup's trailer: stop struck and left, closed, opened on the limit (where the loop
-    started), and closed again at a strictly later time."""
-    for engine in ENGINES:
-        r = _scene(HERE.parent / "regression" / "hang_compiled.toml", engine).runout["P"]
-        stops = [(e.t, e.kind) for e in r.events if e.kind.startswith("stop")]
-        assert [k for _, k in stops] == ["stop_impact", "stop_closed", "stop_open", "stop_closed"], engine
-        assert stops[3][0] > stops[2][0] + 1e-4, engine
+    started), and closed again at a strictly later time.  Contact between the vehicles is off
+    here: the file predates it, and with it the car strikes the trailer again at 0.34 s, which
+    takes the run-out elsewhere (that version is checked by the test above).
+
+    The stop stays open for only 18 ms; at the default rtol the compiled engine's steps straddle
+    the opening (an event that crosses zero and back within one step is not seen), so it is
+    run here at rtol 1e-8, where it resolves it.  Either way the rest positions agree (< 1 mm).
+    """
+    path = HERE.parent / "regression" / "hang_compiled.toml"
+    runs = {(e, rt): _scene(path, e, contact=False, rtol=rt).runout["P"]
+            for e, rt in (("scipy", None), ("compiled", 1e-8), ("compiled", None))}
+    for key in (("scipy", None), ("compiled", 1e-8)):
+        stops = [(e.t, e.kind) for e in runs[key].events if e.kind.startswith("stop")]
+        assert [k for _, k in stops] == ["stop_impact", "stop_closed", "stop_open", "stop_closed"], key
+        assert stops[3][0] > stops[2][0] + 1e-4, key
+    ref = runs[("scipy", None)]
+    for r in runs.values():
+        for name, body in r.bodies.items():
+            assert np.hypot(*np.subtract(body.rest_position, ref.bodies[name].rest_position)) < 1e-3, name
 
 
 def _car_runout(**opts):

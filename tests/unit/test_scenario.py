@@ -153,10 +153,21 @@ def test_helper_incomplete(data):
     assert "impact.external_impulses[0]" in msg and "duration" in msg
 
 
-def test_barrier_with_two_vehicles(data):
+def test_barrier_outside_the_impact_is_an_error(data):
     data["barrier"] = {"name": "wall"}
     msg = error_of(data)
-    assert "vehicles" in msg and "barrier" in msg
+    assert "barrier.name" in msg and "'wall'" in msg and "impact.body1" in msg and "[[obstacles]]" in msg
+
+
+def test_barrier_impact_with_a_second_vehicle_waiting(data):
+    """Two vehicles and a barrier: the vehicle of impact.body1 strikes the barrier, the other is
+    not in the impact (it keeps its state and meets the scene in the run-out)."""
+    data["barrier"] = {"name": "wall"}
+    data["impact"]["body2"] = "wall"
+    sc = scenario_from_dict(data)
+    names = [v.name for v in sc.impact.vehicles]
+    assert "wall" in names and len(names) == 2
+    assert len(sc.vehicles) == 3
 
 
 def test_non_approaching_contact_is_an_input_error(data):

@@ -101,7 +101,7 @@ from .result import RunoutResult
 from .road import Road
 from .wheels import WheelSettings
 
-__all__ = ["AccuracyReport", "AccuracyRun", "SHARES", "simulate_to_accuracy"]
+__all__ = ["AccuracyReport", "AccuracyRun", "SHARES", "simulate_to_accuracy", "scene_to_accuracy"]
 
 _log = logging.getLogger("crashsim")
 
@@ -251,6 +251,13 @@ def _decelerations(vehicle: Vehicle, initial, settings: WheelSettings, road: Roa
     return _Decel(a_min, alpha, r_min, model.l_ref.copy(), v0, w0)
 
 
+def _combine(decs: list) -> _Decel:
+    """The bounds of a scene: the weakest deceleration of any vehicle, every body's own."""
+    return _Decel(min(d.a_min for d in decs), np.concatenate([d.alpha_min for d in decs]),
+                  np.concatenate([d.r_min for d in decs]), np.concatenate([d.l_ref for d in decs]),
+                  max(d.v0 for d in decs), max(d.w0 for d in decs))
+
+
 def _residual(v: float, eps: float, a: float) -> float:
     """Residual travel bound (v^2 + 2 eps v) / (2 a)."""
     return (v * v + 2 * eps * v) / (2 * a) if a > 0 else math.inf
@@ -353,6 +360,76 @@ def simulate_to_accuracy(
     """
     from .levels import simulate_level
 
+    level = _check_targets(target_position, target_heading, base_options, level)
+    settings = WheelSettings.all_locked() if wheels is None else wheels
+    if not isinstance(vehicle, Vehicle) or vehicle.is_barrier:
+        raise ScenarioError("needs a movable Vehicle (a barrier is not simulated)", field="vehicle")
+    dec = _decelerations(vehicle, initial, settings, road)
+    _check_deceleration(dec, f"wheels[{vehicle.name!r}]")
+
+    def runner(opts):
+        return simulate_level(level, vehicle, initial, settings, road, opts)
+
+    result, report = _to_accuracy(runner, dec, target_position, target_heading, base_options, level, start_rtol,
+                                  min_rtol, atol_ratio)
+    if not report.met:
+        _log.warning("run-out of %s: accuracy target not met: %s", vehicle.name, report.message)
+    return result, report
+
+
+def scene_to_accuracy(
+    vehicles, initial, wheels, road: Road, target_position: float, target_heading: float | None = None,
+    base_options: RunoutOptions = RunoutOptions(), *, level: str | None = None, start_rtol: float = 1e-3,
+    min_rtol: float = 1e-10, atol_ratio: float = 1e-2, **contact,
+):
+    """:func:`simulate_to_accuracy` for a whole scene (:func:`~crashsim.motion.simulate_scene`, with contact).
+
+    Every body of every vehicle counts; the bounds use the weakest deceleration of any
+    vehicle.  ``contact`` takes ``simulate_scene``'s keywords (contact model, pair overrides,
+    obstacles).
+
+    Returns
+    -------
+    (SceneRunout, AccuracyReport)
+    """
+    from .simulate import simulate_scene
+
+    level = _check_targets(target_position, target_heading, base_options, level)
+    if level == "rigid":
+        raise ScenarioError("the rigid level runs each vehicle alone; use simulate_to_accuracy per vehicle",
+                            field="runout.level")
+    vehicles = [v for v in vehicles if not v.is_barrier]
+    wheels = dict(wheels or {})
+    decs = []
+    for v in vehicles:
+        settings = wheels.get(v.name) or WheelSettings.all_locked()
+        decs.append(_decelerations(v, {b.name: initial[b.name] for b in v.bodies}, settings, road))
+        _check_deceleration(decs[-1], f"wheels[{v.name!r}]")
+    lt = level == "load_transfer"
+
+    def runner(opts):
+        return _Merged(simulate_scene(vehicles, initial, wheels, road, dataclasses.replace(opts, load_transfer=lt),
+                                      **contact))
+
+    merged, report = _to_accuracy(runner, _combine(decs), target_position, target_heading, base_options, level,
+                                  start_rtol, min_rtol, atol_ratio)
+    if not report.met:
+        _log.warning("scene run-out: accuracy target not met: %s", report.message)
+    return merged.scene, report
+
+
+class _Merged:
+    """A SceneRunout seen as one run-out (its bodies together) by the accuracy driver."""
+
+    def __init__(self, scene):
+        self.scene = scene
+        self.bodies = {n: b for r in scene.vehicles.values() for n, b in r.bodies.items()}
+        self.status = scene.status
+        self.message = scene.message
+        self.nfev = scene.nfev
+
+
+def _check_targets(target_position, target_heading, base_options, level) -> str:
     for name, value in (("target_position", target_position), ("target_heading", target_heading)):
         if value is not None and not (math.isfinite(float(value)) and float(value) > 0):
             raise ScenarioError(f"must be a positive finite number, got {value!r}", field=f"runout.accuracy.{name}")
@@ -366,18 +443,22 @@ def simulate_to_accuracy(
             f"got {level!r} (the 'energy' hand calculation is exact for its own model; 'impact' has no run-out)",
             field="runout.accuracy",
         )
-    settings = WheelSettings.all_locked() if wheels is None else wheels
-    if not isinstance(vehicle, Vehicle) or vehicle.is_barrier:
-        raise ScenarioError("needs a movable Vehicle (a barrier is not simulated)", field="vehicle")
-    target_position = float(target_position)
-    th = math.inf if target_heading is None else float(target_heading)
-    dec = _decelerations(vehicle, initial, settings, road)
+    return level
+
+
+def _check_deceleration(dec: _Decel, field: str) -> None:
     if not (dec.a_min > 0 and np.all(dec.alpha_min > 0)):
         raise ScenarioError(
             "the vehicle has no deceleration at low speed (free-rolling wheels with zero rolling resistance, no "
             "locked wheel): it may never come to rest, so no accuracy can be promised; give rolling_resistance > 0",
-            field=f"wheels[{vehicle.name!r}]",
+            field=field,
         )
+
+
+def _to_accuracy(runner, dec, target_position, target_heading, base_options, level, start_rtol, min_rtol, atol_ratio):
+    """The search of the module docstring; ``runner(options)`` makes one run (``.bodies``, ``.status``, ``.nfev``)."""
+    target_position = float(target_position)
+    th = math.inf if target_heading is None else float(target_heading)
     share_v, share_e, share_i = SHARES
 
     # eps: as large as the analytic bound allows within its share (checked by a run below)
@@ -392,7 +473,7 @@ def simulate_to_accuracy(
     def run(rtol, eps_run, v_stop, previous=None):
         opts = dataclasses.replace(base_options, rtol=rtol, atol=rtol * atol_ratio, eps=eps_run, v_stop=v_stop)
         c0 = time.process_time()
-        res = simulate_level(level, vehicle, initial, settings, road, opts)
+        res = runner(opts)
         cpu = time.process_time() - c0
         d_pos = d_head = None
         if previous is not None:
@@ -463,8 +544,6 @@ def simulate_to_accuracy(
         eps, v_stop = eps / 2, v_stop / 2
         prev = check
 
-    if not met:
-        _log.warning("run-out of %s: accuracy target not met: %s", vehicle.name, message)
     if result is None:
         result = prev
     report = AccuracyReport(

@@ -346,14 +346,17 @@ def _first_root(k, M, phase, D, t, t_new, dense, g_old, g_new, r_old, r_new, ev_
                     break
                 fb = g(tb)
             if (d > 0 and fa <= 0.0 <= fb) or (d < 0 and fa >= 0.0 >= fb):
+                root = tb
                 if fa == 0.0:
                     root = ta
-                elif fb == 0.0:
-                    root = tb
-                elif (fa < 0) == (fb < 0):
-                    root = tb
-                else:
-                    root = brentq(g, ta, tb, xtol=eps4, rtol=eps4)
+                elif fb != 0.0 and (fa < 0) != (fb < 0):
+                    # brentq evaluates the ends again on the dense output, which can differ from the
+                    # step's own end values in the last bits: root-find only on a true sign change
+                    ga, gb = g(ta), g(tb)
+                    if ga == 0.0:
+                        root = ta
+                    elif gb != 0.0 and (ga < 0) != (gb < 0):
+                        root = brentq(g, ta, tb, xtol=eps4, rtol=eps4)
                 if root < t_first:
                     t_first, fired = root, e
                 break

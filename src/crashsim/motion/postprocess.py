@@ -512,10 +512,10 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
     dt = np.diff(T, append=T[-1]) if T.size else np.zeros(0)
     pairs = []
     for p, pair in enumerate(model.pairs):
-        in_contact = pstate[seg_of, p] == k.PS_CONTACT
+        in_contact = (pstate[seg_of, p] == k.PS_CONTACT) & (CF[:, p] > 0)  # pressed together
         pairs.append(PairSummary(pair.name, pair.a, pair.b, n_imp.get(pair.name, 0), float(np.sum(dt[in_contact])),
                                  float(CF[:, p].max()) if CF.shape[0] else 0.0, float(pen[p]),
-                                 float(quad[nb + 3 * nw + p])))
+                                 float(quad[nb + 3 * nw + p]), T.copy(), CF[:, p].copy()))
     ke0, ke1 = model.kinetic_energy(y_initial), model.kinetic_energy(y_end)
     tyres = float(np.sum(quad[nb + 2 * nw: nb + 3 * nw]))
     stops = float(sum(e.energy for e in events if e.kind in ("stop_closed", "stop_impact")))

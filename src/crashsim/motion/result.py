@@ -573,6 +573,8 @@ class PairSummary:
     contact_work : float
         Work of the pair's contact forces on the bodies [J] (<= 0: dissipated, less the
         energy still stored in the penalty spring).
+    t, force : ndarray
+        The sampled sustained-contact force on body1 [N] against time [s].
     """
 
     name: str
@@ -583,9 +585,14 @@ class PairSummary:
     peak_force: float
     max_penetration: float
     contact_work: float
+    t: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    force: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
-    def to_dict(self) -> dict:
-        return _jsonable(dict(self.__dict__))
+    def to_dict(self, history: bool = False) -> dict:
+        d = {k: v for k, v in self.__dict__.items() if k not in ("t", "force")}
+        if history:
+            d.update(t=self.t, force=self.force)
+        return _jsonable(d)
 
 
 @dataclass(frozen=True, eq=False)

@@ -15,7 +15,10 @@ tyre mark       one-sided Hausdorff distance from the measured mark (a polyline,
 point of impact distance between the scenario's contact point and the measured one [m].
 delta-v         computed minus recorded delta-v of a body [m/s]: its magnitude, or its
                 component along the body's x (longitudinal, as event data recorders report)
-                or y axis (lateral), in the body axes at impact.
+                or y axis (lateral), in the body axes at impact.  Of the first impact (default:
+                a recorder records one event, normally the first), or summed over all the
+                body's impacts (``impacts = "all"``: a recorder that accumulates a whole event
+                which includes a later impact).
 """
 
 from __future__ import annotations
@@ -70,6 +73,7 @@ class DeltaVEvidence:
     tolerance: float
     component: str = "magnitude"  # "magnitude", "longitudinal", "lateral"
     name: str = ""
+    impacts: str = "first"  # "first": the first impact only (one recorded event); "all": the sum over the body's impacts
 
 
 @dataclass(frozen=True)
@@ -229,13 +233,16 @@ def _check_mark(ev: MarkEvidence, tracks: dict, index: int) -> Check:
                   "mark_length": float(np.sum(np.hypot(*np.diff(np.asarray(ev.points, float), axis=0).T)))})
 
 
-def evaluate_evidence(evidence: Evidence, impact, runout: dict | None, contact_point) -> EvidenceReport:
+def evaluate_evidence(evidence: Evidence, impact, runout: dict | None, contact_point, secondary=()) -> EvidenceReport:
     """Residual and verdict of every evidence item.
 
     Parameters
     ----------
     evidence : Evidence
     impact : ImpactResult
+    secondary : sequence of SecondaryImpact
+        The impacts of the run-out; a delta-v item with ``impacts = "all"`` sums the body's
+        delta-v over the first impact and these (in the body's axes at the first impact).
     runout : dict of RunoutResult by vehicle, or None (rest and mark items then fail with
         an infinite residual: nothing was computed to compare).
     contact_point : (float, float)
@@ -279,13 +286,28 @@ def evaluate_evidence(evidence: Evidence, impact, runout: dict | None, contact_p
         checks.append(_check_mark(ev, tracks, i))
     for i, ev in enumerate(evidence.delta_v):
         name = ev.name or f"delta-v of {ev.body} ({ev.component})"
-        b = impact.bodies[ev.body]
+        # the body's impacts in time order: the first impact if it took part, then the run-out's
+        own = []
+        if ev.body in impact.bodies and not impact.bodies[ev.body].fixed:
+            own.append((np.asarray(impact.bodies[ev.body].delta_v, dtype=float), impact.bodies[ev.body].heading))
+        for s in secondary:
+            if ev.body in s.delta_v:
+                own.append((np.asarray(s.delta_v[ev.body], dtype=float), s.result.bodies[ev.body].heading))
+        if not own:
+            checks.append(Check("delta-v", name, math.inf, ev.tolerance, False, "speed",
+                                {"reason": "no impact involved this body"}))
+            continue
+        used = own[:1] if ev.impacts == "first" else own
+        dv = sum(d for d, _ in used)
+        heading = own[0][1]
+        n_imp = len(used)
         if ev.component == "magnitude":
-            computed = b.delta_v_magnitude
+            computed = float(np.hypot(*dv))
         else:
-            local = rotate(b.delta_v, -b.heading)
+            local = rotate(dv, -heading)
             computed = float(local[0] if ev.component == "longitudinal" else local[1])
         res = computed - ev.value
         checks.append(Check("delta-v", name, res, ev.tolerance, abs(res) <= ev.tolerance, "speed",
-                            {"computed": computed, "measured": ev.value, "component": ev.component}))
+                            {"computed": computed, "measured": ev.value, "component": ev.component,
+                             "impacts": ev.impacts, "impacts_counted": n_imp}))
     return EvidenceReport(tuple(checks))

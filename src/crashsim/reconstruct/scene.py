@@ -28,11 +28,31 @@ class SceneResult:
     evidence: Any = None  # EvidenceReport or None
     warnings: tuple[str, ...] = ()
     accuracy: dict | None = None  # vehicle name -> AccuracyReport, when the scenario asks for an accuracy
+    joint: Any = None  # SceneRunout: the run-out of the whole scene (impacts, pairs, events, energy ledger)
 
     @property
     def at_rest(self) -> bool:
         """True if there is no run-out or every run-out ended at rest."""
         return self.runout is None or all(r.success for r in self.runout.values())
+
+    def energy_ledger(self) -> dict | None:
+        """The scene's energy ledger from the approach to rest [J] (None without a joint run-out).
+
+        ``before_impact`` = ``first_impact`` (loss in the first impact) + ``later_impacts`` +
+        ``tyres`` + ``stops`` + ``contacts`` + ``final`` + ``closing_error``.
+        """
+        if self.joint is None:
+            return None
+        e = self.joint.energy
+        ke = self.impact.kinetic_energy["system"]
+        first = ke["before"] - ke["after"]
+        ledger = {"before_impact": ke["before"], "first_impact": first, "later_impacts": e["impacts"],
+                  "tyres": e["tyres"], "stops": e["stops"], "contacts": e["contacts"], "final": e["final"]}
+        # kinetic energy of bystanders (not in the first impact) is in the run-out's initial energy
+        bystanders = e["initial"] - ke["after"]
+        ledger["before_impact"] += bystanders
+        ledger["closing_error"] = ledger["before_impact"] - sum(v for k, v in ledger.items() if k != "before_impact")
+        return ledger
 
     def runout_body(self, name: str):
         """The BodyRunout of a body (KeyError if the scene has no run-out or no such body)."""
@@ -43,6 +63,25 @@ class SceneResult:
                 return r.bodies[name]
         raise KeyError(name)
 
+    @property
+    def impacts(self) -> list[dict]:
+        """Every impact in time order, the first (t = 0) and those of the run-out (SI, world frame).
+
+        Each: ``time`` [s] after the first separation, ``body1``, ``body2``, ``point`` [m],
+        ``normal``, ``normal_impulse`` and ``tangential_impulse`` [N s], ``energy_loss`` [J],
+        ``delta_v`` (per body of the two vehicles: ``vector`` [m/s] and ``magnitude``).
+        """
+        imp = self.impact
+        ke = imp.kinetic_energy["system"]
+        first = {"time": 0.0, "body1": imp.body1, "body2": imp.body2, "point": [float(v) for v in imp.point],
+                 "normal": [float(v) for v in imp.normal], "normal_impulse": imp.normal_impulse,
+                 "tangential_impulse": imp.tangential_impulse, "energy_loss": ke["before"] - ke["after"],
+                 "closing_speed": -imp.closing_velocity, "law": imp.tangential_law,
+                 "delta_v": {n: {"vector": [float(v) for v in b.delta_v], "magnitude": b.delta_v_magnitude}
+                             for n, b in imp.bodies.items() if not b.fixed}}
+        later = [i.to_dict() for i in self.joint.impacts] if self.joint is not None else []
+        return [first] + later
+
     def to_dict(self, *, history: bool = False) -> dict:
         """JSON-ready result (SI units, world frame). ``history`` adds sampled time histories."""
         sc = self.scenario
@@ -50,12 +89,15 @@ class SceneResult:
             "scenario": {"title": sc.title, "source": sc.source, "file": sc.path},
             "units": "SI",
             "impact": self.impact.to_dict(),
+            "impacts": self.impacts,
         }
         if self.runout is not None:
             bodies = {}
             for r in self.runout.values():
                 for name, b in r.bodies.items():
                     at_rest = b.time_to_rest is not None
+                    body = next(bb for v in sc.vehicles for bb in v.bodies if bb.name == name)
+                    outline = body.outline()
                     bodies[name] = {
                         "vehicle": r.vehicle,
                         "at_rest": at_rest,
@@ -63,6 +105,7 @@ class SceneResult:
                                  "heading": float(b.rest_heading_wrapped)},
                         "time_to_rest": b.time_to_rest,
                         "distance": float(b.distance),
+                        "outline": None if outline is None else outline.tolist(),
                     }
                     if not at_rest:
                         bodies[name]["reason"] = f"{r.status}: {r.message}"
@@ -70,6 +113,16 @@ class SceneResult:
                 "bodies": bodies,
                 "vehicles": {name: r.to_dict(history=history) for name, r in self.runout.items()},
             }
+            if self.joint is not None:
+                j = self.joint
+                out["runout"].update(
+                    status=j.status, message=j.message, t_end=j.t_end, method=j.method,
+                    pairs=[p.to_dict() for p in j.pairs],
+                    energy=self.energy_ledger(),
+                    events=[{"t": e.t, "kind": e.kind, "detail": e.detail, "energy": e.energy,
+                             "vehicles": list(e.vehicles), **e.data} for e in j.events],
+                    obstacles=[{"name": o.name, "points": [list(p) for p in o.points], "thickness": o.thickness,
+                                "closed": o.closed} for o in sc.runout.obstacles])
         if self.evidence is not None:
             out["evidence"] = self.evidence.to_dict()
         if self.accuracy is not None:
@@ -95,6 +148,13 @@ class SceneResult:
 
             text += "\n\n" + format_runout(self.runout, system)
             text += f"\n  model level: {self.scenario.runout.level}"
+            if self.joint is not None:
+                from ..report import format_events, format_joint
+
+                joint = format_joint(self, system)
+                if joint:
+                    text += "\n\n" + joint
+                text += "\n\n" + format_events(self.joint.events, system)
             for name, rep in (self.accuracy or {}).items():
                 text += f"\n  accuracy, vehicle {name}: {rep.message}"
         if self.evidence is not None:
@@ -149,20 +209,38 @@ class SceneResult:
 
 
 def separation_states(scenario, impact: ImpactResult) -> dict:
-    """Body states at separation: impact positions and headings, post-impact velocities."""
+    """Body states at separation: impact positions and headings, post-impact velocities.
+
+    A vehicle that is not in the impact keeps its state from the file (it may be at rest, or
+    moving towards the scene: the run-out finds out whether it is struck).
+    """
     from ..vehicles import BodyState
 
     out = {}
-    for name, b in impact.bodies.items():
-        if b.fixed:
-            continue
-        s0 = scenario.states[name]
-        out[name] = BodyState(s0.position, s0.heading, tuple(b.velocity), b.yaw_rate)
+    for v in scenario.vehicles:
+        for b in v.bodies:
+            if b.is_fixed:
+                continue
+            s0 = scenario.states[b.name]
+            if b.name in impact.bodies:
+                bi = impact.bodies[b.name]
+                out[b.name] = BodyState(s0.position, s0.heading, tuple(bi.velocity), bi.yaw_rate)
+            else:
+                out[b.name] = s0
     return out
 
 
+#: Fidelity levels whose run-out models contact between vehicles and with obstacles.
+CONTACT_LEVELS = ("articulated", "load_transfer")
+
+
 def run_scene(scenario) -> SceneResult:
-    """Solve a loaded scenario: the impact, then the run-out of every vehicle if asked for.
+    """Solve a loaded scenario: the impact, then the run-out of the whole scene if asked for.
+
+    At the ``articulated`` and ``load_transfer`` levels every vehicle runs out together, with
+    contact between them and with the scene's obstacles (the barrier of the impact among
+    them): later impacts are solved by the impulse solver (:func:`crashsim.motion.simulate_scene`).
+    The ``energy`` and ``rigid`` levels run each vehicle alone, without contact.
 
     Raises
     ------
@@ -178,39 +256,70 @@ def run_scene(scenario) -> SceneResult:
         raise with_file(exc, scenario.path) from None
     runout = None
     accuracy = None
-    if scenario.runout is not None and scenario.runout.level != "impact":
+    joint = None
+    spec = scenario.runout
+    if spec is not None and spec.level != "impact":
         from ..motion import make_hitch_consistent
-        from ..motion.accuracy import simulate_to_accuracy
-        from ..motion.levels import simulate_level
 
         states = separation_states(scenario, impact)
-        spec = scenario.runout
-        runout = {}
-        accuracy = {} if spec.accuracy is not None else None
-        for veh in scenario.vehicles:
-            if veh.is_barrier:
-                continue
-            initial = make_hitch_consistent(veh, {b.name: states[b.name] for b in veh.bodies})
-            if spec.accuracy is not None:
-                runout[veh.name], accuracy[veh.name] = simulate_to_accuracy(
-                    veh, initial, spec.wheels[veh.name], spec.road, spec.accuracy, spec.accuracy_heading,
-                    spec.options, level=spec.level)
-            else:
-                runout[veh.name] = simulate_level(spec.level, veh, initial, spec.wheels[veh.name], spec.road,
-                                                  spec.options)
+        movable = [v for v in scenario.vehicles if not v.is_barrier]
+        initial = {}
+        for veh in movable:
+            initial.update(make_hitch_consistent(veh, {b.name: states[b.name] for b in veh.bodies}))
+        if spec.level in CONTACT_LEVELS:
+            joint, accuracy = _joint_runout(movable, initial, spec)
+            runout = dict(joint.vehicles)
+        else:
+            runout, accuracy = _separate_runouts(movable, initial, spec)
     evidence = None
     if not scenario.evidence.empty:
         from .evidence import evaluate_evidence
 
-        evidence = evaluate_evidence(scenario.evidence, impact, runout, scenario.impact.surface.point)
+        evidence = evaluate_evidence(scenario.evidence, impact, runout, scenario.impact.surface.point,
+                                     secondary=joint.impacts if joint is not None else ())
     warnings = [f"impact: {w}" for w in impact.warnings]
     if runout is not None:
-        warnings += barrier_crossings(scenario, runout)
+        if joint is None:
+            warnings += barrier_crossings(scenario, runout)
+        else:
+            warnings += [f"secondary impact at t = {i.t:.3f} s ({i.body1}/{i.body2}): {i.warning}"
+                         for i in joint.impacts if i.warning]
         for vname, r in runout.items():
             if not r.success:
                 warnings.append(f"the run-out of vehicle {vname!r} did not reach rest: {r.status} ({r.message})")
     return SceneResult(scenario=scenario, impact=impact, runout=runout, evidence=evidence, warnings=tuple(warnings),
-                       accuracy=accuracy)
+                       accuracy=accuracy, joint=joint)
+
+
+def _joint_runout(movable, initial, spec):
+    """Every vehicle together, with contact (and to an accuracy target if the scenario asks)."""
+    from ..motion import simulate_scene
+
+    kwargs = dict(contact=spec.contact, pair_contact=spec.pair_contact, obstacles=spec.obstacles)
+    if spec.accuracy is None:
+        return simulate_scene(movable, initial, spec.wheels, spec.road, spec.options, **kwargs), None
+    from ..motion.accuracy import scene_to_accuracy
+
+    joint, report = scene_to_accuracy(movable, initial, spec.wheels, spec.road, spec.accuracy, spec.accuracy_heading,
+                                      spec.options, level=spec.level, **kwargs)
+    return joint, {v.name: report for v in movable}
+
+
+def _separate_runouts(movable, initial, spec):
+    """The ``energy`` and ``rigid`` levels: each vehicle alone (no contact)."""
+    from ..motion.accuracy import simulate_to_accuracy
+    from ..motion.levels import simulate_level
+
+    runout, accuracy = {}, ({} if spec.accuracy is not None else None)
+    for veh in movable:
+        init = {b.name: initial[b.name] for b in veh.bodies}
+        if spec.accuracy is not None:
+            runout[veh.name], accuracy[veh.name] = simulate_to_accuracy(
+                veh, init, spec.wheels[veh.name], spec.road, spec.accuracy, spec.accuracy_heading, spec.options,
+                level=spec.level)
+        else:
+            runout[veh.name] = simulate_level(spec.level, veh, init, spec.wheels[veh.name], spec.road, spec.options)
+    return runout, accuracy
 
 
 #: Growth of a body's overlap with the barrier after separation [m] that is reported: the
@@ -219,7 +328,8 @@ BARRIER_OVERLAP_WARNING = 0.25
 
 
 def barrier_crossings(scenario, runout: dict) -> list[str]:
-    """Warnings for bodies whose outline moves into the barrier after separation."""
+    """Warnings for bodies whose outline moves into the barrier after separation (the ``energy``
+    and ``rigid`` levels, which model no contact)."""
     import numpy as np
 
     extent = scenario.barrier_extent
@@ -246,6 +356,6 @@ def barrier_crossings(scenario, runout: dict) -> list[str]:
             k = np.nonzero(growth > BARRIER_OVERLAP_WARNING)[0]
             if len(k):
                 out.append(f"body {name!r} moves {np.max(growth):.2f} m into the barrier after separation "
-                           f"(from t = {h.t[k[0]]:.2f} s): a second contact with the barrier is not modelled, "
-                           "so its run-out past that time is not physical")
+                           f"(from t = {h.t[k[0]]:.2f} s): the {scenario.runout.level!r} level models no contact, "
+                           "so its run-out past that time is not physical (the articulated levels do)")
     return out

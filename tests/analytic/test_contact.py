@@ -1,0 +1,146 @@
+"""Contact in the run-out against closed forms: secondary impacts and sustained contact.
+
+The bodies roll on free wheels with zero rolling resistance, moving along their headings, so
+no tyre force acts before a contact and the velocities at the instant of contact are known
+exactly.  Both engines run every case.
+
+* Two equal cars, central impact: the touch at ``t = gap / v``; after it ``v_A = v (1 - e)/2``,
+  ``v_B = v (1 + e)/2`` (momentum and the restitution law), ``P_n = m (1 + e) v / 2``.
+* A car's front face against a rigid wall at an angle: the normal velocity of the CG reverses
+  by e (the contact point is on the CG's normal line), and with f below the no-sliding ratio
+  the tangential impulse is ``f P_n`` against the sliding, turning the car by
+  ``f P_n (length / 2) / I``.
+* A car pressed against a wall by its steered wheels (saturated side force mu N at steer delta)
+  slides along it with the deceleration ``g mu (|sin delta| + f_wall cos delta)``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from crashsim.motion import (ContactModel, Obstacle, Road, RunoutOptions, WheelSetting, WheelSettings,
+                             simulate_scene)
+from crashsim.motion.loads import STANDARD_GRAVITY as G
+from crashsim.vehicles import Axle, Body, BodyState, Vehicle
+
+ENGINES = ("scipy", "compiled")
+FREE = WheelSettings(default=WheelSetting("rolling", cornering_coefficient=8.6, rolling_resistance=0.0))
+
+
+def box(name, m=1500.0, inertia=2500.0, length=4.5, width=1.8):
+    return Vehicle(name, (Body(name, m, inertia, length, width, axles=(Axle(1.3, 1.5), Axle(-1.3, 1.5))),))
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize("e", [0.0, 0.3, 1.0])
+def test_two_equal_cars_central_impact(engine, e):
+    v, gap = 10.0, 1.0
+    states = {"a": BodyState((0, 0), 0.0, (v, 0.0)), "b": BodyState((4.5 + gap, 0), 0.0, (0.0, 0.0))}
+    run = simulate_scene([box("a"), box("b")], states, {"a": FREE, "b": FREE}, Road(0.7),
+                         RunoutOptions(engine=engine, t_max=0.3), contact=ContactModel(restitution=e, friction=0.5))
+    assert len(run.impacts) == 1
+    hit = run.impacts[0]
+    assert hit.t == pytest.approx(gap / v, abs=1e-9)
+    assert (hit.body1, hit.body2) == ("a", "b")
+    assert hit.point == pytest.approx([4.5 / 2 + gap, 0.0], abs=1e-9)
+    assert hit.normal == pytest.approx([-1.0, 0.0], abs=1e-12)  # from b into a
+    assert hit.delta_v["a"][0] == pytest.approx(-v * (1 + e) / 2, rel=1e-9)
+    assert hit.delta_v["b"][0] == pytest.approx(v * (1 + e) / 2, rel=1e-9)
+    assert hit.normal_impulse == pytest.approx(1500 * (1 + e) * v / 2, rel=1e-9)
+    assert hit.tangential_impulse == pytest.approx(0.0, abs=1e-6)
+    assert hit.energy_loss == pytest.approx(0.5 * 1500 * v**2 * (1 - e**2) / 2, rel=1e-9)
+    a, b = run.vehicles["a"].bodies["a"], run.vehicles["b"].bodies["b"]
+    # no tyre force acts afterwards; with e = 0 the cars stay touching (sustained contact), and
+    # the penalty force trades tiny impulses between them (momentum still conserved exactly)
+    tol = 1e-4 if e == 0.0 else 1e-9
+    assert a.final.velocity[0] == pytest.approx(v * (1 - e) / 2, rel=tol, abs=tol)
+    assert b.final.velocity[0] == pytest.approx(v * (1 + e) / 2, rel=tol, abs=tol)
+    assert a.final.velocity[0] + b.final.velocity[0] == pytest.approx(v, rel=1e-9)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize("e, f", [(0.2, 0.0), (0.2, 0.03), (0.0, 0.3)])
+def test_face_on_wall_impact_mirror_law_with_friction(engine, e, f):
+    """A car heading straight at a wall, moving along its heading at 15 deg to the wall normal
+    (the wheels steered 15 deg so that no tyre force acts): its front face meets the wall face
+    on.  The CG's normal velocity reverses by e (the normal impulse acts on the CG's line,
+    P_n = m (1 + e) v_n).  Stopping the contact point's slip v_t takes the tangential impulse
+    P_stop = v_t / (1/m + (L/2)^2 / I) (it acts L/2 ahead of the CG): below f P_n the surfaces
+    stick (P_t = P_stop), else they slide with P_t = f P_n (Eq. 8).  The yaw rate changes by
+    -P_t (L/2) / I."""
+    m, inertia, length = 1500.0, 2500.0, 4.5
+    beta = math.radians(15.0)
+    v = 8.0
+    steer = WheelSettings(default=WheelSetting("rolling", steer=beta, cornering_coefficient=8.6,
+                                               rolling_resistance=0.0))
+    wall = Obstacle("wall", ((length / 2 + 0.5, -20.0), (length / 2 + 0.5, 20.0)), thickness=0.2)
+    states = {"car": BodyState((0, 0), 0.0, (v * math.cos(beta), v * math.sin(beta)))}
+    run = simulate_scene([box("car", m, inertia, length)], states, {"car": steer}, Road(0.7),
+                         RunoutOptions(engine=engine, t_max=0.5), contact=ContactModel(restitution=e, friction=f),
+                         obstacles=[wall])
+    hit = run.impacts[0]
+    vn, vt = v * math.cos(beta), v * math.sin(beta)
+    assert hit.t == pytest.approx(0.4 / vn, rel=1e-9)  # the face reaches the wall face (0.5 - 0.1 m away)
+    assert hit.point[0] == pytest.approx(length / 2 + 0.4, abs=1e-9) and abs(hit.point[1] - vt * hit.t) < 1e-9
+    r = hit.result.bodies["car"]
+    pn = m * (1 + e) * vn
+    p_stop = vt / (1 / m + (length / 2) ** 2 / inertia)
+    pt = min(p_stop, f * pn)
+    assert (p_stop < f * pn) == (hit.result.sliding is False) or f == 0.0
+    assert hit.normal_impulse == pytest.approx(pn, rel=1e-9)
+    assert abs(hit.tangential_impulse) == pytest.approx(pt, rel=1e-9, abs=1e-9)
+    assert r.velocity[0] == pytest.approx(-e * vn, rel=1e-9, abs=1e-12)
+    assert r.velocity[1] == pytest.approx(vt - pt / m, rel=1e-9)
+    assert r.yaw_rate == pytest.approx(-pt * (length / 2) / inertia, rel=1e-9, abs=1e-12)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_sliding_along_a_wall_decelerates_as_road_and_wall_friction_say(engine):
+    """Steer -30 deg on every wheel of a car moving along a wall: each tyre's side force is
+    saturated at mu N, perpendicular to its wheel, pushing the car into the wall with mu m g
+    cos(delta) and braking it with mu m g |sin(delta)|; the wall's friction f_w adds f_w times
+    the normal force.  The contact is sustained (a slow approach below the impulse threshold),
+    so the speed falls at g mu (|sin delta| + f_w cos delta)."""
+    mu, f_wall, delta = 0.7, 0.4, math.radians(-30.0)
+    wheels = WheelSettings(default=WheelSetting("rolling", steer=delta, cornering_coefficient=8.6,
+                                                rolling_resistance=0.0))
+    car = Vehicle("car", (Body("car", 1500.0, 2500.0, 4.5, 1.8, axles=(Axle(1.3, 1.5), Axle(-1.3, 1.5))),))
+    wall = Obstacle("wall", ((-10.0, -1.0), (200.0, -1.0)), thickness=0.2)  # face at y = -0.9
+    states = {"car": BodyState((0, 0.05), 0.0, (20.0, 0.0))}  # 5 cm from the face
+    run = simulate_scene([car], states, {"car": wheels}, Road(mu), RunoutOptions(engine=engine, max_step=0.01),
+                         contact=ContactModel(friction=f_wall, velocity_threshold=5.0), obstacles=[wall])
+    assert run.status == "rest" and not run.impacts
+    assert [e.kind for e in run.events if e.kind.startswith("contact")] == ["contact"]
+    h = run.vehicles["car"].bodies["car"].history
+    # speed against time over the middle of the slide (the contact settled, well above rest)
+    sel = (h.t > 0.5) & (np.hypot(h.vx, h.vy) > 3.0)
+    slope = np.polyfit(h.t[sel], np.hypot(h.vx, h.vy)[sel], 1)[0]
+    expected = G * mu * (abs(math.sin(delta)) + f_wall * math.cos(delta))
+    assert -slope == pytest.approx(expected, rel=0.01)
+    pair = run.pairs[0]
+    # pressed with N = mu m g cos(delta) (after the first touch, damped without a bounce); the
+    # contact force is N with the wall friction f_w N across it; never deeper than the largest
+    # force over the stiffness of the two corner contacts
+    steady = (pair.t > 0.5) & (pair.t < pair.t[pair.force > 0].max() - 0.5)
+    normal = mu * 1500 * G * math.cos(delta)
+    assert np.median(pair.force[steady]) == pytest.approx(normal * math.hypot(1.0, f_wall), rel=0.01)
+    assert pair.max_penetration < pair.peak_force / 1e7 + 1e-3
+    assert abs(h.heading).max() < math.radians(1.0)  # the wall holds the car straight
+    assert run.energy["closing_error"] == pytest.approx(0.0, abs=1e-6 * run.energy["initial"])
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_a_pair_that_never_touches_changes_nothing(engine):
+    """Contact modelled or not, two cars far apart run out identically (to the integration)."""
+    locked = WheelSettings(default=WheelSetting("locked"))
+    states = {"a": BodyState((0, 0), 0.3, (12.0, 2.0), 0.5), "b": BodyState((0, 30), 0.0, (10.0, -1.0), -0.4)}
+    runs = [simulate_scene([box("a"), box("b")], states, {"a": locked, "b": locked}, Road(0.7),
+                           RunoutOptions(engine=engine), contact=ContactModel(enabled=on)) for on in (True, False)]
+    assert not runs[0].impacts and [p.impacts for p in runs[0].pairs] == [0]
+    for name, v in (("a", "a"), ("b", "b")):
+        p0 = runs[0].vehicles[v].bodies[name].rest_position
+        p1 = runs[1].vehicles[v].bodies[name].rest_position
+        assert np.hypot(*np.subtract(p0, p1)) < 1e-6

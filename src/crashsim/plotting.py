@@ -12,7 +12,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["BarrierAxes", "plot_barrier_sweep", "plot_barrier_figures", "plot_scene", "plot_histories",
+__all__ = ["BarrierAxes", "plot_barrier_sweep", "plot_barrier_figures", "plot_scene", "plot_histories", "history_panels",
            "save_scene_figures", "SCENE_FIGURE_SUFFIXES"]
 
 
@@ -986,16 +986,24 @@ def _scene_legend(S: _Scene, legend, below: bool):
     return leg
 
 
+def history_panels(scene) -> int:
+    """Panels of :func:`plot_histories` for ``scene``: 3, or 4 when bodies stayed in sustained
+    contact during the run-out (the contact-force panel)."""
+    joint = getattr(scene, "joint", None)
+    return 4 if joint is not None and any(p.contact_time > 0 for p in joint.pairs) else 3
+
+
 def plot_histories(scene, axes=None, *, system: str | None = None):
-    """Run-out time histories: CG speed, yaw rate and articulation angle after separation.
+    """Run-out time histories: CG speed, yaw rate and articulation angle after separation, and
+    the sustained-contact forces when bodies stayed in contact.
 
     Parameters
     ----------
     scene : SceneResult
         With a run-out (``scene.runout`` not None).
-    axes : sequence of 3 matplotlib Axes, optional
-        Panels for speed, yaw rate and articulation; a new 3 x 1 figure (shared time axis)
-        if None.
+    axes : sequence of matplotlib Axes, optional
+        Panels for speed, yaw rate and articulation (and contact force: as many as
+        :func:`history_panels` says); a new figure (shared time axis) if None.
     system : {"SI", "US"}, optional
         Speed in m/s or mph; yaw rate in deg/s and articulation in deg in both. Default: the
         scenario's units.
@@ -1015,7 +1023,9 @@ def plot_histories(scene, axes=None, *, system: str | None = None):
     first body of a vehicle, dashed and dotted for the towed ones) from the sampled
     ``BodyRunout.history``; a dot marks the time to rest. The articulation at each hitch is
     ``HitchHistory.articulation`` (heading of the front body minus that of the rear body);
-    a hitch's articulation limit, if set, is drawn as thin grey lines.
+    a hitch's articulation limit, if set, is drawn as thin grey lines.  Secondary impacts are
+    thin vertical lines, numbered as in the report (#2, #3, ...); the contact-force panel
+    shows each pair's sampled sustained-contact force (``PairSummary.force``).
     """
     from .errors import ScenarioError
     from .units import Kind, convert, to_unit
@@ -1024,13 +1034,15 @@ def plot_histories(scene, axes=None, *, system: str | None = None):
     if not scene.runout:
         raise ScenarioError(f"scene {scene.scenario.title!r} has no run-out (impact only): there are no time "
                             "histories to plot; add a [runout] section to the scenario", field="runout")
+    n_panels = history_panels(scene)
     new = axes is None
     if new:
-        fig, axes = _plt().subplots(3, 1, figsize=(8.0, 8.5), sharex=True, layout="constrained")
+        fig, axes = _plt().subplots(n_panels, 1, figsize=(8.0, 2.85 * n_panels), sharex=True, layout="constrained")
     axes = np.asarray(axes, dtype=object).ravel()
-    if len(axes) != 3:
-        raise ScenarioError(f"needs 3 axes (speed, yaw rate, articulation), got {len(axes)}", field="axes")
-    ax_v, ax_w, ax_a = axes
+    if len(axes) != n_panels:
+        what = "speed, yaw rate, articulation" + (", contact force" if n_panels == 4 else "")
+        raise ScenarioError(f"needs {n_panels} axes ({what}), got {len(axes)}", field="axes")
+    ax_v, ax_w, ax_a = axes[:3]
     kv, vunit = to_unit(1.0, Kind.SPEED, system)
     kw = convert(1.0, "rad/s", "deg/s", Kind.ANGULAR_VELOCITY)
     ka = convert(1.0, "rad", "deg", Kind.ANGLE)
@@ -1069,7 +1081,22 @@ def plot_histories(scene, axes=None, *, system: str | None = None):
     ax_v.set_ylabel(f"CG speed [{vunit}]")
     ax_w.set_ylabel("yaw rate [deg/s]")
     ax_a.set_ylabel("articulation [deg]")
-    ax_a.set_xlabel("time after separation [s]")
+    axes[-1].set_xlabel("time after separation [s]")
+    joint = getattr(scene, "joint", None)
+    if n_panels == 4:
+        ax_f = axes[3]
+        kf, funit = to_unit(1.0, Kind.FORCE, system)
+        for k, p in enumerate(q for q in joint.pairs if q.contact_time > 0):
+            ax_f.plot(p.t, kf * np.asarray(p.force), styles[k % len(styles)], lw=1.3, label=p.name.replace("|", " \N{EN DASH} "))
+        ax_f.set_ylabel(f"contact force [{funit}]")
+        ax_f.set_ylim(bottom=0.0)
+        ax_f.legend(fontsize=8, loc="best", title="sustained contact", title_fontsize=7)
+    if joint is not None:
+        for n, imp in enumerate(joint.impacts, start=2):
+            for ax in axes:
+                ax.axvline(imp.t, color="0.45", lw=0.7, ls=":")
+            ax_v.annotate(f"#{n}", (imp.t, 1.0), xycoords=("data", "axes fraction"), xytext=(2, -10),
+                          textcoords="offset points", fontsize=7, color="0.3")
     for ax in axes:
         ax.grid(True, alpha=0.4)
         ax.set_xlim(0.0, t_max * 1.02 if t_max > 0 else 1.0)

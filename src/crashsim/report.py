@@ -69,13 +69,17 @@ def format_impact(result, system: str = "SI") -> str:
     return "\n".join(lines)
 
 
-def format_runout(runout: dict, system: str = "SI") -> str:
-    """Text report of the run-outs (dict vehicle name -> RunoutResult)."""
+def format_runout(runout: dict, system: str = "SI", *, joint: bool = False) -> str:
+    """Text report of the run-outs (dict vehicle name -> RunoutResult); ``joint``: one run-out of
+    the whole scene (its method and work are stated once)."""
     s = system
     lines = ["Run-out to rest"]
+    if joint and runout:
+        r0 = next(iter(runout.values()))
+        lines[0] += f" (one run-out of the whole scene: method {r0.method}, {r0.nfev} right-hand-side evaluations)"
     for vname, r in runout.items():
-        lines.append(f"  vehicle {vname}: {r.status} after {fmt(r.t_end, 'time', s)} ({r.message}); "
-                     f"method {r.method}, {r.nfev} right-hand-side evaluations")
+        how = "" if joint else f"; method {r.method}, {r.nfev} right-hand-side evaluations"
+        lines.append(f"  vehicle {vname}: {r.status} after {fmt(r.t_end, 'time', s)} ({r.message}){how}")
         if not r.success:
             lines.append(f"    NOT AT REST ({r.status}): the positions below are where the run stopped, not rest "
                          "positions")
@@ -109,9 +113,10 @@ def format_joint(scene, system: str = "SI") -> str:
     if touched:
         lines.append("Contacts")
         for p in touched:
-            lines.append(f"  {p.name}: {p.impacts} impact(s), sustained contact {fmt(p.contact_time, 'time', s)}, "
-                         f"peak force {fmt(p.peak_force, 'force', s)}, deepest {fmt(p.max_penetration, 'length', s)} "
-                         "beyond the crush")
+            sustained = (f"sustained contact {fmt(p.contact_time, 'time', s)}, peak force {fmt(p.peak_force, 'force', s)}, "
+                         f"deepest {fmt(p.max_penetration, 'length', s)} beyond the crush, "
+                         f"work taken {fmt(-p.contact_work, 'energy', s)}" if p.contact_time > 0 else "no sustained contact")
+            lines.append(f"  {p.name}: {p.impacts} impact(s), {sustained}")
     ledger = scene.energy_ledger()
     if ledger:
         lines.append("Energy from the first impact to rest")

@@ -242,6 +242,11 @@ RUNOUT = Section("runout", [
     Field("sample_dt", Kind.TIME, minimum=0, exclusive_minimum=True, default=f"{_OPT.sample_dt} s",
           description="Spacing of the sampled histories and tracks"),
     Field("lateral_model", choices=LATERAL_MODELS, default=_OPT.lateral_model, description="Lateral tyre curve"),
+    Field("max_impacts", "int", minimum=0, maximum=100_000, default=_OPT.max_impacts,
+          description="Secondary impacts allowed in the run-out; more end it with status event_limit (exit 3)"),
+    Field("max_wall_time", Kind.TIME, minimum=0, exclusive_minimum=True, maximum=1e6,
+          default=f"{_OPT.max_wall_time} s",
+          description="Computing time allowed for the run-out; more ends it with status wall_time_limit (exit 3)"),
     Field("load_transfer", "bool", default=_OPT.load_transfer,
           description="Quasi-static load transfer (needs every body's cg_height)"),
 ], subsections=[ArrayOf("zones", ZONE, required=False, description="Friction zones")],
@@ -458,6 +463,14 @@ def _build_wheels(vehicle: Vehicle, v: dict, file: str | None) -> WheelSettings:
         default = WheelSetting(**_given(tyres))
     except ScenarioError as exc:
         raise _rewrap(exc, f"vehicles.{name}.tyres", file) from None
+    if not default.is_sliding:
+        if default.cornering_stiffness is None and default.cornering_coefficient is None:
+            raise _err(f'state = "{default.state}" needs cornering_coefficient (cornering stiffness per unit load, '
+                       "1/rad: about 8.6 for car tyres, 6 for truck tyres) or cornering_stiffness (N/rad per tyre)",
+                       f"vehicles.{name}.tyres.cornering_coefficient", file)
+        if default.rolling_resistance is None:
+            raise _err(f'state = "{default.state}" needs rolling_resistance (in [0, 0.5]: about 0.012 for car tyres, '
+                       "0.008 for truck tyres)", f"vehicles.{name}.tyres.rolling_resistance", file)
     overrides = {}
     for i, w in enumerate(v["wheels"]):
         merged = {**_given(tyres), **_given(w)}
@@ -509,7 +522,8 @@ def _build_runout(r: dict, vehicles, raw_vehicles: dict, file: str | None, raw: 
             raise ScenarioError("the compiled engine is not available in this installation", field="engine")
         options = RunoutOptions(method=r["method"], rtol=r["rtol"], atol=r["atol"], eps=r["eps"], v_stop=r["v_stop"],
                                 max_step=r["max_step"], t_max=r["t_max"], sample_dt=r["sample_dt"],
-                                lateral_model=r["lateral_model"], load_transfer=level == "load_transfer", **extra)
+                                lateral_model=r["lateral_model"], load_transfer=level == "load_transfer",
+                                max_impacts=r["max_impacts"], max_wall_time=r["max_wall_time"], **extra)
     except ScenarioError as exc:
         raise _rewrap(exc, "runout", file) from None
     if options.load_transfer:

@@ -82,6 +82,22 @@ def _semi(rng, name, length, rear_hitch):
 
 
 def _vehicle(rng, kind):
+    """A random vehicle of ``kind`` whose static axle loads are all positive (drawn again until so:
+    a heavy semitrailer's kingpin behind the tractor's drive group can lift the steer axle)."""
+    from crashsim.errors import ScenarioError
+    from crashsim.motion.loads import static_loads
+
+    for _ in range(100):
+        vehicle = _draw_vehicle(rng, kind)
+        try:
+            static_loads(vehicle)
+        except ScenarioError:
+            continue
+        return vehicle
+    raise RuntimeError(f"no valid {kind} in 100 draws")
+
+
+def _draw_vehicle(rng, kind):
     lim = lambda: math.radians(_u(rng, 55, 95))  # noqa: E731
     if kind == "car":
         car, _ = _car(rng, "car")
@@ -267,9 +283,7 @@ def random_scene(seed: int, i: int, *, engine: str = "scipy", kinds=KINDS, n_veh
         if all(_apart(p, pole.pieces(), 0.5) for p in polys):
             obstacles.append(pole)
     speed0 = max(float(np.hypot(*initial[v.bodies[0].name].velocity)) for v in vehicles)
-    lt = rng.random() < 0.2
-    if lt:  # every body has a CG height (the generator sets them)
-        pass
+    lt = rng.random() < 0.2  # every body has a CG height (the generator sets them)
     options = RunoutOptions(engine=engine, load_transfer=lt)
     label = (f"seed {seed} scene {i}: {nv} vehicles ({', '.join(str(len(v.bodies)) + ' bodies' for v in vehicles)}), "
              f"{len(obstacles)} obstacle(s), fastest {speed0:.1f} m/s" + (", load transfer" if lt else ""))

@@ -20,7 +20,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 from crashsim.errors import ScenarioError  # noqa: E402
 from crashsim.geometry import rotate  # noqa: E402
-from crashsim.plotting import (SCENE_FIGURE_SUFFIXES, plot_histories, plot_scene,  # noqa: E402
+from crashsim.plotting import (SCENE_FIGURE_SUFFIXES, history_panels, plot_histories, plot_scene,  # noqa: E402
                                save_scene_figures)
 from crashsim.reconstruct import run_scene  # noqa: E402
 from crashsim.scenario import load_scenario  # noqa: E402
@@ -241,11 +241,11 @@ def test_histories(path):
     scene = _scene(path)
     fig = plot_histories(scene)
     axes = fig.axes
-    assert len(axes) == 3
+    assert len(axes) == history_panels(scene) == 3 + any(p.contact_time > 0 for p in scene.joint.pairs)
     assert axes[0].get_ylabel() == "CG speed [m/s]"
     assert axes[1].get_ylabel() == "yaw rate [deg/s]"
     assert axes[2].get_ylabel() == "articulation [deg]"
-    assert axes[2].get_xlabel() == "time after separation [s]"
+    assert axes[-1].get_xlabel() == "time after separation [s]"
     n_bodies = sum(len(r.bodies) for r in scene.runout.values())
     labelled = [ln.get_label() for ln in axes[0].get_lines() if not ln.get_label().startswith("_")]
     assert sorted(labelled) == sorted(f"{n} ({v})" for v, r in scene.runout.items() for n in r.bodies)
@@ -261,6 +261,24 @@ def test_histories_of_articulation_match_headings():
     (line,) = [ln for ln in fig.axes[2].get_lines() if ln.get_label().startswith("tractor")]
     tr, tl = scene.runout_body("tractor").history, scene.runout_body("trailer").history
     np.testing.assert_allclose(line.get_ydata(), np.degrees(tr.heading - tl.heading), atol=1e-9)
+
+
+def test_contact_force_panel_and_impact_lines():
+    """The median-barrier slide: both bodies stay in sustained contact; the fourth panel draws
+    each pair's sampled force (its maximum is the report's peak force) and every panel marks
+    the trailer's side slap (#2) with a vertical line at its time."""
+    scene = _scene(ROOT / "scenarios" / "scenes" / "median_barrier_slide.toml")
+    fig = plot_histories(scene)
+    assert len(fig.axes) == 4 and fig.axes[3].get_ylabel() == "contact force [N]"
+    pairs = {p.name.replace("|", " \N{EN DASH} "): p for p in scene.joint.pairs if p.contact_time > 0}
+    lines = {ln.get_label(): ln for ln in fig.axes[3].get_lines() if not ln.get_label().startswith("_")}
+    assert lines.keys() == pairs.keys()
+    for name, ln in lines.items():
+        assert max(ln.get_ydata()) == pytest.approx(pairs[name].peak_force)
+    (t2,) = [i.t for i in scene.joint.impacts]
+    for ax in fig.axes:
+        assert any(np.allclose(ln.get_xdata(), t2) for ln in ax.get_lines())
+    assert [t.get_text() for t in fig.axes[0].texts] == ["#2"]
 
 
 def test_histories_need_a_runout():

@@ -592,6 +592,7 @@ def pair_forces(y, M, D, cs, p, f, mf):
     ``cs`` holds the bodies' heading cosines and sines, ``mf`` (2, 3) is scratch for the
     manifold.  Returns the power of the forces on the bodies [W] (their work on the system:
     dissipation by the damper and the friction, and the spring's change of stored energy).
+    The bodies of parked vehicles count as still.
     """
     pr_body, pr_ptr, pp, pr_par, cfg = M[26], M[27], M[28], M[29], M[11]
     nb = M[0].shape[0]
@@ -602,6 +603,10 @@ def pair_forces(y, M, D, cs, p, f, mf):
     c = pr_par[p, R_C]
     mu = pr_par[p, R_MU]
     allowance = D[6][p]
+    # a parked body does not move: its frozen velocity (<= v_stop) neither damps nor does work
+    bveh, parked = M[19], D[7]
+    still_a = parked[bveh[ia]] != 0
+    still_b = ib >= 0 and parked[bveh[ib]] != 0
     power = 0.0
     for q in range(pr_ptr[p], pr_ptr[p + 1]):
         a = pp[q, 0]
@@ -615,8 +620,8 @@ def pair_forces(y, M, D, cs, p, f, mf):
             depth = mf[m, 2] - allowance
             if depth <= 0.0:
                 continue
-            vax, vay = point_velocity(y, M, ia, px, py)
-            vbx, vby = point_velocity(y, M, ib, px, py)
+            vax, vay = (0.0, 0.0) if still_a else point_velocity(y, M, ia, px, py)
+            vbx, vby = (0.0, 0.0) if still_b else point_velocity(y, M, ib, px, py)
             rvx = vax - vbx
             rvy = vay - vby
             rate = -(rvx * nx + rvy * ny)  # penetration rate
@@ -722,6 +727,49 @@ def rest_measure(y, M, v):
         sp = math.sqrt(y[3 * nb + i] ** 2 + y[4 * nb + i] ** 2)
         rot = abs(y[5 * nb + i]) * body[i, 2]
         out = max(out, max(sp, rot))
+    return out
+
+
+@njit(**_HOT)
+def contact_group(M, D, v):
+    """Bit mask of the vehicles linked to vehicle ``v`` by sustained contacts, directly or
+    through others (``v`` included); only ``v`` in scenes of more than 62 vehicles."""
+    pstate = D[5]
+    bveh, pr_body = M[19], M[26]
+    mask = np.int64(1) << v
+    if D[7].shape[0] > 62:
+        return mask
+    changed = True
+    while changed:
+        changed = False
+        for p in range(pr_body.shape[0]):
+            if pstate[p] != PS_CONTACT or pr_body[p, 1] < 0:
+                continue
+            va = bveh[pr_body[p, 0]]
+            vb = bveh[pr_body[p, 1]]
+            if ((mask >> va) & 1) != ((mask >> vb) & 1):
+                mask |= (np.int64(1) << va) | (np.int64(1) << vb)
+                changed = True
+    return mask
+
+
+@njit(**_HOT)
+def group_rest_measure(y, M, D, v):
+    """Rest measure of vehicle ``v`` together with every moving vehicle of its contact group
+    (the largest of their rest measures) [m/s].
+
+    A vehicle pressed by a moving one cannot park; its rest event is the group's, so that the
+    group comes to rest at one instant instead of the event firing again and again while the
+    partner still moves (event chattering, found by the scene fuzz).
+    """
+    parked = D[7]
+    out = rest_measure(y, M, v)
+    if M[26].shape[0] == 0:
+        return out
+    mask = contact_group(M, D, v)
+    for w in range(parked.shape[0]):
+        if w != v and (mask >> w) & 1 and parked[w] == 0:
+            out = max(out, rest_measure(y, M, w))
     return out
 
 
@@ -856,7 +904,7 @@ def event_value(e, y, M, ev_kind, ev_idx, ev_val, D, sw, dydt, W):
     """Value of event ``e`` of the segment at state ``y`` (module docstring for the kinds)."""
     kind = ev_kind[e]
     if kind == EV_REST:
-        return rest_measure(y, M, ev_idx[e]) - M[11][C_VSTOP]
+        return group_rest_measure(y, M, D, ev_idx[e]) - M[11][C_VSTOP]
     nb = M[0].shape[0]
     cs = W[5]
     if kind == EV_ZONE:
@@ -1285,9 +1333,16 @@ def handle_event(e, t, y, M, D, offsets, ev_kind, ev_idx, ev_val, ev_dir, sw, dy
     nh = hitch.shape[0]
     n = 0
     if kind == EV_REST:
-        # the event says the vehicle is at rest (located to round-off either side of v_stop)
-        if D[7][idx] == 0:
+        # the event says the vehicle and its contact partners are at rest (located to round-off
+        # either side of v_stop): park them
+        v_stop = M[11][C_VSTOP] * (1.0 + 1e-9)
+        parked = D[7]
+        if parked[idx] == 0:
             n = _try_park(idx, y, M, D, rec, n)
+        mask = contact_group(M, D, idx)
+        for w in range(parked.shape[0]):
+            if parked[w] == 0 and parked[idx] != 0 and (mask >> w) & 1 and rest_measure(y, M, w) <= v_stop:
+                n = _try_park(w, y, M, D, rec, n)
         return False, n
     if kind == EV_STOP:
         # plastic impact at the stop, then close it unless the bodies separate
@@ -1360,7 +1415,7 @@ def _try_park(v, y, M, D, rec, n):
     vehicle that still moves faster than v_stop; returns the number of log records."""
     pstate, parked = D[5], D[7]
     bveh, pr_body, cfg = M[19], M[26], M[11]
-    v_stop = cfg[C_VSTOP]
+    v_stop = cfg[C_VSTOP] * (1.0 + 1e-9)
     for p in range(pr_body.shape[0]):
         if pstate[p] != PS_CONTACT or pr_body[p, 1] < 0:
             continue
@@ -1901,6 +1956,55 @@ def run(t0, y0, M, D, offsets, stops, gl_x, gl_w, deadline, counters, quad):
     return (status, t, y, st_t[:n_steps], st_h[:n_steps], st_y[:n_steps], st_q[:n_steps],
             sg_t[:n_seg], sg_s[:n_seg], sg_phase[:n_seg], sg_memb[:n_seg], sg_nlk[:n_seg], sg_lkj[:n_seg],
             sg_lkth[:n_seg], sg_pstate[:n_seg], sg_pref[:n_seg], sg_parked[:n_seg], lg_t[:lg_n], lg_rec[:lg_n], geo)
+
+
+@njit(**_JIT)
+def reconcile_stops(y, M, D, offsets, veh_mask):
+    """Closed articulation stops after an impulse on the vehicles of ``veh_mask`` (a secondary
+    impact, solved with the hitches as free pins); returns the log records.
+
+    A closed stop that the impulse turns away from its limit is released (``stop_open``).  Any
+    other closed stop of those vehicles takes a plastic stop impact at the same instant, as
+    an articulation that reaches its stop does: the velocities are projected onto the closed
+    stops (kinetic-energy metric) and the loss is logged as a ``stop_closed`` record of the
+    first of them (the stop stays closed).  The crush impulse and the stop's moment impulse
+    are thus applied one after the other, not solved together.
+    """
+    W = make_work(M)
+    lk_j, lk_th, lk_n, shift = D[1], D[2], D[3], D[4]
+    hitch, hbody, bveh = M[3], M[20], M[19]
+    nb = M[0].shape[0]
+    rec = np.zeros((2 * max(hitch.shape[0], 1) + 2, 5))
+    n = 0
+    q = 0
+    while q < lk_n[0]:
+        j = lk_j[q]
+        if veh_mask[bveh[hbody[j, 0]]] == 0:
+            q += 1
+            continue
+        side = 1.0 if lk_th[q] - offsets[j] > 0.0 else -1.0
+        rate = y[5 * nb + hbody[j, 0]] - y[5 * nb + hbody[j, 1]]
+        if rate * side < 0.0:
+            n = _log(rec, n, LOG_STOP_OPEN, j, 0, 0.0, 0.0)
+            shift[j] = _left_stop_shift(y, M, j, offsets[j], hitch[j, 4], shift[j])
+            for r in range(q, lk_n[0] - 1):
+                lk_j[r] = lk_j[r + 1]
+                lk_th[r] = lk_th[r + 1]
+            lk_n[0] -= 1
+        else:
+            q += 1
+    first = -1
+    for q in range(lk_n[0]):
+        if veh_mask[bveh[hbody[lk_j[q], 0]]] != 0:
+            first = q
+            break
+    if first >= 0:
+        ke_before = kinetic_energy(y, M)
+        project_velocities(y, M, lk_j, lk_th, lk_n[0], W[2], W[3], W[4], W[5])
+        j = lk_j[first]
+        side = 1.0 if lk_th[first] - offsets[j] > 0.0 else -1.0
+        n = _log(rec, n, LOG_STOP_CLOSED, j, 0, side * hitch[j, 4], ke_before - kinetic_energy(y, M))
+    return rec[:n]
 
 
 @njit(**_JIT)

@@ -446,8 +446,17 @@ def _pair_vehicles(model: SceneModel, pair) -> tuple:
 
 
 # ============================================================================= secondary impacts
-def _secondary_impact(model: SceneModel, t: float, y: np.ndarray, geo: np.ndarray, D) -> tuple[SecondaryImpact, RunoutEvent]:
-    """Solve the impact of a touch with the impulse solver; update ``y`` and the mode ``D`` in place."""
+def _secondary_impact(model: SceneModel, t: float, y: np.ndarray, geo: np.ndarray, D, offsets: np.ndarray,
+                      log: list) -> tuple[SecondaryImpact, RunoutEvent]:
+    """Solve the impact of a touch with the impulse solver; update ``y`` and the mode ``D`` in place.
+
+    The impulse solver takes the hitches as free pins.  A closed articulation stop of an involved
+    vehicle is then reconciled at the same instant (:func:`crashsim.motion._kernels.reconcile_stops`):
+    released if the impact turns the articulation away from it, else a plastic stop impact whose
+    loss goes to the stop-impact line of the energy ledger (appended to ``log`` after the
+    returned impact event).  The impact's delta-v includes that stop reaction (the velocity
+    change of the instant); its energy loss is the crush impulse's alone.
+    """
     from ..impact import CrushSurface, ImpactProblem, TangentialLaw, solve_impact
     from .dynamics import make_hitch_consistent
 
@@ -485,16 +494,24 @@ def _secondary_impact(model: SceneModel, t: float, y: np.ndarray, geo: np.ndarra
                    "frictionless (mu = 0) instead")
         result = solve_impact(problem(TangentialLaw("ratio", 0.0)))
     L = model.layout
+    k = kernels()
     ke_before = model.kinetic_energy(y)
-    delta_v = {}
+    v_before = {b.name: (y[L.vx][names.index(b.name)], y[L.vy][names.index(b.name)]) for v in involved for b in v.bodies}
     for v in involved:
         for b in v.bodies:
             i = names.index(b.name)
             bi = result.bodies[b.name]
-            delta_v[b.name] = (float(bi.velocity[0] - y[L.vx][i]), float(bi.velocity[1] - y[L.vy][i]))
             y[L.vx.start + i], y[L.vy.start + i], y[L.w.start + i] = bi.velocity[0], bi.velocity[1], bi.yaw_rate
     loss = ke_before - model.kinetic_energy(y)
-    D[5][p] = kernels().PS_CONTACT
+    mask = np.zeros(len(model.vehicles), dtype=np.int64)
+    for v in involved:
+        mask[model.vehicles.index(v)] = 1
+    stop_records = k.reconcile_stops(y, model.M, D, offsets, mask)
+    delta_v = {}
+    for name, (vx0, vy0) in v_before.items():
+        i = names.index(name)
+        delta_v[name] = (float(y[L.vx][i] - vx0), float(y[L.vy][i] - vy0))
+    D[5][p] = k.PS_CONTACT
     D[6][p] = 0.0
     for v in involved:
         D[7][model.vehicles.index(v)] = 0
@@ -509,6 +526,8 @@ def _secondary_impact(model: SceneModel, t: float, y: np.ndarray, geo: np.ndarra
                                      + (f" ({warning})" if warning else ""),
                         float(loss), tuple(v.name for v in involved),
                         {"pair": pair.name, "speed_m_s": float(-geo[5]), "normal_impulse_N_s": result.normal_impulse})
+    log.append(event)
+    _log_records(model, t, stop_records, log)
     return record, event
 
 
@@ -580,9 +599,8 @@ def run_model(model: SceneModel, initial: Mapping[str, BodyState]) -> SceneRunou
                        f"secondary impacts; the last between {model.pairs[int(geo[0])].name}")
             code = None
             break
-        record, event = _secondary_impact(model, t, y, geo, D)
+        record, _ = _secondary_impact(model, t, y, geo, D, offsets, log)
         impacts.append(record)
-        log.append(event)
         _log_records(model, t, k.settle_at(y, M, D), log)
     if code is not None:
         status = names[code]

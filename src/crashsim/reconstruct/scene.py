@@ -146,7 +146,7 @@ class SceneResult:
         if self.runout is not None:
             from ..report import format_runout
 
-            text += "\n\n" + format_runout(self.runout, system)
+            text += "\n\n" + format_runout(self.runout, system, joint=self.joint is not None)
             text += f"\n  model level: {self.scenario.runout.level}"
             if self.joint is not None:
                 from ..report import format_events, format_joint

@@ -9,7 +9,7 @@ Options: ``--repeats N`` (default 7), ``--max-size N`` (default 100000), ``--out
 ``--replot`` (redraw the table and figure from ``impact_speed.json``).
 
 The impact is the paper's Table 5 (a loaded tractor-semitrailer, B, strikes the side of an empty
-one, A, at its trailer wheels; geometry from shared/papers/recovered-geometry.md): 7 unknowns
+one, A, at its trailer wheels; geometry from docs/paper-geometry.md): 7 unknowns
 (P_n, P_t, M and two hitch impulses). It measures
 
 (a) the latency of ``solve_impact`` (the single-solve public API: dense path, SVD condition

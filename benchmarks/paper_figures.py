@@ -18,7 +18,7 @@ Writes, into ``--out`` (default ``plots/``):
                             spot checks of the same sweeps.
 
 Source: "Impact of Articulated Vehicles", RIGID BARRIER COLLISIONS, Table 2, Figs. 4 and 5;
-dimensions from ``shared/papers/recovered-geometry.md``.
+dimensions from ``docs/paper-geometry.md``.
 """
 
 from __future__ import annotations
@@ -45,7 +45,7 @@ CONTACTS = ("interpolate", "fixed", "corner")
 TRUCKS = ("loaded", "empty")
 FRICTION = (0.2, 0.6)
 
-#: What the paper and recovered-geometry.md state, for the markdown table.
+#: What the paper and docs/paper-geometry.md state, for the markdown table.
 PAPER = {
     "onset_0.2": "about 14 deg (text)",
     "mu60": "f = 1.2 needed (text); 1.12 loaded / 1.06 empty with the corner contact (recovered geometry)",
@@ -115,7 +115,7 @@ def notes(rows: list[dict], sweeps: dict) -> list[str]:
         f"already at 0 deg, the onset is at {ci['sliding_onset_deg']:.1f} deg, and the energy",
         f"  loss at 0 deg is {ci['energy_loss_0deg_pct']:.1f} % rather than 'near 100 %': the paper's contact was not",
         "  at the corner for small angles.",
-        "* |mu_max| at 60 deg: the corner gives the recovered-geometry values; the interpolated contact gives",
+        "* |mu_max| at 60 deg: the corner gives the values of docs/paper-geometry.md; the interpolated contact gives",
         f"  {r['loaded', 'interpolate', 0.6]['abs_mu_max_60deg']:.2f} / {r['empty', 'interpolate', 0.6]['abs_mu_max_60deg']:.2f}, "
         "also about the text's '1.2', so that statement needs a contact near the corner at 60 deg,",
         f"  not necessarily at it. The Table 3 point gives {r['loaded', 'fixed', 0.6]['abs_mu_max_60deg']:.2f}.",

@@ -298,7 +298,8 @@ def _write_markdown(rows, converged, ref_unc, order, args, path):
         r for r in rows
         if r["engine"] == "scipy" and r["method"] == DEFAULT.method and r["rtol"] == DEFAULT.rtol
     ]
-    lines += ["", "## Default setting (LSODA, rtol 1e-6, atol 1e-8, eps 0.01 m/s, v_stop 0.03 m/s)", ""]
+    lines += ["", f"## Default setting ({DEFAULT.method}, rtol {DEFAULT.rtol:g}, atol {DEFAULT.atol:g}, eps "
+                  f"{DEFAULT.eps:g} m/s, v_stop {DEFAULT.v_stop:g} m/s)", ""]
     if default:
         lines += [
             "| vehicle | median wall [ms] | best wall [ms] | median CPU [ms] | nfev | rest-position error [mm] "

@@ -1,4 +1,4 @@
-"""Eq. 6 with the sign of recovered-geometry.md, on the case that decides it: two bodies that
+"""Eq. 6 with the sign of docs/paper-geometry.md, on the case that decides it: two bodies that
 exchange only a moment impulse. With the contact on the line of centres, the normal along it
 and no tangential impulse (mu = 0), the crush force has no moment about either CG, so
 I1 (W1 - w1) = M, I2 (W2 - w2) = -M and the relative rotation must come back reversed and

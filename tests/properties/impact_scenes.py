@@ -405,10 +405,18 @@ def system_energy_change(result) -> float:
     return ke["after"] - ke["before"]
 
 
-def impulse_scale(result) -> float:
+def impulse_scale(result, problem=None) -> float:
     """Sum of the magnitudes of all unknown impulses of a result [N s] (a residual scale for
-    equations written in impulses, such as P_t = mu P_n)."""
+    equations written in impulses, such as P_t = mu P_n).
+
+    With ``problem``, the moment impulse counts too, as the force impulse |M| / L that gives the
+    same moment at the largest lever arm L: when a moment impulse does the work (a spinning
+    body whose rotation e' = 0 locks at a contact on its CG's path), P_n and P_t are round-off
+    of the solve of the whole system, whose size M sets.
+    """
     s = abs(result.normal_impulse) + abs(result.tangential_impulse)
     s += sum(float(np.hypot(*h.impulse)) for h in result.hitches.values())
     s += sum(abs(c.impulse) for c in result.constraints.values())
+    if problem is not None:
+        s += abs(result.moment_impulse) / lever_length(problem)
     return s

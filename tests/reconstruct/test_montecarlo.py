@@ -176,3 +176,24 @@ def test_dask_cluster_equals_local(data):
                              chunk_size=1)
     assert remote.backend == "dask"
     _same(local, remote)
+
+
+def test_whole_event_outputs_of_a_joint_run_out():
+    """With later impacts, each body's delta-v over the whole event (the magnitude of the sum of
+    its impacts' velocity changes) and the number of later impacts are outputs too; the waiting
+    car of the third-vehicle scene, in no first impact, has only the whole-event one."""
+    from pathlib import Path
+
+    from crashsim.reconstruct.evidence import body_impacts
+    from crashsim.reconstruct.montecarlo import scene_outputs
+    from crashsim.reconstruct.scene import run_scene
+    from crashsim.scenario import load_scenario
+
+    scene = run_scene(load_scenario(Path(__file__).resolve().parents[2] / "scenarios" / "scenes"
+                                    / "third_vehicle_waiting_car.toml"))
+    out = scene_outputs(scene)
+    assert out["impacts.later"] == len(scene.joint.impacts) >= 3
+    assert "delta_v.waiting" not in out
+    own = body_impacts("waiting", scene.impact, scene.joint.impacts)
+    assert out["delta_v_event.waiting"] == pytest.approx(float(np.hypot(*sum(d for d, _ in own))))
+    assert out["delta_v_event.striker"] != pytest.approx(out["delta_v.striker"])  # the trailer's blow adds

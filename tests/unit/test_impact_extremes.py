@@ -1,6 +1,6 @@
 """Extremes of the impact solver: each test asserts a conservation law, a bound or a clear error.
 
-Geometry follows shared/papers/recovered-geometry.md: tractor 9500 kg / 21000 kg m^2, fifth
+Geometry follows docs/paper-geometry.md: tractor 9500 kg / 21000 kg m^2, fifth
 wheel 3.1 m behind its CG, kingpin 3.991 m ahead of the trailer CG; loaded trailer
 20000 kg / 150000 kg m^2; car 1500 kg / 2800 kg m^2.
 

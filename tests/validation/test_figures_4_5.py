@@ -1,8 +1,8 @@
 """Validation: the paper's statements about its Figures 4 and 5 (rigid-barrier impacts).
 
-Source: "Impact of Articulated Vehicles" (shared/papers/impact-of-articulated-vehicles.txt),
+Source: "Impact of Articulated Vehicles",
 section RIGID BARRIER COLLISIONS, Table 2 and the text on Figures 4 and 5; the omitted
-dimensions and the contact points from shared/papers/recovered-geometry.md. The figures
+dimensions and the contact points from docs/paper-geometry.md. The figures
 themselves are lost, so only what the text states is checked; the contact point the paper
 used moved with the barrier angle, and each test says which contact it uses.
 """
@@ -38,7 +38,7 @@ def test_f02_sliding_throughout_from_about_14_deg(truck, fixed):
     """"for f = 0.2 the vehicle will continue sliding along the barrier surface throughout the
     collision for barrier angles of about 14 degrees or greater" (text on Figs. 4, 5).
 
-    Contact: the Table 3 point (recovered-geometry: "mu_max reaches 0.2 at G of about 14 deg
+    Contact: the Table 3 point (docs/paper-geometry.md: "mu_max reaches 0.2 at G of about 14 deg
     with the G = 15 contact point"). Tolerance [13.5, 14.5] deg: "about 14" read off a figure
     is a whole degree, i.e. anything that rounds to 14. The onset is the last angle where
     |mu_max| = 0.2 (|mu_max| is small but non-zero near 0 deg); the 0.05 deg grid with linear
@@ -60,7 +60,7 @@ def test_mu_max_at_60_deg_with_corner_contact(truck, expected):
     """"For a barrier angle of 60 degrees, a friction coefficient of 1.2 is needed to stop the
     initial sliding" (text on Figs. 4, 5).
 
-    recovered-geometry: this holds only with the front-corner contact (3.884, 1.205) m,
+    docs/paper-geometry.md: this holds only with the front-corner contact (3.884, 1.205) m,
     |mu_max| = 1.12 loaded and 1.06 empty; checked to those printed 2 decimals. With the Table 3
     point the model needs about 1.57, evidence that the paper's contact moved with the angle.
     """

@@ -5,7 +5,7 @@ Tolerances (the "printed precision"), and why:
 
 * velocities and yaw rates: one unit in the last printed digit (0.01 m/s or rad/s where the paper
   prints two decimals, 0.1 where it prints one). The paper's figures, and with them every length,
-  are lost; ``shared/papers/recovered-geometry.md`` recovers a geometry that reproduces every
+  are lost; ``docs/paper-geometry.md`` recovers a geometry that reproduces every
   printed velocity within 0.01 m/s (0.01 rad/s). A value printed as exactly 0 is a constraint and
   is asserted to 1e-9.
 * impulses printed to six significant figures: 0.05 % (the same note's precision for impulses;
@@ -200,7 +200,7 @@ def test_table7_external_impulse_from_helper():
 
 
 def test_sliding_flags_of_barrier_tables(capsys):
-    """recovered-geometry.md: mu_max -0.224 (3-a), -0.218 (3-b) -> stick with f = 0.6; about -2 in
+    """docs/paper-geometry.md: mu_max -0.224 (3-a), -0.218 (3-b) -> stick with f = 0.6; about -2 in
     Tables 4 -> sliding with |mu| = f = 0.6 (Table 4's impulse ratio -7054/11757 = -0.600)."""
     for table, mu_max, sliding in (("table3a", -0.224, False), ("table3b", -0.218, False)):
         d = run_json(table, capsys)["impact"]

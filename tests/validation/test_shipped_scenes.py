@@ -26,7 +26,7 @@ SCENES = sorted((ROOT / "scenarios" / "scenes").glob("*.toml"))
 def test_there_are_shipped_scenes():
     names = {p.stem for p in SCENES}
     assert {"intersection_car_trailer_wheels", "barrier_15deg", "barrier_75deg", "car_trailer_side_impact",
-            "median_barrier_slide", "third_vehicle_waiting_car"} <= names
+            "median_barrier_slide", "third_vehicle_waiting_car", "trailer_swings_into_car"} <= names
 
 
 @pytest.mark.parametrize("path", SCENES, ids=[p.stem for p in SCENES])
@@ -123,3 +123,29 @@ def test_trailer_constraint_holds_in_side_impact(capsys):
     assert abs(vy_axle) < 1e-9
     c = out["impact"]["constraints"]["trailer wheels rolling (no side slip)"]
     assert c["impulse"] != 0.0
+
+
+def test_trailer_swings_into_the_car_that_struck_it(capsys):
+    """The second impact is the trailer's, on the car; through the kingpin it also moves the
+    tractor (the impulse solver carries the hitch impulse)."""
+    assert main(["run", str(ROOT / "scenarios" / "scenes" / "trailer_swings_into_car.toml"), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    second = out["impacts"][1]
+    assert {second["body1"], second["body2"]} == {"trailer", "car"}
+    assert second["closing_speed"] > 5.0
+    assert second["delta_v"]["tractor"]["magnitude"] > 0.05
+    assert second["delta_v"]["car"]["magnitude"] > 2.0
+
+
+def test_sliding_along_the_median_barrier(capsys):
+    """Both bodies stay in sustained contact with the barrier for most of the run-out, the
+    contact takes work, and the trailer's side slap is a secondary impact."""
+    assert main(["run", str(ROOT / "scenarios" / "scenes" / "median_barrier_slide.toml"), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    pairs = {p["name"]: p for p in out["runout"]["pairs"]}
+    t_end = out["runout"]["t_end"]
+    for body in ("tractor", "trailer"):
+        p = pairs[f"{body}|median"]
+        assert p["contact_time"] > 0.5 * t_end and p["contact_work"] < 0
+    assert [(i["body1"], i["body2"]) for i in out["impacts"][1:]] == [("trailer", "median")]
+    assert out["runout"]["energy"]["contacts"] > 0

@@ -31,7 +31,7 @@ With W = J Minv J^T and u = J (q + Minv p_ext) the conditions are linear in lamb
     constraints (Eq. 7)      W_c lambda = value - u_c
 
 Eq. 6 is used with the sign that makes e' a restitution coefficient (see
-``shared/papers/recovered-geometry.md``): e' M = -(1 + e')(Omega_2 - Omega_1) Ibar.
+``docs/paper-geometry.md``): e' M = -(1 + e')(Omega_2 - Omega_1) Ibar.
 The system is equilibrated (rows, then columns, scaled to unit max-norm); the exact 1-norm
 condition number of the equilibrated matrix is reported so an ill-posed configuration is
 visible, and a solution is only returned where it is below :data:`COND_LIMIT`.

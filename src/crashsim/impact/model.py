@@ -1,7 +1,7 @@
 """Typed description of one impact: who collides, where, and under which laws.
 
 Everything here is SI and in the world frame of the scene. The equation numbers refer to
-Brach's "Impact of Articulated Vehicles" (``shared/papers/impact-of-articulated-vehicles.txt``).
+Brach's "Impact of Articulated Vehicles".
 """
 
 from __future__ import annotations

@@ -12,12 +12,12 @@ Two layers:
   ``update`` callback for fields that depend on the swept value.
 * :func:`barrier_problem` and :func:`barrier_angle_sweep` are a thin wrapper for the paper's
   "RIGID BARRIER COLLISIONS" section (Table 2, Figures 4 and 5), with the dimensions the
-  paper omits taken from ``shared/papers/recovered-geometry.md``.
+  paper omits taken from ``docs/paper-geometry.md``.
 
 Paper frame of the barrier examples
 -----------------------------------
 The tractor CG is at the origin with heading pi (travelling -x at the Table 2 speed), as in
-the paper's printed results (recovered-geometry: the paper's frame is the "vehicle travels
+the paper's printed results (docs/paper-geometry.md: the paper's frame is the "vehicle travels
 +x" frame turned by 180 deg). The crush-surface normal, from the barrier into the tractor,
 then points at the barrier angle G: ``normal_angle = G`` with ``tangent_sign = +1``.
 G = 0 is a head-on impact; at G = 90 deg the tractor's contact point moves along the wall
@@ -240,7 +240,7 @@ class Table2Truck:
     """The hypothetical tractor-semitrailer of the paper's Table 2.
 
     Masses [kg], yaw inertias [kg m^2] and speed [m/s] are the paper's; the pin offsets [m]
-    are from ``recovered-geometry.md`` (tractor CG to fifth wheel 3.100 m rearward, fifth
+    are from ``docs/paper-geometry.md`` (tractor CG to fifth wheel 3.100 m rearward, fifth
     wheel to trailer CG 3.991 m rearward).
     """
 
@@ -383,7 +383,7 @@ def barrier_angle_sweep(
     """Energy loss, mu_max, mu and tractor yaw rate against barrier angle (Figs. 4 and 5).
 
     The figures of the paper are lost and its contact point moved with the barrier angle in a
-    way it does not state (recovered-geometry: the 15 deg point reproduces "mu_max reaches
+    way it does not state (docs/paper-geometry.md: the 15 deg point reproduces "mu_max reaches
     0.2 at about 14 deg", only the front corner reproduces "f = 1.2 needed at 60 deg"). The
     figures can therefore be reproduced in shape, not line for line; ``contact`` chooses
     the assumption (see :func:`contact_points`).

@@ -233,6 +233,19 @@ def _check_mark(ev: MarkEvidence, tracks: dict, index: int) -> Check:
                   "mark_length": float(np.sum(np.hypot(*np.diff(np.asarray(ev.points, float), axis=0).T)))})
 
 
+def body_impacts(body: str, impact, secondary=()) -> list:
+    """The velocity changes of ``body`` in the impacts it took part in, in time order: the
+    first impact (if the body was in it), then the run-out's secondary impacts.  A list of
+    ``(delta_v world vector [m/s] (2,), the body's heading at that impact [rad])``."""
+    own = []
+    if body in impact.bodies and not impact.bodies[body].fixed:
+        own.append((np.asarray(impact.bodies[body].delta_v, dtype=float), impact.bodies[body].heading))
+    for s in secondary:
+        if body in s.delta_v:
+            own.append((np.asarray(s.delta_v[body], dtype=float), s.result.bodies[body].heading))
+    return own
+
+
 def evaluate_evidence(evidence: Evidence, impact, runout: dict | None, contact_point, secondary=()) -> EvidenceReport:
     """Residual and verdict of every evidence item.
 
@@ -286,13 +299,7 @@ def evaluate_evidence(evidence: Evidence, impact, runout: dict | None, contact_p
         checks.append(_check_mark(ev, tracks, i))
     for i, ev in enumerate(evidence.delta_v):
         name = ev.name or f"delta-v of {ev.body} ({ev.component})"
-        # the body's impacts in time order: the first impact if it took part, then the run-out's
-        own = []
-        if ev.body in impact.bodies and not impact.bodies[ev.body].fixed:
-            own.append((np.asarray(impact.bodies[ev.body].delta_v, dtype=float), impact.bodies[ev.body].heading))
-        for s in secondary:
-            if ev.body in s.delta_v:
-                own.append((np.asarray(s.delta_v[ev.body], dtype=float), s.result.bodies[ev.body].heading))
+        own = body_impacts(ev.body, impact, secondary)
         if not own:
             checks.append(Check("delta-v", name, math.inf, ev.tolerance, False, "speed",
                                 {"reason": "no impact involved this body"}))

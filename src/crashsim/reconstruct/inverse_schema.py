@@ -87,7 +87,7 @@ FIT = Section("fit", [
           description="Largest number of scene evaluations of one local fit (Jacobians not counted)"),
     Field("diff_step", "float", default=1e-3, minimum=1e-8, maximum=0.1,
           description="Finite-difference step of the Jacobian, as a fraction of each unknown's bound range "
-                      "(above the run-out solver's noise, rtol 1e-6)"),
+                      "(above the run-out solver's noise at its default rtol 1e-8)"),
     Field("confidence", "float", default=0.95, minimum=0.5, maximum=0.9999,
           description="Confidence level of the reported intervals"),
     Field("covariance", choices=("absolute", "scaled"), default="absolute",

@@ -38,6 +38,8 @@ def _display(values, kind: str, system: str):
         return np.degrees(v), "deg"
     if kind == "dimensionless":
         return 100.0 * v, "%"
+    if kind == "count":
+        return v, "count"
     _, label = to_unit(1.0, kind, system)
     factor = to_unit(1.0, kind, system)[0]
     return v * factor, label
@@ -47,16 +49,29 @@ def _label(key: str) -> str:
     what, _, who = key.partition(".")
     names = {"delta_v": "delta-v", "speed": "impact speed", "speed_after": "speed after impact",
              "energy_loss": "energy loss", "rest_x": "rest x", "rest_y": "rest y", "rest_heading": "rest heading",
-             "distance": "distance travelled"}
+             "distance": "distance travelled", "delta_v_event": "delta-v, whole event",
+             "impacts": "impacts after the first"}
+    if what == "impacts":
+        return names[what]
     return f"{names.get(what, what)}, {who}" if who else names.get(what, what)
 
 
 def default_histogram_keys(mc) -> list[str]:
-    """Delta-v of every moving body, impact speeds of the vehicles, system energy loss."""
+    """Delta-v of every moving body (first impact, and over the whole event where later impacts
+    add to it), impact speeds of the vehicles, system energy loss, the number of later impacts;
+    outputs that do not vary over the samples (a fixed speed, a car at rest) are left out."""
     keys = [k for k in mc.outputs if k.startswith("delta_v.")]
+    keys += [k for k in mc.outputs if k.startswith("delta_v_event.")
+             and not np.allclose(mc.outputs[k], mc.outputs.get("delta_v." + k.split(".", 1)[1], np.nan), equal_nan=False)]
     keys += [k for k in mc.outputs if k.startswith("speed.")]
-    keys += [k for k in ("energy_loss.system",) if k in mc.outputs]
-    return keys
+    keys += [k for k in ("energy_loss.system", "impacts.later") if k in mc.outputs]
+
+    def varies(k):
+        v = np.asarray(mc.outputs[k], dtype=float)
+        v = v[np.isfinite(v)]
+        return v.size > 0 and float(np.ptp(v)) > 1e-12 * max(1.0, float(np.max(np.abs(v))))
+
+    return [k for k in keys if varies(k)]
 
 
 def plot_histograms(mc, keys=None, axes=None, *, system: str | None = None, bins: int = 40):

@@ -245,11 +245,15 @@ def sample_inputs(spec: UncertaintySpec, seed: int, i: int) -> np.ndarray:
 
 #: Unit kind of each output, by the prefix of its key ("delta_v.car").
 OUTPUT_KINDS = {"delta_v": "speed", "speed": "speed", "speed_after": "speed", "energy_loss": "dimensionless",
-                "rest_x": "length", "rest_y": "length", "rest_heading": "angle", "distance": "length"}
+                "rest_x": "length", "rest_y": "length", "rest_heading": "angle", "distance": "length",
+                "delta_v_event": "speed", "impacts": "count"}
 
 
 def scene_outputs(scene) -> dict[str, float]:
-    """Flat outputs of one scene (SI): delta-v, speeds before/after, energy loss, rest positions."""
+    """Flat outputs of one scene (SI): delta-v, speeds before/after, energy loss, rest positions;
+    with a joint run-out also each body's delta-v over the whole event (``delta_v_event``: the
+    magnitude of the sum over all its impacts, as a recorder accumulating the event sees it)
+    and the number of impacts after the first (``impacts.later``)."""
     imp = scene.impact
     out: dict[str, float] = {}
     data = scene.scenario.data
@@ -262,6 +266,16 @@ def scene_outputs(scene) -> dict[str, float]:
         out[f"speed_after.{name}"] = float(np.hypot(*b.velocity))
     for k, v in imp.energy_loss.items():
         out[f"energy_loss.{k}"] = float(v)
+    joint = getattr(scene, "joint", None)
+    if joint is not None:
+        from .evidence import body_impacts
+
+        out["impacts.later"] = float(len(joint.impacts))
+        for r in scene.runout.values():
+            for name in r.bodies:
+                own = body_impacts(name, imp, joint.impacts)
+                if own:
+                    out[f"delta_v_event.{name}"] = float(np.hypot(*sum(d for d, _ in own)))
     for r in (scene.runout or {}).values():
         for name, b in r.bodies.items():
             out[f"rest_x.{name}"] = float(b.rest_position[0])
@@ -427,6 +441,8 @@ class MCResult:
                 return "n/a"
             if kind == "dimensionless":
                 return f"{100 * v:.1f} %"
+            if kind == "count":
+                return f"{v:.3g}"
             return fmt(v, kind, system)
 
         title = self.nominal.scenario.title if self.nominal is not None else ""

@@ -812,30 +812,31 @@ def quad_integrand(y, M, D, W, out):
 
 
 @njit(**_INLINE)
-def wheel_xy(y, M, k, cs):
-    """World position [m] of contact ``k`` (``cs``: heading cosines/sines of the bodies)."""
-    body, wheel, wbody = M[0], M[1], M[2]
-    nb = body.shape[0]
+def wheel_arm(M, k, cs):
+    """Body of contact ``k`` and the contact's offset from that body's CG in world axes [m]
+    (``cs``: heading cosines/sines of the bodies)."""
+    wheel, wbody = M[1], M[2]
     i = wbody[k]
     c = cs[0, i]
     s = cs[1, i]
     rx = wheel[k, 0]
     ry = wheel[k, 1]
-    return y[i] + c * rx - s * ry, y[nb + i] + s * rx + c * ry
+    return i, c * rx - s * ry, s * rx + c * ry
+
+
+@njit(**_INLINE)
+def wheel_xy(y, M, k, cs):
+    """World position [m] of contact ``k``."""
+    nb = M[0].shape[0]
+    i, dx, dy = wheel_arm(M, k, cs)
+    return y[i] + dx, y[nb + i] + dy
 
 
 @njit(**_HOT)
 def wheel_velocity(y, M, k, cs):
     """World velocity [m/s] of contact ``k``."""
-    body, wheel, wbody = M[0], M[1], M[2]
-    nb = body.shape[0]
-    i = wbody[k]
-    c = cs[0, i]
-    s = cs[1, i]
-    rx = wheel[k, 0]
-    ry = wheel[k, 1]
-    dx = c * rx - s * ry
-    dy = s * rx + c * ry
+    nb = M[0].shape[0]
+    i, dx, dy = wheel_arm(M, k, cs)
     w = y[5 * nb + i]
     return y[3 * nb + i] - w * dy, y[4 * nb + i] + w * dx
 

@@ -85,7 +85,7 @@ class _ScipyIntegrator:
         model = self.model
         M = model.M
         o = model.options
-        stops = sorted({tc for tc in model.change_times if tc < o.t_max} | {o.t_max})
+        stops = model.segment_stops
         max_eval = int(o.max_evaluations)
         while True:
             if bool(np.all(D[7] != 0)):
@@ -204,8 +204,7 @@ class _CompiledIntegrator:
     def integrate(self, t, y, D, offsets, deadline, counters, quad, log):
         k = kernels()
         model = self.model
-        o = model.options
-        stops = np.array(sorted({tc for tc in model.change_times if tc < o.t_max} | {o.t_max}), dtype=float)
+        stops = np.array(model.segment_stops, dtype=float)
         out = k.run(float(t), np.ascontiguousarray(y, dtype=float), model.M, D, offsets, stops, _GL_NODES, _GL_WEIGHTS,
                     float(deadline), counters, quad)
         status, t_end, y_end = int(out[0]), float(out[1]), np.array(out[2])

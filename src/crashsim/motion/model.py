@@ -140,6 +140,8 @@ class SceneModel:
         times = sorted({0.0} | {t for r in self.resolved.values() for t in r.change_times})
         self.phase_times = np.array(times, dtype=float)
         self.change_times = tuple(times[1:])
+        #: Where the integration must stop and restart: the scheduled changes before t_max, then t_max.
+        self.segment_stops = tuple(sorted({tc for tc in self.change_times if tc < options.t_max} | {options.t_max}))
         phase_w = np.zeros((len(times), nw, k.N_P))
         for p, t in enumerate(times):
             for v in self.vehicles:

@@ -75,3 +75,19 @@ def test_wired_schema_documents_the_new_sections():
                 "evidence.delta_v[].sigma", "evidence.marks[].sigma", "evidence.impact_point.sigma"):
         assert key.split(".")[-1] in text
     assert FIT.name == "fit" and UNCERTAINTY.name == "uncertainty"
+
+
+def test_contact_coefficients_are_unknowns_too():
+    """Fit unknowns and Monte Carlo inputs reach the contact model of later impacts: the scene
+    default and a pair's override, with the file's ranges."""
+    assert resolve_path("contacts.restitution").kind == "dimensionless"
+    assert resolve_path("contacts.velocity_threshold").kind == "speed"
+    data = car_trailer()
+    data["contacts"] = {"friction": 0.5, "pairs": [{"first": "trailer", "second": "striker", "restitution": 0.1}]}
+    ov = ScenarioOverrides(data, ["contacts.friction", "contacts.pairs[0].restitution"])
+    sc = ov.scenario([0.3, 0.35])
+    assert sc.runout.contact.friction == pytest.approx(0.3)
+    assert sc.runout.pair_contact[("trailer", "striker")].restitution == pytest.approx(0.35)
+    with pytest.raises(ScenarioError) as e:
+        ov.scenario([0.3, 1.5])
+    assert "contacts.pairs[0].restitution" in str(e.value) and "1.5" in str(e.value)

@@ -2117,6 +2117,13 @@ def schedule_change(y, M, D):
     return rec[:n]
 
 
+@njit(**_JIT)  # allocates: compiled with reference counting
+def segment_mode(s, sg_memb, sg_nlk, sg_lkj, sg_lkth, sg_pstate, sg_pref, sg_parked):
+    """The mode tuple ``D`` of stored segment ``s`` (copies: evaluating must not change the record)."""
+    return (sg_memb[s], sg_lkj[s].copy(), sg_lkth[s].copy(), np.full(1, sg_nlk[s], np.int64),
+            np.zeros(sg_lkj.shape[1]), sg_pstate[s].copy(), sg_pref[s].copy(), sg_parked[s].copy())
+
+
 @njit(**_JIT)
 def quad_sums(Yq, wq, seg_of, M, sg_phase, sg_memb, sg_nlk, sg_lkj, sg_lkth, sg_pstate, sg_pref, sg_parked):
     """Path integrals from states ``Yq`` (n, K) at quadrature nodes with weights ``wq`` [s] in segments ``seg_of``."""
@@ -2131,13 +2138,11 @@ def quad_sums(Yq, wq, seg_of, M, sg_phase, sg_memb, sg_nlk, sg_lkj, sg_lkth, sg_
     g = np.zeros(nq + nw)
     out = np.zeros(nq)
     last = -1
-    D = (sg_memb[0], sg_lkj[0].copy(), sg_lkth[0].copy(), np.zeros(1, np.int64), np.zeros(sg_lkj.shape[1]),
-         sg_pstate[0].copy(), sg_pref[0].copy(), sg_parked[0].copy())
+    D = segment_mode(0, sg_memb, sg_nlk, sg_lkj, sg_lkth, sg_pstate, sg_pref, sg_parked)
     for k in range(Yq.shape[1]):
         s = seg_of[k]
         if s != last:
-            D = (sg_memb[s], sg_lkj[s].copy(), sg_lkth[s].copy(), np.full(1, sg_nlk[s], np.int64),
-                 np.zeros(sg_lkj.shape[1]), sg_pstate[s].copy(), sg_pref[s].copy(), sg_parked[s].copy())
+            D = segment_mode(s, sg_memb, sg_nlk, sg_lkj, sg_lkth, sg_pstate, sg_pref, sg_parked)
             segment_params(sg_phase[s], sg_memb[s], M, sw)
             last = s
         for i in range(Yq.shape[0]):
@@ -2253,13 +2258,11 @@ def evaluate_samples(Y, seg_of, M, sg_phase, sg_memb, sg_nlk, sg_lkj, sg_lkth, s
     yq = np.zeros(Y.shape[0])
     f_scratch = np.zeros(3 * nb)
     last = -1
-    D = (sg_memb[0], sg_lkj[0].copy(), sg_lkth[0].copy(), np.zeros(1, np.int64), np.zeros(sg_lkj.shape[1]),
-         sg_pstate[0].copy(), sg_pref[0].copy(), sg_parked[0].copy())
+    D = segment_mode(0, sg_memb, sg_nlk, sg_lkj, sg_lkth, sg_pstate, sg_pref, sg_parked)
     for p in range(K):
         s = seg_of[p]
         if s != last:
-            D = (sg_memb[s], sg_lkj[s].copy(), sg_lkth[s].copy(), np.full(1, sg_nlk[s], np.int64),
-                 np.zeros(sg_lkj.shape[1]), sg_pstate[s].copy(), sg_pref[s].copy(), sg_parked[s].copy())
+            D = segment_mode(s, sg_memb, sg_nlk, sg_lkj, sg_lkth, sg_pstate, sg_pref, sg_parked)
             segment_params(sg_phase[s], sg_memb[s], M, sw)
             last = s
         for i in range(Y.shape[0]):

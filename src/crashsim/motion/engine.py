@@ -67,18 +67,25 @@ class _Budget(Exception):
 
 
 # ============================================================================= integrators
-class _ScipyIntegrator:
+class _Integrator:
+    """What both integrators keep: the model, the implicit solvers' work counters, a failure message."""
+
+    def __init__(self, model: SceneModel):
+        self.model = model
+        self.njev = 0
+        self.nlu = 0
+        self.message = ""
+
+
+class _ScipyIntegrator(_Integrator):
     """Segments integrated by SciPy's ODE solvers, stepped from Python (one step at a time)."""
 
     def __init__(self, model: SceneModel):
         from scipy.integrate import BDF, DOP853, LSODA, RK45, Radau
 
-        self.model = model
+        super().__init__(model)
         self.solver_cls = {"LSODA": LSODA, "RK45": RK45, "DOP853": DOP853, "Radau": Radau, "BDF": BDF}[model.options.method]
         self.segments: list[dict] = []
-        self.njev = 0
-        self.nlu = 0
-        self.message = ""
 
     def integrate(self, t, y, D, offsets, deadline, counters, quad, log):
         k = kernels()
@@ -191,15 +198,12 @@ class _ScipyIntegrator:
         return f"scipy/{self.model.options.method}"
 
 
-class _CompiledIntegrator:
+class _CompiledIntegrator(_Integrator):
     """Segments integrated by the compiled loop (:func:`crashsim.motion._kernels.run`)."""
 
     def __init__(self, model: SceneModel):
-        self.model = model
+        super().__init__(model)
         self.parts: list[tuple] = []
-        self.njev = 0
-        self.nlu = 0
-        self.message = ""
 
     def integrate(self, t, y, D, offsets, deadline, counters, quad, log):
         k = kernels()

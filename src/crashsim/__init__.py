@@ -1,6 +1,27 @@
 """crashsim: reconstruction of collisions involving articulated vehicles.
 
-Impact (impulse-momentum, pin-connected rigid bodies), run-out to rest, and evidence checks.
+Impact (impulse-momentum, pin-connected rigid bodies), run-out of the whole scene to rest,
+and the checks against the evidence found at the scene.
+
+Start here
+----------
+load(path)
+    Read and validate a scenario file (TOML) -> Scenario.
+run(scenario_or_path, **overrides)
+    Impact, run-out and evidence of a scene -> SceneResult, e.g.
+    ``scene = crashsim.run("scene.toml", vehicles__car__speed="35 mph")``.
+    The result has ``.report(units="US")``, ``.to_dict()``, ``.plot(ax=None)``,
+    ``.animate("scene.gif")``, ``.history(dt)`` (arrays), ``.history_frame(dt)`` (pandas),
+    ``.write_csv(dir, system=..., dt=...)``, and the parts: ``.impact`` (ImpactResult),
+    ``.runout`` (per vehicle), ``.impacts`` (every impact), ``.evidence``.
+fit(scenario_or_path, **options)
+    Fit the ``[fit]`` unknowns to the evidence -> FitResult.
+monte_carlo(scenario_or_path, samples, **options)
+    Propagate the ``[uncertainty]`` inputs -> MCResult.
+
+Lower levels: :func:`solve_impact` with :class:`ImpactProblem` (the impulse-momentum solver),
+:mod:`crashsim.motion` (run-outs), :mod:`crashsim.plotting`, :mod:`crashsim.units`.
+Everything inside is SI; units are converted at the edges (:mod:`crashsim.units`).
 """
 
 import logging as _logging
@@ -10,6 +31,8 @@ from .vehicles import Axle, Body, BodyState, Hitch, Vehicle, chain_states
 from .impact import (CrushSurface, ExternalImpulse, ImpactBatch, ImpactProblem, ImpactResult, TangentialLaw,
                      VelocityConstraint, solve_impact, tyre_friction_impulse)
 
+from .api import fit, load, monte_carlo, run
+
 __version__ = "0.1.0"
 
 # Library code never prints: warnings go to the "crashsim" logger, silent unless the
@@ -17,6 +40,7 @@ __version__ = "0.1.0"
 _logging.getLogger("crashsim").addHandler(_logging.NullHandler())
 
 __all__ = [
+    "load", "run", "fit", "monte_carlo",
     "CrashsimError", "IllConditionedError", "ScenarioError", "SolverError",
     "Axle", "Body", "BodyState", "Hitch", "Vehicle", "chain_states",
     "CrushSurface", "ExternalImpulse", "ImpactBatch", "ImpactProblem", "ImpactResult", "TangentialLaw",

@@ -18,14 +18,38 @@ from .motion.result import _jsonable as _clean  # JSON-safe copy: numpy to Pytho
 __all__ = ["main"]
 
 
+def _units(text: str) -> str:
+    """argparse type of ``--units``: SI or US in any case."""
+    from .units import resolve_system
+
+    try:
+        return resolve_system(text)
+    except ScenarioError:
+        raise argparse.ArgumentTypeError(f"{text!r}: allowed SI or US (any case)") from None
+
+
+def _dt(text: str | None) -> float | None:
+    from .units import Kind, parse
+
+    if text is None:
+        return None
+    dt = parse(text, Kind.TIME, field="--dt")
+    if not dt > 0:
+        raise ScenarioError(f"--dt = {text!r}; allowed a time step > 0 (e.g. \"0.1 s\")", field="--dt")
+    return dt
+
+
 def _cmd_run(args) -> int:
     from .scenario import load_scenario
     from .reconstruct import run_scene
 
     scenario = load_scenario(args.file)
+    dt = _dt(args.dt)
+    if dt is not None and not args.csv:
+        raise ScenarioError("--dt sets the time step of the --csv histories; give --csv DIR too", field="--dt")
     result = run_scene(scenario)
     if args.csv:
-        result.write_csv(Path(args.csv))
+        result.write_csv(Path(args.csv), system=args.units, dt=dt)
     if args.json:
         json.dump(_clean(result.to_dict()), sys.stdout, indent=2)
         sys.stdout.write("\n")
@@ -158,8 +182,10 @@ def build_parser() -> argparse.ArgumentParser:
     r = sub.add_parser("run", help="solve a scenario file and report")
     r.add_argument("file", help="scenario file (TOML)")
     r.add_argument("--json", action="store_true", help="print the full result as one JSON object (SI units)")
-    r.add_argument("--units", choices=("SI", "US"), default="SI", help="units of the readable report")
-    r.add_argument("--csv", metavar="DIR", help="write time histories as CSV files into DIR")
+    r.add_argument("--units", type=_units, default=None,
+                   help="SI or US (any case): units of the report and the CSV files (default: the scenario's units)")
+    r.add_argument("--csv", metavar="DIR", help="write time histories as CSV files into DIR (headers carry the unit)")
+    r.add_argument("--dt", metavar="TIME", help='time step of the CSV histories, e.g. "0.1 s" (default: runout.sample_dt)')
     r.add_argument("--strict", action="store_true", help="exit with code 1 if an evidence item is out of tolerance")
     r.set_defaults(func=_cmd_run)
 
@@ -170,7 +196,7 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("-o", "--output", required=True, help="scene diagram: .png, .svg or .pdf")
     pl.add_argument("--histories", metavar="FILE", help="also draw speed, yaw rate and articulation histories")
     pl.add_argument("--interval", metavar="TIME", help='time between ghost outlines, e.g. "0.5 s"')
-    pl.add_argument("--units", choices=("SI", "US"), default=None, help="units of the figure (default: the scenario's)")
+    pl.add_argument("--units", type=_units, default=None, help="SI or US: units of the figure (default: the scenario's)")
     pl.add_argument("--dpi", type=int, default=150)
     pl.set_defaults(func=_cmd_plot)
 
@@ -183,10 +209,45 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+#: Commands that run the run-out kernels (and so may compile them on a first run).
+_COMPUTING = ("run", "fit", "mc", "plot", "animate")
+
+
+def _first_compile(bar: bool = True) -> None:
+    """Compile the run-out kernels once, saying so on stderr with a progress bar (a line per step
+    without ``bar``); the first run after installing or upgrading, later runs load them from the cache."""
+    from .motion.jitcache import COMPILE_STEPS, cache_dir, compile_kernels, ready
+
+    if ready():
+        return
+    sys.stderr.write("crashsim: compiling the run-out kernels (once after installing or upgrading; about 1-2 "
+                     f"minutes; cached in {cache_dir()})\n")
+    if not bar:
+        n = len(COMPILE_STEPS)
+        compile_kernels(lambda i, label: sys.stderr.write(f"crashsim: compiling {i + 1}/{n}: {label}\n"))
+        sys.stderr.write("crashsim: compiled\n")
+        return
+    from tqdm import tqdm
+
+    with tqdm(total=len(COMPILE_STEPS), file=sys.stderr, unit="step",
+              bar_format="{l_bar}{bar}| {n_fmt}/{total_fmt} [{elapsed}]") as bar:
+        def progress(i, label):
+            bar.n = i
+            bar.set_description_str(f"compiling: {label}")
+            bar.refresh()
+
+        compile_kernels(progress)
+        bar.n = len(COMPILE_STEPS)
+        bar.set_description_str("compiled")
+        bar.refresh()
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
+        if args.command in _COMPUTING:
+            _first_compile(bar=sys.stderr.isatty())
         return int(args.func(args))
     except ScenarioError as exc:
         sys.stderr.write(f"crashsim: input error: {exc}\n")

@@ -8,7 +8,8 @@ import numpy as np
 
 from .units import Kind, format_value, to_unit
 
-__all__ = ["format_impact", "format_runout", "format_joint", "format_events", "format_evidence", "fmt"]
+__all__ = ["format_impact", "format_runout", "format_joint", "format_events", "format_evidence", "describe_event",
+           "fmt", "table"]
 
 
 fmt = format_value  # an SI value in the display unit of a system (crashsim.units.format_value)
@@ -23,6 +24,36 @@ def _vec(values, kind, system):
     return (f"({', '.join(parts)}) {label}").rstrip()
 
 
+def table(rows, align: str = "", indent: str = "  ") -> list[str]:
+    """Rows of cells as aligned text lines (each column as wide as its widest cell).
+
+    ``align``: one letter per column, ``"l"`` (default) or ``"r"``; trailing blanks are cut.
+    """
+    rows = [[str(c) for c in r] for r in rows]
+    if not rows:
+        return []
+    n = max(len(r) for r in rows)
+    rows = [r + [""] * (n - len(r)) for r in rows]
+    widths = [max(len(r[i]) for r in rows) for i in range(n)]
+    align = align.ljust(n, "l")
+    out = []
+    for r in rows:
+        cells = [c.rjust(w) if a == "r" else c.ljust(w) for c, w, a in zip(r, widths, align)]
+        out.append((indent + "  ".join(cells)).rstrip())
+    return out
+
+
+def _law_text(result) -> str:
+    law = result.tangential_law
+    frac = result.mu_fraction
+    share = "n/a" if frac is None else f"{100 * frac:.1f} %"
+    state = "sliding at separation" if result.sliding else "no sliding at separation"
+    words = {"ratio": "given impulse ratio", "fraction": "impulse ratio as a share of mu_max",
+             "no_slide": "no sliding at separation", "friction": "crush-surface friction"}.get(law, law)
+    return (f"impulse ratio mu = {result.mu:.4f}, mu_max = {result.mu_max:.4f}, mu / mu_max = {share} "
+            f"(law {law}: {words}; {state})")
+
+
 def format_impact(result, system: str = "SI") -> str:
     """Multi-line text report of an :class:`~crashsim.impact.ImpactResult`."""
     s = system
@@ -34,21 +65,19 @@ def format_impact(result, system: str = "SI") -> str:
                  f"{fmt(result.separation_normal_velocity, 'speed', s)}, tangential "
                  f"{fmt(result.separation_tangential_velocity, 'speed', s)}")
     lines.append("")
-    lines.append("  body            velocity after            yaw rate     delta-v    PDOF")
+    rows = [["body", "velocity after", "yaw rate", "delta-v", "PDOF"]]
     for name, b in result.bodies.items():
         if b.fixed:
             continue
-        pdof = "" if b.pdof is None else f"{math.degrees(b.pdof):6.1f} deg ({b.clock} o'clock)"
-        lines.append(
-            f"  {name:<14} {_vec(b.velocity, 'speed', s):<25} {fmt(b.yaw_rate, 'angular_velocity', s):<12} "
-            f"{fmt(b.delta_v_magnitude, 'speed', s):<10} {pdof}"
-        )
+        pdof = "" if b.pdof is None else f"{math.degrees(b.pdof):.1f} deg ({b.clock} o'clock)"
+        rows.append([name, _vec(b.velocity, 'speed', s), fmt(b.yaw_rate, 'angular_velocity', s),
+                     fmt(b.delta_v_magnitude, 'speed', s), pdof])
+    lines += table(rows)
     lines.append("")
+    moment = 0.0 if abs(result.moment_impulse) < 1e-9 else result.moment_impulse
     lines.append(f"  crush impulse: normal {fmt(result.normal_impulse, 'impulse', s, 6)}, tangential "
-                 f"{fmt(result.tangential_impulse, 'impulse', s, 6)}, moment "
-                 f"{0.0 if abs(result.moment_impulse) < 1e-9 else result.moment_impulse:.4g} N m s")
-    lines.append(f"  impulse ratio mu = {result.mu:.4f}, mu_max = {result.mu_max:.4f} "
-                 f"({result.tangential_law}; {'sliding at separation' if result.sliding else 'no sliding at separation'})")
+                 f"{fmt(result.tangential_impulse, 'impulse', s, 6)}, moment {fmt(moment, 'moment_impulse', s)}")
+    lines.append("  " + _law_text(result))
     for name, h in result.hitches.items():
         lines.append(f"  hitch {name}: impulse on front body {_vec(h.impulse, 'impulse', s)} "
                      f"(longitudinal {fmt(h.longitudinal, 'impulse', s)}, lateral {fmt(h.lateral, 'impulse', s)})")
@@ -57,16 +86,26 @@ def format_impact(result, system: str = "SI") -> str:
     for name, x in result.external.items():
         lines.append(f"  external impulse {name!r} on {x['body']}: {_vec(x['impulse'], 'impulse', s)}")
     lines.append("")
-    lines.append("  kinetic energy        before        after      loss")
+    rows = [["kinetic energy", "before", "after", "loss"]]
     for name, ke in result.kinetic_energy.items():
         if name not in result.energy_loss:
             continue
-        lines.append(f"  {name:<14} {fmt(ke['before'], 'energy', s):>12} {fmt(ke['after'], 'energy', s):>12} "
-                     f"{100 * result.energy_loss[name]:8.1f} %")
+        rows.append([name, fmt(ke['before'], 'energy', s), fmt(ke['after'], 'energy', s),
+                     f"{100 * result.energy_loss[name]:.1f} %"])
+    lines += table(rows, "lrrr")
     lines.append(f"  condition number of the impulse equations: {result.condition_number:.3g}")
     for w in result.warnings:
         lines.append(f"  WARNING: {w}")
     return "\n".join(lines)
+
+
+def _status_text(r, system: str) -> str:
+    """Why a vehicle's run-out ended, in the display units."""
+    if r.status == "rest":
+        v_stop = (r.options or {}).get("v_stop")
+        below = f" (all bodies below v_stop = {fmt(v_stop, 'speed', system)})" if v_stop is not None else ""
+        return f"at rest after {fmt(r.t_end, 'time', system)}{below}"
+    return f"{r.status} after {fmt(r.t_end, 'time', system)} ({r.message})"
 
 
 def format_runout(runout: dict, system: str = "SI", *, joint: bool = False) -> str:
@@ -79,16 +118,18 @@ def format_runout(runout: dict, system: str = "SI", *, joint: bool = False) -> s
         lines[0] += f" (one run-out of the whole scene: method {r0.method}, {r0.nfev} right-hand-side evaluations)"
     for vname, r in runout.items():
         how = "" if joint else f"; method {r.method}, {r.nfev} right-hand-side evaluations"
-        lines.append(f"  vehicle {vname}: {r.status} after {fmt(r.t_end, 'time', s)} ({r.message}){how}")
+        lines.append(f"  vehicle {vname}: {_status_text(r, s)}{how}")
         if not r.success:
             lines.append(f"    NOT AT REST ({r.status}): the positions below are where the run stopped, not rest "
                          "positions")
+        rows = []
         for name, b in r.bodies.items():
             ttr = "n/a" if b.time_to_rest is None else fmt(b.time_to_rest, "time", s)
-            where = "rest at   " if b.time_to_rest is not None else "stopped at"
-            lines.append(f"    {name:<14} {where} {_vec(b.rest_position, 'length', s):<22} heading "
-                         f"{math.degrees(b.rest_heading_wrapped):7.1f} deg, travelled {fmt(b.distance, 'length', s)}, "
-                         f"time to rest {ttr}")
+            where = "rest at" if b.time_to_rest is not None else "stopped at"
+            rows.append([name, where, _vec(b.rest_position, 'length', s),
+                         f"heading {math.degrees(b.rest_heading_wrapped):.1f} deg",
+                         f"travelled {fmt(b.distance, 'length', s)}", f"time to rest {ttr}"])
+        lines += table(rows, indent="    ")
     return "\n".join(lines)
 
 
@@ -129,18 +170,52 @@ def format_joint(scene, system: str = "SI") -> str:
     return "\n".join(lines)
 
 
-def format_events(events, system: str = "SI") -> str:
-    """The run-out's events, one line each (time, kind, what happened)."""
-    lines = ["Run-out events"]
+def describe_event(e, system: str = "SI") -> str:
+    """What a run-out event did, in the display units of ``system`` (from its numbers; the
+    event's own ``detail`` text, in SI, where it carries none)."""
+    s, d = system, e.data
+    a, b = (d.get("bodies") or [None, None])[:2]
+    k = e.kind
+    if k in ("zone_enter", "zone_exit") and "wheel" in d:
+        f = f" (f = {d['friction']:g})" if "friction" in d else ""
+        return f"wheel {d['wheel']} {'enters' if k == 'zone_enter' else 'leaves'} zone {d['zone']!r}{f}"
+    if k in ("stop_closed", "stop_impact") and "angle_rad" in d:
+        how = "closes" if k == "stop_closed" else "struck and left"
+        return (f"articulation stop of hitch {d['hitch']} {how} at {math.degrees(d['angle_rad']):+.1f} deg "
+                f"(impact dissipates {fmt(e.energy, 'energy', s)})")
+    if k == "vehicle_rest" and "v_stop_m_s" in d:
+        return f"vehicle {d['vehicle']} at rest (all bodies below v_stop = {fmt(d['v_stop_m_s'], 'speed', s)})"
+    if k == "rest" and "v_stop_m_s" in d:
+        return f"every vehicle at rest (all bodies below v_stop = {fmt(d['v_stop_m_s'], 'speed', s)})"
+    if k == "armed" and "arm_distance_m" in d:
+        return f"{a} and {b} have separated by {fmt(d['arm_distance_m'], 'length', s)}: a later touch is an impact"
+    if k == "contact" and "threshold_m_s" in d:
+        return (f"{a} touches {b} at {fmt(d['speed_m_s'], 'speed', s)} (below the impulse threshold "
+                f"{fmt(d['threshold_m_s'], 'speed', s)}): sustained contact")
+    if k == "contact_pressed" and "depth_m" in d:
+        return (f"{a} is pressed into {b} beyond the crush of the impact ({fmt(d['depth_m'], 'length', s)} deep): "
+                "sustained contact")
+    if k == "impact" and "delta_v_m_s" in d:
+        dv = ", ".join(f"{n} {fmt(v, 'speed', s)}" for n, v in d["delta_v_m_s"].items())
+        return (f"{a} strikes {b} at {fmt(d['speed_m_s'], 'speed', s)}: normal impulse "
+                f"{fmt(d['normal_impulse_N_s'], 'impulse', s)}, delta-v {dv}, {fmt(e.energy, 'energy', s)} lost")
+    return e.detail
+
+
+def format_events(events, system: str = "SI", title: str = "Run-out events") -> str:
+    """The run-out's events, one line each: time, kind, place (world frame) and what happened."""
+    rows = [["time", "event", "place", "what"]]
     for e in events:
-        lines.append(f"  {fmt(e.t, 'time', system):>10}  {e.kind:<15} {e.detail}")
-    return "\n".join(lines)
+        place = "" if e.place is None else _vec(e.place, "length", system)
+        rows.append([fmt(e.t, 'time', system), e.kind, place, describe_event(e, system)])
+    return "\n".join([title] + table(rows, "r"))
 
 
 def format_evidence(report, system: str = "SI") -> str:
     """Text table of evidence residuals and verdicts."""
     s = system
     lines = [f"Evidence: {len(report.checks) - report.n_failed} of {len(report.checks)} items within tolerance"]
+    rows = []
     for c in report.checks:
         if c.quantity == "angle":
             res, tol = f"{math.degrees(c.residual):+.1f} deg", f"{math.degrees(c.tolerance):.1f} deg"
@@ -150,9 +225,9 @@ def format_evidence(report, system: str = "SI") -> str:
             res, tol = fmt(c.residual, c.quantity, s), fmt(c.tolerance, c.quantity, s)
         extra = ""
         if "matched_wheel" in c.details:
-            extra = f" (closest track: {c.details['matched_wheel']})"
+            extra = f"closest track: {c.details['matched_wheel']}"
         elif "reason" in c.details:
-            extra = f" ({c.details['reason']})"
-        lines.append(f"  {'PASS' if c.passed else 'FAIL'}  {c.kind:<16} {c.name:<28} residual {res:<14} "
-                     f"tolerance {tol}{extra}")
+            extra = c.details["reason"]
+        rows.append(["PASS" if c.passed else "FAIL", c.kind, c.name, f"residual {res}", f"tolerance {tol}", extra])
+    lines += table(rows)
     return "\n".join(lines)

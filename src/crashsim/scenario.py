@@ -193,10 +193,14 @@ IMPACT = Section("impact", [
           description="Coefficient of restitution e (Eq. 5)"),
     Field("moment_restitution", "float", default=-1.0, minimum=-1, maximum=1,
           description="Moment coefficient e' (Eq. 6): -1 for no moment impulse, else 0 <= e' <= 1"),
-    Field("tangential", choices=("no_slide", "ratio", "friction"), example='friction',
+    Field("tangential", choices=("no_slide", "ratio", "fraction", "friction"), example='friction',
           description="Tangential law: no sliding at separation (mu = mu_max); a given impulse ratio mu; "
+                      "a share of this impact's critical ratio (mu = mu_fraction x mu_max, PIM's \"85 % of mu_0\"); "
                       "or friction f (stick if |mu_max| <= f, else slide with |mu| = f)"),
     Field("mu", "float", required=False, example="0.3", description="Impulse ratio P_t/P_n, for tangential = \"ratio\""),
+    Field("mu_fraction", "float", required=False, minimum=0, maximum=1, example="0.85",
+          description="mu as a share of mu_max of this very impact, for tangential = \"fraction\" (1: no sliding at "
+                      "separation; as a fit unknown or uncertain input mu follows each sample's mu_max)"),
     Field("friction", "float", required=False, minimum=0, example="0.6",
           description="Crush-surface friction f, for tangential = \"friction\""),
 ], subsections=[
@@ -346,7 +350,9 @@ META = Section("scenario", [
     Field("title", "str", example='Car into trailer wheels', description="Title of the scene"),
     Field("source", "str", default="", description="Where the inputs come from (report, paper, measurement)"),
     Field("notes", "str", default="", description="Free text"),
-    Field("units", choices=("SI", "US"), default="SI", description="Units of the readable report"),
+    Field("units", choices=("SI", "US"), default="SI",
+          description="Units of every output (any case): the reports of run, fit and mc, the CSV files, the figures "
+                      "and animations (US: ft, mph, lb, lbf, lbf s, ft lbf, deg); --units overrides it"),
 ], description="What the scene is")
 
 SCHEMA = Section("scenario file", subsections=[
@@ -703,8 +709,17 @@ def _apply_presets(data: dict, file: str | None) -> dict:
     return data
 
 
+def _units_any_case(data: dict) -> dict:
+    """``scenario.units`` written in any case ("us", "Si") read as "US"/"SI"."""
+    meta = data.get("scenario") if isinstance(data, dict) else None
+    if isinstance(meta, dict) and isinstance(meta.get("units"), str) and meta["units"].strip().upper() in ("SI", "US"):
+        data = {**data, "scenario": {**meta, "units": meta["units"].strip().upper()}}
+    return data
+
+
 def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scenario:
     """Validate a parsed scenario (as from TOML) and build the typed SI objects."""
+    data = _units_any_case(data)
     d = validate(_apply_presets(data, file), SCHEMA, file=file)
     vehicles, states = [], {}
     for name, v in d["vehicles"].items():
@@ -744,16 +759,19 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
     law = imp["tangential"]
     if law == "ratio" and imp["mu"] is None:
         raise _err('tangential = "ratio" needs mu (the impulse ratio P_t/P_n), e.g. mu = 0.3', "impact.mu", file)
+    if law == "fraction" and imp["mu_fraction"] is None:
+        raise _err('tangential = "fraction" needs mu_fraction (mu as a share of mu_max, 0 to 1), e.g. '
+                   'mu_fraction = 0.85', "impact.mu_fraction", file)
     if law == "friction" and imp["friction"] is None:
         raise _err('tangential = "friction" needs friction (f >= 0), e.g. friction = 0.6', "impact.friction", file)
-    for k, needed in (("mu", "ratio"), ("friction", "friction")):
+    for k, needed in (("mu", "ratio"), ("mu_fraction", "fraction"), ("friction", "friction")):
         if imp[k] is not None and law != needed:
             raise _err(f"{k} = {imp[k]} is given but tangential = {law!r} does not use it "
                        f'(it belongs to tangential = "{needed}")', f"impact.{k}", file)
     ep = imp["moment_restitution"]
     if not (ep == -1.0 or 0.0 <= ep <= 1.0):
         raise _err(f"{ep} is out of range; allowed -1 (no moment impulse) or [0, 1]", "impact.moment_restitution", file)
-    value = imp["mu"] if law == "ratio" else (imp["friction"] if law == "friction" else 0.0)
+    value = {"ratio": imp["mu"], "fraction": imp["mu_fraction"], "friction": imp["friction"]}.get(law, 0.0)
     surface = CrushSurface(point, imp["normal"] + nang, imp["restitution"], TangentialLaw(law, value), ep,
                            1 if imp["tangent"] == "ccw" else -1)
     constraints = []

@@ -73,6 +73,7 @@ __all__ = [
     "describe",
     "example",
     "si_unit",
+    "resolve_system",
     "toml_repr",
 ]
 
@@ -94,6 +95,7 @@ class Kind(str, enum.Enum):
     TIME = "time"
     FORCE = "force"
     IMPULSE = "impulse"
+    MOMENT_IMPULSE = "moment_impulse"
     ACCELERATION = "acceleration"
     ENERGY = "energy"
     DIMENSIONLESS = "dimensionless"
@@ -116,8 +118,9 @@ _SPECS: dict[Kind, _Spec] = {
                        ("m", "mm", "cm", "km", "ft", "in", "yd", "mi")),
     Kind.SPEED: _Spec("a speed", "m/s, km/h, mph, ft/s", ("30 mph", "13.41 m/s"),
                       ("m/s", "km/h", "kph", "mph", "ft/s", "fps")),
-    Kind.MASS: _Spec("a mass", "kg, t, lb; or a weight in N, kN, lbf, kip",
-                     ("9500 kg", "20945 lbf"), ("kg", "t", "lb", "lbs", "N", "kN", "lbf", "kip")),
+    Kind.MASS: _Spec("a mass", "kg, t, lb, slug (= lbf s^2/ft, lb-s^2/ft); or a weight in N, kN, lbf, kip",
+                     ("9500 kg", "20945 lbf"),
+                     ("kg", "t", "lb", "lbs", "slug", "lb-s^2/ft", "N", "kN", "lbf", "kip")),
     Kind.YAW_INERTIA: _Spec("a yaw inertia", "kg m^2, slug ft^2, lbf ft s^2 (ft-lb-s^2)",
                             ("21000 kg m^2", "15489 ft-lb-s^2"),
                             ("kg m^2", "kg*m^2", "slug ft^2", "lbf ft s^2", "ft-lb-s^2")),
@@ -131,6 +134,8 @@ _SPECS: dict[Kind, _Spec] = {
                       ("N", "kN", "lbf", "kip")),
     Kind.IMPULSE: _Spec("an impulse", "N s, kN s, lbf s (lb-s)",
                         ("403164 N s", "90639 lb-s"), ("N s", "N*s", "kN s", "lbf s", "lb-s")),
+    Kind.MOMENT_IMPULSE: _Spec("a moment impulse", "N m s, lbf ft s (ft-lb-s)",
+                               ("1200 N m s", "885 ft-lb-s"), ("N m s", "lbf ft s", "ft-lb-s")),
     Kind.ACCELERATION: _Spec("an acceleration", "m/s^2, ft/s^2, g (standard gravity)",
                              ("9.81 m/s^2", "0.7 g"), ("m/s^2", "ft/s^2", "g")),
     Kind.ENERGY: _Spec("an energy", "J, kJ, N m, ft lbf (ft-lb)",
@@ -149,6 +154,7 @@ DISPLAY_UNITS: dict[Kind, dict[str, str]] = {
     Kind.TIME: {"SI": "s", "US": "s"},
     Kind.FORCE: {"SI": "N", "US": "lbf"},
     Kind.IMPULSE: {"SI": "N s", "US": "lbf s"},
+    Kind.MOMENT_IMPULSE: {"SI": "N m s", "US": "lbf ft s"},
     Kind.ACCELERATION: {"SI": "m/s^2", "US": "ft/s^2"},
     Kind.ENERGY: {"SI": "J", "US": "ft lbf"},
     Kind.DIMENSIONLESS: {"SI": "", "US": ""},
@@ -420,6 +426,20 @@ def parse_vector(value: Sequence[str | int | float], kind: Kind | str, n: int | 
         raise ScenarioError(f"{toml_repr(value)} has {count}; expected {n}",
                             field=field, file=file)
     return tuple(parse(v, kind, field=f"{field}[{i}]", file=file) for i, v in enumerate(value))
+
+
+def resolve_system(value: object, default: str = "SI", *, field: str = "units") -> System:
+    """A unit system written by a user (``"SI"``, ``"us"``, any case; None: ``default``).
+
+    Raises
+    ------
+    ScenarioError
+        Naming ``field`` and the value, for anything but SI or US.
+    """
+    value = default if value is None else value
+    if not isinstance(value, str) or value.strip().upper() not in ("SI", "US"):
+        raise ScenarioError(f"unknown unit system {value!r}; allowed \"SI\" or \"US\" (any case)", field=field)
+    return value.strip().upper()  # type: ignore[return-value]
 
 
 def si_unit(kind: Kind | str) -> str:

@@ -569,7 +569,7 @@ def test_text_documentation_lists_every_key_from_the_same_objects():
         '      Initial speed along the heading (example: "30 mph")',
         "[vehicles.<name>.bodies.<name>]",
         "vehicles.<name>.bodies.<name>.mass",
-        "mass [kg]; accepts kg, t, lb; or a weight in N, kN, lbf, kip",
+        "mass [kg]; accepts kg, t, lb, slug (= lbf s^2/ft, lb-s^2/ft); or a weight in N, kN, lbf, kip",
         "allowed (0, inf) kg",
         'optional, default ["0 m", "0 m"]',
         "list of 2 x length [m]",

@@ -191,8 +191,8 @@ def test_error_names_the_file():
 @pytest.mark.parametrize(
     ("value", "kind", "message"),
     [
-        ("30 mph", Kind.MASS, '"30 mph" is a speed; expected a mass (kg, t, lb; '
-                              "or a weight in N, kN, lbf, kip)"),
+        ("30 mph", Kind.MASS, '"30 mph" is a speed; expected a mass (kg, t, lb, slug (= lbf s^2/ft, '
+                              'lb-s^2/ft); or a weight in N, kN, lbf, kip)'),
         ("3 m^3", Kind.SPEED, '"3 m^3" is of dimension [length] ** 3; '
                               "expected a speed (m/s, km/h, mph, ft/s)"),
         ("75 %", Kind.ANGLE, '"75 %" is a plain number; expected an angle (deg, rad)'),
@@ -217,8 +217,8 @@ def test_wrong_dimension_is_named(value, kind, message):
 
 def test_unknown_unit_is_named_with_a_suggestion():
     assert str(error("30 kgs", Kind.MASS, field="m")) == (
-        "m: \"30 kgs\" has an unknown unit 'kgs'; expected a mass (kg, t, lb; or a weight in "
-        "N, kN, lbf, kip); did you mean 'kg'?"
+        "m: \"30 kgs\" has an unknown unit 'kgs'; expected a mass (kg, t, lb, slug (= lbf s^2/ft, lb-s^2/ft); "
+        "or a weight in N, kN, lbf, kip); did you mean 'kg'?"
     )
 
 

@@ -247,6 +247,7 @@ def check_admissible(S: ImpactStructure, A: ImpactArrays, out: dict, *, work: di
     allowed = f"0 <= e <= {_fmt(rng[1])}" if rng else "no restitution coefficient"
     law_hint = {"no_slide": " with no sliding at separation (or use tangential = \"friction\")",
                 "ratio": f" with mu = {_fmt(float(A.law_value[0]))}",
+                "fraction": f" with mu = {_fmt(float(A.law_value[0]))} x mu_max",
                 "friction": f" with friction f = {_fmt(float(A.law_value[0]))}"}[law]
     raise InadmissibleImpactError(
         f"impact.restitution = {_fmt(e)} creates energy at the crush surface ({share}) for this geometry"

@@ -56,7 +56,7 @@ import numpy as np
 
 __all__ = ["ImpactStructure", "ImpactArrays", "solve_arrays", "energy_loss_fraction", "TANGENTIAL_KINDS"]
 
-TANGENTIAL_KINDS = ("ratio", "no_slide", "friction")
+TANGENTIAL_KINDS = ("ratio", "fraction", "no_slide", "friction")
 
 
 @dataclass(frozen=True)
@@ -82,7 +82,7 @@ class ImpactStructure:
     external_bodies : tuple of int
     external_names : tuple of str
     tangential : str
-        One of ``"ratio"``, ``"no_slide"``, ``"friction"``.
+        One of ``"ratio"``, ``"fraction"``, ``"no_slide"``, ``"friction"``.
     """
 
     body_names: tuple[str, ...]
@@ -110,6 +110,7 @@ class ImpactStructure:
     def equation_labels(self) -> tuple[str, ...]:
         """Human-readable label of each equation row (for error messages)."""
         t = {"ratio": "impulse ratio P_t = mu P_n (Eq. 4)",
+             "fraction": "impulse ratio P_t = (fraction x mu_max) P_n (Eq. 4)",
              "no_slide": "no sliding at separation",
              "friction": "no sliding at separation / friction limit"}[self.tangential]
         labels = ["restitution (Eq. 5)", t, "moment restitution (Eq. 6)"]
@@ -415,6 +416,9 @@ def _solve_chunk(S: ImpactStructure, A: ImpactArrays, condition: bool) -> dict[s
         if S.tangential == "ratio":
             mu_used = A.law_value.copy()
             redo = np.ones(B, dtype=bool)
+        elif S.tangential == "fraction":  # mu follows this impact's mu_max (NaN where it is unknown)
+            mu_used = A.law_value * mu_max
+            redo = np.ones(B, dtype=bool)
         else:  # friction: keep the no-slide answer where |mu_max| <= f (Eq. 8)
             stoppable = ok & (np.abs(mu_max) <= MU_MAX_LIMIT)
             redo = ~(stoppable & (np.abs(mu_max) <= A.law_value))
@@ -441,7 +445,7 @@ def _solve_chunk(S: ImpactStructure, A: ImpactArrays, condition: bool) -> dict[s
     dq = minv * (p_ext + np.einsum("bkni,bk->bni", J, lam))
     Q = q + dq
     u_after = (Jf @ Q.reshape(B, 3 * n, 1))[..., 0]
-    if S.tangential == "ratio":
+    if S.tangential in ("ratio", "fraction"):
         # sliding continues through separation unless mu happens to equal mu_max
         sliding = np.abs(u_after[:, 1]) > 1e-9 * (1.0 + np.abs(u0[:, 1]))
 
@@ -839,6 +843,9 @@ def _solve_chunk_reduced(S: ImpactStructure, A: ImpactArrays) -> dict[str, np.nd
         if S.tangential == "ratio":
             mu_used = A.law_value
             redo = np.ones(B, dtype=bool)
+        elif S.tangential == "fraction":  # mu follows this impact's mu_max (NaN where it is unknown)
+            mu_used = A.law_value * mu_max
+            redo = np.ones(B, dtype=bool)
         else:  # friction: keep the no-slide answer where |mu_max| <= f (Eq. 8)
             stoppable = ok & (np.abs(mu_max) <= MU_MAX_LIMIT)
             redo = ~(stoppable & (np.abs(mu_max) <= A.law_value))
@@ -870,7 +877,7 @@ def _solve_chunk_reduced(S: ImpactStructure, A: ImpactArrays) -> dict[str, np.nd
     vout[~ok] = np.nan  # as in _solve_chunk, where Minv (p_ext + J^T lambda) is NaN for every body
     wout[~ok] = np.nan
     u_after = [np.where(ok, row_dot(k, Q), np.nan) for k in (0, 1)]
-    if S.tangential == "ratio":
+    if S.tangential in ("ratio", "fraction"):
         # sliding continues through separation unless mu happens to equal mu_max
         sliding = np.abs(u_after[1]) > 1e-9 * (1.0 + np.abs(u0[1]))
 

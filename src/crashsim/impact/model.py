@@ -34,21 +34,25 @@ class TangentialLaw:
 
     kind
         ``"ratio"``: P_t = mu P_n with the given ``value`` = mu (Eq. 4).
+        ``"fraction"``: P_t = mu P_n with mu = ``value`` x mu_max of this very impact (the
+        PIM practice of giving the impulse ratio as a share of the critical one, "mu = 85 %
+        of mu_0"); 1 is no sliding at separation, 0 a frictionless crush surface.
         ``"no_slide"``: no relative tangential velocity at separation (mu = mu_max).
         ``"friction"``: the paper's rule with Coulomb coefficient ``value`` = f: solve with
         no sliding at separation; if |mu_max| <= f that solution stands (Eq. 8), otherwise
         the surfaces slide throughout and mu = f sign(mu_max).
     value
-        mu (any sign) for ``"ratio"``, f >= 0 for ``"friction"``, unused for ``"no_slide"``.
+        mu (any sign) for ``"ratio"``, the share 0 <= mu / mu_max <= 1 for ``"fraction"``,
+        f >= 0 for ``"friction"``, unused for ``"no_slide"``.
     """
 
-    kind: Literal["ratio", "no_slide", "friction"] = "no_slide"
+    kind: Literal["ratio", "fraction", "no_slide", "friction"] = "no_slide"
     value: float = 0.0
 
     def __post_init__(self):
-        if self.kind not in ("ratio", "no_slide", "friction"):
+        if self.kind not in ("ratio", "fraction", "no_slide", "friction"):
             raise ScenarioError(
-                f"unknown tangential law {self.kind!r}; allowed 'ratio', 'no_slide', 'friction'",
+                f"unknown tangential law {self.kind!r}; allowed 'ratio', 'fraction', 'no_slide', 'friction'",
                 field="impact.tangential",
             )
         v = float(self.value)
@@ -56,6 +60,10 @@ class TangentialLaw:
             raise ScenarioError(f"must be finite, got {self.value!r}", field=f"impact.{self.kind}")
         if self.kind == "friction" and v < 0:
             raise ScenarioError(f"friction f must be >= 0, got {v}", field="impact.friction")
+        if self.kind == "fraction" and not 0.0 <= v <= 1.0:
+            raise ScenarioError(f"mu_fraction = {v:g} is out of range; allowed 0 <= mu_fraction <= 1 (a share of "
+                                "mu_max: 1 is no sliding at separation, 0 no tangential impulse)",
+                                field="impact.mu_fraction")
         object.__setattr__(self, "value", v)
 
 

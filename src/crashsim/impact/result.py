@@ -147,7 +147,8 @@ class ImpactResult:
     moment_impulse : float
         Moment impulse on body 1 [N m s].
     mu, mu_max : float
-        Impulse ratio used and the no-sliding-at-separation ratio.
+        Impulse ratio used and the no-sliding-at-separation ratio (:attr:`mu_fraction` is
+        their ratio).
     sliding : bool
         True if the surfaces still slide at separation.
     energy_loss : dict
@@ -295,6 +296,14 @@ class ImpactResult:
         total = sum(b.mass for b in members)
         return sum(b.mass * b.delta_v for b in members) / total
 
+    @property
+    def mu_fraction(self) -> float | None:
+        """The impulse ratio as a share of the critical one, mu / mu_max (PIM's "85 % of mu_0");
+        None where mu_max is zero or unknown."""
+        if not (math.isfinite(self.mu) and math.isfinite(self.mu_max)) or self.mu_max == 0.0:
+            return None
+        return self.mu / self.mu_max
+
     def to_dict(self) -> dict:
         """JSON-ready dictionary, SI units, world frame."""
         return {
@@ -310,6 +319,7 @@ class ImpactResult:
             "moment_impulse": self.moment_impulse,
             "mu": self.mu,
             "mu_max": self.mu_max,
+            "mu_fraction": self.mu_fraction,
             "sliding": self.sliding,
             "tangential_law": self.tangential_law,
             "closing_velocity": self.closing_velocity,

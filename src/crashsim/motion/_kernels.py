@@ -72,6 +72,10 @@ import numpy as np
 from numba import njit, objmode, types
 from numba.extending import overload
 
+from .jitcache import configure as _configure_cache
+
+_configure_cache()  # a user-writable cache directory (crashsim.motion.jitcache), before any kernel is defined
+
 from . import tyres
 from .options import MAX_STILL_SEGMENTS, STOP_HYSTERESIS  # the same constants as the SciPy engine
 

@@ -397,12 +397,14 @@ def _log_records(model: SceneModel, t: float, recs, log: list) -> None:
             zone = model.road.zones[j]
             veh = model.vehicle_of_body(spec.body_index).name
             log.append(RunoutEvent(t, f"zone_{word}", f"wheel {spec.key} {word}s zone {j} {zone.name!r}", 0.0, (veh,),
-                                   {"wheel": spec.key, "zone": zone.name}))
+                                   {"wheel": spec.key, "zone": zone.name, "zone_index": j, "friction": zone.mu}))
         elif kind == k.LOG_SCHEDULE:
             changing = tuple(v.name for v in model.vehicles if any(abs(tc - t) < 1e-12
                                                                   for tc in model.resolved[v.name].change_times))
-            log.append(RunoutEvent(t, "schedule", "wheel settings change" + (f" ({', '.join(changing)})" if changing else ""),
-                                   0.0, changing))
+            changes = _wheel_changes(model, changing, t)
+            what = "; ".join(f"{key}: {a} -> {b}" for key, a, b in changes)
+            log.append(RunoutEvent(t, "schedule", "wheel settings change" + (f" ({what})" if what else ""),
+                                   0.0, changing, {"changes": [list(c) for c in changes]}))
         elif kind in (k.LOG_STOP_CLOSED, k.LOG_STOP_IMPACT, k.LOG_STOP_OPEN):
             front, rear = model.hitch_names[i]
             veh = model.vehicle_of_body(model.layout.bodies.index(front)).name
@@ -418,26 +420,45 @@ def _log_records(model: SceneModel, t: float, recs, log: list) -> None:
         elif kind == k.LOG_REST:
             v = model.vehicles[i]
             log.append(RunoutEvent(t, "vehicle_rest", f"vehicle {v.name} at rest (all bodies below v_stop = "
-                                                      f"{model.options.v_stop} m/s)", 0.0, (v.name,)))
+                                                      f"{model.options.v_stop} m/s)", 0.0, (v.name,),
+                                   {"vehicle": v.name, "v_stop_m_s": model.options.v_stop}))
         else:
             pair = model.pairs[i]
             vehs = _pair_vehicles(model, pair)
             if kind == k.LOG_ARMED:
                 log.append(RunoutEvent(t, "armed", f"{pair.a} and {pair.b} have separated by "
                                                    f"{pair.contact.arm_distance:g} m: a later touch is an impact",
-                                       0.0, vehs, {"pair": pair.name}))
+                                       0.0, vehs, {"pair": pair.name, "bodies": [pair.a, pair.b],
+                                                   "arm_distance_m": pair.contact.arm_distance}))
             elif kind == k.LOG_CONTACT:
                 log.append(RunoutEvent(t, "contact", f"{pair.a} touches {pair.b} at {abs(x):.3g} m/s (below the "
                                                      f"impulse threshold {pair.contact.velocity_threshold:g} m/s): "
                                                      "sustained contact", 0.0, vehs,
-                                       {"pair": pair.name, "speed_m_s": abs(x)}))
+                                       {"pair": pair.name, "speed_m_s": abs(x), "bodies": [pair.a, pair.b],
+                                        "threshold_m_s": pair.contact.velocity_threshold}))
             elif kind == k.LOG_PRESS:
                 log.append(RunoutEvent(t, "contact_pressed", f"{pair.a} is pressed into {pair.b} beyond the crush of "
                                                              f"the impact ({x:.3g} m deep): sustained contact", 0.0,
-                                       vehs, {"pair": pair.name, "depth_m": x}))
+                                       vehs, {"pair": pair.name, "depth_m": x, "bodies": [pair.a, pair.b]}))
             elif kind == k.LOG_CONTACT_END:
                 log.append(RunoutEvent(t, "contact_end", f"{pair.a} and {pair.b} separate", 0.0, vehs,
-                                       {"pair": pair.name}))
+                                       {"pair": pair.name, "bodies": [pair.a, pair.b]}))
+
+
+def _wheel_changes(model: SceneModel, vehicles, t: float) -> list[tuple[str, str, str]]:
+    """(wheel, setting before, setting after) of every wheel whose setting changes at ``t``."""
+    def word(s):
+        return s.state + (f" {100 * s.brake:.0f} %" if s.state == "braked" else "") + \
+            (f", steer {math.degrees(s.steer):+.1f} deg" if s.steer else "")
+
+    out = []
+    for name in vehicles:
+        res = model.resolved[name]
+        before, after = res.at(t - 1e-9), res.at(t)
+        for spec, a, b in zip(res.specs, before, after):
+            if a != b:
+                out.append((spec.key, word(a), word(b)))
+    return out
 
 
 def _pair_vehicles(model: SceneModel, pair) -> tuple:
@@ -528,7 +549,10 @@ def _secondary_impact(model: SceneModel, t: float, y: np.ndarray, geo: np.ndarra
                                      f"{result.normal_impulse:.4g} N s, delta-v {dv}, {loss:.4g} J lost"
                                      + (f" ({warning})" if warning else ""),
                         float(loss), tuple(v.name for v in involved),
-                        {"pair": pair.name, "speed_m_s": float(-geo[5]), "normal_impulse_N_s": result.normal_impulse})
+                        {"pair": pair.name, "speed_m_s": float(-geo[5]), "normal_impulse_N_s": result.normal_impulse,
+                         "delta_v_m_s": {n: math.hypot(*d) for n, d in delta_v.items() if n in (pair.a, pair.b)},
+                         "energy_J": float(loss), "bodies": [pair.a, pair.b]},
+                        place=(float(point[0]), float(point[1])))
     log.append(event)
     _log_records(model, t, stop_records, log)
     return record, event
@@ -608,7 +632,7 @@ def run_model(model: SceneModel, initial: Mapping[str, BodyState]) -> SceneRunou
     if code is not None:
         status = names[code]
         message = _message(code, o, t, y, k, M, log, integrator)
-    log.append(RunoutEvent(t, status, message))
+    log.append(RunoutEvent(t, status, message, data={"v_stop_m_s": o.v_stop} if status == "rest" else {}))
     if status != "rest":
         _log.warning("run-out did not reach rest (%s): %s", status, message)
     from .postprocess import assemble_scene

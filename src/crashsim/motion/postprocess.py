@@ -449,6 +449,7 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
     arrays = _segment_arrays(table if table else [(t_end, t_end, _snapshot(0, mode))], model)
     P, SL, LD, LAMH, STOPM, CF, max_gap, pen = k.evaluate_samples(np.ascontiguousarray(Y), seg_of, M, *arrays)
     sol = integrator.solution(y_end, t_end)
+    events[:] = event_places(model, sol, events)
     missed = None
     if model.road.zones and table:
         miss_t, miss_k = k.missed_zone(M, T, P, seg_of, arrays[1])
@@ -531,6 +532,53 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
     return SceneRunout(vehicles=vehicles, impacts=tuple(impacts), pairs=tuple(pairs), events=tuple(events),
                        energy=ledger, status=status, message=message, t_end=float(t_end), nfev=int(nfev),
                        n_segments=len(table), method=integrator.method, sol=sol, layout=model.layout)
+
+
+def event_places(model, sol, events) -> list:
+    """The events with the place where each happened (``place``, world frame [m]).
+
+    A wheel's zone entry or exit: the wheel's contact centre; an articulation stop: the hitch
+    pin; a secondary impact: its contact point; sustained contact starting or pressing: the
+    contact point of the pair's manifold (none once they part); a vehicle at rest: its first
+    body's CG.  States come from the run's dense solution at the event's time.
+    """
+    from dataclasses import replace
+
+    from .model import kernels
+
+    L = model.layout
+    want = [i for i, e in enumerate(events) if e.place is None and
+            (any(key in e.data for key in ("wheel", "hitch", "pair")) or e.kind == "vehicle_rest")]
+    if not want:
+        return list(events)
+    Y = np.asarray(sol(np.array([events[i].t for i in want])))
+    out = list(events)
+    specs = {s.key: s for s in model.specs}
+    names = [v.name for v in model.vehicles]
+    for col, i in enumerate(want):
+        e, y = events[i], Y[:, col]
+
+        def at(bi, point):
+            c, s_ = np.cos(y[L.psi][bi]), np.sin(y[L.psi][bi])
+            return (float(y[L.x][bi] + c * point[0] - s_ * point[1]), float(y[L.y][bi] + s_ * point[0] + c * point[1]))
+
+        place = None
+        if "wheel" in e.data and e.data["wheel"] in specs:
+            spec = specs[e.data["wheel"]]
+            place = at(spec.body_index, spec.position)
+        elif "hitch" in e.data:
+            j = [f"{a}-{b}" for a, b in model.hitch_names].index(e.data["hitch"])
+            place = at(int(model.M[20][j][0]), model.M[3][j, :2])
+        elif e.kind == "vehicle_rest" and e.vehicles and e.vehicles[0] in names:
+            place = at(model.body_range[e.vehicles[0]][0], (0.0, 0.0))
+        elif "pair" in e.data and e.kind != "contact_end":
+            p = [q.name for q in model.pairs].index(e.data["pair"])
+            _, ok, geo = kernels().pair_geometry(np.ascontiguousarray(y), model.M, p)
+            if ok:
+                place = (float(geo[0]), float(geo[1]))
+        if place is not None:
+            out[i] = replace(e, place=place)
+    return out
 
 
 def _ke(model, y, b0, b1) -> float:

@@ -291,8 +291,11 @@ class RunoutEvent:
     vehicles : tuple of str
         The vehicles the event concerns (empty: the whole scene).
     data : dict
-        The event's numbers (SI), for reports in other units: e.g. ``{"angle": ...}`` for a
-        stop, ``{"speed": ...}`` for a contact.
+        The event's numbers (SI), for reports in other units: e.g. ``{"angle_rad": ...}`` for
+        a stop, ``{"speed_m_s": ...}`` for a contact.
+    place : (float, float) or None
+        Where it happened, world frame [m] (the wheel, the hitch pin, the contact point, the
+        vehicle's first body at rest); None for events of the whole scene.
     """
 
     t: float
@@ -301,6 +304,7 @@ class RunoutEvent:
     energy: float = 0.0
     vehicles: tuple = ()
     data: dict = field(default_factory=dict, compare=False)
+    place: tuple | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -383,8 +387,16 @@ class RunoutResult:
         impacts = sum(e.energy for e in self.events)
         return (ke0 - self.kinetic_energy_final - self.energy_dissipated - impacts) / ke0 if ke0 > 0 else 0.0
 
-    def table(self) -> dict[str, np.ndarray]:
-        """Sampled history of every body as columns (name with unit -> array), for CSV export.
+    def table(self, times=None) -> dict[str, np.ndarray]:
+        """History of every body as columns (name with unit -> array), for CSV export.
+
+        Parameters
+        ----------
+        times : array_like, optional
+            Times [s] to report (e.g. every 0.1 s): body states come from the dense solution
+            (exact to the integration tolerance; a body at rest stays there), hitch forces are
+            interpolated linearly between the stored samples.  Default: the stored samples
+            (``options.sample_dt`` apart).
 
         Returns
         -------
@@ -394,15 +406,23 @@ class RunoutResult:
             ``"<front>-<rear>.force_long [N]"``, ``".force_lat [N]"``, ``".articulation [rad]"``.
         """
         first = next(iter(self.bodies.values()))
-        cols: dict[str, np.ndarray] = {"t [s]": first.history.t}
+        t = first.history.t if times is None else np.asarray(times, dtype=float)
+        cols: dict[str, np.ndarray] = {"t [s]": t}
         units = {"x": "m", "y": "m", "heading": "rad", "vx": "m/s", "vy": "m/s", "yaw_rate": "rad/s"}
+        states = {}
         for name, body in self.bodies.items():
-            for field, unit in units.items():
-                cols[f"{name}.{field} [{unit}]"] = getattr(body.history, field)
+            states[name] = None if times is None else np.asarray(body.sol(np.clip(t, 0.0, self.t_end)))
+            for i, (fld, unit) in enumerate(units.items()):
+                cols[f"{name}.{fld} [{unit}]"] = getattr(body.history, fld) if times is None else states[name][i]
         for h in self.hitches:
-            cols[f"{h.front}-{h.rear}.force_long [N]"] = h.force_body[:, 0]
-            cols[f"{h.front}-{h.rear}.force_lat [N]"] = h.force_body[:, 1]
-            cols[f"{h.front}-{h.rear}.articulation [rad]"] = h.articulation
+            if times is None:
+                long, lat, art = h.force_body[:, 0], h.force_body[:, 1], h.articulation
+            else:
+                long, lat = (np.interp(t, h.t, h.force_body[:, c]) for c in (0, 1))
+                art = states[h.front][2] - states[h.rear][2]
+            cols[f"{h.front}-{h.rear}.force_long [N]"] = long
+            cols[f"{h.front}-{h.rear}.force_lat [N]"] = lat
+            cols[f"{h.front}-{h.rear}.articulation [rad]"] = art
         return cols
 
     def to_dict(self, *, history: bool = True) -> dict:

@@ -63,7 +63,7 @@ UNKNOWN = Section("unknown", [
     Field("path", "str", example="vehicles.B.speed",
           description="Input to find, by its path in this file (key.key, key[i] for an array item or a vector "
                       "component): vehicles.<v>.speed, vehicles.<v>.heading, impact.point[0], impact.restitution, "
-                      "impact.friction, impact.mu, impact.moment_restitution, runout.road_friction, "
+                      "impact.friction, impact.mu, impact.mu_fraction, impact.moment_restitution, runout.road_friction, "
                       "vehicles.<v>.tyres.brake, vehicles.<v>.bodies[i].mass, ..."),
     Field("name", "str", default="", description="Label for the report (default: the path)"),
     Field("lower", "str", example="20 mph", description=f"Lower bound, {_VALUE}"),

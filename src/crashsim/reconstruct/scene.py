@@ -132,9 +132,14 @@ class SceneResult:
         out["warnings"] = list(self.warnings)
         return out
 
-    def report(self, system: str = "SI") -> str:
+    def report(self, units: str | None = None, *, system: str | None = None) -> str:
+        """The readable report: impact, run-out, later impacts, events, evidence, warnings.
+
+        ``units`` (or ``system``): ``"SI"`` or ``"US"`` (any case); default the scenario's ``units``.
+        """
         from ..report import format_impact
 
+        system = _system(self, units if units is not None else system)
         sc = self.scenario
         head = [f"crashsim: {sc.title}"]
         if sc.source:
@@ -144,17 +149,20 @@ class SceneResult:
         head.append(f"units: {system}")
         text = "\n".join(head) + "\n\n" + format_impact(self.impact, system)
         if self.runout is not None:
-            from ..report import format_runout
+            from ..report import format_events, format_runout
 
             text += "\n\n" + format_runout(self.runout, system, joint=self.joint is not None)
             text += f"\n  model level: {self.scenario.runout.level}"
             if self.joint is not None:
-                from ..report import format_events, format_joint
+                from ..report import format_joint
 
                 joint = format_joint(self, system)
                 if joint:
                     text += "\n\n" + joint
                 text += "\n\n" + format_events(self.joint.events, system)
+            else:
+                for vname, r in self.runout.items():
+                    text += "\n\n" + format_events(r.events, system, title=f"Run-out events, vehicle {vname}")
             for name, rep in (self.accuracy or {}).items():
                 text += f"\n  accuracy, vehicle {name}: {rep.message}"
         if self.evidence is not None:
@@ -165,47 +173,162 @@ class SceneResult:
             text += "\n\nWarnings\n" + "\n".join(f"  - {w}" for w in self.warnings)
         return text
 
-    def write_csv(self, directory: Path) -> list[Path]:
-        """Write CSV files (SI units, column headers carry the unit); returns the paths written.
+    # ------------------------------------------------------------------ histories
+    @property
+    def t_end(self) -> float:
+        """End of the run-out [s] (the latest vehicle's rest); 0 without a run-out."""
+        return max((r.t_end for r in (self.runout or {}).values()), default=0.0)
+
+    def times(self, dt: float | None = None):
+        """Times from the first separation to :attr:`t_end` every ``dt`` [s] (default: the
+        run-out's ``sample_dt``), the end included."""
+        import numpy as np
+
+        from ..errors import ScenarioError
+
+        if self.runout is None:
+            raise ScenarioError("this scene has no run-out (runout.level = \"impact\" or no [runout])", field="runout")
+        dt = self.scenario.runout.options.sample_dt if dt is None else float(dt)
+        if not (dt > 0 and np.isfinite(dt)):
+            raise ScenarioError(f"dt = {dt!r} s; allowed a time step > 0", field="dt")
+        n = int(np.floor(self.t_end / dt + 1e-9))
+        if n > 1_000_000:
+            raise ScenarioError(f"dt = {dt:g} s gives {n} steps over {self.t_end:.4g} s; allowed at most "
+                                f"1,000,000 (dt >= {self.t_end / 1e6:.3g} s)", field="dt")
+        t = np.arange(n + 1) * dt
+        return t if t[-1] >= self.t_end - 1e-12 else np.append(t, self.t_end)
+
+    def history(self, dt: float | None = None) -> dict:
+        """Every body's state at common times, as arrays (SI): the positions at any time step.
+
+        Parameters
+        ----------
+        dt : float, optional
+            Time step [s] (default: the run-out's ``sample_dt``).  States come from the
+            run-out's dense solution, exact to its tolerance; a vehicle at rest stays at rest.
+
+        Returns
+        -------
+        dict of str to ndarray
+            ``"t"`` [s] and per body ``"<body>.x"``, ``".y"`` [m], ``".heading"`` [rad],
+            ``".vx"``, ``".vy"``, ``".speed"`` [m/s], ``".yaw_rate"`` [rad/s].
+        """
+        import numpy as np
+
+        t = self.times(dt)
+        out = {"t": t}
+        for r in self.runout.values():
+            for name, b in r.bodies.items():
+                x, y, h, vx, vy, w = np.asarray(b.sol(np.clip(t, 0.0, r.t_end)))
+                out.update({f"{name}.x": x, f"{name}.y": y, f"{name}.heading": h, f"{name}.vx": vx,
+                            f"{name}.vy": vy, f"{name}.speed": np.hypot(vx, vy), f"{name}.yaw_rate": w})
+        return out
+
+    def history_frame(self, dt: float | None = None):
+        """:meth:`history` as a pandas DataFrame indexed by time (needs pandas installed)."""
+        try:
+            import pandas as pd
+        except ImportError:  # pragma: no cover - depends on the environment
+            raise ImportError("history_frame needs pandas (pip install pandas); history() gives the same "
+                              "columns as numpy arrays") from None
+        h = self.history(dt)
+        return pd.DataFrame({k: v for k, v in h.items() if k != "t"}, index=pd.Index(h["t"], name="t [s]"))
+
+    # ------------------------------------------------------------------ figures
+    def plot(self, ax=None, **kwargs):
+        """The scene diagram on ``ax`` (a new figure if None); see :func:`crashsim.plotting.plot_scene`.
+        Returns the axes."""
+        from ..plotting import plot_scene
+
+        return plot_scene(self, ax, **kwargs)
+
+    def animate(self, path, **kwargs):
+        """Write an animation (``.gif``; ``.mp4`` where ffmpeg is present); see
+        :func:`crashsim.animation.animate_scene`.  Returns the path written."""
+        from ..animation import animate_scene
+
+        return animate_scene(self, path, **kwargs)
+
+    def write_csv(self, directory: Path, *, system: str | None = None, dt: float | None = None) -> list[Path]:
+        """Write CSV files (column headers carry the unit); returns the paths written.
 
         ``impact.csv``: one row per body (velocities before/after, delta-v, yaw rates);
-        ``<vehicle>_history.csv``: sampled run-out history of every body and hitch;
+        ``<vehicle>_history.csv``: the run-out history of every body and hitch, at the stored
+        samples or every ``dt`` [s] (:meth:`crashsim.motion.RunoutResult.table`);
         ``<vehicle>_tracks.csv``: every wheel's track (time, x, y, sliding flag).
+        ``system``: ``"SI"`` (angles in rad) or ``"US"`` (ft, mph, lbf, deg); default the
+        scenario's ``units``.
         """
         import csv
 
+        system = _system(self, system)
         directory = Path(directory)
+        if dt is not None:
+            self.times(dt)  # checked before anything is written
         directory.mkdir(parents=True, exist_ok=True)
         written = []
         path = directory / "impact.csv"
+        cols = [("vx_before", "speed"), ("vy_before", "speed"), ("yaw_rate_before", "angular_velocity"),
+                ("vx_after", "speed"), ("vy_after", "speed"), ("yaw_rate_after", "angular_velocity"),
+                ("delta_vx", "speed"), ("delta_vy", "speed"), ("delta_v", "speed"), ("pdof", "angle")]
         with path.open("w", newline="") as fh:
             w = csv.writer(fh)
-            w.writerow(["body", "vehicle", "vx_before [m/s]", "vy_before [m/s]", "yaw_rate_before [rad/s]",
-                        "vx_after [m/s]", "vy_after [m/s]", "yaw_rate_after [rad/s]", "delta_vx [m/s]",
-                        "delta_vy [m/s]", "delta_v [m/s]", "pdof [rad]"])
+            w.writerow(["body", "vehicle"] + [f"{n} [{_unit(k, system)}]" for n, k in cols])
             for name, b in self.impact.bodies.items():
                 if b.fixed:
                     continue
-                w.writerow([name, b.vehicle, *b.velocity_before, b.yaw_rate_before, *b.velocity, b.yaw_rate,
-                            *b.delta_v, b.delta_v_magnitude, "" if b.pdof is None else b.pdof])
+                values = [*b.velocity_before, b.yaw_rate_before, *b.velocity, b.yaw_rate, *b.delta_v,
+                          b.delta_v_magnitude, b.pdof]
+                w.writerow([name, b.vehicle] + ["" if v is None else _convert(v, k, system)
+                                                for v, (_, k) in zip(values, cols)])
         written.append(path)
         for vname, r in (self.runout or {}).items():
-            cols = r.table()
+            table = r.table(None if dt is None else self.times(dt))
             path = directory / f"{vname}_history.csv"
+            heads, columns = [], []
+            for head, values in table.items():
+                name, si = head[:-1].split(" [")
+                kind = _SI_KIND[si]
+                heads.append(f"{name} [{_unit(kind, system)}]")
+                columns.append([_convert(v, kind, system) for v in values.tolist()])
             with path.open("w", newline="") as fh:
                 w = csv.writer(fh)
-                w.writerow(list(cols))
-                w.writerows(zip(*[c.tolist() for c in cols.values()]))
+                w.writerow(heads)
+                w.writerows(zip(*columns))
             written.append(path)
             path = directory / f"{vname}_tracks.csv"
+            lu = _unit("length", system)
             with path.open("w", newline="") as fh:
                 w = csv.writer(fh)
-                w.writerow(["wheel", "t [s]", "x [m]", "y [m]", "sliding"])
+                w.writerow(["wheel", "t [s]", f"x [{lu}]", f"y [{lu}]", "sliding"])
                 for key, tr in r.wheels.items():
                     for t, (x, y), sl in zip(tr.t.tolist(), tr.points.tolist(), tr.sliding.tolist()):
-                        w.writerow([key, t, x, y, int(sl)])
+                        w.writerow([key, t, _convert(x, "length", system), _convert(y, "length", system), int(sl)])
             written.append(path)
         return written
+
+
+#: The kind of a CSV column from its SI unit label.
+_SI_KIND = {"s": "time", "m": "length", "rad": "angle", "m/s": "speed", "rad/s": "angular_velocity", "N": "force"}
+
+
+def _unit(kind: str, system: str) -> str:
+    from ..units import to_unit
+
+    return to_unit(0.0, kind, system)[1]
+
+
+def _convert(value: float, kind: str, system: str) -> float:
+    from ..units import to_unit
+
+    return to_unit(value, kind, system)[0] if system != "SI" else float(value)
+
+
+def _system(scene, system: str | None) -> str:
+    """``system`` (any case) or the scenario's units; a ScenarioError names anything else."""
+    from ..units import resolve_system
+
+    return resolve_system(system, scene.scenario.units)
 
 
 def separation_states(scenario, impact: ImpactResult) -> dict:

@@ -1,0 +1,132 @@
+"""The Python API for scripts and notebooks: load a scenario file, run it, fit it, sample it.
+
+Each function is a thin door to the same code the command line uses (``crashsim run``,
+``fit``, ``mc``), so a number computed in a notebook is the number of the report.
+
+>>> import crashsim
+>>> scene = crashsim.run("scenarios/scenes/intersection_car_trailer_wheels.toml")  # doctest: +SKIP
+>>> scene.impact.bodies["car"].delta_v_magnitude                                   # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Mapping
+
+__all__ = ["load", "run", "fit", "monte_carlo", "with_overrides"]
+
+
+def _raw(source) -> tuple[dict, str | None]:
+    """The file contents (raw TOML dict) and the file name of a path, a Scenario or a dict."""
+    from .schema import load_toml
+
+    if isinstance(source, (str, Path)):
+        return load_toml(source), str(source)
+    if isinstance(source, Mapping):
+        return dict(source), None
+    path = getattr(source, "path", None)
+    if path is None:
+        from .errors import ScenarioError
+
+        raise ScenarioError(f"cannot read scenario inputs from {type(source).__name__}: give a file path, a dict of "
+                            "the file's contents, or a Scenario loaded from a file", field="scenario")
+    return load_toml(path), str(path)
+
+
+def with_overrides(data: Mapping, overrides: Mapping[str, Any] | None = None, **kwargs) -> dict:
+    """A copy of a scenario's file contents with some inputs replaced.
+
+    Parameters
+    ----------
+    data : dict
+        The file's contents (as read by :func:`crashsim.schema.load_toml`).
+    overrides : dict, optional
+        ``{path: value}`` with a path as in ``[fit]`` unknowns (``"vehicles.car.speed"``,
+        ``"impact.point[0]"``) and the value written as in the file, with its unit
+        (``"35 mph"``, ``0.1``).
+    **kwargs
+        The same with ``__`` for each dot: ``vehicles__car__speed="35 mph"``.
+
+    Raises
+    ------
+    ScenarioError
+        A path the schema does not have, or a value that cannot be read (naming the path).
+    """
+    from .reconstruct.overrides import parse_value, resolve_path, set_value
+
+    items = dict(overrides or {})
+    items.update({k.replace("__", "."): v for k, v in kwargs.items()})
+    out = dict(data)
+    for path, value in items.items():
+        target = resolve_path(path, field=path)
+        out = set_value(out, target, parse_value(value, target, field=path))
+    return out
+
+
+def load(path):
+    """Read and validate a scenario file (TOML); returns a :class:`crashsim.scenario.Scenario`.
+
+    Raises :class:`~crashsim.errors.ScenarioError` naming the file, key, value and allowed
+    range of anything wrong.
+    """
+    from .scenario import load_scenario
+
+    return load_scenario(path)
+
+
+def run(scenario, overrides: Mapping[str, Any] | None = None, **kwargs):
+    """Solve a scene: the impact, the run-out to rest, the evidence checks.
+
+    Parameters
+    ----------
+    scenario : str, Path, Scenario or dict
+        A scenario file, a scenario from :func:`load`, or a file's contents as a dict.
+    overrides, **kwargs
+        Inputs to change first (see :func:`with_overrides`), e.g.
+        ``crashsim.run("scene.toml", vehicles__car__speed="35 mph")``.
+
+    Returns
+    -------
+    SceneResult
+        With ``.report(units=...)``, ``.to_dict()``, ``.plot(ax=None)``, ``.animate(path)``,
+        ``.history(dt)`` (arrays) and ``.history_frame(dt)`` (pandas).
+    """
+    from .reconstruct import run_scene
+    from .scenario import Scenario, scenario_from_dict
+
+    if isinstance(scenario, Scenario) and not overrides and not kwargs:
+        return run_scene(scenario)
+    if isinstance(scenario, (str, Path)) and not overrides and not kwargs:
+        return run_scene(load(scenario))
+    data, file = _raw(scenario)
+    return run_scene(scenario_from_dict(with_overrides(data, overrides, **kwargs), file=file))
+
+
+def fit(scenario, **options):
+    """Fit the ``[fit]`` unknowns of a scenario to its evidence (as ``crashsim fit``).
+
+    ``options`` go to :func:`crashsim.reconstruct.fit.fit_scene` (``engine``, ``workers``,
+    ``progress``, ``sample_time_limit``). Returns a :class:`~crashsim.reconstruct.fit.FitResult`.
+    """
+    from .reconstruct.fit import fit_scene
+    from .scenario import scenario_from_dict
+
+    data, file = _raw(scenario)
+    scenario_from_dict(data, file=file)  # the whole file validated first, as the CLI does
+    return fit_scene(data, None, file=file, **options)
+
+
+def monte_carlo(scenario, samples: int | None = None, **options):
+    """Monte Carlo of the ``[uncertainty]`` inputs through impact and run-out (as ``crashsim mc``).
+
+    ``options`` go to :func:`crashsim.reconstruct.montecarlo.monte_carlo` (``seed``,
+    ``engine``, ``workers``, ``out_path``, ``progress``, ...). Returns an
+    :class:`~crashsim.reconstruct.montecarlo.MCResult`.
+    """
+    from .reconstruct.montecarlo import monte_carlo as _mc
+    from .scenario import scenario_from_dict
+
+    data, file = _raw(scenario)
+    scenario_from_dict(data, file=file)
+    options.setdefault("progress", False)
+    return _mc(data, None, samples, file=file, **options)

@@ -18,7 +18,6 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib import animation as mpl_animation  # noqa: E402
 
-from crashsim import animation  # noqa: E402
 from crashsim.animation import (HOLD, MAX_FRAMES, animate_scene, animation_formats, frame_times,  # noqa: E402
                                 scene_animation)
 from crashsim.cli import main  # noqa: E402
@@ -33,6 +32,7 @@ Image = pytest.importorskip("PIL.Image")
 
 ROOT = Path(__file__).resolve().parents[2]
 INTERSECTION = ROOT / "scenarios" / "scenes" / "intersection_car_trailer_wheels.toml"
+WAITING = ROOT / "scenarios" / "scenes" / "third_vehicle_waiting_car.toml"  # legend at the right
 TABLE6 = ROOT / "scenarios" / "paper" / "table6.toml"  # impact only
 DT = 0.5
 
@@ -169,6 +169,40 @@ def test_last_frame_is_the_rest_pose_and_limits_hold_every_frame():
             assert np.all((xy[:, 0] >= x0) & (xy[:, 0] <= x1) & (xy[:, 1] >= y0) & (xy[:, 1] <= y1))
         assert (anim.ax.get_xlim(), anim.ax.get_ylim()) == limits
 
+
+@pytest.mark.parametrize("path, legend_below", [(INTERSECTION, True), (WAITING, False)], ids=["wide", "tall"])
+def test_limits_widen_to_poses_outside_the_scene_figure(monkeypatch, path, legend_below):
+    """No shipped scene has a pose outside the static figure's limits: shrink them to provoke it.
+    The legend stays where plot_scene put it (under a wide scene, at the right of a tall one)."""
+    import crashsim.plotting
+
+    original = crashsim.plotting.plot_scene
+
+    def shrunk(scene, **kwargs):
+        ax = original(scene, **kwargs)
+        x0, x1 = ax.get_xlim()
+        y0, y1 = ax.get_ylim()
+        ax.set_xlim(x0 + 0.3 * (x1 - x0), x0 + 0.6 * (x1 - x0))
+        ax.set_ylim(y0 + 0.4 * (y1 - y0), y0 + 0.6 * (y1 - y0))
+        return ax
+
+    monkeypatch.setattr(crashsim.plotting, "plot_scene", shrunk)
+    anim = scene_animation(_scene(path), dt=DT)
+    (x0, x1), (y0, y1) = anim.ax.get_xlim(), anim.ax.get_ylim()
+    for k in range(len(anim)):
+        for patch in anim.frame(k)[:len(anim.outlines)]:
+            xy = _vertices(patch)
+            assert np.all((xy[:, 0] > x0) & (xy[:, 0] < x1) & (xy[:, 1] > y0) & (xy[:, 1] < y1))
+    # laid out again: the axes box has the aspect of the new limits (equal scale, nothing cut)
+    fig = anim.fig
+    box = anim.ax.get_position()
+    w_in, h_in = box.width * fig.get_figwidth(), box.height * fig.get_figheight()
+    assert w_in / h_in == pytest.approx((x1 - x0) / (y1 - y0), rel=1e-6)
+    r = fig.canvas.get_renderer()
+    leg = anim.ax.get_legend().get_window_extent(r)
+    axes = anim.ax.get_window_extent(r)
+    assert (leg.y1 <= axes.y0) == legend_below
+    assert 0 <= leg.x0 and leg.x1 <= fig.bbox.width + 1 and 0 <= leg.y0
 
 def test_us_units_scale_the_outlines():
     scene = _scene(INTERSECTION)

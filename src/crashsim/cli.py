@@ -156,6 +156,23 @@ def _cmd_plot(args) -> int:
     return 0
 
 
+def _cmd_animate(args) -> int:
+    from .animation import animate_scene, check_animation_path, frame_times
+    from .reconstruct import run_scene
+    from .scenario import load_scenario
+    from .units import Kind, parse
+
+    out = check_animation_path(args.output, field="-o")  # before anything long
+    dt = parse(args.dt, Kind.TIME, field="--dt")
+    frame_times(0.0, dt, field="--dt")  # dt > 0; the frame count is checked once the run-out's end is known
+    scene = run_scene(load_scenario(args.file))
+    if scene.runout:
+        frame_times(max(r.t_end for r in scene.runout.values()), dt, field="--dt")
+    written = animate_scene(scene, out, dt=dt, speed=args.speed, system=args.units, dpi=args.dpi)
+    sys.stdout.write(f"wrote {written}\n")
+    return 0
+
+
 def _cmd_schema(args) -> int:
     from .scenario import schema_document
 
@@ -199,6 +216,16 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("--units", type=_units, default=None, help="SI or US: units of the figure (default: the scenario's)")
     pl.add_argument("--dpi", type=int, default=150)
     pl.set_defaults(func=_cmd_plot)
+
+    an = sub.add_parser("animate", help="animate the run-out over the scene diagram (.gif, or .mp4 with ffmpeg)")
+    an.add_argument("file", help="scenario file (TOML) with a [runout] section")
+    an.add_argument("-o", "--output", required=True, help="animation: .gif, or .mp4 where ffmpeg is installed")
+    an.add_argument("--dt", metavar="TIME", default="0.05 s", help='scene time between frames (default "0.05 s")')
+    an.add_argument("--speed", type=float, default=1.0,
+                    help="playback speed, 1 = real time (frames per second = speed / dt)")
+    an.add_argument("--units", choices=("SI", "US"), default=None, help="units of the figure (default: the scenario's)")
+    an.add_argument("--dpi", type=int, default=100)
+    an.set_defaults(func=_cmd_animate)
 
     s = sub.add_parser("schema", help="print the documented scenario-file schema")
     s.add_argument("--format", choices=("text", "markdown"), default="text")

@@ -531,7 +531,8 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
         if times is not None:
             tt = np.sort(np.asarray(times, dtype=float).ravel())
             ghost = {vn: tt[(tt > 0) & (tt < r.t_end)] for vn, r in runout.items()}
-            ghost_note = "intermediate, at the given times"
+            # no legend entry for ghosts that are not drawn (times=(): the animation's static layer)
+            ghost_note = "intermediate, at the given times" if any(len(g) for g in ghost.values()) else None
         else:
             if interval is not None:
                 if not (np.isfinite(interval) and interval > 0):
@@ -602,7 +603,8 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
                 S.body_label(name, np.asarray(br.rest_position), suffix="" if r.success else " (run stopped)",
                              offset=6.0 if name in S.no_outline else -5.0)
             S.pins(v, poses, dark, 4.0, zorder=_Z_REST)
-        S.legend_entry(ghost_note, Patch(facecolor="none", edgecolor="0.4", lw=0.7, alpha=0.7))
+        if ghost_note:
+            S.legend_entry(ghost_note, Patch(facecolor="none", edgecolor="0.4", lw=0.7, alpha=0.7))
         S.legend_entry("at rest (end of run)", Patch(facecolor="0.8", edgecolor="0.1", lw=1.8))
         S.legend_entry("tyre track, sliding (mark expected)", Line2D([], [], color="0.15", lw=2.2))
         S.legend_entry("tyre track, rolling", Line2D([], [], color="0.4", lw=0.7, ls="--", dashes=(4, 3)))

@@ -1,0 +1,409 @@
+"""Animation of a reconstructed scene: the scene diagram with the bodies moving over it.
+
+An edge module like :mod:`crashsim.plotting` (matplotlib imported lazily, on first use). The
+static layer of every frame is :func:`crashsim.plotting.plot_scene` without ghost outlines
+(marks, tracks, CG paths, outlines at impact and at rest, obstacles, evidence, legend, scale
+bar), drawn once; per frame only one outline per body, the hitch pins and a clock change.
+
+Frames are at scene times 0, dt, 2 dt, ... after separation and at the end of the run-out;
+playback runs at ``fps = speed / dt`` frames per second, so ``speed = 1`` is real time and
+the last frame is held for about :data:`HOLD` seconds.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["animate_scene", "scene_animation", "SceneAnimation", "animation_formats", "check_animation_path",
+           "frame_times", "MAX_FRAMES", "HOLD"]
+
+_log = logging.getLogger("crashsim")
+
+#: Largest number of frames of an animation (a smaller dt is refused).
+MAX_FRAMES = 2000
+
+#: How long the last frame is held at the end of playback [s of playback].
+HOLD = 1.0
+
+#: GIF frame delays are whole centiseconds and most viewers slow down delays under 20 ms.
+_GIF_MIN_DELAY_MS = 20
+
+
+def animation_formats() -> tuple[str, ...]:
+    """File suffixes :func:`animate_scene` can write on this machine.
+
+    ``.gif`` always (matplotlib's PillowWriter); ``.mp4`` only where matplotlib finds ffmpeg
+    (``matplotlib.animation.writers.is_available("ffmpeg")``).
+    """
+    from matplotlib import animation
+
+    return (".gif",) + ((".mp4",) if animation.writers.is_available("ffmpeg") else ())
+
+
+def check_animation_path(path, *, field: str = "path") -> Path:
+    """The output path as a Path, if its format can be written here; cheap, so call it before
+    running anything long.
+
+    Parameters
+    ----------
+    path : str or Path
+        Output file; the format follows the suffix (``.gif``, ``.mp4``).
+    field : str
+        Name of the argument in the error message (``"-o"`` on the command line).
+
+    Raises
+    ------
+    ScenarioError
+        For a suffix other than .gif/.mp4, or .mp4 where ffmpeg is not available; the message
+        names the formats that can be written on this machine.
+    """
+    from .errors import ScenarioError
+
+    p = Path(path)
+    allowed = animation_formats()
+    suffix = p.suffix.lower()
+    if suffix not in allowed:
+        why = ("ffmpeg, which matplotlib needs for .mp4, is not available on this machine" if suffix == ".mp4"
+               else f"unsupported suffix {p.suffix!r}")
+        raise ScenarioError(f"cannot write an animation to {str(p)!r}: {why}; formats that can be written here: "
+                            f"{', '.join(allowed)}", field=field)
+    return p
+
+
+def frame_times(t_end: float, dt: float, *, field: str = "dt") -> np.ndarray:
+    """Frame times 0, dt, 2 dt, ... below ``t_end``, and ``t_end`` itself as the last one [s].
+
+    Parameters
+    ----------
+    t_end : float
+        End of the animation [s] (>= 0).
+    dt : float
+        Time between frames [s]; > 0 and giving at most :data:`MAX_FRAMES` frames.
+    field : str
+        Name of ``dt`` in the error message (``"--dt"`` on the command line).
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Ascending; ``n = ceil(t_end / dt) + 1`` (a multiple of dt within 1e-9 dt of ``t_end``
+        is replaced by ``t_end``), 1 if ``t_end == 0``.
+
+    Raises
+    ------
+    ScenarioError
+        If dt is not a positive finite time or gives more than :data:`MAX_FRAMES` frames; the
+        message states the smallest dt allowed for this ``t_end``.
+    """
+    from .errors import ScenarioError
+
+    t_end = float(t_end)
+    dt_min = t_end / (MAX_FRAMES - 1)
+    allowed = f"allowed dt > 0 s and >= {dt_min:.3g} s (at most {MAX_FRAMES} frames for {t_end:.4g} s)"
+    if not (isinstance(dt, (int, float, np.floating)) and math.isfinite(dt) and dt > 0):
+        raise ScenarioError(f"time between frames {dt!r} s is not a positive time; {allowed}", field=field)
+    n = math.floor(t_end / dt + 1e-9)
+    times = dt * np.arange(n + 1, dtype=float)
+    if t_end - times[-1] > 1e-9 * dt:
+        times = np.append(times, t_end)
+    else:
+        times[-1] = t_end
+    if len(times) > MAX_FRAMES:
+        raise ScenarioError(f"time between frames {dt:g} s gives {len(times)} frames; {allowed}", field=field)
+    return times
+
+
+def _decimals(dt: float) -> int:
+    """Decimals that show every multiple of ``dt`` exactly (at most 6)."""
+    for d in range(7):
+        if abs(round(dt, d) - dt) <= 1e-9 * max(1.0, dt):
+            return d
+    return 6
+
+
+class SceneAnimation:
+    """The figure of an animation and its moving artists, set to any frame by :meth:`frame`.
+
+    Made by :func:`scene_animation`; :func:`animate_scene` writes it to a file.
+
+    Attributes
+    ----------
+    scene : SceneResult
+    fig, ax : matplotlib Figure and Axes
+        The scene figure (:func:`crashsim.plotting.plot_scene` without ghosts); axis limits
+        fixed, containing every pose of every frame.
+    times : ndarray, shape (n,)
+        Frame times after separation [s].
+    outlines : dict of str to matplotlib artist
+        Body name -> its moving outline (a Polygon with gid ``"anim:outline:<body>"``; a CG
+        marker Line2D with gid ``"anim:cg:<body>"`` for a body without outline data).
+    pins : dict of str to matplotlib Line2D
+        Vehicle name -> markers at its hitch pins (gid ``"anim:pins:<vehicle>"``).
+    clock : matplotlib Text
+        ``"t = 1.25 s"`` (gid ``"anim:clock"``).
+    """
+
+    def __init__(self, scene, fig, ax, times, S, outlines, pins, clock, decimals, end_note):
+        self.scene = scene
+        self.fig = fig
+        self.ax = ax
+        self.times = times
+        self.outlines = outlines
+        self.pins = pins
+        self.clock = clock
+        self._S = S
+        self._decimals = decimals
+        self._end_note = end_note
+
+    def __len__(self) -> int:
+        return len(self.times)
+
+    def poses(self, t: float) -> dict:
+        """Body name -> ``((x, y), heading)`` at scene time ``t`` [s, m, rad] from the dense
+        output ``BodyRunout.sol``, ``t`` clamped to ``[0, t_end]`` of the body's run (a body
+        at rest stays where it stopped)."""
+        out = {}
+        for r in self.scene.runout.values():
+            tc = min(max(float(t), 0.0), float(r.t_end))
+            for name, br in r.bodies.items():
+                st = np.asarray(br.sol(tc), dtype=float)
+                out[name] = ((float(st[0]), float(st[1])), float(st[2]))
+        return out
+
+    def clock_text(self, k: int) -> str:
+        """The clock of frame ``k``: ``"t = 1.25 s"`` (the last frame of a whole run-out adds
+        ", at rest" or ", run stopped")."""
+        from .units import Kind, to_unit
+
+        v, unit = to_unit(float(self.times[k]), Kind.TIME, self._S.system)
+        text = f"t = {v:.{self._decimals}f} {unit}"
+        return text + self._end_note if k == len(self.times) - 1 and self._end_note else text
+
+    def frame(self, k: int) -> list:
+        """Move the outlines, pins and clock to frame ``k``; returns the artists changed."""
+        from .geometry import to_world
+
+        S = self._S
+        poses = self.poses(self.times[k])
+        for name, artist in self.outlines.items():
+            pos, heading = poses[name]
+            corners = S.body_of[name].outline()
+            if corners is None:
+                artist.set_data(*([c] for c in S.d(pos)))
+            else:
+                artist.set_xy(S.d(to_world(corners, pos, heading)))
+        for vn, line in self.pins.items():
+            xy = _pin_points(S, vn, poses)
+            line.set_data(xy[:, 0], xy[:, 1])
+        self.clock.set_text(self.clock_text(k))
+        return [*self.outlines.values(), *self.pins.values(), self.clock]
+
+
+def _pin_points(S, vehicle_name: str, poses: dict) -> np.ndarray:
+    """Hitch pins of a vehicle (from the front body's pose) in display units, shape (n, 2)."""
+    from .geometry import to_world
+
+    v = next(x for x in S.sc.vehicles if x.name == vehicle_name)
+    pts = [to_world(h.front_point, *poses[v.bodies[i].name]) for i, h in enumerate(v.hitches)]
+    return S.d(np.reshape(pts, (-1, 2)))
+
+
+def _frame_points(S, anim: SceneAnimation) -> np.ndarray:
+    """Every outline corner (or CG) and pin of every frame, display units, shape (n, 2)."""
+    from .geometry import to_world
+
+    pts = []
+    for k in range(len(anim.times)):
+        poses = anim.poses(anim.times[k])
+        for name, (pos, heading) in poses.items():
+            corners = S.body_of[name].outline()
+            pts.append(S.d(pos if corners is None else to_world(corners, pos, heading)))
+        for vn in anim.pins:
+            pts.append(_pin_points(S, vn, poses))
+    return np.vstack([np.reshape(p, (-1, 2)) for p in pts])
+
+
+def _contain(ax, pts: np.ndarray) -> bool:
+    """Widen the axis limits (3 % margin) to contain ``pts`` and lay the scene figure out again
+    at the new aspect; True if the limits changed."""
+    from .plotting import _layout_scene_figure
+
+    x0, x1 = ax.get_xlim()
+    y0, y1 = ax.get_ylim()
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    if lo[0] >= x0 and lo[1] >= y0 and hi[0] <= x1 and hi[1] <= y1:
+        return False
+    pad = 0.03 * max(x1 - x0, y1 - y0)
+    ax.set_xlim(min(x0, lo[0] - pad), max(x1, hi[0] + pad))
+    ax.set_ylim(min(y0, lo[1] - pad), max(y1, hi[1] + pad))
+    leg = ax.get_legend()
+    fig = ax.figure
+    r = fig.canvas.get_renderer()
+    # plot_scene put the legend under a wide scene, else at the right: keep its choice
+    below = leg is not None and leg.get_window_extent(r).y1 <= ax.get_window_extent(r).y0 + 1.0
+    _layout_scene_figure(ax, leg, below)
+    return True
+
+
+def scene_animation(scene, *, dt: float = 0.05, system: str | None = None, t_end: float | None = None
+                    ) -> SceneAnimation:
+    """Build the figure of an animation, set to its first frame (nothing written).
+
+    Parameters
+    ----------
+    scene : SceneResult
+        From :func:`crashsim.reconstruct.run_scene`, with a run-out.
+    dt : float
+        Scene time between frames [s].
+    system : {"SI", "US"}, optional
+        Display units of the figure and the clock; default the scenario's.
+    t_end : float, optional
+        Last frame time [s]; default the end of the run-out (the latest vehicle's ``t_end``).
+
+    Returns
+    -------
+    SceneAnimation
+
+    Raises
+    ------
+    ScenarioError
+        If the scene has no run-out, or for a bad ``dt``, ``t_end`` or ``system``.
+
+    Notes
+    -----
+    Moving outlines use the colour family of each vehicle in the scene figure (its line colour,
+    half transparent, as fill; the dark edge of the outline at rest) and lie above the outlines
+    at impact and at rest, below the evidence and the arrows.
+    """
+    from matplotlib.colors import to_rgba
+
+    from .errors import ScenarioError
+    from .plotting import _Z_REST, _Z_TEXT, _Scene, _system, plot_scene
+
+    system = _system(scene, system)
+    if not scene.runout:
+        raise ScenarioError(f"scene {scene.scenario.title!r} has no run-out (impact only): nothing moves after "
+                            "separation, so there is nothing to animate; add a [runout] section to the scenario",
+                            field="runout")
+    run_end = max(float(r.t_end) for r in scene.runout.values())
+    if t_end is None:
+        t_end = run_end
+    elif not (isinstance(t_end, (int, float, np.floating)) and math.isfinite(t_end) and t_end > 0):
+        raise ScenarioError(f"end of the animation {t_end!r} s is not a positive time; allowed t_end > 0 s "
+                            f"(default: the end of the run-out, {run_end:.4g} s)", field="t_end")
+    times = frame_times(float(t_end), dt)
+
+    ax = plot_scene(scene, times=(), system=system)
+    fig = ax.figure
+    S = _Scene(scene, ax, system)
+    outlines, pins = {}, {}
+    z = _Z_REST + 0.5
+    for vn, r in scene.runout.items():
+        _, line, dark = S.colors(next(iter(r.bodies)))
+        for name in r.bodies:
+            body = S.body_of[name]
+            if body.outline() is None:
+                (outlines[name],) = ax.plot([], [], "o", ms=6, color=dark, zorder=z, gid=f"anim:cg:{name}")
+            else:
+                # stronger than the outlines at impact and at rest under it: half-transparent line colour
+                outlines[name] = S.outline(body, (0.0, 0.0), 0.0, gid=f"anim:outline:{name}", fill=line, edge=dark,
+                                           lw=2.0, zorder=z)
+                outlines[name].set_alpha(None)
+                outlines[name].set_facecolor(to_rgba(line, 0.45))
+        v = next(x for x in scene.scenario.vehicles if x.name == vn)
+        if v.hitches:
+            (pins[vn],) = ax.plot([], [], "o", ls="none", ms=4.5, mfc="white", mec=dark, mew=1.0, zorder=z + 0.2,
+                                  gid=f"anim:pins:{vn}")
+    clock = ax.text(0.985, 0.975, "", transform=ax.transAxes, ha="right", va="top", fontsize=11, family="monospace",
+                    zorder=_Z_TEXT + 3, gid="anim:clock",
+                    bbox=dict(boxstyle="round,pad=0.3", facecolor="white", edgecolor="0.5", lw=0.6, alpha=0.9))
+    end_note = ""
+    if times[-1] >= run_end:
+        end_note = ", at rest" if scene.at_rest else ", run stopped"
+    anim = SceneAnimation(scene, fig, ax, times, S, outlines, pins, clock, _decimals(dt), end_note)
+    _contain(ax, _frame_points(S, anim))
+    anim.frame(0)
+    return anim
+
+
+def animate_scene(scene, path, *, dt: float = 0.05, speed: float = 1.0, system: str | None = None, dpi: int = 100,
+                  t_end: float | None = None) -> Path:
+    """Write an animation of a scene's run-out to scale: the scene diagram with the bodies moving.
+
+    Parameters
+    ----------
+    scene : SceneResult
+        From :func:`crashsim.reconstruct.run_scene`, with a run-out.
+    path : str or Path
+        Output file: ``.gif`` (matplotlib's PillowWriter) or ``.mp4`` (FFMpegWriter, only
+        where ffmpeg is available; see :func:`animation_formats`). Parent directories are
+        created.
+    dt : float
+        Scene time between frames [s]: frames at 0, dt, 2 dt, ... after separation and at the
+        end of the run-out. At most :data:`MAX_FRAMES` frames.
+    speed : float
+        Playback speed: ``fps = speed / dt`` frames per second, so 1 is real time and 0.5
+        slow motion. The last frame is held for about :data:`HOLD` s of playback.
+    system : {"SI", "US"}, optional
+        Display units of the figure and the clock; default the scenario's.
+    dpi : int
+        Resolution [dots per inch]; the figure is the scene figure's size (10 in wide).
+    t_end : float, optional
+        Last frame time [s]; default the end of the run-out (the latest vehicle's ``t_end``).
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Raises
+    ------
+    ScenarioError
+        For a format that cannot be written here (checked first, before any drawing), a scene
+        without a run-out, or a bad ``dt``, ``speed``, ``dpi``, ``t_end`` or ``system``.
+
+    Notes
+    -----
+    Each frame shows every body at ``BodyRunout.sol(t)``, ``t`` clamped to the end of its
+    vehicle's run (a body at rest stays). GIF frame delays are whole milliseconds rounded to
+    centiseconds by the format, and most viewers slow delays under 20 ms down, so keep
+    ``speed / dt <= 50`` for a GIF (a warning on the "crashsim" logger says so otherwise).
+    Identical consecutive GIF frames (the hold) are stored once with their delays summed.
+    """
+    from .errors import ScenarioError
+
+    p = check_animation_path(path)
+    if not (isinstance(speed, (int, float, np.floating)) and math.isfinite(speed) and speed > 0):
+        raise ScenarioError(f"playback speed {speed!r} is not a positive number; allowed speed > 0 "
+                            "(1 = real time)", field="speed")
+    if isinstance(dpi, bool) or not isinstance(dpi, (int, np.integer)) or not 10 <= dpi <= 1000:
+        raise ScenarioError(f"resolution {dpi!r} dpi is outside the allowed range: an integer 10 to 1000",
+                            field="dpi")
+    from matplotlib import animation
+
+    anim = scene_animation(scene, dt=dt, system=system, t_end=t_end)
+    fps = float(speed) / float(dt)
+    if p.suffix.lower() == ".gif":
+        if 1000.0 / fps < _GIF_MIN_DELAY_MS:
+            _log.warning("GIF at %.4g frames/s: delays under %d ms are played slower by most viewers; use a larger "
+                         "dt or a smaller speed (speed / dt <= 50)", fps, _GIF_MIN_DELAY_MS)
+        writer = animation.PillowWriter(fps=fps)
+    else:
+        writer = animation.FFMpegWriter(fps=fps)
+    hold = max(math.ceil(HOLD * fps - 1e-9) - 1, 0)
+    try:
+        p.parent.mkdir(parents=True, exist_ok=True)
+        with writer.saving(anim.fig, p, dpi=dpi):
+            for k in range(len(anim)):
+                anim.frame(k)
+                writer.grab_frame()
+            for _ in range(hold):
+                writer.grab_frame()
+    finally:
+        import matplotlib.pyplot as plt
+
+        plt.close(anim.fig)
+    return p

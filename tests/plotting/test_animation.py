@@ -1,0 +1,346 @@
+"""Tests of the scene animation (crashsim.animation and ``crashsim animate``), under Agg.
+
+The intersection scene is the fastest shipped run-out scene (about 0.1 s to run once the
+kernels are compiled); a large dt (0.5 s: 7 frames) keeps the rendering short.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+matplotlib = pytest.importorskip("matplotlib")
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib import animation as mpl_animation  # noqa: E402
+
+from crashsim.animation import (HOLD, MAX_FRAMES, animate_scene, animation_formats, frame_times,  # noqa: E402
+                                scene_animation)
+from crashsim.cli import main  # noqa: E402
+from crashsim.errors import ScenarioError  # noqa: E402
+from crashsim.geometry import rotate  # noqa: E402
+from crashsim.plotting import plot_scene  # noqa: E402
+from crashsim.reconstruct import run_scene  # noqa: E402
+from crashsim.scenario import load_scenario  # noqa: E402
+from crashsim.units import Kind, to_unit  # noqa: E402
+
+Image = pytest.importorskip("PIL.Image")
+
+ROOT = Path(__file__).resolve().parents[2]
+INTERSECTION = ROOT / "scenarios" / "scenes" / "intersection_car_trailer_wheels.toml"
+WAITING = ROOT / "scenarios" / "scenes" / "third_vehicle_waiting_car.toml"  # legend at the right
+TABLE6 = ROOT / "scenarios" / "paper" / "table6.toml"  # impact only
+DT = 0.5
+
+
+@functools.lru_cache(maxsize=None)
+def _scene(path: Path):
+    return run_scene(load_scenario(path))
+
+
+@pytest.fixture(autouse=True)
+def _close_figures():
+    yield
+    plt.close("all")
+
+
+def _run_end(scene) -> float:
+    return max(r.t_end for r in scene.runout.values())
+
+
+def _bodies(scene):
+    """(vehicle run-out, body name, Body, BodyRunout) of every body of the run-out."""
+    body_of = {b.name: b for v in scene.scenario.vehicles for b in v.bodies}
+    return [(r, name, body_of[name], br) for r in scene.runout.values() for name, br in r.bodies.items()]
+
+
+def _corners(body, position, heading, k=1.0) -> np.ndarray:
+    """Outline corners in the world, scaled by k (display units per metre)."""
+    return k * (np.asarray(position, dtype=float) + rotate(body.outline(), heading))
+
+
+def _vertices(patch) -> np.ndarray:
+    xy = np.asarray(patch.get_xy(), dtype=float)
+    return xy[:-1] if len(xy) > 4 and np.allclose(xy[0], xy[-1]) else xy
+
+
+# -- frame times ----------------------------------------------------------------------------
+
+def test_frame_times_are_multiples_of_dt_and_end_exactly_at_the_end():
+    t = frame_times(2.9483, 0.5)
+    np.testing.assert_allclose(t[:-1], 0.5 * np.arange(6))
+    assert t[-1] == 2.9483 and len(t) == math.ceil(2.9483 / 0.5) + 1
+    t = frame_times(3.0, 0.5)  # the end is a multiple: not repeated
+    assert len(t) == 7 and t[-1] == 3.0 and np.all(np.diff(t) > 0)
+    t = frame_times(0.3 * 3, 0.3)  # 0.9 / 0.3 is 2.9999999999999996 in floating point
+    assert len(t) == 4 and t[-1] == 0.3 * 3
+    np.testing.assert_array_equal(frame_times(0.0, 0.05), [0.0])
+
+
+@pytest.mark.parametrize("dt", [0.0, -0.1, float("nan"), float("inf")])
+def test_frame_times_refuse_a_non_positive_dt(dt):
+    with pytest.raises(ScenarioError, match=r"^dt: .*not a positive time.*allowed dt > 0"):
+        frame_times(3.0, dt)
+
+
+def test_frame_times_refuse_too_many_frames_and_state_the_smallest_dt():
+    assert len(frame_times(3.0, 3.0 / (MAX_FRAMES - 1))) == MAX_FRAMES
+    with pytest.raises(ScenarioError, match=rf"--dt: .*gives {3001} frames.*>= 0.0015 s \(at most {MAX_FRAMES}"):
+        frame_times(3.0, 0.001, field="--dt")
+
+
+# -- frames ---------------------------------------------------------------------------------
+
+def test_number_of_frames_and_clock():
+    scene = _scene(INTERSECTION)
+    anim = scene_animation(scene, dt=DT)
+    t_end = _run_end(scene)
+    assert len(anim) == math.ceil(t_end / DT) + 1 == 7
+    assert anim.times[0] == 0.0 and anim.times[-1] == t_end
+    anim.frame(1)
+    assert anim.clock.get_text() == "t = 0.5 s"
+    anim.frame(len(anim) - 1)
+    assert anim.clock.get_text() == f"t = {t_end:.1f} s, at rest"
+    assert scene_animation(scene, dt=0.05).clock_text(25) == "t = 1.25 s"
+
+
+def test_outline_of_frame_k_is_the_body_at_sol_of_t_k_clamped_to_its_run():
+    scene = _scene(INTERSECTION)
+    anim = scene_animation(scene, dt=DT)
+    ends = {r.t_end for r in scene.runout.values()}
+    assert len(ends) == 2, "the car stops before the truck: its clamp is exercised"
+    bodies = _bodies(scene)
+    for k, t in enumerate(anim.times):
+        anim.frame(k)
+        for r, name, body, br in bodies:
+            x, y, heading = np.asarray(br.sol(min(t, r.t_end)), dtype=float)[:3]
+            np.testing.assert_allclose(_vertices(anim.outlines[name]), _corners(body, (x, y), heading), atol=1e-9)
+        # hitch pins at the front body's pin
+        for v in scene.scenario.vehicles:
+            if v.hitches:
+                front = scene.runout_body(v.bodies[0].name)
+                tc = min(t, scene.runout[v.name].t_end)
+                x, y, heading = np.asarray(front.sol(tc), dtype=float)[:3]
+                pin = np.asarray((x, y)) + rotate(np.asarray(v.hitches[0].front_point), heading)
+                np.testing.assert_allclose(np.column_stack(anim.pins[v.name].get_data())[0], pin, atol=1e-9)
+    # the car has stopped at frame 3 (t = 1.5 s > its end): it stays at rest
+    car = scene.runout_body("car")
+    assert anim.times[3] > scene.runout["B"].t_end
+    anim.frame(3)
+    body = next(b for _, n, b, _ in bodies if n == "car")
+    np.testing.assert_allclose(_vertices(anim.outlines["car"]), _corners(body, car.rest_position, car.rest_heading),
+                               atol=1e-9)
+
+
+def test_poses_clamp_time_to_each_run():
+    """A dense output that extrapolates (x = t) is read only inside [0, t_end] of its run."""
+    from types import SimpleNamespace
+
+    from crashsim.animation import SceneAnimation
+
+    def body(t_end):
+        return SimpleNamespace(sol=lambda t: np.array([t, 2.0 * t, 0.1 * t, 1.0, 2.0, 0.1]))
+
+    runout = {"A": SimpleNamespace(t_end=1.0, bodies={"a": body(1.0)}),
+              "B": SimpleNamespace(t_end=3.0, bodies={"b1": body(3.0), "b2": body(3.0)})}
+    anim = SceneAnimation(SimpleNamespace(runout=runout), None, None, np.array([0.0, 2.5]), None, {}, {}, None, 1, "")
+    poses = anim.poses(2.5)
+    assert poses["a"] == ((1.0, 2.0), pytest.approx(0.1))
+    assert poses["b1"] == poses["b2"] == ((2.5, 5.0), pytest.approx(0.25))
+    assert anim.poses(-1.0)["b1"] == ((0.0, 0.0), 0.0)
+    assert anim.poses(9.0)["b2"] == ((3.0, 6.0), pytest.approx(0.3))
+
+def test_last_frame_is_the_rest_pose_and_limits_hold_every_frame():
+    scene = _scene(INTERSECTION)
+    anim = scene_animation(scene, dt=DT)
+    limits = anim.ax.get_xlim(), anim.ax.get_ylim()
+    anim.frame(len(anim) - 1)
+    for r, name, body, br in _bodies(scene):
+        np.testing.assert_allclose(_vertices(anim.outlines[name]),
+                                   _corners(body, br.rest_position, br.rest_heading), atol=1e-9)
+    (x0, x1), (y0, y1) = limits
+    for k in range(len(anim)):
+        for patch in anim.frame(k)[:len(anim.outlines)]:
+            xy = _vertices(patch)
+            assert np.all((xy[:, 0] >= x0) & (xy[:, 0] <= x1) & (xy[:, 1] >= y0) & (xy[:, 1] <= y1))
+        assert (anim.ax.get_xlim(), anim.ax.get_ylim()) == limits
+
+
+@pytest.mark.parametrize("path, legend_below", [(INTERSECTION, True), (WAITING, False)], ids=["wide", "tall"])
+def test_limits_widen_to_poses_outside_the_scene_figure(monkeypatch, path, legend_below):
+    """No shipped scene has a pose outside the static figure's limits: shrink them to provoke it.
+    The legend stays where plot_scene put it (under a wide scene, at the right of a tall one)."""
+    import crashsim.plotting
+
+    original = crashsim.plotting.plot_scene
+
+    def shrunk(scene, **kwargs):
+        ax = original(scene, **kwargs)
+        x0, x1 = ax.get_xlim()
+        y0, y1 = ax.get_ylim()
+        ax.set_xlim(x0 + 0.3 * (x1 - x0), x0 + 0.6 * (x1 - x0))
+        ax.set_ylim(y0 + 0.4 * (y1 - y0), y0 + 0.6 * (y1 - y0))
+        return ax
+
+    monkeypatch.setattr(crashsim.plotting, "plot_scene", shrunk)
+    anim = scene_animation(_scene(path), dt=DT)
+    (x0, x1), (y0, y1) = anim.ax.get_xlim(), anim.ax.get_ylim()
+    for k in range(len(anim)):
+        for patch in anim.frame(k)[:len(anim.outlines)]:
+            xy = _vertices(patch)
+            assert np.all((xy[:, 0] > x0) & (xy[:, 0] < x1) & (xy[:, 1] > y0) & (xy[:, 1] < y1))
+    # laid out again: the axes box has the aspect of the new limits (equal scale, nothing cut)
+    fig = anim.fig
+    box = anim.ax.get_position()
+    w_in, h_in = box.width * fig.get_figwidth(), box.height * fig.get_figheight()
+    assert w_in / h_in == pytest.approx((x1 - x0) / (y1 - y0), rel=1e-6)
+    r = fig.canvas.get_renderer()
+    leg = anim.ax.get_legend().get_window_extent(r)
+    axes = anim.ax.get_window_extent(r)
+    assert (leg.y1 <= axes.y0) == legend_below
+    assert 0 <= leg.x0 and leg.x1 <= fig.bbox.width + 1 and 0 <= leg.y0
+
+def test_us_units_scale_the_outlines():
+    scene = _scene(INTERSECTION)
+    anim = scene_animation(scene, dt=DT, system="US")
+    k, label = to_unit(1.0, Kind.LENGTH, "US")
+    assert label == "ft" and anim.ax.get_xlabel() == "X [ft]"
+    anim.frame(2)
+    r, name, body, br = _bodies(scene)[0]
+    x, y, heading = np.asarray(br.sol(min(anim.times[2], r.t_end)), dtype=float)[:3]
+    np.testing.assert_allclose(_vertices(anim.outlines[name]), _corners(body, (x, y), heading, k), atol=1e-9)
+
+
+def test_static_layer_is_the_scene_figure_without_ghosts():
+    scene = _scene(INTERSECTION)
+    anim = scene_animation(scene, dt=DT)
+    gids = [p.get_gid() or "" for p in anim.ax.patches]
+    assert not any(g.startswith("outline:ghost:") for g in gids)
+    for _, name, _, _ in _bodies(scene):
+        assert f"outline:impact:{name}" in gids and f"outline:rest:{name}" in gids
+    # plot_scene(times=()) does not announce ghosts it does not draw
+    texts = [t.get_text() for t in plot_scene(scene, times=()).get_legend().get_texts()]
+    assert not any(t.startswith("intermediate") for t in texts)
+    texts = [t.get_text() for t in plot_scene(scene, times=[1.0]).get_legend().get_texts()]
+    assert "intermediate, at the given times" in texts
+
+
+def test_a_scene_without_runout_is_refused():
+    scene = _scene(TABLE6)
+    assert scene.runout is None
+    with pytest.raises(ScenarioError, match=r"^runout: .*no run-out \(impact only\).*nothing to animate"):
+        scene_animation(scene)
+
+
+# -- files ----------------------------------------------------------------------------------
+
+def test_gif_has_one_frame_per_time_and_plays_in_real_time(tmp_path):
+    scene = _scene(INTERSECTION)
+    out = animate_scene(scene, tmp_path / "sub" / "scene.gif", dt=DT, speed=2.0, dpi=40)
+    assert out == tmp_path / "sub" / "scene.gif"
+    n = len(frame_times(_run_end(scene), DT))
+    fps = 2.0 / DT
+    with Image.open(out) as im:
+        assert im.n_frames == n
+        durations = []
+        for k in range(im.n_frames):
+            im.seek(k)
+            durations.append(im.info["duration"])
+    assert durations[:-1] == [int(1000 / fps)] * (n - 1)
+    # the last frame is held about HOLD seconds (identical frames merged by the GIF encoder)
+    assert durations[-1] == int(1000 / fps) * math.ceil(HOLD * fps)
+
+
+def test_gif_is_written_at_the_requested_dpi(tmp_path):
+    scene = _scene(INTERSECTION)
+    anim = scene_animation(scene, dt=2.0)
+    w, h = anim.fig.get_size_inches()
+    out = animate_scene(scene, tmp_path / "a.gif", dt=2.0, dpi=30)
+    with Image.open(out) as im:
+        assert im.size == (round(w * 30), round(h * 30))
+        assert im.n_frames == len(anim)
+
+
+@pytest.mark.skipif(not mpl_animation.writers.is_available("ffmpeg"), reason="ffmpeg not installed")
+def test_mp4_where_ffmpeg_is_available(tmp_path):  # pragma: no cover - depends on the machine
+    out = animate_scene(_scene(INTERSECTION), tmp_path / "a.mp4", dt=DT, dpi=40)
+    assert out.stat().st_size > 0
+
+
+def test_formats_follow_ffmpeg(monkeypatch):
+    assert animation_formats()[0] == ".gif"
+    monkeypatch.setattr(mpl_animation.writers, "is_available", lambda name: name == "ffmpeg")
+    assert animation_formats() == (".gif", ".mp4")
+    monkeypatch.setattr(mpl_animation.writers, "is_available", lambda name: False)
+    assert animation_formats() == (".gif",)
+
+
+@pytest.mark.parametrize("kwargs, field", [({"speed": 0.0}, "speed"), ({"speed": float("nan")}, "speed"),
+                                           ({"dpi": 0}, "dpi"), ({"dpi": 72.5}, "dpi"), ({"dt": -1.0}, "dt"),
+                                           ({"t_end": -1.0}, "t_end"), ({"system": "metric"}, "system")])
+def test_bad_arguments_are_named(tmp_path, kwargs, field):
+    with pytest.raises(ScenarioError, match=rf"^{field}: "):
+        animate_scene(_scene(INTERSECTION), tmp_path / "a.gif", **kwargs)
+    assert not (tmp_path / "a.gif").exists()
+
+
+# -- command line ---------------------------------------------------------------------------
+
+def test_cli_writes_the_gif(tmp_path, capsys):
+    out = tmp_path / "scene.gif"
+    code = main(["animate", str(INTERSECTION), "-o", str(out), "--dt", "0.5 s", "--dpi", "30", "--units", "US"])
+    assert code == 0
+    assert capsys.readouterr().out == f"wrote {out}\n"
+    with Image.open(out) as im:
+        assert im.n_frames == len(frame_times(_run_end(_scene(INTERSECTION)), 0.5))
+
+
+@pytest.fixture
+def no_run(monkeypatch):
+    """Fail if the scene is run: format errors must come before anything long."""
+    import crashsim.reconstruct
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("the scene was run before the output format was checked")
+
+    monkeypatch.setattr(crashsim.reconstruct, "run_scene", refuse)
+
+
+def test_cli_bad_suffix_exits_2_before_running(tmp_path, capsys, no_run):
+    code = main(["animate", str(INTERSECTION), "-o", str(tmp_path / "scene.png")])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert err.startswith("crashsim: input error: -o: ") and "scene.png" in err and "'.png'" in err
+    assert "formats that can be written here: .gif" in err
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_cli_mp4_without_ffmpeg_exits_2(tmp_path, capsys, monkeypatch, no_run):
+    monkeypatch.setattr(mpl_animation.writers, "is_available", lambda name: False)
+    code = main(["animate", str(INTERSECTION), "-o", str(tmp_path / "scene.mp4")])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert "-o: " in err and "scene.mp4" in err and "ffmpeg" in err
+    assert err.rstrip().endswith("formats that can be written here: .gif")
+
+
+@pytest.mark.parametrize("dt, message", [("0 s", "not a positive time"), ("0.5", "has no unit"),
+                                         ("2 m", "expected a time"), ("1 ms", "gives 2950 frames")])
+def test_cli_bad_dt_exits_2_naming_it(tmp_path, capsys, dt, message):
+    out = tmp_path / "scene.gif"
+    code = main(["animate", str(INTERSECTION), "-o", str(out), "--dt", dt])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert "--dt: " in err and message in err
+    assert not out.exists()
+
+
+def test_cli_scene_without_runout_exits_2(tmp_path, capsys):
+    code = main(["animate", str(TABLE6), "-o", str(tmp_path / "a.gif")])
+    assert code == 2
+    assert "runout: " in capsys.readouterr().err
+

@@ -223,7 +223,7 @@ def build_parser() -> argparse.ArgumentParser:
     an.add_argument("--dt", metavar="TIME", default="0.05 s", help='scene time between frames (default "0.05 s")')
     an.add_argument("--speed", type=float, default=1.0,
                     help="playback speed, 1 = real time (frames per second = speed / dt)")
-    an.add_argument("--units", choices=("SI", "US"), default=None, help="units of the figure (default: the scenario's)")
+    an.add_argument("--units", type=_units, default=None, help="SI or US: units of the figure (default: the scenario's)")
     an.add_argument("--dpi", type=int, default=100)
     an.set_defaults(func=_cmd_animate)
 

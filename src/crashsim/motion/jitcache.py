@@ -143,6 +143,7 @@ def compile_kernels(progress: Callable[[int, str], None] | None = None) -> Path:
     run_scene(replace(scenario, runout=replace(spec, options=replace(spec.options, engine="compiled"))))
     marker = _marker()
     try:
+        marker.parent.mkdir(parents=True, exist_ok=True)
         for old in marker.parent.glob("ready-*"):
             old.unlink()
         marker.touch()

@@ -103,3 +103,21 @@ def test_fit_paragraph_numbers_come_from_the_fit_report():
     for n in ("30.71", "30.4", "0.05535", "0.999", "29.91", "0.27"):
         assert n in para and n in text, n
     assert "2 of 8 agreed" in text
+
+
+def test_python_example_runs_as_a_doctest(monkeypatch, tmp_path):
+    """The README's Python example, run as it is written (from the repository root)."""
+    import doctest
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    blocks = [body for lang, body in BLOCKS if lang == "python" and ">>>" in body]
+    assert blocks
+    monkeypatch.chdir(ROOT)
+    for body in blocks:
+        test = doctest.DocTestParser().get_doctest(body, {}, "README", "README.md", 0)
+        runner = doctest.DocTestRunner(optionflags=doctest.NORMALIZE_WHITESPACE | doctest.ELLIPSIS)
+        runner.run(test)
+        result = runner.summarize(verbose=False)
+        assert result.attempted >= 5 and result.failed == 0

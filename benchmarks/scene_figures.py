@@ -1,7 +1,9 @@
 """Regenerate the committed figures of every shipped scene (plots/scene_<name>.png and
 plots/scene_<name>_histories.png) with the project's own command, ``crashsim plot``.
 
-Run from the repository root: ``python benchmarks/scene_figures.py``.
+Run from the repository root: ``python benchmarks/scene_figures.py`` (every scene of
+scenarios/scenes/, among them verge_run_off: friction zone and road layout), or name some
+scenes: ``python benchmarks/scene_figures.py verge_run_off``.
 """
 
 from __future__ import annotations
@@ -14,8 +16,18 @@ from crashsim.cli import main as crashsim
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def main() -> int:
-    for scene in sorted((ROOT / "scenarios" / "scenes").glob("*.toml")):
+def main(names: list[str] | None = None) -> int:
+    """Draw the scenes named (file stems in scenarios/scenes/; all of them if none); 0 on success,
+    2 for an unknown name, else the first failing ``crashsim plot`` exit code."""
+    scenes = sorted((ROOT / "scenarios" / "scenes").glob("*.toml"))
+    if names:
+        unknown = sorted(set(names) - {s.stem for s in scenes})
+        if unknown:
+            print(f"unknown scene(s) {', '.join(unknown)}; shipped: {', '.join(s.stem for s in scenes)}",
+                  file=sys.stderr)
+            return 2
+        scenes = [s for s in scenes if s.stem in names]
+    for scene in scenes:
         out = ROOT / "plots" / f"scene_{scene.stem}.png"
         hist = ROOT / "plots" / f"scene_{scene.stem}_histories.png"
         code = crashsim(["plot", str(scene), "-o", str(out), "--histories", str(hist)])
@@ -25,4 +37,4 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(main(sys.argv[1:]))

@@ -12,8 +12,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["BarrierAxes", "plot_barrier_sweep", "plot_barrier_figures", "plot_scene", "plot_histories", "history_panels",
-           "save_scene_figures", "SCENE_FIGURE_SUFFIXES"]
+__all__ = ["is_color", "BarrierAxes", "plot_barrier_sweep", "plot_barrier_figures", "plot_scene", "plot_histories",
+           "history_panels", "save_scene_figures", "SCENE_FIGURE_SUFFIXES"]
 
 
 def _plt():
@@ -185,8 +185,31 @@ _PASS = "#1a7f37"
 _FAIL = "#c62828"
 _NICE = (1.0, 2.0, 2.5, 5.0)
 
-# z-order of the layers, bottom to top
+# z-order of the layers, bottom to top (friction zones under the grid, which sits at 0.5)
+_Z_ZONE, _Z_MAP = 0.3, 1.0
 _Z_BARRIER, _Z_TRACK, _Z_GHOST, _Z_IMPACT, _Z_REST, _Z_EVIDENCE, _Z_ARROW, _Z_TEXT = 2, 3, 4, 5, 6, 7, 8, 9
+
+#: Friction zones, in scenario order: (pale fill, hatch and edge). Green, tan, grey-blue, sand.
+_ZONE_COLORS = (("#e2efcf", "#7da453"), ("#f0e2c4", "#a27c3f"), ("#dde5ee", "#637a92"), ("#f3efc9", "#a39a3c"))
+
+#: Drawing of each map-line style (crashsim.scenario.MAP_LINE_STYLES): legend text, colour, width,
+#: dashes (None: solid) and whether it is a double line (two strokes with a white gap).
+_MAP_STYLES = {
+    "edge": ("road edge", "0.25", 1.6, None, False),
+    "lane": ("lane line", "0.35", 1.1, (6.0, 5.0), False),
+    "centre": ("centre line", "0.2", 1.0, None, True),
+    "kerb": ("kerb / verge edge", "0.35", 4.5, None, False),
+    "stop": ("stop line", "0.1", 5.0, None, False),
+    "other": ("other line", "0.6", 0.8, None, False),
+}
+
+
+def is_color(value) -> bool:
+    """Whether ``value`` is a colour matplotlib understands (a name such as ``"white"`` or
+    ``"tab:orange"``, a hex code, a grey level string ``"0.5"``); used to check scenario files."""
+    from matplotlib.colors import is_color_like
+
+    return bool(is_color_like(value))
 
 
 def _system(scene, system):
@@ -470,8 +493,10 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     -------
     matplotlib Axes
         Equal aspect. Patches carry gids: ``"outline:impact:<body>"``, ``"outline:rest:<body>"``,
-        ``"outline:ghost:<body>:<t>"``, ``"evidence:rest:<body>"``; the scale bar is the artist
-        with gid ``"scalebar"``.
+        ``"outline:ghost:<body>:<t>"``, ``"evidence:rest:<body>"``, ``"zone:<i>"`` (friction zone
+        i of ``runout.road.zones``); lines ``"map:<i>"`` (``scenario.map_lines[i]``); texts
+        ``"zone-label:<i>"`` and ``"map-label:<i>"``; the scale bar is the artist with gid
+        ``"scalebar"``.
 
     Notes
     -----
@@ -483,6 +508,13 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     point and points along the crush impulse on that body (SAE J224: its tail lies on the
     side the force comes from). A barrier is drawn as a thick line through the contact point
     along the crush-surface tangent (over ``scenario.barrier_extent`` when given).
+
+    The road layout lies under everything else: each friction zone as a pale hatched polygon
+    labelled inside with its name and friction ("grass verge, f = 0.35"), and each line of
+    ``[[map.lines]]`` in its style (solid edge, dashed lane line, double centre line, thick kerb
+    and stop bar, thin grey other). They count toward the axis limits only inside the region of
+    interest (everything else drawn, plus a margin of 3 m or 15 % of its span, whichever is
+    larger): a zone or line reaching far away is cut by the axes instead of shrinking the scene.
     """
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
@@ -636,6 +668,11 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     _draw_obstacles(S)
     _draw_impacts(S)
 
+    # -- road layout: friction zones and map lines, counted in the extent only near the scene --
+    roi = _region_of_interest(S)
+    _draw_zones(S, roi)
+    _draw_map_lines(S, roi)
+
     # -- barrier (after everything else: an endless barrier spans the drawn extent) -----------
     _draw_barrier(S)
 
@@ -651,6 +688,7 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
     ax.set_aspect("equal", adjustable="box")
+    _label_road_layout(S, roi, lo, hi)
     ax.set_xlabel(f"X [{S.lunit}]")
     ax.set_ylabel(f"Y [{S.lunit}]")
     ax.grid(True, color="0.9", lw=0.6, zorder=0)
@@ -871,6 +909,302 @@ def _draw_barrier(S: _Scene) -> None:
     S.ax.plot(ends[:, 0], ends[:, 1], "-", color="0.15", lw=4.0, solid_capstyle="butt", zorder=_Z_BARRIER + 0.5)
     S.add(np.vstack([ends, back]))
     S.legend_entry(f"barrier face ({name})", Line2D([], [], color="0.15", lw=4.0))
+
+
+# --------------------------------------------------------------------------------------------
+# Road layout: friction zones and map lines
+# --------------------------------------------------------------------------------------------
+
+#: Margin of the region of interest around the scene: at least this many metres, and at least
+#: this fraction of the scene's larger span.
+_ROI_MARGIN, _ROI_FRACTION = 3.0, 0.15
+
+
+class _Roi(NamedTuple):
+    """Region of interest of a scene figure (display units): what road-layout geometry may add
+    to the axis limits, and what its labels must keep clear of."""
+
+    lo: np.ndarray       # lower-left corner of the box
+    hi: np.ndarray       # upper-right corner
+    drawn: np.ndarray    # every point drawn before the road layout, shape (n, 2)
+    shapes: list         # outlines and obstacles (polygons) a label must not sit in
+
+
+def _region_of_interest(S: _Scene) -> _Roi:
+    """The box around everything drawn so far (vehicles, tracks, evidence, obstacles, arrows,
+    impacts) plus a margin (:data:`_ROI_MARGIN`, :data:`_ROI_FRACTION`)."""
+    pts = np.vstack(S.points)
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    margin = max(_ROI_MARGIN * S.k, _ROI_FRACTION * float((hi - lo).max()))
+    kinds = ("outline", "evidence", "obstacle", "barrier")
+    shapes = []
+    for p in S.ax.patches:
+        if (p.get_gid() or "").split(":")[0] in kinds and hasattr(p, "get_xy"):
+            xy = np.asarray(p.get_xy(), dtype=float)
+            keep = np.any(xy != np.roll(xy, -1, axis=0), axis=1)  # no zero-length edges (closing vertex)
+            if keep.sum() >= 3:
+                shapes.append(xy[keep])
+    return _Roi(lo - margin, hi + margin, pts, shapes)
+
+
+def _clip_polygon(polygon, lo, hi) -> np.ndarray:
+    """The part of a polygon inside the box [lo, hi] (Sutherland-Hodgman), shape (m, 2); m is 0
+    when they do not overlap."""
+    out = np.asarray(polygon, dtype=float)
+    for axis in (0, 1):
+        for bound, inside in ((lo[axis], np.greater_equal), (hi[axis], np.less_equal)):
+            if len(out) == 0:
+                return out.reshape(0, 2)
+            kept = []
+            prev = out[-1]
+            for cur in out:
+                if inside(cur[axis], bound) != inside(prev[axis], bound):
+                    kept.append(prev + (bound - prev[axis]) / (cur[axis] - prev[axis]) * (cur - prev))
+                if inside(cur[axis], bound):
+                    kept.append(cur)
+                prev = cur
+            out = np.asarray(kept, dtype=float).reshape(-1, 2)
+    return out
+
+
+def _clip_polyline(points, lo, hi) -> list[np.ndarray]:
+    """The pieces of a polyline inside the box [lo, hi] (Liang-Barsky on each segment), each of
+    shape (m >= 2, 2)."""
+    pts = np.asarray(points, dtype=float)
+    pieces, cur = [], []
+    for a, b in zip(pts[:-1], pts[1:]):
+        d = b - a
+        t0, t1 = 0.0, 1.0
+        for p, q in ((-d[0], a[0] - lo[0]), (d[0], hi[0] - a[0]), (-d[1], a[1] - lo[1]), (d[1], hi[1] - a[1])):
+            if p == 0.0:
+                if q < 0.0:
+                    t0, t1 = 1.0, 0.0  # parallel to this side and outside it
+            elif p < 0.0:
+                t0 = max(t0, q / p)
+            else:
+                t1 = min(t1, q / p)
+        if t0 > t1:
+            if cur:
+                pieces.append(np.asarray(cur))
+                cur = []
+            continue
+        pa, pb = a + t0 * d, a + t1 * d
+        if not (cur and np.allclose(cur[-1], pa)):
+            if cur:
+                pieces.append(np.asarray(cur))
+            cur = [pa]
+        cur.append(pb)
+    if cur:
+        pieces.append(np.asarray(cur))
+    return pieces
+
+
+def _zones(S: _Scene) -> tuple:
+    spec = S.sc.runout
+    return spec.road.zones if spec is not None else ()
+
+
+def _zone_label(zone) -> str:
+    return f"{zone.name}, f = {zone.mu:g}"
+
+
+def _draw_zones(S: _Scene, roi: _Roi) -> None:
+    """Every friction zone of the road as a pale hatched polygon under everything else, with a
+    legend entry; only its part inside the region of interest counts toward the axis limits."""
+    from matplotlib.patches import Patch, Polygon
+
+    zones = _zones(S)
+    for i, z in enumerate(zones):
+        fill, edge = _ZONE_COLORS[i % len(_ZONE_COLORS)]
+        xy = S.d(z.vertices)
+        S.ax.add_patch(Polygon(xy, closed=True, facecolor=fill, edgecolor=edge, lw=0.8, hatch=".",
+                               zorder=_Z_ZONE, gid=f"zone:{i}"))
+        inside = _clip_polygon(xy, roi.lo, roi.hi)
+        if len(inside):
+            S.add(inside)
+        S.legend_entry(f"friction zone: {_zone_label(z)}", Patch(facecolor=fill, edgecolor=edge, hatch=".", lw=0.8))
+    if zones:
+        S.legend_entry(f"road surface outside the zones: f = {S.sc.runout.road.mu:g}",
+                       Patch(facecolor="white", edgecolor="0.6", lw=0.8))
+
+
+def _map_line_artist_kw(line) -> tuple[str, dict]:
+    """(legend text, Line2D keywords) of a map line in its style (and its own colour, if given)."""
+    from matplotlib import patheffects
+
+    text, color, lw, dashes, double = _MAP_STYLES[line.style]
+    color = line.color or color
+    if double:  # two strokes with a white gap: a wide stroke under a narrow white line
+        kw = dict(color="white", lw=lw, solid_capstyle="butt",
+                  path_effects=[patheffects.Stroke(linewidth=3.6 * lw, foreground=color), patheffects.Normal()])
+    else:
+        kw = dict(color=color, lw=lw, solid_capstyle="butt")
+        if dashes is not None:
+            kw.update(ls="--", dashes=dashes)
+    if line.color is not None:
+        text = f"{text} ({line.name or line.color})"
+    return text, kw
+
+
+def _draw_map_lines(S: _Scene, roi: _Roi) -> None:
+    """The road layout of ``[[map.lines]]`` under the vehicles, each in its style; only the parts
+    inside the region of interest count toward the axis limits."""
+    from matplotlib.lines import Line2D
+
+    for i, line in enumerate(getattr(S.sc, "map_lines", ())):
+        text, kw = _map_line_artist_kw(line)
+        xy = S.d(line.points)
+        S.ax.plot(xy[:, 0], xy[:, 1], zorder=_Z_MAP, gid=f"map:{i}", **kw)
+        for piece in _clip_polyline(xy, roi.lo, roi.hi):
+            S.add(piece)
+        S.legend_entry(text, Line2D([], [], **kw))
+
+
+class _LabelPlacer:
+    """Chooses where road-layout labels go: among candidate anchors, the one whose text box
+    (estimated from its length and font size at the current scale) covers the fewest drawn
+    points, vehicle outlines, obstacles, placed labels and axes corners (axes indicator, scale
+    bar), and then keeps clearest of what is drawn."""
+
+    def __init__(self, S: _Scene, roi: _Roi, lo, hi):
+        from scipy.spatial import cKDTree
+
+        self.S, self.roi = S, roi
+        self.lo, self.hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+        fig, ax = S.ax.figure, S.ax
+        fig.draw_without_rendering()
+        inv = ax.transData.inverted()
+        r = fig.canvas.get_renderer()
+        self.boxes = []  # (lower-left, upper-right) of the labels placed so far, data units
+        for t in S.texts:
+            c = inv.transform(t.get_window_extent(r).get_points())
+            self.boxes.append((c.min(axis=0), c.max(axis=0)))
+        self.per_point = float(abs(inv.transform([[fig.dpi / 72.0, 0.0]])[0, 0] - inv.transform([[0.0, 0.0]])[0, 0]))
+        self.tree = cKDTree(roi.drawn)
+
+    def _blocked(self, q: np.ndarray, pad: float) -> np.ndarray:
+        """Which points q (m, 2) are covered by something drawn or kept free."""
+        from .motion.road import points_in_polygon
+
+        bad = np.isfinite(self.tree.query(q, distance_upper_bound=pad)[0])
+        for shape in self.roi.shapes:
+            bad |= points_in_polygon(q, shape)
+        for a, b in self.boxes:
+            bad |= np.all((q >= a) & (q <= b), axis=1)
+        frac = (q - self.lo) / (self.hi - self.lo)
+        bad |= np.any((frac < 0.0) | (frac > 1.0), axis=1)
+        bad |= (frac[:, 0] < 0.25) & ((frac[:, 1] > 0.72) | (frac[:, 1] < 0.12))
+        return bad
+
+    def best(self, candidates, text: str, fontsize: float, *, angles=None, offset: float = 0.0,
+             allowed=None, room=None) -> int | None:
+        """Index of the best anchor among ``candidates`` (n, 2) for ``text``, or None if none.
+
+        Parameters
+        ----------
+        angles : array_like, optional
+            Text direction at each candidate [deg] (default horizontal).
+        offset : float
+            Distance of the text from its anchor across its direction [points] (text above the
+            anchor); 0: centred on it.
+        allowed : callable, optional
+            ``allowed(points) -> bool array``: where the text may lie (e.g. inside its zone).
+        room : array_like, optional
+            Free space around each candidate in its own region; caps the clearance score.
+        """
+        cand = np.asarray(candidates, dtype=float).reshape(-1, 2)
+        if len(cand) == 0:
+            return None
+        ang = np.radians(np.zeros(len(cand)) if angles is None else np.asarray(angles, dtype=float))
+        u = np.column_stack([np.cos(ang), np.sin(ang)])
+        nrm = np.column_stack([-u[:, 1], u[:, 0]])
+        w = len(text) * 0.55 * fontsize * self.per_point
+        h = 1.25 * fontsize * self.per_point
+        centre = cand + nrm * (offset * self.per_point + 0.5 * h if offset else 0.0)
+        s, t = np.meshgrid(np.linspace(-0.5 * w, 0.5 * w, 9), np.linspace(-0.5 * h, 0.5 * h, 3))
+        q = (centre[:, None, :] + u[:, None, :] * s.ravel()[None, :, None]
+             + nrm[:, None, :] * t.ravel()[None, :, None])  # (n, 27, 2) samples of each text box
+        flat = q.reshape(-1, 2)
+        bad = self._blocked(flat, 0.5 * h)
+        if allowed is not None:
+            bad |= ~np.asarray(allowed(flat), dtype=bool)
+        conflicts = bad.reshape(len(cand), -1).sum(axis=1)
+        clear = self.tree.query(cand)[0]
+        if room is not None:
+            clear = np.minimum(clear, 2.0 * np.asarray(room, dtype=float))
+        order = np.lexsort((-clear, conflicts))  # fewest conflicts, then clearest
+        k = int(order[0])
+        box = q[k]
+        self.boxes.append((box.min(axis=0), box.max(axis=0)))
+        return k
+
+
+def _label_road_layout(S: _Scene, roi: _Roi, lo, hi) -> None:
+    """Label each friction zone inside its visible part ("grass verge, f = 0.35") and each named
+    map line along its visible part, where the text covers least of the scene (:class:`_LabelPlacer`)."""
+    from .motion.road import points_in_polygon, signed_distance
+
+    zones = _zones(S)
+    lines = [ln for ln in getattr(S.sc, "map_lines", ()) if ln.name]
+    if not zones and not lines:
+        return
+    place = _LabelPlacer(S, roi, lo, hi)
+    inset = 0.03 * (np.asarray(hi) - np.asarray(lo))
+    vlo, vhi = lo + inset, hi - inset  # anchors inside the axes
+    polys = [S.d(z.vertices) for z in zones]
+    for i, z in enumerate(zones):
+        part = _clip_polygon(polys[i], vlo, vhi)
+        if len(part) < 3:
+            continue
+        a, b = part.min(axis=0), part.max(axis=0)
+        gx, gy = np.meshgrid(np.linspace(a[0], b[0], 31), np.linspace(a[1], b[1], 31))
+        cand = np.column_stack([gx.ravel(), gy.ravel()])
+
+        def effective(q, i=i):  # inside zone i and not in a later zone (later zones win)
+            inside = points_in_polygon(q, polys[i])
+            for later in polys[i + 1:]:
+                inside &= ~points_in_polygon(q, later)
+            return inside
+
+        cand = cand[effective(cand)]
+        if len(cand) == 0:
+            continue
+        text = _zone_label(z)
+        k = place.best(cand, text, 7.5, allowed=effective, room=signed_distance(cand, polys[i]))
+        edge = _ZONE_COLORS[i % len(_ZONE_COLORS)][1]
+        t = S.text(cand[k], text, fontsize=7.5, ha="center", va="center", style="italic", color=_darker(edge),
+                   path_effects=_halo(2.2), zorder=_Z_TEXT - 0.5)
+        t.set_gid(f"zone-label:{i}")
+        S.labels.append(cand[k])
+    step = 0.015 * float((np.asarray(hi) - np.asarray(lo)).max())
+    for i, line in enumerate(getattr(S.sc, "map_lines", ())):
+        if not line.name:
+            continue
+        cand, angle = [], []
+        for piece in _clip_polyline(S.d(line.points), vlo, vhi):
+            for p, q in zip(piece[:-1], piece[1:]):
+                n = max(2, int(np.ceil(np.hypot(*(q - p)) / step)))
+                cand += list(p + np.linspace(0.0, 1.0, n)[:, None] * (q - p))
+                deg = np.degrees(np.arctan2(q[1] - p[1], q[0] - p[0]))
+                angle += [(deg + 90.0) % 180.0 - 90.0] * n  # readable: never upside down
+        k = place.best(np.asarray(cand).reshape(-1, 2), line.name, 6.5, angles=angle, offset=3.0)
+        if k is None:
+            continue
+        deg = angle[k]
+        off = 3.0 * np.array([-np.sin(np.radians(deg)), np.cos(np.radians(deg))])
+        color = _darker(line.color or _MAP_STYLES[line.style][1])
+        t = S.text(cand[k], line.name, xytext=tuple(off), textcoords="offset points", fontsize=6.5, ha="center",
+                   va="bottom", rotation=deg, rotation_mode="anchor", color=color, path_effects=_halo(2.0),
+                   zorder=_Z_TEXT - 0.5)
+        t.set_gid(f"map-label:{i}")
+        S.labels.append(cand[k])
+
+
+def _darker(color, factor: float = 0.6):
+    """``color`` darkened towards black (labels in a zone's or line's colour, readable on white)."""
+    from matplotlib.colors import to_rgb
+
+    return tuple(factor * c for c in to_rgb(color))
 
 
 def _scale_bar(S: _Scene, width: float) -> None:

@@ -32,7 +32,8 @@ from .units import Kind
 from .reconstruct.evidence import DeltaVEvidence, Evidence, ImpactPointEvidence, MarkEvidence, RestEvidence
 from .vehicles import Axle, Body, BodyState, Hitch, Vehicle, chain_states
 
-__all__ = ["SCHEMA", "Scenario", "RunoutSpec", "load_scenario", "presets", "scenario_from_dict", "schema_document"]
+__all__ = ["SCHEMA", "MAP_LINE_STYLES", "MapLine", "Scenario", "RunoutSpec", "load_scenario", "presets",
+           "scenario_from_dict", "schema_document"]
 
 # ----------------------------------------------------------------------------------------
 # The schema (validates and documents)
@@ -346,6 +347,26 @@ OBSTACLE = Section("obstacle", [
     Field("description", "str", default="", description="Free text for the report"),
 ], description="A fixed obstacle: guardrail, wall, pole, pier")
 
+#: Styles of a map line (``[[map.lines]]``); crashsim.plotting draws each in its conventional way.
+MAP_LINE_STYLES = ("edge", "lane", "centre", "kerb", "stop", "other")
+
+MAP_LINE = Section("line", [
+    Field("name", "str", default="", description="Label drawn on the scene figure (\"north kerb\"); empty: none"),
+    Field("style", choices=MAP_LINE_STYLES, example="edge",
+          description="How it is drawn: edge (solid road edge), lane (dashed lane line), centre (double centre "
+                      "line), kerb (thick kerb or verge edge), stop (thick stop bar), other (thin grey line)"),
+    Field("points", Kind.LENGTH, n=2, points=True, min_points=2, example='[["-40 m", "3.5 m"], ["60 m", "3.5 m"]]',
+          description="The line as a polyline, world frame"),
+    Field("color", "str", required=False, example="#7f7f7f",
+          description="Colour instead of the style's own: a matplotlib colour name or hex code"),
+], description="A line of the road layout (edge, lane line, kerb, ...), drawn under the vehicles; no physics")
+
+MAP = Section("map", [], subsections=[
+    ArrayOf("lines", MAP_LINE, required=False,
+            description="Lines of the road layout (road edges, lane and centre lines, kerbs, stop bars), drawn "
+                        "under the vehicles on the scene figure; they do not change the physics"),
+], required=False, description="Road layout drawn on the scene figure (does not change the physics)")
+
 META = Section("scenario", [
     Field("title", "str", example='Car into trailer wheels', description="Title of the scene"),
     Field("source", "str", default="", description="Where the inputs come from (report, paper, measurement)"),
@@ -363,6 +384,7 @@ SCHEMA = Section("scenario file", subsections=[
     RUNOUT,
     CONTACTS,
     ArrayOf("obstacles", OBSTACLE, required=False, description="Fixed obstacles of the scene (run-out)"),
+    MAP,
     EVIDENCE,
 ], description="A crashsim scenario file (TOML)")
 
@@ -379,6 +401,63 @@ def schema_document(fmt: str = "text") -> str:
 
 # ----------------------------------------------------------------------------------------
 # From validated data to typed SI objects
+
+
+@dataclass(frozen=True, eq=False)
+class MapLine:
+    """A line of the road layout (``[[map.lines]]``): drawn on the scene figure, no physics.
+
+    Attributes
+    ----------
+    name : str
+        Label ("" for none).
+    style : str
+        One of :data:`MAP_LINE_STYLES`.
+    points : ndarray, shape (n, 2)
+        The polyline in the world frame [m], n >= 2 (read-only).
+    color : str or None
+        A matplotlib colour replacing the style's own; None for the style's.
+    """
+
+    name: str
+    style: str
+    points: np.ndarray
+    color: str | None = None
+
+    def __post_init__(self) -> None:
+        pts = np.array(self.points, dtype=float)
+        if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) < 2:
+            raise ScenarioError(f"a map line needs at least 2 points (x, y), got shape {pts.shape}", field="points")
+        if self.style not in MAP_LINE_STYLES:
+            raise ScenarioError(f"unknown style {self.style!r}; allowed {', '.join(MAP_LINE_STYLES)}", field="style")
+        pts.flags.writeable = False
+        object.__setattr__(self, "points", pts)
+
+    def _key(self) -> tuple:
+        return self.name, self.style, self.color, self.points.shape, self.points.tobytes()
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, MapLine):
+            return NotImplemented
+        return self._key() == other._key()
+
+    def __hash__(self) -> int:
+        return hash(self._key())
+
+
+def _build_map_lines(m: dict, file: str | None) -> tuple[MapLine, ...]:
+    """The ``[[map.lines]]`` of a validated file (points already in m); colours checked here."""
+    lines = []
+    for i, ln in enumerate(m["lines"]):
+        color = ln["color"]
+        if color is not None:
+            from .plotting import is_color
+
+            if not is_color(color):
+                raise _err(f"{color!r} is not a colour; use a matplotlib colour name (\"white\", \"tab:orange\") "
+                           "or a hex code (\"#7f7f7f\")", f"map.lines[{i}].color", file)
+        lines.append(MapLine(ln["name"], ln["style"], np.asarray(ln["points"], dtype=float), color))
+    return tuple(lines)
 
 
 @dataclass(frozen=True)
@@ -400,6 +479,8 @@ class Scenario:
         What was measured at the scene (possibly empty).
     data : dict
         The validated file contents (SI floats), for traceability.
+    map_lines : tuple of MapLine
+        The road layout of ``[[map.lines]]`` (drawing only; empty without a ``[map]``).
     """
 
     path: str | None
@@ -412,6 +493,7 @@ class Scenario:
     runout: "RunoutSpec | None"
     evidence: Evidence
     data: dict = field(repr=False)
+    map_lines: tuple[MapLine, ...] = ()
 
     @property
     def barrier_extent(self) -> tuple[float, float] | None:
@@ -824,9 +906,10 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
         runout = _build_runout(d["runout"], vehicles, d["vehicles"], file, raw_runout)
         runout = _with_contact(runout, d, vehicles, problem, file)
     evidence = _build_evidence(d["evidence"], states, file, vehicles)
+    map_lines = _build_map_lines(d["map"], file)
     meta = d["scenario"]
     return Scenario(file, meta["title"], meta["source"], meta["units"], tuple(vehicles), states, problem, runout,
-                    evidence, d)
+                    evidence, d, map_lines)
 
 
 def _check_contact_point(problem: ImpactProblem, tolerance: float, system: str, file: str | None) -> None:

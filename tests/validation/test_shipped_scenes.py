@@ -26,7 +26,8 @@ SCENES = sorted((ROOT / "scenarios" / "scenes").glob("*.toml"))
 def test_there_are_shipped_scenes():
     names = {p.stem for p in SCENES}
     assert {"intersection_car_trailer_wheels", "barrier_15deg", "barrier_75deg", "car_trailer_side_impact",
-            "median_barrier_slide", "third_vehicle_waiting_car", "trailer_swings_into_car"} <= names
+            "median_barrier_slide", "third_vehicle_waiting_car", "trailer_swings_into_car",
+            "verge_run_off"} <= names
 
 
 @pytest.mark.parametrize("path", SCENES, ids=[p.stem for p in SCENES])

@@ -213,12 +213,10 @@ def is_color(value) -> bool:
 
 
 def _system(scene, system):
-    from .errors import ScenarioError
+    """The figure's unit system: ``system`` (SI or US, any case) or the scenario's units."""
+    from .units import resolve_system
 
-    system = scene.scenario.units if system is None else system
-    if system not in ("SI", "US"):
-        raise ScenarioError(f"unknown unit system {system!r}; allowed 'SI', 'US'", field="system")
-    return system
+    return resolve_system(system, scene.scenario.units, field="system")
 
 
 def _nice_steps(lo: float, hi: float):

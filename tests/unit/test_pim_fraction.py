@@ -123,3 +123,22 @@ def test_fraction_follows_mu_max_when_an_input_changes():
     assert a.impact.mu_max != pytest.approx(b.impact.mu_max, rel=1e-3)
     for s in (a, b):
         assert s.impact.mu == pytest.approx(0.85 * s.impact.mu_max, rel=1e-12)
+
+
+def test_fit_recovers_the_fraction_from_recorded_delta_v():
+    """Round trip: delta-v components made by the model at mu = 0.6 mu_max are fitted with
+    mu_fraction unknown from 0.95; the fit returns 0.6 (mu_max changes along the way)."""
+    truth = crashsim.run(_data(tangential="fraction", mu_fraction=0.6))
+    car = truth.impact.bodies["car"]
+    h = car.heading
+    dv = np.asarray(car.delta_v)
+    comps = {"longitudinal": dv @ (np.cos(h), np.sin(h)), "lateral": dv @ (-np.sin(h), np.cos(h))}
+    data = _data(tangential="fraction", mu_fraction=0.95)
+    data["evidence"] = {"delta_v": [
+        {"name": f"car {k}", "body": "car", "component": k, "value": f"{float(v)!r} m/s", "tolerance": "0.5 m/s",
+         "sigma": "0.1 m/s"} for k, v in comps.items()]}
+    data["fit"] = {"starts": 1, "unknowns": [{"path": "impact.mu_fraction", "lower": "0", "upper": "1",
+                                             "initial": "0.95"}]}
+    fit = crashsim.fit(data, workers=1)
+    best = fit.to_dict()["unknowns"][0]
+    assert best["value"] == pytest.approx(0.6, abs=1e-4)

@@ -46,6 +46,12 @@ def _cmd_fit(args) -> int:
     from .scenario import load_scenario
     from .schema import load_toml
 
+    if args.write_best is not None:  # before the fit, not after it
+        from .reconstruct.fit import _same_file
+
+        if _same_file(Path(args.write_best), Path(args.file)):
+            raise ScenarioError(f"{args.write_best!r} is the input file; write the best fit to another file",
+                                field="--write-best", file=args.file)
     load_scenario(args.file)  # the whole file validated first ([fit] and evidence sigmas included)
     result = fit_scene(load_toml(args.file), None, engine=args.engine, workers=args.workers,
                        progress=args.progress, file=args.file, sample_time_limit=args.sample_time_limit)
@@ -54,6 +60,9 @@ def _cmd_fit(args) -> int:
         sys.stdout.write("\n")
     else:
         sys.stdout.write(result.report(args.units) + "\n")
+    if args.write_best is not None:
+        path = result.write_best(args.write_best)
+        sys.stderr.write(f"crashsim: wrote the best-fit scenario to {path} (crashsim run {path})\n")
     return 0
 
 
@@ -97,6 +106,9 @@ def _add_inverse_commands(sub):
     f.add_argument("--progress", action="store_true", help="progress bar over the starts on stderr")
     f.add_argument("--sample-time-limit", type=float, default=30.0, metavar="SECONDS",
                    help="wall-clock limit of one scene evaluation's run-out (default 30 s); a slower one is penalised")
+    f.add_argument("--write-best", metavar="OUT.toml",
+                   help="write a runnable scenario: the input file with the unknowns at their best values, "
+                        "[fit] removed (not the input file itself)")
     f.set_defaults(func=_cmd_fit)
 
     m = sub.add_parser("mc", help="Monte Carlo of the [uncertainty] inputs through impact and run-out")

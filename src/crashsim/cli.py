@@ -71,11 +71,15 @@ def _cmd_mc(args) -> int:
     from .scenario import load_scenario
     from .schema import load_toml
 
-    load_scenario(args.file)
+    scenario = load_scenario(args.file)
+    if args.accept and scenario.evidence.empty:
+        raise ScenarioError("--accept keeps the samples that meet all the evidence, but the scenario has no "
+                            "[evidence] items", field="--accept", file=args.file)
     try:
         result = monte_carlo(load_toml(args.file), None, args.samples, seed=args.seed, engine=args.engine,
                              workers=args.workers, dask_address=args.dask, out_path=args.out,
-                             progress=not args.quiet, file=args.file, sample_time_limit=args.sample_time_limit)
+                             progress=not args.quiet, file=args.file, sample_time_limit=args.sample_time_limit,
+                             accept=args.accept)
     except KeyboardInterrupt:
         kept = f"; the samples done are kept in {args.out}: run the same command again to resume" if args.out else ""
         sys.stderr.write(f"crashsim: stopped{kept}\n")
@@ -122,6 +126,9 @@ def _add_inverse_commands(sub):
     m.add_argument("--json", action="store_true", help="print the summary as one JSON object (SI units)")
     m.add_argument("--units", choices=("SI", "US"), default="SI", help="units of the report and plots")
     m.add_argument("--engine", choices=engines, default=None, help="run-out engine (default: compiled if available)")
+    m.add_argument("--accept", action="store_true",
+                   help="rejection sampling: also report the samples that meet ALL the evidence (count, share, "
+                        "their percentiles beside all samples'), and draw them apart in the --plots figures")
     m.add_argument("--quiet", action="store_true", help="no progress bar")
     m.add_argument("--sample-time-limit", type=float, default=30.0, metavar="SECONDS",
                    help="wall-clock limit of one sample's run-out (default 30 s); a slower sample fails with that "

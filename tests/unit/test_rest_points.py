@@ -72,8 +72,8 @@ def test_tyre_contacts_by_axle_name_or_index_and_body_points(car):
     assert named["front/left"] == named["axle1/left"] == (1.10, 0.775)
     assert named["rear/right"] == named["axle2/right"] == (-1.60, -0.775)
     pts = _measured(car, ["front/left", "axle2/right"], (3.0, 4.0), 120.0)
-    pts.append({"body_point": ["2.55 m", "0 m"],  # the middle of the front
-                "position": [_m(3.0 + 2.55 * math.cos(math.radians(120))), _m(4.0 + 2.55 * math.sin(math.radians(120)))]})
+    c, s = math.cos(math.radians(120)), math.sin(math.radians(120))
+    pts.append({"body_point": ["2.55 m", "0 m"], "position": [_m(3.0 + 2.55 * c), _m(4.0 + 2.55 * s)]})  # mid-front
     sc = scenario_from_dict(_with_points(pts), file="case.toml")
     (r,) = sc.evidence.rest
     assert r.position == pytest.approx((3.0, 4.0), abs=1e-9)

@@ -105,7 +105,8 @@ def plot_histograms(mc, keys=None, axes=None, *, system: str | None = None, bins
     """Histogram of each output, with its 5th, 50th and 95th percentiles marked.
 
     With ``mc.accept`` the samples that meet all the evidence are drawn dark over the pale
-    histogram of all samples (same bins, counts), with their own percentiles (dashed).
+    histogram of all samples (same bins; each group as its share of samples per bin, so that
+    a few accepted samples are as visible as all of them), with their own percentiles (dashed).
 
     Parameters
     ----------
@@ -150,8 +151,12 @@ def plot_histograms(mc, keys=None, axes=None, *, system: str | None = None, bins
             ax.set_title(_summary(d), fontsize=8)
             continue
         acc = d[meets[ok]]
-        ax.hist(d, bins=edges, color=_PALE, label=f"all ({d.size})")
-        ax.hist(acc, bins=edges, color=_DARK, label=f"meet all evidence ({acc.size})")
+        # each group as its share per bin (each sums to 100 %): the few accepted samples' shape stays visible
+        ax.hist(d, bins=edges, weights=np.full(d.size, 100.0 / d.size), color=_PALE, label=f"all ({d.size})")
+        if acc.size:
+            ax.hist(acc, bins=edges, weights=np.full(acc.size, 100.0 / acc.size), color=_DARK, alpha=0.75,
+                    label=f"meet all evidence ({acc.size})")
+        ax.set_ylabel("share of the group's samples [%]")
         for q, ls in ((5, ":"), (50, "-"), (95, ":")):
             ax.axvline(np.percentile(d, q), color="0.55", ls=ls, lw=1.0)
             if acc.size:
@@ -197,9 +202,10 @@ def plot_rest_clouds(mc, scene=None, ax=None, *, system: str | None = None, max_
         _, ax = plt.subplots(figsize=(8, 6), layout="constrained")
         ax.set_aspect("equal")
     leg = ax.get_legend()
-    if leg is not None and leg.get_title().get_text().startswith("Evidence:"):  # plot_scene's verdict: the median run's
+    verdict = leg.get_title().get_text() if leg is not None else ""
+    if verdict.startswith("Evidence:"):  # plot_scene's verdict is the median scene's, not the samples'
         leg.get_title().set_text("Median scene (every input at its median): "
-                                 + leg.get_title().get_text().removeprefix("Evidence: ").replace("items", "evidence items"))
+                                 + verdict.removeprefix("Evidence: ").replace("items", "evidence items"))
     bodies = [k.split(".", 1)[1] for k in mc.outputs if k.startswith("rest_x.")]
     colors = plt.get_cmap("tab10")
     meets = np.asarray(mc.meets_all, dtype=bool) if mc.accept and len(mc.meets_all) == mc.n_done else None
@@ -224,17 +230,13 @@ def plot_rest_clouds(mc, scene=None, ax=None, *, system: str | None = None, max_
                    label=f"rest of {b}: {int((~acc).sum())} samples not meeting all evidence (pale)")
         ax.scatter(x[acc], y[acc], s=14, alpha=1.0, color=_shade(color, -0.35), zorder=7, linewidths=0.4,
                    edgecolors="white", label=f"rest of {b}: {int(acc.sum())} samples meeting all evidence (dark)")
-    if pts:  # every sample inside the limits, with a margin (the scene's own extent is already in them)
-        allp = np.vstack(pts)
-        x0, x1 = ax.get_xlim()
-        y0, y1 = ax.get_ylim()
-        lo = np.minimum(allp.min(axis=0), [x0, y0])
-        hi = np.maximum(allp.max(axis=0), [x1, y1])
-        pad = 0.03 * float(max(hi - lo))
-        if allp[:, 0].min() - pad < x0 or allp[:, 0].max() + pad > x1:
-            ax.set_xlim(min(x0, allp[:, 0].min() - pad), max(x1, allp[:, 0].max() + pad))
-        if allp[:, 1].min() - pad < y0 or allp[:, 1].max() + pad > y1:
-            ax.set_ylim(min(y0, allp[:, 1].min() - pad), max(y1, allp[:, 1].max() + pad))
+    allp = np.vstack(pts) if pts else np.zeros((0, 2))
+    if len(allp):  # every sample inside the limits, with a margin (the scene's extent is in them already)
+        (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+        lo, hi = allp.min(axis=0), allp.max(axis=0)
+        pad = 0.03 * max(hi[0] - lo[0], hi[1] - lo[1], x1 - x0, y1 - y0)
+        ax.set_xlim(min(x0, lo[0] - pad), max(x1, hi[0] + pad))
+        ax.set_ylim(min(y0, lo[1] - pad), max(y1, hi[1] + pad))
     ax.set_title(f"Rest positions over the median scene. {_headline(mc)}", fontsize=9)
     handles, labels = ax.get_legend_handles_labels()
     ours = [(h, lab) for h, lab in zip(handles, labels) if lab.startswith("rest of") and "samples" in lab]

@@ -543,7 +543,8 @@ class MCResult:
         lines[-1] += "".join(f"{q:>13}" for q in qs)
         for key, p in self.percentiles.items():
             kind = self.kind_of(key)
-            lines.append(f"  {key:<28}" + ("all       " if both else "") + "".join(f"{show(p[q], kind):>13}" for q in qs))
+            row = "".join(f"{show(p[q], kind):>13}" for q in qs)
+            lines.append(f"  {key:<28}" + (f"{'all':<10}" if both else "") + row)
             a = self.accepted_percentiles.get(key) if both else None
             if a is not None:
                 lines.append(f"  {'':<28}{'accepted':<10}" + "".join(f"{show(a[q], kind):>13}" for q in qs))
@@ -597,7 +598,8 @@ class MCResult:
                 p = table.get(d.name)
                 if p is not None:
                     shown = [f"{p[q]:.4g}" if d.kind == "dimensionless" else show(p[q], d.kind) for q in qs]
-                    lines.append(f"  {d.name if tag == 'all' else '':<{w}}{tag:<10}" + "".join(f"{v:>13}" for v in shown))
+                    lines.append(f"  {d.name if tag == 'all' else '':<{w}}{tag:<10}"
+                                 + "".join(f"{v:>13}" for v in shown))
         return lines
 
 
@@ -745,7 +747,8 @@ def _assemble(spec, seed, n, rows: dict, n_resumed, elapsed, engine, backend, wo
                     errors=errors, percentiles=pct, pass_share=share, tornado=tornado, n_resumed=int(n_resumed),
                     elapsed=float(elapsed), engine=engine, backend=backend, workers=int(workers),
                     out_path=None if out_path is None else str(out_path), nominal=nominal, failure_reasons=reasons,
-                    meets_all=meets, accept=bool(accept), accepted_percentiles=_percentiles(outputs, meets, percentiles),
+                    meets_all=meets, accept=bool(accept),
+                    accepted_percentiles=_percentiles(outputs, meets, percentiles),
                     input_percentiles=_percentiles(inputs, good, percentiles),
                     accepted_input_percentiles=_percentiles(inputs, meets, percentiles))
 

@@ -70,6 +70,12 @@ def _cmd_fit(args) -> int:
     from .scenario import load_scenario
     from .schema import load_toml
 
+    if args.write_best is not None:  # before the fit, not after it
+        from .reconstruct.fit import _same_file
+
+        if _same_file(Path(args.write_best), Path(args.file)):
+            raise ScenarioError(f"{args.write_best!r} is the input file; write the best fit to another file",
+                                field="--write-best", file=args.file)
     load_scenario(args.file)  # the whole file validated first ([fit] and evidence sigmas included)
     result = fit_scene(load_toml(args.file), None, engine=args.engine, workers=args.workers,
                        progress=args.progress, file=args.file, sample_time_limit=args.sample_time_limit)
@@ -78,6 +84,9 @@ def _cmd_fit(args) -> int:
         sys.stdout.write("\n")
     else:
         sys.stdout.write(result.report(args.units) + "\n")
+    if args.write_best is not None:
+        path = result.write_best(args.write_best)
+        sys.stderr.write(f"crashsim: wrote the best-fit scenario to {path} (crashsim run {path})\n")
     return 0
 
 
@@ -86,11 +95,15 @@ def _cmd_mc(args) -> int:
     from .scenario import load_scenario
     from .schema import load_toml
 
-    load_scenario(args.file)
+    scenario = load_scenario(args.file)
+    if args.accept and scenario.evidence.empty:
+        raise ScenarioError("--accept keeps the samples that meet all the evidence, but the scenario has no "
+                            "[evidence] items", field="--accept", file=args.file)
     try:
         result = monte_carlo(load_toml(args.file), None, args.samples, seed=args.seed, engine=args.engine,
                              workers=args.workers, dask_address=args.dask, out_path=args.out,
-                             progress=not args.quiet, file=args.file, sample_time_limit=args.sample_time_limit)
+                             progress=not args.quiet, file=args.file, sample_time_limit=args.sample_time_limit,
+                             accept=args.accept)
     except KeyboardInterrupt:
         kept = f"; the samples done are kept in {args.out}: run the same command again to resume" if args.out else ""
         sys.stderr.write(f"crashsim: stopped{kept}\n")
@@ -121,6 +134,9 @@ def _add_inverse_commands(sub):
     f.add_argument("--progress", action="store_true", help="progress bar over the starts on stderr")
     f.add_argument("--sample-time-limit", type=float, default=30.0, metavar="SECONDS",
                    help="wall-clock limit of one scene evaluation's run-out (default 30 s); a slower one is penalised")
+    f.add_argument("--write-best", metavar="OUT.toml",
+                   help="write a runnable scenario: the input file with the unknowns at their best values, "
+                        "[fit] removed (not the input file itself)")
     f.set_defaults(func=_cmd_fit)
 
     m = sub.add_parser("mc", help="Monte Carlo of the [uncertainty] inputs through impact and run-out")
@@ -134,6 +150,9 @@ def _add_inverse_commands(sub):
     m.add_argument("--json", action="store_true", help="print the summary as one JSON object (SI units)")
     m.add_argument("--units", choices=("SI", "US"), default="SI", help="units of the report and plots")
     m.add_argument("--engine", choices=engines, default=None, help="run-out engine (default: compiled if available)")
+    m.add_argument("--accept", action="store_true",
+                   help="rejection sampling: also report the samples that meet ALL the evidence (count, share, "
+                        "their percentiles beside all samples'), and draw them apart in the --plots figures")
     m.add_argument("--quiet", action="store_true", help="no progress bar")
     m.add_argument("--sample-time-limit", type=float, default=30.0, metavar="SECONDS",
                    help="wall-clock limit of one sample's run-out (default 30 s); a slower sample fails with that "

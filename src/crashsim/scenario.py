@@ -257,15 +257,34 @@ RUNOUT = Section("runout", [
 ], subsections=[ArrayOf("zones", ZONE, required=False, description="Friction zones")],
    required=False, description="Run-out of every vehicle from separation to rest (omit for an impact-only study)")
 
+EV_REST_POINT = Section("point", [
+    Field("at", "str", required=False, example="front_left",
+          description="Which point of the body: an outline corner front_left, front_right, rear_left, rear_right "
+                      "(from the body's length, width and outline_center), or a tyre contact <axle>/left or "
+                      "<axle>/right (axle x, +-track/2), where <axle> is the axle's name or axle1, axle2, ... "
+                      "counted front to rear (for unnamed axles too); or give body_point instead"),
+    Field("body_point", Kind.LENGTH, n=2, required=False, example='["2.1 m", "0.9 m"]',
+          description="The point in body axes (origin at the CG, x forward, y left), instead of at"),
+    Field("position", Kind.LENGTH, n=2, example='["12.1 m", "3.4 m"]', description="Where it was measured, world"),
+], description="One measured point of the body at rest")
 EV_REST = Section("rest", [
     Field("name", "str", default="", description="Label for the report"),
     Field("body", "str", example="trailer", description="Body whose rest position was measured"),
-    Field("position", Kind.LENGTH, n=2, example='["12.3 m", "2.6 m"]', description="Measured CG rest position, world"),
-    Field("tolerance", Kind.LENGTH, minimum=0, example="0.5 m", description="Largest acceptable distance"),
-    Field("heading", Kind.ANGLE, required=False, example="-25 deg", description="Measured rest heading"),
+    Field("position", Kind.LENGTH, n=2, required=False, example='["12.3 m", "2.6 m"]',
+          description="Measured CG rest position, world (or give points instead)"),
+    Field("tolerance", Kind.LENGTH, minimum=0, example="0.5 m", description="Largest acceptable distance of the CG"),
+    Field("heading", Kind.ANGLE, required=False, example="-25 deg",
+          description="Measured rest heading (not with points: they give it)"),
     Field("heading_tolerance", Kind.ANGLE, required=False, minimum=0, example="5 deg",
-          description="Largest acceptable heading error (required with heading)"),
-], description="A measured rest position (and heading) of a body")
+          description="Largest acceptable heading error (required with heading; with points, the heading derived "
+                      "from them is checked if this is given)"),
+], subsections=[
+    ArrayOf("points", EV_REST_POINT, required=False,
+            description="Instead of position: two or more measured points of the body (corners, tyre contacts); "
+                        "the CG and heading follow by a least-squares rigid fit of the body's points to them, "
+                        "e.g. points = [{at = \"front_left\", position = [\"12.1 m\", \"3.4 m\"]}, "
+                        "{at = \"rear_left\", position = [\"4.0 m\", \"1.9 m\"]}]"),
+], description="A measured rest position (and heading) of a body: its CG, or measured points of it")
 EV_MARK = Section("mark", [
     Field("name", "str", default="", description="Label for the report"),
     Field("wheel", "str", default="*", description="Wheel(s) that may have left it: \"*\", a body, "
@@ -937,6 +956,56 @@ def _check_contact_point(problem: ImpactProblem, tolerance: float, system: str, 
                    "impact.point", file)
 
 
+def _rest_registration(r: dict, body: Body, key: str, file: str | None):
+    """The CG and heading of a rest item given by measured points of ``body`` (a rigid least-squares fit)."""
+    import difflib
+
+    from .reconstruct.evidence import CORNERS, named_body_points, register_points
+    from .units import format_value
+
+    if r["position"] is not None:
+        raise _err("give either position (the measured CG) or points (measured points of the body), not both",
+                   f"{key}.points", file)
+    if r["heading"] is not None:
+        raise _err(f"heading = {math.degrees(r['heading']):.6g} deg is given with points: the points give the heading; "
+                   "remove heading (heading_tolerance then applies to the derived heading)", f"{key}.heading", file)
+    pts = r["points"]
+    if len(pts) < 2:
+        raise _err(f"{len(pts)} measured point: at least two are needed to fix the CG and the heading",
+                   f"{key}.points", file)
+    named = named_body_points(body)
+    labels, body_pts, measured = [], [], []
+    for j, p in enumerate(pts):
+        pkey = f"{key}.points[{j}]"
+        if (p["at"] is None) == (p["body_point"] is None):
+            raise _err("give at (a named point of the body, e.g. \"front_left\") or body_point (in body axes), "
+                       f"{'not both' if p['at'] is not None else 'one of them'}", pkey, file)
+        if p["at"] is not None:
+            at = p["at"]
+            if at not in named:
+                if at in CORNERS:
+                    raise _err(f"at = {at!r} is a corner of the outline, but body {body.name!r} has no length and "
+                               "width; give them in its [[vehicles.<v>.bodies]] entry, or give body_point",
+                               f"{pkey}.at", file)
+                near = difflib.get_close_matches(at, list(named), n=2)
+                hint = f"; did you mean {' or '.join(map(repr, near))}?" if near else ""
+                raise _err(f"at = {at!r} is not a named point of body {body.name!r}{hint} Named points: "
+                           f"{', '.join(named) or 'none (no length, width or axles)'}", f"{pkey}.at", file)
+            labels.append(at)
+            body_pts.append(named[at])
+        else:
+            bp = tuple(p["body_point"])
+            labels.append("(" + ", ".join(format_value(v, Kind.LENGTH) for v in bp) + ")")
+            body_pts.append(bp)
+        measured.append(tuple(p["position"]))
+    try:
+        return register_points(body_pts, measured, labels)
+    except ValueError as exc:
+        shown = "; ".join(f"{lab} at (" + ", ".join(format_value(v, Kind.LENGTH) for v in m) + ")"
+                          for lab, m in zip(labels, measured))
+        raise _err(f"{exc}: {shown}", f"{key}.points", file) from None
+
+
 def _build_evidence(e: dict | None, states: dict, file: str | None, vehicles=()) -> Evidence:
     if e is None:
         return Evidence()
@@ -950,11 +1019,22 @@ def _build_evidence(e: dict | None, states: dict, file: str | None, vehicles=())
         return name
 
     rest = []
+    by_name = {b.name: b for v in vehicles for b in v.bodies}
     for i, r in enumerate(e["rest"]):
         key = f"evidence.rest[{i}]"
+        name = body(r["body"], f"{key}.body")
+        if r["points"]:
+            reg = _rest_registration(r, by_name[name], key, file)
+            heading = reg.heading if r["heading_tolerance"] is not None else None
+            rest.append(RestEvidence(name, reg.position, r["tolerance"], heading, r["heading_tolerance"], r["name"],
+                                     reg))
+            continue
+        if r["position"] is None:
+            raise _err(f"rest evidence of {name!r} needs position (the measured CG) or points (two or more measured "
+                       "points of the body, e.g. its corners)", f"{key}.position", file)
         if (r["heading"] is None) != (r["heading_tolerance"] is None):
             raise _err("heading and heading_tolerance go together", f"{key}.heading_tolerance", file)
-        rest.append(RestEvidence(body(r["body"], f"{key}.body"), tuple(r["position"]), r["tolerance"], r["heading"],
+        rest.append(RestEvidence(name, tuple(r["position"]), r["tolerance"], r["heading"],
                                  r["heading_tolerance"], r["name"]))
     marks = []
     for i, m in enumerate(e["marks"]):

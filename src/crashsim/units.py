@@ -69,6 +69,7 @@ __all__ = [
     "parse",
     "parse_vector",
     "to_unit",
+    "write_like",
     "convert",
     "describe",
     "example",
@@ -477,6 +478,51 @@ def to_unit(si_value: float, kind: Kind | str, system: System = "SI") -> tuple[f
     if kind is Kind.DIMENSIONLESS:
         return float(si_value), label
     return float(si_value) / _si_factor(label, kind), label
+
+
+def write_like(si_value: float, kind: Kind | str, like: object = None) -> str | float:
+    """An SI value written as a file value in the unit of another file value ``like``.
+
+    The number is exact (Python's shortest ``repr`` of the value in that unit), so that
+    :func:`parse` reads back the same SI value to within a rounding of the unit factor.
+
+    Parameters
+    ----------
+    si_value
+        The value in the SI unit of ``kind``.
+    kind
+        Its physical kind.
+    like
+        A value as written in a file (``"25 mph"``, ``"5 %"``, ``0.6``) whose unit to use;
+        ``None`` or a value without a readable unit: the SI unit of ``kind``.
+
+    Returns
+    -------
+    str or float
+        ``"30.2 mph"``, ``"13.5 m/s"``; a plain number for a dimensionless value (a percentage
+        if ``like`` is one).
+
+    Examples
+    --------
+    >>> write_like(13.4112, "speed", "25 mph")
+    '30.0 mph'
+    >>> write_like(0.05, "dimensionless", "2 %"), write_like(0.05, "dimensionless", "0.1")
+    ('5.0 %', 0.05)
+    """
+    kind = _kind(kind)
+    x = float(si_value)
+    unit = None
+    if isinstance(like, str):
+        m = _NUMBER.fullmatch(like)
+        unit = m["unit"] if m is not None and m["unit"] else None
+    if kind is Kind.DIMENSIONLESS:
+        return f"{100.0 * x!r} %" if unit in ("%", "percent") else x
+    if unit is not None:
+        try:
+            return f"{x / _si_factor(unit, kind)!r} {unit}"
+        except _Invalid:  # not a unit of this kind: SI below
+            pass
+    return f"{x!r} {si_unit(kind)}"
 
 
 def format_value(value: float, kind: Kind | str, system: System = "SI", digits: int = 4) -> str:

@@ -197,3 +197,65 @@ def test_whole_event_outputs_of_a_joint_run_out():
     own = body_impacts("waiting", scene.impact, scene.joint.impacts)
     assert out["delta_v_event.waiting"] == pytest.approx(float(np.hypot(*sum(d for d, _ in own))))
     assert out["delta_v_event.striker"] != pytest.approx(out["delta_v.striker"])  # the trailer's blow adds
+
+
+def test_accept_keeps_the_samples_that_meet_all_the_evidence(data, tmp_path):
+    """Rejection sampling: a sample is accepted when every evidence check passes; the accepted
+    percentiles are those of the accepted samples; a resumed or re-read file knows the same."""
+    out = tmp_path / "mc.jsonl"
+    spec = dict(SPEC, samples=12)
+    res = monte_carlo(data, spec, workers=1, out_path=out, progress=False, engine=ENGINE, accept=True)
+    every = np.all(np.column_stack([ok for _, ok in res.checks.values()]), axis=1)
+    assert res.n_evidence == 5 and np.array_equal(res.meets_all, every)
+    assert 0 < res.n_accepted < res.n_done == 12  # this seed gives both
+    assert res.accepted_share == pytest.approx(res.n_accepted / 12)
+    assert res.pass_share["all evidence"] == pytest.approx(res.accepted_share)  # no failed sample here
+    v = res.outputs["rest_x.carA"][every]
+    assert res.accepted_percentiles["rest_x.carA"]["p50"] == pytest.approx(float(np.median(v)))
+    assert res.accepted_percentiles["rest_x.carA"]["p95"] == pytest.approx(float(np.percentile(v, 95)))
+    speed_b = res.inputs[every, 1]
+    name_b = res.spec.inputs[1].name
+    assert res.accepted_input_percentiles[name_b]["p5"] == pytest.approx(float(np.percentile(speed_b, 5)))
+    d = res.to_dict()["accepted"]
+    assert d["count"] == res.n_accepted and d["share"] == pytest.approx(res.accepted_share) and d["of"] == 12
+    assert d["indices"] == [int(i) for i in np.nonzero(every)[0]]
+    assert set(d["percentiles"]) == set(res.percentiles) and name_b in d["inputs"]
+    text = res.report("US")
+    headline = f"{100 * res.n_accepted / 12:.3g} % of 12 samples meet all 5 evidence items"
+    assert f"Accepted samples (rejection sampling): {headline}" in text
+    assert "accepted  " in text and "the inputs given the evidence" in text
+    # read back from the results file, and resumed with more samples: the same verdicts
+    back = load_results(out, accept=True)
+    assert np.array_equal(back.meets_all, res.meets_all) and back.accepted_percentiles == res.accepted_percentiles
+    more = monte_carlo(data, spec, 14, workers=1, out_path=out, progress=False, engine=ENGINE, accept=True)
+    assert more.n_resumed == 12 and np.array_equal(more.meets_all[:12], res.meets_all)
+    # without accept nothing changes but the summary: no "accepted" key, no section
+    plain = monte_carlo(data, spec, workers=1, progress=False, engine=ENGINE)
+    assert "accepted" not in plain.to_dict() and "rejection sampling" not in plain.report()
+    assert np.array_equal(plain.meets_all, res.meets_all)
+
+
+def test_accept_with_no_sample_meeting_the_evidence(data):
+    tight = {**data, "evidence": {**data["evidence"],
+                                  "rest": [dict(r, tolerance="1 mm") for r in data["evidence"]["rest"]]}}
+    res = monte_carlo(tight, SPEC, 4, workers=1, progress=False, engine=ENGINE, accept=True)
+    assert res.n_accepted == 0 and res.accepted_percentiles == {} and res.accepted_input_percentiles == {}
+    assert res.to_dict()["accepted"]["count"] == 0 and res.to_dict()["accepted"]["percentiles"] == {}
+    text = res.report()
+    assert "0 % of 4 samples meet all 5 evidence items" in text and "NO sample meets all the evidence" in text
+
+
+def test_cli_accept(data, tmp_path, capsys):
+    import tomli_w
+
+    from crashsim.cli import main
+
+    f = tmp_path / "scene.toml"
+    f.write_text(tomli_w.dumps({**data, "uncertainty": dict(SPEC, samples=4)}))
+    assert main(["mc", str(f), "--accept", "--json", "--quiet", "--workers", "1"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert set(out["accepted"]) >= {"count", "share", "percentiles", "indices"}
+    bare = {k: v for k, v in data.items() if k != "evidence"}
+    f.write_text(tomli_w.dumps({**bare, "uncertainty": dict(SPEC, samples=4)}))
+    assert main(["mc", str(f), "--accept", "--quiet"]) == 2
+    assert "--accept" in capsys.readouterr().err

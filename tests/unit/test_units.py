@@ -491,3 +491,25 @@ def test_importing_units_does_not_import_pint():
     env = {**os.environ, "PYTHONPATH": path}
     code = "import sys, crashsim.units; assert 'pint' not in sys.modules, 'pint imported'"
     subprocess.run([sys.executable, "-c", code], check=True, env=env)
+
+
+@pytest.mark.parametrize("kind", [k for k in Kind if k is not Kind.DIMENSIONLESS])
+@pytest.mark.parametrize("system", ["SI", "US"])
+def test_write_like_keeps_the_unit_and_reads_back(kind, system):
+    from crashsim.units import write_like
+
+    label = DISPLAY_UNITS[kind][system]
+    x = 1.234567890123 * (parse(f"1 {label}", kind, field="f"))
+    text = write_like(x, kind, f"7 {label}")
+    assert text.endswith(f" {label}")
+    assert parse(text, kind, field="f") == pytest.approx(x, rel=2e-16 * 4)
+
+
+def test_write_like_plain_numbers_percentages_and_no_unit():
+    from crashsim.units import write_like
+
+    assert write_like(0.05, Kind.DIMENSIONLESS, "2 %") == "5.0 %"
+    assert write_like(0.05, Kind.DIMENSIONLESS, 0.7) == 0.05
+    assert write_like(9500.0, Kind.MASS, "20945 lbf") == f"{9500.0 * G0 / parse('1 lbf', Kind.FORCE, field='f')!r} lbf"
+    assert write_like(2.5, Kind.LENGTH, None) == "2.5 m"
+    assert write_like(2.5, Kind.LENGTH, "not a value") == "2.5 m"

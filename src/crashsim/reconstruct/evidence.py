@@ -6,7 +6,11 @@ and a verdict against the tolerance the user stated for it. All SI, world frame.
 Residuals
 ---------
 rest position   distance between computed and measured CG rest positions [m]; heading error
-                wrapped to (-pi, pi] [rad] if a heading was measured.
+                wrapped to (-pi, pi] [rad] if a heading was measured.  The measured CG and
+                heading may come from two or more measured points of the body (corners, tyre
+                contacts): :func:`register_points` fits the body's points to them (a least-squares
+                rigid motion) and the check then compares the derived CG and heading; its details
+                add the fit's RMS misfit.
 tyre mark       one-sided Hausdorff distance from the measured mark (a polyline, densified to
                 ``MARK_SPACING``) to the computed track of the wheel that matches it best: the
                 largest distance of any point of the mark from the track [m]. Only the sliding
@@ -33,21 +37,164 @@ from ..geometry import rotate, wrap_angle
 __all__ = [
     "RestEvidence", "MarkEvidence", "ImpactPointEvidence", "DeltaVEvidence", "Evidence",
     "Check", "EvidenceReport", "evaluate_evidence", "distance_to_polyline", "signed_distance_to_polyline",
-    "MARK_SPACING",
+    "MARK_SPACING", "Registration", "register_points", "named_body_points", "CORNERS", "MIN_POINT_SPREAD",
 ]
 
 #: Spacing [m] to which measured marks are densified before their distance to a track is taken.
 MARK_SPACING = 0.1
 
 
+#: Outline corners a measured rest point may name, as (sign along x, sign along y) from the
+#: outline centre: front/rear = +/- length/2, left/right = +/- width/2 (body axes, y left).
+CORNERS = {"front_left": (1.0, 1.0), "front_right": (1.0, -1.0), "rear_left": (-1.0, 1.0),
+           "rear_right": (-1.0, -1.0)}
+
+#: Smallest RMS distance [m] of a set of points from their centroid for a rigid fit: points
+#: closer together than this coincide, and fix no heading.
+MIN_POINT_SPREAD = 1e-6
+
+
+def named_body_points(body) -> dict[str, tuple[float, float]]:
+    """The points of a body a measurement may name, in body axes [m].
+
+    The outline corners (:data:`CORNERS`; only if the body has a length and a width) and the
+    tyre contact centres ``<axle>/left`` and ``<axle>/right`` at ``(axle.x, +-track/2)``
+    (as :mod:`crashsim.motion.wheels` places them), where ``<axle>`` is ``axle1``,
+    ``axle2``, ... (front to rear, for every axle) or the axle's name if it has one.
+
+    Parameters
+    ----------
+    body : Body
+
+    Returns
+    -------
+    dict
+        ``{name: (x, y)}`` in body axes [m].
+    """
+    out: dict[str, tuple[float, float]] = {}
+    if body.length is not None and body.width is not None:
+        cx, cy = body.outline_center
+        for name, (sx, sy) in CORNERS.items():
+            out[name] = (cx + sx * body.length / 2, cy + sy * body.width / 2)
+    for k, axle in enumerate(body.axles):
+        labels = [f"axle{k + 1}"] + ([axle.name] if axle.name else [])
+        for label in labels:
+            out[f"{label}/left"] = (float(axle.x), axle.track / 2)
+            out[f"{label}/right"] = (float(axle.x), -axle.track / 2)
+    return out
+
+
+@dataclass(frozen=True)
+class Registration:
+    """A body's pose fitted to measured points of it (:func:`register_points`).
+
+    Attributes
+    ----------
+    labels : tuple of str
+        What each point is (``"front_left"``, ``"axle1/right"``, ``"(1.2 m, 0.8 m)"``).
+    body_points, measured : ndarray (n, 2)
+        The points in body axes and as measured, world [m].
+    position : (float, float)
+        Derived CG position, world [m].
+    heading : float
+        Derived heading, wrapped to (-pi, pi] [rad].
+    rms : float
+        RMS distance between the measured points and the fitted body's points [m].
+    misfit : ndarray (n,)
+        Distance of each measured point from its fitted body point [m].
+    """
+
+    labels: tuple[str, ...]
+    body_points: np.ndarray
+    measured: np.ndarray
+    position: tuple[float, float]
+    heading: float
+    rms: float
+    misfit: np.ndarray
+
+    def to_dict(self) -> dict:
+        return {"position": list(self.position), "heading": self.heading, "rms": self.rms,
+                "points": [{"at": lab, "body_point": [float(v) for v in b], "measured": [float(v) for v in m],
+                            "misfit": float(d)}
+                           for lab, b, m, d in zip(self.labels, self.body_points, self.measured, self.misfit)]}
+
+
+def register_points(body_points, measured, labels=None) -> Registration:
+    """Least-squares rigid motion (rotation + translation, no scaling) of body points onto measured ones.
+
+    Minimises ``sum_i |p_w,i - (c + R(psi) p_b,i)|^2`` over the CG position ``c`` and the heading
+    ``psi`` (the planar Kabsch / orthogonal Procrustes problem). With centred points
+    ``a_i = p_b,i - mean(p_b)`` and ``b_i = p_w,i - mean(p_w)`` the minimiser is, in closed
+    form,
+
+        psi = atan2(sum_i cross(a_i, b_i), sum_i dot(a_i, b_i)),   c = mean(p_w) - R(psi) mean(p_b)
+
+    (Kabsch 1976, Acta Cryst. A32 922; in 2D the rotation needs no SVD).
+
+    Parameters
+    ----------
+    body_points : array_like (n, 2)
+        Points in body axes (origin at the CG, x forward, y left) [m].
+    measured : array_like (n, 2)
+        The same points as measured, world frame [m].
+    labels : sequence of str, optional
+        What each point is, for reports.
+
+    Returns
+    -------
+    Registration
+
+    Raises
+    ------
+    ValueError
+        Fewer than two points, shapes that differ, or points (body or measured) that
+        coincide: their RMS distance from their centroid is below :data:`MIN_POINT_SPREAD`,
+        so no heading follows.
+
+    Examples
+    --------
+    >>> r = register_points([[1, 0], [-1, 0]], [[5, 3], [5, 1]])
+    >>> [round(v, 9) for v in r.position], round(math.degrees(r.heading), 9), round(r.rms, 12)
+    ([5.0, 2.0], 90.0, 0.0)
+    """
+    p = np.asarray(body_points, dtype=float)
+    q = np.asarray(measured, dtype=float)
+    if p.ndim != 2 or p.shape[1] != 2 or p.shape != q.shape:
+        raise ValueError(f"body points {p.shape} and measured points {q.shape} must both be (n, 2)")
+    if len(p) < 2:
+        raise ValueError(f"{len(p)} point(s): a rigid fit needs at least two")
+    pm, qm = p.mean(axis=0), q.mean(axis=0)
+    a, b = p - pm, q - qm
+    for what, c in (("body", a), ("measured", b)):
+        spread = float(np.sqrt(np.mean(np.sum(c * c, axis=1))))
+        if spread < MIN_POINT_SPREAD:
+            raise ValueError(f"the {what} points coincide (RMS distance from their centroid {spread:.3g} m): "
+                             "they fix no heading")
+    heading = math.atan2(float(np.sum(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])), float(np.sum(np.sum(a * b, axis=1))))
+    centre = qm - rotate(pm, heading)
+    fitted = centre + rotate(p, heading)
+    misfit = np.hypot(*(q - fitted).T)
+    labels = tuple(labels) if labels is not None else tuple(f"point {i + 1}" for i in range(len(p)))
+    return Registration(labels, p, q, (float(centre[0]), float(centre[1])), float(wrap_angle(heading)),
+                        float(np.sqrt(np.mean(misfit**2))), misfit)
+
+
 @dataclass(frozen=True)
 class RestEvidence:
+    """A measured rest position of a body's CG (and heading), world frame [m, rad].
+
+    ``registration`` is set when the CG (and heading) were derived from measured points of the
+    body (:func:`register_points`); ``position`` and ``heading`` are then the derived ones
+    (``heading`` None when no ``heading_tolerance`` was given: not checked).
+    """
+
     body: str
     position: tuple[float, float]
     tolerance: float
     heading: float | None = None
     heading_tolerance: float | None = None
     name: str = ""
+    registration: Registration | None = None
 
 
 @dataclass(frozen=True)
@@ -286,6 +433,8 @@ def evaluate_evidence(evidence: Evidence, impact, runout: dict | None, contact_p
         at_rest = b.time_to_rest is not None
         extra = {} if at_rest else {"reason": f"not at rest: the run-out stopped ({stopped.get(ev.body, 'unknown')}) "
                                               "with the body still moving"}
+        if ev.registration is not None:
+            extra["registration"] = ev.registration.to_dict()
         checks.append(Check("rest", name, d, ev.tolerance, d <= ev.tolerance and at_rest, "length",
                             {"computed": [float(v) for v in b.rest_position], "measured": list(ev.position),
                              "at_rest": at_rest, **extra}))

@@ -342,6 +342,8 @@ class EvidenceModel:
                 computed = np.asarray(b.rest_position, float)
                 out.append(computed - it.measured)
                 det.append({"computed": computed.tolist(), "at_rest": b.time_to_rest is not None})
+                if c is not None and "registration" in c.details:  # the measured CG came from measured points
+                    det[-1]["registration"] = c.details["registration"]
             elif it.kind == "rest heading":
                 b = bodies[it.body]
                 out.append(np.array([float(wrap_angle(b.rest_heading - it.measured))]))
@@ -625,6 +627,8 @@ class FitResult:
     message: str
     scene: Any = field(default=None, repr=False, compare=False)
     failure_reasons: dict = field(default_factory=dict)
+    source_data: Any = field(default=None, repr=False, compare=False)
+    file: str | None = None
 
     @property
     def values(self) -> dict:
@@ -649,6 +653,78 @@ class FitResult:
             "n_same_cost": self.n_same_cost, "warnings": list(self.warnings), "evaluations": self.evaluations,
             "failures": self.failures, "failure_reasons": dict(self.failure_reasons), "elapsed": self.elapsed,
         }
+
+    def best_scenario_dict(self) -> dict:
+        """The fitted scenario file as a dict: the input file's with each unknown at its best value.
+
+        Each unknown is written as a file value at its path, in the unit of the file's own
+        value there (``"30.2 mph"`` where the file had ``"25 mph"``; a plain number stays plain,
+        a percentage a percentage), or in SI where the file gave none (a preset's value, which
+        the written key then overrides). The ``[fit]`` table is removed. Where the fit's
+        run-out engine differs from the file's, ``runout.engine`` is set to it, so that
+        ``crashsim run`` on the written file reproduces the fit's best residuals.
+
+        Returns
+        -------
+        dict
+            Raw file values (with units), as from :func:`crashsim.schema.load_toml`.
+
+        Raises
+        ------
+        ValueError
+            If this result does not hold its input (built by hand, not by :func:`fit_scene`).
+        """
+        import copy
+
+        from .overrides import resolve_path, set_value
+
+        if self.source_data is None:
+            raise ValueError("this FitResult does not hold the scenario it was fitted to (made by fit_scene, it does)")
+        data = copy.deepcopy({k: v for k, v in self.source_data.items() if k != "fit"})
+        for u, x in zip(self.unknowns, self.x):
+            data = set_value(data, resolve_path(u.path), float(x), like=True)
+        runout = data.get("runout")
+        if isinstance(runout, dict) and runout.get("engine", "scipy") != self.engine:
+            runout["engine"] = self.engine
+        return data
+
+    def write_best(self, path) -> "Path":
+        """Write :meth:`best_scenario_dict` as a runnable TOML scenario file.
+
+        A header comment says what wrote it, from which file, the best values (with their
+        intervals) and chi^2; the input's ``[fit]`` table follows at the end as comments.
+
+        Parameters
+        ----------
+        path : str or Path
+            The file to write; never the input file.
+
+        Returns
+        -------
+        Path
+
+        Raises
+        ------
+        ScenarioError
+            If ``path`` is the file the fit was read from.
+        """
+        from pathlib import Path
+
+        import tomli_w
+
+        path = Path(path)
+        if self.file is not None and _same_file(path, Path(self.file)):
+            raise ScenarioError(f"{str(path)!r} is the input file; the best fit is written to another file",
+                                field="--write-best", file=self.file)
+        data = self.best_scenario_dict()
+        text = _best_header(self, data) + tomli_w.dumps(data)
+        fit_table = (self.source_data or {}).get("fit")
+        if fit_table is not None:
+            text += ("\n# ---- The [fit] table of the input file (the fit that wrote this file) ----\n"
+                     + "".join(f"# {line}\n" if line else "#\n"
+                               for line in tomli_w.dumps({"fit": fit_table}).splitlines()))
+        path.write_text(text, encoding="utf-8")
+        return path
 
     def report(self, system: str = "SI") -> str:
         """Readable report: best values with intervals, correlations, residuals, warnings."""
@@ -706,6 +782,50 @@ class FitResult:
             lines.append("Warnings")
             lines += [f"  - {w_}" for w_ in self.warnings]
         return "\n".join(lines)
+
+
+def _same_file(a, b) -> bool:
+    """Whether two paths name the same file (existing or not)."""
+    try:
+        if a.exists() and b.exists():
+            return a.samefile(b)
+    except OSError:  # pragma: no cover - unreadable paths
+        pass
+    return a.resolve() == b.resolve()
+
+
+def _best_header(res: FitResult, data: dict) -> str:
+    """The comment block at the top of a best-fit scenario file (display units of the scenario)."""
+    import datetime
+
+    from .. import __version__
+    from ..report import fmt
+
+    system = (data.get("scenario") or {}).get("units", "SI")
+    system = system if system in ("SI", "US") else "SI"
+    when = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    pct = f"{100 * res.confidence:g} %"
+    lines = [f"Written by crashsim {__version__} (crashsim fit --write-best) on {when}",
+             f"from {res.file or 'a scenario given as a dict'}: its values with the [fit] unknowns set to their "
+             "best fit",
+             f"chi^2 = {res.chi2:.6g} for {res.dof} degrees of freedom"
+             + (f" (p = {res.p_value:.3g})" if np.isfinite(res.p_value) else "")
+             + f"; fit {'converged' if res.success else 'did NOT converge: ' + res.message}",
+             f"Best values ({pct} intervals, {res.covariance_mode} covariance):"]
+    for i, u in enumerate(res.unknowns):
+        lo, hi = res.interval[i]
+        iv = f"[{fmt(lo, u.kind, system)}, {fmt(hi, u.kind, system)}]" if np.isfinite(lo) and np.isfinite(hi) \
+            else "not determined"
+        lines.append(f"  {u.path} = {fmt(res.x[i], u.kind, system)}  {iv}")
+    lines.append("The [fit] table is removed (it follows at the end, as comments).")
+    runout = data.get("runout")
+    src_engine = ((res.source_data or {}).get("runout") or {}).get("engine", "scipy")
+    if isinstance(runout, dict) and src_engine != res.engine:
+        lines.append(f"runout.engine = \"{res.engine}\": the fit's run-out engine (the input file's was "
+                     f"\"{src_engine}\"), so that crashsim run reproduces the fit's residuals.")
+    if res.warnings:
+        lines.append(f"The fit gave {len(res.warnings)} warning(s): see its report.")
+    return "".join(f"# {line}\n" for line in lines) + "\n"
 
 
 # ---------------------------------------------------------------------------------------------
@@ -852,7 +972,10 @@ def fit_scene(scenario_data: dict, fit_spec: FitSpec | dict | None = None, *, en
     n_before = problem.nfev
     result = _analyse(problem, spec, outcomes, engine)
     evaluations += problem.nfev - n_before
-    return _replace_timing(result, evaluations, time.perf_counter() - t0, problem.failures)
+    result = _replace_timing(result, evaluations, time.perf_counter() - t0, problem.failures)
+    from dataclasses import replace
+
+    return replace(result, source_data=scenario_data, file=file)
 
 
 def _merge_reasons(tallies) -> dict[str, int]:

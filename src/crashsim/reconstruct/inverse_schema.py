@@ -136,9 +136,11 @@ UNCERTAINTY = Section("uncertainty", [
 EVIDENCE_SIGMA_FIELDS = {
     "rest": (
         Field("sigma", Kind.LENGTH, required=False, minimum=0, exclusive_minimum=True, example="0.2 m",
-              description="Standard uncertainty of each coordinate of the measured rest position (fit)"),
+              description="Standard uncertainty of each coordinate of the measured rest position (fit; with "
+                          "points: of the CG derived from them)"),
         Field("heading_sigma", Kind.ANGLE, required=False, minimum=0, exclusive_minimum=True, example="2 deg",
-              description="Standard uncertainty of the measured rest heading (fit)"),
+              description="Standard uncertainty of the measured rest heading (fit; with points: of the heading "
+                          "derived from them)"),
     ),
     "marks": (
         Field("sigma", Kind.LENGTH, required=False, minimum=0, exclusive_minimum=True, example="0.15 m",

@@ -4,6 +4,11 @@ matplotlib is imported on first use (as in :mod:`crashsim.plotting`); every func
 given axes (``ax=None``/``axes=None``: a new figure) and returns them; nothing calls
 ``plt.show()``. Inputs are :class:`~crashsim.reconstruct.montecarlo.MCResult` objects (SI);
 display units follow ``system`` (default: the scenario's).
+
+Headlines give the share of samples that meet *all* the evidence (``MCResult.evidence_headline``);
+the verdict of the scene drawn under the rest clouds (every input at its median) is labelled as
+that run's. With ``mc.accept`` (``crashsim mc --accept``) the samples that meet all the evidence
+are drawn dark and the others pale, in the histograms and in the rest clouds.
 """
 
 from __future__ import annotations
@@ -45,6 +50,28 @@ def _display(values, kind: str, system: str):
     return v * factor, label
 
 
+#: Blue of the histograms; with acceptance, its pale (rejected) and dark (accepted) versions.
+_BLUE, _PALE, _DARK = "#4C72B0", "#c6d3e8", "#1b2f5c"
+
+
+def _shade(color, f: float):
+    """``color`` mixed with black (f < 0, darker) or white (f > 0, paler) by |f|."""
+    from matplotlib.colors import to_rgb
+
+    c = np.asarray(to_rgb(color))
+    return tuple(c * (1 + f) if f < 0 else c + (1 - c) * f)
+
+
+def _summary(d: np.ndarray) -> str:
+    p5, p50, p95 = np.percentile(d, [5, 50, 95])
+    return f"median {p50:.3g}, 90 % in [{p5:.3g}, {p95:.3g}]"
+
+
+def _headline(mc) -> str:
+    """Figure headline: seed and the share of samples meeting all the evidence."""
+    return f"Monte Carlo, seed {mc.seed}: {mc.evidence_headline()}"
+
+
 def _label(key: str) -> str:
     what, _, who = key.partition(".")
     names = {"delta_v": "delta-v", "speed": "impact speed", "speed_after": "speed after impact",
@@ -77,6 +104,10 @@ def default_histogram_keys(mc) -> list[str]:
 def plot_histograms(mc, keys=None, axes=None, *, system: str | None = None, bins: int = 40):
     """Histogram of each output, with its 5th, 50th and 95th percentiles marked.
 
+    With ``mc.accept`` the samples that meet all the evidence are drawn dark over the pale
+    histogram of all samples (same bins; each group as its share of samples per bin, so that
+    a few accepted samples are as visible as all of them), with their own percentiles (dashed).
+
     Parameters
     ----------
     mc : MCResult
@@ -101,21 +132,37 @@ def plot_histograms(mc, keys=None, axes=None, *, system: str | None = None, bins
         fig, axes = plt.subplots(nrow, ncol, figsize=(4.0 * ncol, 3.0 * nrow), layout="constrained", squeeze=False)
         for ax in axes.flat[len(keys):]:
             ax.set_visible(False)
-        fig.suptitle(f"Monte Carlo: {mc.n_done - mc.n_failed} samples, seed {mc.seed}")
+        fig.suptitle(_headline(mc) + ("\nsamples meeting all the evidence dark, the others pale" if mc.accept else ""))
     flat = np.asarray(axes).ravel()
+    meets = np.asarray(mc.meets_all, dtype=bool) if mc.accept and len(mc.meets_all) == mc.n_done else None
     for ax, key in zip(flat, keys):
-        v = mc.outputs[key]
-        v = v[np.isfinite(v)]
-        d, unit = _display(v, mc.kind_of(key), sysname)
-        ax.hist(d, bins=bins, color="#4C72B0", alpha=0.85)
-        for q, ls in ((5, ":"), (50, "-"), (95, ":")):
-            if d.size:
-                ax.axvline(np.percentile(d, q), color="k", ls=ls, lw=1.0)
+        v = np.asarray(mc.outputs[key], dtype=float)
+        ok = np.isfinite(v)
+        d, unit = _display(v[ok], mc.kind_of(key), sysname)
         ax.set_xlabel(f"{_label(key)} [{unit}]" if unit else _label(key))
         ax.set_ylabel("samples")
-        if d.size:
-            p5, p50, p95 = np.percentile(d, [5, 50, 95])
-            ax.set_title(f"median {p50:.3g}, 90 % in [{p5:.3g}, {p95:.3g}]", fontsize=8)
+        if not d.size:
+            continue
+        edges = np.histogram_bin_edges(d, bins=bins)
+        if meets is None:
+            ax.hist(d, bins=edges, color=_BLUE, alpha=0.85)
+            for q, ls in ((5, ":"), (50, "-"), (95, ":")):
+                ax.axvline(np.percentile(d, q), color="k", ls=ls, lw=1.0)
+            ax.set_title(_summary(d), fontsize=8)
+            continue
+        acc = d[meets[ok]]
+        # each group as its share per bin (each sums to 100 %): the few accepted samples' shape stays visible
+        ax.hist(d, bins=edges, weights=np.full(d.size, 100.0 / d.size), color=_PALE, label=f"all ({d.size})")
+        if acc.size:
+            ax.hist(acc, bins=edges, weights=np.full(acc.size, 100.0 / acc.size), color=_DARK, alpha=0.75,
+                    label=f"meet all evidence ({acc.size})")
+        ax.set_ylabel("share of the group's samples [%]")
+        for q, ls in ((5, ":"), (50, "-"), (95, ":")):
+            ax.axvline(np.percentile(d, q), color="0.55", ls=ls, lw=1.0)
+            if acc.size:
+                ax.axvline(np.percentile(acc, q), color=_DARK, ls="--" if q == 50 else ":", lw=1.2)
+        ax.set_title(f"all: {_summary(d)}\naccepted: " + (_summary(acc) if acc.size else "none"), fontsize=7.5)
+        ax.legend(fontsize=6.5, loc="best", framealpha=0.8)
     return np.asarray(axes)
 
 
@@ -133,7 +180,12 @@ def plot_rest_clouds(mc, scene=None, ax=None, *, system: str | None = None, max_
     max_points : int
         At most this many samples per body are drawn (evenly thinned).
     evidence : bool
-        Draw the scene's evidence (measured rest positions, marks) with the diagram.
+        Draw the scene's evidence (measured rest positions, marks) with the diagram; its
+        verdict there is the median scene's, and labelled so.
+
+    The axes limits hold the scene and every sample's rest position with a margin (no sample
+    is clipped). With ``mc.accept`` the samples that meet all the evidence are drawn dark
+    (all of them, never thinned) and the others pale.
 
     Returns
     -------
@@ -149,35 +201,54 @@ def plot_rest_clouds(mc, scene=None, ax=None, *, system: str | None = None, max_
     elif ax is None:
         _, ax = plt.subplots(figsize=(8, 6), layout="constrained")
         ax.set_aspect("equal")
+    leg = ax.get_legend()
+    verdict = leg.get_title().get_text() if leg is not None else ""
+    if verdict.startswith("Evidence:"):  # plot_scene's verdict is the median scene's, not the samples'
+        leg.get_title().set_text("Median scene (every input at its median): "
+                                 + verdict.removeprefix("Evidence: ").replace("items", "evidence items"))
     bodies = [k.split(".", 1)[1] for k in mc.outputs if k.startswith("rest_x.")]
     colors = plt.get_cmap("tab10")
+    meets = np.asarray(mc.meets_all, dtype=bool) if mc.accept and len(mc.meets_all) == mc.n_done else None
     pts = []
     for j, b in enumerate(bodies):
         x, unit = _display(mc.outputs[f"rest_x.{b}"], "length", sysname)
         y, _ = _display(mc.outputs[f"rest_y.{b}"], "length", sysname)
         ok = np.isfinite(x) & np.isfinite(y)
+        acc = meets[ok] if meets is not None else np.zeros(int(ok.sum()), dtype=bool)
         x, y = x[ok], y[ok]
-        if x.size > max_points:
-            sel = np.linspace(0, x.size - 1, max_points).astype(int)
-            x, y = x[sel], y[sel]
         pts.append(np.column_stack([x, y]))
-        ax.scatter(x, y, s=5, alpha=0.5, color=colors(j % 10), label=f"rest of {b} ({x.size} samples)",
-                   zorder=6, linewidths=0)
-    if pts:
-        allp = np.vstack(pts)
-        lo, hi = np.percentile(allp, 0.5, axis=0), np.percentile(allp, 99.5, axis=0)
-        x0, x1 = ax.get_xlim()
-        y0, y1 = ax.get_ylim()
-        pad = 0.05 * max(hi - lo)
+        rx, ry = x[~acc], y[~acc]
+        if rx.size > max_points:
+            sel = np.linspace(0, rx.size - 1, max_points).astype(int)
+            rx, ry = rx[sel], ry[sel]
+        color = colors(j % 10)
+        if meets is None:
+            ax.scatter(rx, ry, s=5, alpha=0.5, color=color, label=f"rest of {b} ({rx.size} samples)",
+                       zorder=6, linewidths=0)
+            continue
+        ax.scatter(rx, ry, s=5, alpha=0.6, color=_shade(color, 0.45), zorder=6, linewidths=0,
+                   label=f"rest of {b}: {int((~acc).sum())} samples not meeting all evidence (pale)")
+        ax.scatter(x[acc], y[acc], s=14, alpha=1.0, color=_shade(color, -0.35), zorder=7, linewidths=0.4,
+                   edgecolors="white", label=f"rest of {b}: {int(acc.sum())} samples meeting all evidence (dark)")
+    allp = np.vstack(pts) if pts else np.zeros((0, 2))
+    if len(allp):  # every sample inside the limits, with a margin (the scene's extent is in them already)
+        (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+        lo, hi = allp.min(axis=0), allp.max(axis=0)
+        pad = 0.03 * max(hi[0] - lo[0], hi[1] - lo[1], x1 - x0, y1 - y0)
         ax.set_xlim(min(x0, lo[0] - pad), max(x1, hi[0] + pad))
         ax.set_ylim(min(y0, lo[1] - pad), max(y1, hi[1] + pad))
-    ax.set_title(f"Rest positions of {mc.n_done - mc.n_failed} Monte Carlo samples over the median scene",
-                 fontsize=9)
+    ax.set_title(f"Rest positions over the median scene. {_headline(mc)}", fontsize=9)
     handles, labels = ax.get_legend_handles_labels()
     ours = [(h, lab) for h, lab in zip(handles, labels) if lab.startswith("rest of") and "samples" in lab]
     if ours:
         leg = ax.get_legend()
-        ax.legend([h for h, _ in ours], [lab for _, lab in ours], loc="lower right", fontsize=7, markerscale=4)
+        from matplotlib.lines import Line2D
+
+        def proxy(h):  # a legend marker of the scatter's colour, opaque and of one size
+            return Line2D([], [], ls="none", marker="o", markersize=5, markeredgewidth=0,
+                          markerfacecolor=h.get_facecolor()[0][:3])
+
+        ax.legend([proxy(h) for h, _ in ours], [lab for _, lab in ours], loc="lower right", fontsize=7)
         if leg is not None:
             ax.add_artist(leg)
     return ax

@@ -5,6 +5,17 @@ file), writes them into the scenario (:mod:`crashsim.reconstruct.overrides`, val
 file values) and runs the whole scene to rest. The result is a table: delta-v, speeds,
 energy loss and rest positions of every sample, and the verdict of every evidence item.
 
+Rejection sampling
+------------------
+Every sample stores the verdict of every evidence item (its residual and whether it is within
+its tolerance), so a result, also one read back or resumed from a results file, knows per
+sample whether it meets *all* the evidence (:attr:`MCResult.meets_all`). With ``accept``
+the result also summarises the accepted samples (those that meet all the evidence; a failed
+sample meets none): their count and share, and the percentiles of the outputs and inputs over
+them beside those over all samples. The accepted samples are draws of the inputs conditioned
+on the evidence being met within its tolerances (rejection sampling with the tolerances as a
+uniform likelihood); their number says how much the result rests on.
+
 Reproducibility
 ---------------
 Sample ``i`` draws its inputs from ``numpy.random.default_rng(SeedSequence(seed,
@@ -314,8 +325,12 @@ class _Runner:
             return row
         row["out"] = scene_outputs(scene)
         if scene.evidence is not None:
-            row["checks"] = {_check_key(c): [float(c.residual) if math.isfinite(c.residual) else None, bool(c.passed)]
-                             for c in scene.evidence.checks}
+            row["checks"] = {}
+            for c in scene.evidence.checks:
+                key, k = _check_key(c), 2
+                while key in row["checks"]:  # two items of the same kind and name stay two
+                    key, k = f"{_check_key(c)} ({k})", k + 1
+                row["checks"][key] = [float(c.residual) if math.isfinite(c.residual) else None, bool(c.passed)]
         row["warnings"] = len(scene.warnings)
         row["rest"] = all(r.success for r in (scene.runout or {}).values())
         return row
@@ -386,6 +401,15 @@ class MCResult:
         ``base``.
     nominal : SceneResult or None
         The scene with every input at its median (for plots; not in ``to_dict``).
+    meets_all : ndarray of bool (n_done,)
+        Per sample (in ``indices`` order): it ran and every evidence item is within its
+        tolerance. All False when the scenario has no evidence.
+    accept : bool
+        Whether the report and ``to_dict`` summarise the accepted samples (rejection sampling,
+        ``crashsim mc --accept``) and the figures draw them apart.
+    accepted_percentiles, input_percentiles, accepted_input_percentiles : dict
+        As ``percentiles``, over the accepted samples; and of the inputs (by input name) over
+        the successful and over the accepted samples.
     """
 
     spec: UncertaintySpec
@@ -407,6 +431,11 @@ class MCResult:
     out_path: str | None
     nominal: Any = field(default=None, repr=False, compare=False)
     failure_reasons: dict = field(default_factory=dict)
+    meets_all: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool), repr=False, compare=False)
+    accept: bool = False
+    accepted_percentiles: dict = field(default_factory=dict)
+    input_percentiles: dict = field(default_factory=dict)
+    accepted_input_percentiles: dict = field(default_factory=dict)
 
     @property
     def n_done(self) -> int:
@@ -415,6 +444,32 @@ class MCResult:
     @property
     def n_failed(self) -> int:
         return len(self.errors)
+
+    @property
+    def n_evidence(self) -> int:
+        """Number of evidence checks of a sample (a rest item with a heading counts twice)."""
+        return len(self.checks)
+
+    @property
+    def n_accepted(self) -> int:
+        """Samples that meet all the evidence."""
+        return int(np.count_nonzero(self.meets_all))
+
+    @property
+    def accepted_share(self) -> float:
+        """Share of the samples run (failed ones included, as not meeting it) that meet all the evidence."""
+        return self.n_accepted / self.n_done if self.n_done else float("nan")
+
+    def evidence_headline(self) -> str:
+        """One line: how many samples meet all the evidence (``"4.2 % of 3000 samples meet all 9 evidence
+        items"``); failed samples count as not meeting it."""
+        if not self.n_evidence:
+            return f"{self.n_done} samples; no evidence items to meet"
+        items = f"{self.n_evidence} evidence item{'s' if self.n_evidence != 1 else ''}"
+        failed = f" ({self.n_failed} failed)" if self.n_failed else ""
+        if self.n_evidence == 1:
+            return f"{100 * self.accepted_share:.3g} % of {self.n_done} samples{failed} meet the {items}"
+        return f"{100 * self.accepted_share:.3g} % of {self.n_done} samples{failed} meet all {items}"
 
     @staticmethod
     def kind_of(key: str) -> str:
@@ -431,6 +486,13 @@ class MCResult:
             "tornado": self.tornado,
             "errors": [{"i": int(i), "message": m} for i, m in self.errors[:50]],
             "failure_reasons": dict(self.failure_reasons),
+            **({"accepted": {
+                "count": self.n_accepted, "share": fin(self.accepted_share), "of": self.n_done,
+                "n_evidence": self.n_evidence, "indices": [int(i) for i in self.indices[self.meets_all]],
+                "percentiles": {k: {q: fin(v) for q, v in p.items()} for k, p in self.accepted_percentiles.items()},
+                "inputs": {k: {q: fin(v) for q, v in p.items()} for k, p in self.accepted_input_percentiles.items()},
+                "inputs_all": {k: {q: fin(v) for q, v in p.items()} for k, p in self.input_percentiles.items()},
+            }} if self.accept else {}),
         }
 
     def report(self, system: str = "SI") -> str:
@@ -474,16 +536,26 @@ class MCResult:
         show = output_show
         lines.append("")
         qs = [q for q in next(iter(self.percentiles.values()), {}) if q.startswith("p")]
-        lines.append("Outputs (percentiles over the successful samples)")
-        lines.append(f"  {'output':<28}" + "".join(f"{q:>13}" for q in qs))
+        both = self.accept and bool(self.accepted_percentiles)
+        lines.append("Outputs (percentiles over the successful samples" + (
+            "; below each, over the accepted samples: those that meet all the evidence)" if both else ")"))
+        lines.append(f"  {'output':<28}{'':<10}" if both else f"  {'output':<28}")
+        lines[-1] += "".join(f"{q:>13}" for q in qs)
         for key, p in self.percentiles.items():
             kind = self.kind_of(key)
-            lines.append(f"  {key:<28}" + "".join(f"{show(p[q], kind):>13}" for q in qs))
+            row = "".join(f"{show(p[q], kind):>13}" for q in qs)
+            lines.append(f"  {key:<28}" + (f"{'all':<10}" if both else "") + row)
+            a = self.accepted_percentiles.get(key) if both else None
+            if a is not None:
+                lines.append(f"  {'':<28}{'accepted':<10}" + "".join(f"{show(a[q], kind):>13}" for q in qs))
         if self.pass_share:
             lines.append("")
-            lines.append("Share of samples within each evidence tolerance")
+            lines.append(f"Evidence over the samples: {self.evidence_headline()}")
+            lines.append("Share of samples within each evidence tolerance (over the successful samples)")
             for k, s in self.pass_share.items():
                 lines.append(f"  {100 * s:6.1f} %  {k}")
+        if self.accept:
+            lines += [""] + self._accepted_lines(show, qs)
         if self.tornado:
             lines.append("")
             lines.append("What moves delta-v (one input from its 5th to its 95th percentile, the others at their "
@@ -502,6 +574,33 @@ class MCResult:
                 lines.append(f"  {count:6d}  {reason}")
             lines.append(f"  first: sample {self.errors[0][0]}: {self.errors[0][1]}")
         return "\n".join(lines)
+
+
+    def _accepted_lines(self, show, qs) -> list[str]:
+        """The report's rejection-sampling section: the accepted count, and the inputs over all and accepted samples
+        (the outputs of the accepted samples are in the outputs table)."""
+        lines = [f"Accepted samples (rejection sampling): {self.evidence_headline()}"]
+        if not self.n_evidence:
+            lines.append("  the scenario has no evidence: there is nothing to accept the samples against")
+            return lines
+        if not self.n_accepted:
+            lines.append("  NO sample meets all the evidence: there are no accepted percentiles. The evidence and the "
+                         "[uncertainty] inputs disagree (widen the distributions, check the evidence), or more "
+                         "samples are needed.")
+            return lines
+        few = " (few: their percentiles are rough)" if self.n_accepted < 30 else ""
+        lines.append(f"  {self.n_accepted} accepted{few}. The inputs, over all successful samples and over the "
+                     "accepted ones (the inputs given the evidence):")
+        w = max([28] + [len(d.name) + 2 for d in self.spec.inputs])
+        lines.append(f"  {'input':<{w}}{'':<10}" + "".join(f"{q:>13}" for q in qs))
+        for d in self.spec.inputs:
+            for tag, table in (("all", self.input_percentiles), ("accepted", self.accepted_input_percentiles)):
+                p = table.get(d.name)
+                if p is not None:
+                    shown = [f"{p[q]:.4g}" if d.kind == "dimensionless" else show(p[q], d.kind) for q in qs]
+                    lines.append(f"  {d.name if tag == 'all' else '':<{w}}{tag:<10}"
+                                 + "".join(f"{v:>13}" for v in shown))
+        return lines
 
 
 # ---------------------------------------------------------------------------------------------
@@ -545,8 +644,11 @@ def _read_rows(path: Path, run_hash: str | None) -> tuple[dict | None, dict[int,
 
 
 def load_results(path: str | Path, scenario_data: dict | None = None, spec: UncertaintySpec | dict | None = None,
-                 *, percentiles: Sequence[float] = DEFAULT_PERCENTILES) -> MCResult:
-    """An :class:`MCResult` from a results file alone (no evaluation; no tornado swings, no nominal scene)."""
+                 *, percentiles: Sequence[float] = DEFAULT_PERCENTILES, accept: bool = False) -> MCResult:
+    """An :class:`MCResult` from a results file alone (no evaluation; no tornado swings, no nominal scene).
+
+    ``accept``: summarise the samples that meet all the evidence (see :func:`monte_carlo`).
+    """
     header, rows = _read_rows(Path(path), None)
     if header is None:
         raise ScenarioError(f"{path} is empty", field="out_path")
@@ -555,7 +657,7 @@ def load_results(path: str | Path, scenario_data: dict | None = None, spec: Unce
         spec = _spec_from_header(header)
     n = max([int(header.get("n", 0))] + [i + 1 for i in rows])
     return _assemble(spec, header["seed"], n, rows, len(rows), 0.0, header.get("engine", "?"), "file", 0, str(path),
-                     percentiles, swings=None, nominal=None)
+                     percentiles, swings=None, nominal=None, accept=accept)
 
 
 def _spec_from_header(header: dict) -> UncertaintySpec:
@@ -577,8 +679,22 @@ def _spearman(a: np.ndarray, b: np.ndarray) -> float | None:
     return float(np.corrcoef(ra, rb)[0, 1])
 
 
+def _percentiles(columns: dict, mask: np.ndarray, percentiles: Sequence[float]) -> dict:
+    """``{key: {"p5": ..., "mean": ..., "std": ...}}`` of each column over the samples in ``mask`` (finite values)."""
+    out = {}
+    for key, v in columns.items():
+        vv = v[mask & np.isfinite(v)]
+        if vv.size == 0:
+            continue
+        p = {f"p{q:g}": float(np.percentile(vv, q)) for q in percentiles}
+        p["mean"] = float(np.mean(vv))
+        p["std"] = float(np.std(vv, ddof=1)) if vv.size > 1 else 0.0
+        out[key] = p
+    return out
+
+
 def _assemble(spec, seed, n, rows: dict, n_resumed, elapsed, engine, backend, workers, out_path, percentiles,
-              swings, nominal) -> MCResult:
+              swings, nominal, accept: bool = False) -> MCResult:
     idx = np.array(sorted(i for i in rows if i < n), dtype=int)
     k = len(spec.inputs)
     X = np.array([rows[i]["x"] for i in idx], dtype=float).reshape(len(idx), k)
@@ -604,15 +720,11 @@ def _assemble(spec, seed, n, rows: dict, n_resumed, elapsed, engine, backend, wo
             why = rows[i].get("reason") or rows[i]["error"].split(":", 1)[0]  # files written before reasons
             reasons[why] = reasons.get(why, 0) + 1
     good = np.array([not rows[i].get("error") for i in idx], dtype=bool)
-    pct = {}
-    for key, v in outputs.items():
-        vv = v[good & np.isfinite(v)]
-        if vv.size == 0:
-            continue
-        p = {f"p{q:g}": float(np.percentile(vv, q)) for q in percentiles}
-        p["mean"] = float(np.mean(vv))
-        p["std"] = float(np.std(vv, ddof=1)) if vv.size > 1 else 0.0
-        pct[key] = p
+    pct = _percentiles(outputs, good, percentiles)
+    meets = good.copy() if checks else np.zeros(len(idx), dtype=bool)
+    for _, ok in checks.values():
+        meets &= ok
+    inputs = {d.name: X[:, j] for j, d in enumerate(spec.inputs)}
     share = {}
     if good.any():
         for key, (_, ok) in checks.items():
@@ -634,7 +746,11 @@ def _assemble(spec, seed, n, rows: dict, n_resumed, elapsed, engine, backend, wo
     return MCResult(spec=spec, seed=int(seed), n=int(n), indices=idx, inputs=X, outputs=outputs, checks=checks,
                     errors=errors, percentiles=pct, pass_share=share, tornado=tornado, n_resumed=int(n_resumed),
                     elapsed=float(elapsed), engine=engine, backend=backend, workers=int(workers),
-                    out_path=None if out_path is None else str(out_path), nominal=nominal, failure_reasons=reasons)
+                    out_path=None if out_path is None else str(out_path), nominal=nominal, failure_reasons=reasons,
+                    meets_all=meets, accept=bool(accept),
+                    accepted_percentiles=_percentiles(outputs, meets, percentiles),
+                    input_percentiles=_percentiles(inputs, good, percentiles),
+                    accepted_input_percentiles=_percentiles(inputs, meets, percentiles))
 
 
 def _swings(data, spec: UncertaintySpec, engine, file, q=(0.05, 0.95)) -> tuple[dict, Any]:
@@ -689,7 +805,7 @@ def monte_carlo(scenario_data: dict, spec: UncertaintySpec | dict | None = None,
                 dask_address: Any = None, out_path: str | Path | None = None,
                 progress: bool | Callable[[int, int], None] = True, chunk_size: int | None = None,
                 percentiles: Sequence[float] = DEFAULT_PERCENTILES, file: str | None = None,
-                sample_time_limit: float = DEFAULT_SAMPLE_TIME_LIMIT) -> MCResult:
+                sample_time_limit: float = DEFAULT_SAMPLE_TIME_LIMIT, accept: bool = False) -> MCResult:
     """Propagate the uncertain inputs through impact and run-out by Monte Carlo sampling.
 
     Parameters
@@ -724,6 +840,11 @@ def monte_carlo(scenario_data: dict, spec: UncertaintySpec | dict | None = None,
         Wall-clock seconds allowed for the run-out of one sample (default
         :data:`DEFAULT_SAMPLE_TIME_LIMIT`); a sample that needs longer fails with the reason
         ``"run-out: wall_time_limit"`` and the run goes on.
+    accept : bool
+        Rejection sampling: summarise the samples that meet all the evidence (count, share,
+        percentiles of outputs and inputs beside those of all samples) in the report and
+        ``to_dict()["accepted"]``, and draw them apart in the figures. Nothing else changes:
+        every sample is run and stored.
 
     Failed samples (an inadmissible impact, a run-out that did not reach rest, ...) are kept
     with their reason; ``MCResult.failure_reasons`` tallies them and the report lists them.
@@ -823,7 +944,7 @@ def monte_carlo(scenario_data: dict, spec: UncertaintySpec | dict | None = None,
         if bar is not None:
             bar.close()
     return _assemble(spec, seed, n, rows, n_resumed, time.perf_counter() - t0, engine, backend, nw,
-                     out_path, percentiles, swings, nominal)
+                     out_path, percentiles, swings, nominal, accept=accept)
 
 
 def _run_pool(payload, chunks, workers, take) -> None:

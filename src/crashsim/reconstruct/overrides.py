@@ -37,7 +37,7 @@ from typing import Any, Sequence
 
 from ..errors import ScenarioError
 from ..schema import ArrayOf, Field, Section, Table
-from ..units import Kind, parse, si_unit
+from ..units import Kind, parse, si_unit, write_like
 
 __all__ = ["Target", "resolve_path", "parse_value", "format_value", "set_value", "get_value",
            "ScenarioOverrides", "INVERSE_SECTIONS"]
@@ -186,9 +186,14 @@ def parse_value(value: Any, target: Target, *, field: str) -> float:
     return parse(value, Kind.DIMENSIONLESS, field=field)
 
 
-def format_value(x: float, target: Target) -> Any:
-    """An SI value written as the file writes it at ``target`` (``"13.41 m/s"``, or a number)."""
+def format_value(x: float, target: Target, like: Any = None) -> Any:
+    """An SI value written as the file writes it at ``target`` (``"13.41 m/s"``, or a number).
+
+    With ``like`` (a file value) in the unit of ``like`` (:func:`crashsim.units.write_like`).
+    """
     f = target.field
+    if like is not None:
+        return write_like(x, f.kind if isinstance(f.kind, Kind) else Kind.DIMENSIONLESS, like)
     if isinstance(f.kind, Kind) and f.kind is not Kind.DIMENSIONLESS:
         return f"{float(x)!r} {si_unit(f.kind)}"
     return float(x)
@@ -249,16 +254,18 @@ def get_value(data: dict, target: Target) -> Any:
     return v[index] if isinstance(v, (list, tuple)) and index < len(v) else None
 
 
-def set_value(data: dict, target: Target, x: float, *, copy_path: bool = True) -> dict:
+def set_value(data: dict, target: Target, x: float, *, copy_path: bool = True, like: bool = False) -> dict:
     """Write SI value ``x`` at ``target`` into the raw dict ``data`` (as a file value with its unit).
 
     With ``copy_path`` (default) ``data`` is not changed: the dicts and lists along the path
-    are copied (the rest is shared) and the new top-level dict is returned.
+    are copied (the rest is shared) and the new top-level dict is returned. With ``like`` the
+    value is written in the unit of the value it replaces (SI where there is none).
     """
+    old = get_value(data, target) if like else None
     out = dict(data) if copy_path else data
     node = _container(out, target, create=True, copy_path=copy_path)
     key, index = target.steps[-1]
-    value = format_value(x, target)
+    value = format_value(x, target, old)
     if index is None:
         node[key] = value
     else:

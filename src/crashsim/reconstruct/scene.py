@@ -11,6 +11,25 @@ from ..impact import ImpactResult, solve_impact
 __all__ = ["SceneResult", "run_scene"]
 
 
+def _format_registrations(evidence, system: str) -> str:
+    """Lines for the rest items derived from measured points: the derived CG and heading, the fit's misfit."""
+    from ..units import Kind, format_value
+
+    lines = []
+    for r in evidence.rest:
+        reg = r.registration
+        if reg is None:
+            continue
+        L = lambda v: format_value(v, Kind.LENGTH, system)  # noqa: E731
+        lines.append(f"  {r.name or 'rest of ' + r.body}: CG ({L(reg.position[0])}, {L(reg.position[1])}), heading "
+                     f"{format_value(reg.heading, Kind.ANGLE, system)} from {len(reg.labels)} measured points "
+                     f"(rigid least-squares fit; RMS misfit {L(reg.rms)}, largest {L(float(max(reg.misfit)))} at "
+                     f"{reg.labels[int(reg.misfit.argmax())]})")
+    if not lines:
+        return ""
+    return "\n\nRest positions from measured points of the body\n" + "\n".join(lines)
+
+
 @dataclass(frozen=True)
 class SceneResult:
     """Everything computed for one scenario (SI, world frame of the scene).
@@ -169,6 +188,7 @@ class SceneResult:
             from ..report import format_evidence
 
             text += "\n\n" + format_evidence(self.evidence, system)
+            text += _format_registrations(self.scenario.evidence, system)
         if self.warnings:
             text += "\n\nWarnings\n" + "\n".join(f"  - {w}" for w in self.warnings)
         return text

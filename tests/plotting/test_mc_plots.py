@@ -1,0 +1,120 @@
+"""Monte Carlo figures under Agg: headlines give the share meeting all the evidence, rest clouds are
+never clipped, and with acceptance the accepted samples are drawn apart (dark) from the others (pale)."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+matplotlib = pytest.importorskip("matplotlib")
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.colors import to_rgb  # noqa: E402
+
+from crashsim.reconstruct.mc_plots import (_display, _label, plot_histograms, plot_rest_clouds,  # noqa: E402
+                                           save_mc_figures)
+from crashsim.reconstruct.montecarlo import monte_carlo  # noqa: E402
+from crashsim.reconstruct.overrides import default_engine  # noqa: E402
+from crashsim.schema import load_toml  # noqa: E402
+
+FILE = Path(__file__).resolve().parents[2] / "scenarios" / "fit" / "intersection_fit.toml"
+N = 10
+
+
+@pytest.fixture(scope="module")
+def mc():
+    return monte_carlo(load_toml(FILE), n=N, engine=default_engine(), workers=1, progress=False, file=str(FILE))
+
+
+@pytest.fixture(scope="module")
+def mc_accept(mc):
+    """The same samples with acceptance on and a known accepted set (samples 1, 4 and 7)."""
+    meets = np.zeros(mc.n_done, dtype=bool)
+    meets[[1, 4, 7]] = True
+    return dataclasses.replace(mc, accept=True, meets_all=meets)
+
+
+def _luminance(rgb) -> float:
+    return float(np.dot(to_rgb(rgb), [0.2126, 0.7152, 0.0722]))
+
+
+def test_headline_is_the_share_meeting_all_the_evidence(mc):
+    k = mc.n_evidence
+    assert k == 9
+    expected = f"{100 * mc.n_accepted / N:.3g} % of {N} samples meet all {k} evidence items"
+    assert mc.evidence_headline() == expected
+    axes = plot_histograms(mc)
+    assert expected in axes.ravel()[0].figure._suptitle.get_text()
+    plt.close("all")
+    ax = plot_rest_clouds(mc)
+    assert expected in ax.get_title()
+    assert "within tolerance" not in ax.get_title()
+    # the scene underneath is the median run: its verdict says so
+    titles = [a.get_title().get_text() for a in ax.get_children() if isinstance(a, matplotlib.legend.Legend)]
+    assert any(t.startswith("Median scene (every input at its median): ") for t in titles), titles
+    assert not any(t.startswith("Evidence:") for t in titles)
+    plt.close("all")
+
+
+def test_rest_clouds_are_never_clipped(mc):
+    out = dict(mc.outputs)
+    far = out["rest_x.tractor"].copy()
+    far[3] += 60.0  # a sample far beyond the scene
+    low = out["rest_y.car"].copy()
+    low[5] -= 25.0
+    out["rest_x.tractor"], out["rest_y.car"] = far, low
+    ax = plot_rest_clouds(dataclasses.replace(mc, outputs=out))
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    for key in ("tractor", "trailer", "car"):
+        x, y = out[f"rest_x.{key}"], out[f"rest_y.{key}"]
+        assert np.all(x > x0) and np.all(x < x1) and np.all(y > y0) and np.all(y < y1), key
+    # with a margin
+    assert x1 - far.max() > 0.5 and low.min() - y0 > 0.5
+    plt.close("all")
+
+
+def test_accepted_samples_are_drawn_dark_the_others_pale(mc_accept):
+    ax = plot_rest_clouds(mc_accept)
+    clouds = [c for c in ax.collections if c.get_label().startswith("rest of")]
+    acc = [c for c in clouds if "meeting all evidence (dark)" in c.get_label()]
+    rej = [c for c in clouds if "not meeting all evidence (pale)" in c.get_label()]
+    assert len(acc) == len(rej) == 3
+    for a, r in zip(acc, rej):
+        assert len(a.get_offsets()) == 3 and len(r.get_offsets()) == N - 3
+        assert _luminance(a.get_facecolor()[0][:3]) < _luminance(r.get_facecolor()[0][:3]) - 0.2
+    # the accepted tractor rests are the samples 1, 4 and 7
+    tractor = next(c for c in acc if "tractor" in c.get_label())
+    assert np.allclose(np.sort(tractor.get_offsets()[:, 0]), np.sort(mc_accept.outputs["rest_x.tractor"][[1, 4, 7]]))
+    plt.close("all")
+
+    axes = plot_histograms(mc_accept)
+    for a in axes.ravel():
+        if not a.get_visible():
+            continue
+        bars = a.containers
+        assert len(bars) == 2  # all samples (pale), then the accepted ones (dark) on the same bins
+        # each group as its share per bin: the accepted bars are the accepted samples' histogram, in % of 3
+        key = next(k for k in mc_accept.outputs if a.get_xlabel().startswith(_label(k)))
+        v = mc_accept.outputs[key]
+        edges = [p.get_x() for p in bars[0]] + [bars[0][-1].get_x() + bars[0][-1].get_width()]
+        scale = _display(v, mc_accept.kind_of(key), "SI")[0] / v
+        counts, _ = np.histogram(v[[1, 4, 7]] * scale[0], bins=edges)
+        assert np.allclose([p.get_height() for p in bars[1]], 100.0 * counts / 3)
+        assert sum(p.get_height() for p in bars[0]) == pytest.approx(100.0)
+        assert _luminance(bars[1][0].get_facecolor()[:3]) < _luminance(bars[0][0].get_facecolor()[:3]) - 0.3
+        assert "accepted: median" in a.get_title()
+    plt.close("all")
+
+
+def test_no_accepted_sample_draws_and_says_so(mc, tmp_path):
+    none = dataclasses.replace(mc, accept=True, meets_all=np.zeros(mc.n_done, dtype=bool))
+    assert none.evidence_headline().startswith(f"0 % of {N} samples meet all")
+    paths = save_mc_figures(none, tmp_path)
+    assert all(p.stat().st_size > 10_000 for p in paths)
+    axes = plot_histograms(none)
+    assert "accepted: none" in axes.ravel()[0].get_title()
+    assert "NO sample meets all the evidence" in none.report()
+    plt.close("all")

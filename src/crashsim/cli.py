@@ -76,14 +76,15 @@ def _cmd_fit(args) -> int:
         if _same_file(Path(args.write_best), Path(args.file)):
             raise ScenarioError(f"{args.write_best!r} is the input file; write the best fit to another file",
                                 field="--write-best", file=args.file)
-    load_scenario(args.file)  # the whole file validated first ([fit] and evidence sigmas included)
+    scenario = load_scenario(args.file)  # the whole file validated first ([fit] and evidence sigmas included)
+    system = _units(args.units or scenario.units)
     result = fit_scene(load_toml(args.file), None, engine=args.engine, workers=args.workers,
                        progress=args.progress, file=args.file, sample_time_limit=args.sample_time_limit)
     if args.json:
         json.dump(_clean(result.to_dict()), sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:
-        sys.stdout.write(result.report(args.units) + "\n")
+        sys.stdout.write(result.report(system) + "\n")
     if args.write_best is not None:
         path = result.write_best(args.write_best)
         sys.stderr.write(f"crashsim: wrote the best-fit scenario to {path} (crashsim run {path})\n")
@@ -96,6 +97,7 @@ def _cmd_mc(args) -> int:
     from .schema import load_toml
 
     scenario = load_scenario(args.file)
+    system = _units(args.units or scenario.units)
     if args.accept and scenario.evidence.empty:
         raise ScenarioError("--accept keeps the samples that meet all the evidence, but the scenario has no "
                             "[evidence] items", field="--accept", file=args.file)
@@ -114,12 +116,12 @@ def _cmd_mc(args) -> int:
         matplotlib.use("Agg")
         from .reconstruct.mc_plots import save_mc_figures
 
-        save_mc_figures(result, Path(args.plots), system=args.units)
+        save_mc_figures(result, Path(args.plots), system=system)
     if args.json:
         json.dump(_clean(result.to_dict()), sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:
-        sys.stdout.write(result.report(args.units) + "\n")
+        sys.stdout.write(result.report(system) + "\n")
     return 0
 
 
@@ -128,7 +130,8 @@ def _add_inverse_commands(sub):
     f = sub.add_parser("fit", help="find the [fit] unknowns from the evidence (weighted least squares, intervals)")
     f.add_argument("file", help="scenario file (TOML) with a [fit] table and evidence sigmas")
     f.add_argument("--json", action="store_true", help="print the full result as one JSON object (SI units)")
-    f.add_argument("--units", choices=("SI", "US"), default="SI", help="units of the readable report")
+    f.add_argument("--units", type=_units, default=None,
+                   help="SI or US (any case): units of the report (default: the scenario's units)")
     f.add_argument("--engine", choices=engines, default=None, help="run-out engine (default: compiled if available)")
     f.add_argument("--workers", type=int, default=None, help="processes for the starts (default: all cores)")
     f.add_argument("--progress", action="store_true", help="progress bar over the starts on stderr")
@@ -148,7 +151,8 @@ def _add_inverse_commands(sub):
     m.add_argument("--dask", metavar="ADDRESS", help="run on an existing Dask cluster (scheduler address)")
     m.add_argument("--plots", metavar="DIR", help="write histograms, rest clouds and tornado charts into DIR")
     m.add_argument("--json", action="store_true", help="print the summary as one JSON object (SI units)")
-    m.add_argument("--units", choices=("SI", "US"), default="SI", help="units of the report and plots")
+    m.add_argument("--units", type=_units, default=None,
+                   help="SI or US (any case): units of the report and plots (default: the scenario's units)")
     m.add_argument("--engine", choices=engines, default=None, help="run-out engine (default: compiled if available)")
     m.add_argument("--accept", action="store_true",
                    help="rejection sampling: also report the samples that meet ALL the evidence (count, share, "

@@ -726,11 +726,14 @@ class FitResult:
         path.write_text(text, encoding="utf-8")
         return path
 
-    def report(self, system: str = "SI") -> str:
-        """Readable report: best values with intervals, correlations, residuals, warnings."""
-        from ..report import fmt
+    def report(self, system: str | None = None) -> str:
+        """Readable report: best values with intervals, correlations, residuals, warnings
+        (``system``: SI or US, any case; default the scenario's units)."""
+        from ..report import fmt, table
+        from ..units import resolve_system
 
         sc = self.scene.scenario if self.scene is not None else None
+        system = resolve_system(system, sc.units if sc is not None else "SI")
         lines = [f"crashsim fit: {sc.title}" if sc is not None else "crashsim fit"]
         if sc is not None and sc.path:
             lines.append(f"file: {sc.path}")
@@ -739,37 +742,38 @@ class FitResult:
                      f"in {self.elapsed:.1f} s")
         lines.append("")
         lines.append(f"Unknowns (best fit, {pct} intervals, {'measurement sigmas' if self.covariance_mode == 'absolute' else 'scaled by chi^2/dof'})")
-        w = max(12, max(len(u.name) for u in self.unknowns))
-        lines.append(f"  {'unknown':<{w}}  {'best':>13}  {'std. error':>13}  {pct + ' interval':<31} bounds")
+        rows = [["unknown", "best", "std. error", f"{pct} interval", "bounds"]]
         for i, u in enumerate(self.unknowns):
             k = u.kind
             lo, hi = self.interval[i]
             iv = (f"[{fmt(lo, k, system)}, {fmt(hi, k, system)}]" if np.isfinite(lo) and np.isfinite(hi)
                   else "not determined")
             se = fmt(self.stderr[i], k, system) if np.isfinite(self.stderr[i]) else "inf"
-            lines.append(f"  {u.name:<{w}}  {fmt(self.x[i], k, system):>13}  {se:>13}  {iv:<31} "
-                         f"[{fmt(u.lower, k, system)}, {fmt(u.upper, k, system)}]")
+            rows.append([u.name, fmt(self.x[i], k, system), se, iv, f"[{fmt(u.lower, k, system)}, {fmt(u.upper, k, system)}]"])
+        lines += table(rows, "lrr")
         n = len(self.unknowns)
         if n > 1:
             lines.append("")
             lines.append("Correlation of the unknowns")
-            lines.append("  " + " " * w + "".join(f"{j + 1:>8d}" for j in range(n)))
+            rows = [[""] + [str(j + 1) for j in range(n)]]
             for i, u in enumerate(self.unknowns):
-                row = "".join(f"{self.correlation[i, j]:8.3f}" if np.isfinite(self.correlation[i, j]) else "     n/a"
-                              for j in range(n))
-                lines.append(f"  {(str(i + 1) + ' ' + u.name):<{w}}{row}")
+                rows.append([f"{i + 1} {u.name}"] + [f"{self.correlation[i, j]:.3f}" if np.isfinite(self.correlation[i, j])
+                                                      else "n/a" for j in range(n)])
+            lines += table(rows, "l" + "r" * n)
         lines.append("")
         lines.append(f"Evidence at the best fit: chi^2 = {self.chi2:.3g} for {self.dof} degrees of freedom"
                      + (f" (p = {self.p_value:.2g})" if np.isfinite(self.p_value) else ""))
+        rows = []
         for r in self.residuals:
-            verdict = "    " if r.passed is None else ("PASS" if r.passed else "FAIL")
+            verdict = "" if r.passed is None else ("PASS" if r.passed else "FAIL")
             if r.kind == "mark":
                 res = f"rms distance {fmt(r.normalized * r.sigma, 'length', system)}"
             else:
                 res = ", ".join(fmt(v, r.quantity, system) for v in r.residual)
                 res = f"residual ({res})" if len(r.residual) > 1 else f"residual {res}"
-            lines.append(f"  {verdict}  {r.kind:<15} {r.name:<32} {res:<34} sigma {fmt(r.sigma, r.quantity, system)}"
-                         f" -> {r.normalized:+.2f} sigma")
+            rows.append([verdict, r.kind, r.name, res, f"sigma {fmt(r.sigma, r.quantity, system)}",
+                         f"-> {r.normalized:+.2f} sigma"])
+        lines += table(rows)
         lines.append("")
         same = (f"; {self.n_same_cost} reached its cost" if self.n_same_cost != self.n_agree else "")
         lines.append(f"Starts: {self.n_agree} of {len(self.starts)} agreed with the best minimum{same}")

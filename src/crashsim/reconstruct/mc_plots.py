@@ -27,11 +27,10 @@ def _plt():
 
 
 def _system(mc, system):
-    if system is not None:
-        return system
-    if mc.nominal is not None:
-        return mc.nominal.scenario.units
-    return "SI"
+    """SI or US (any case); default the scenario's units."""
+    from ..units import resolve_system
+
+    return resolve_system(system, mc.nominal.scenario.units if mc.nominal is not None else "SI", field="system")
 
 
 def _display(values, kind: str, system: str):

@@ -15,7 +15,6 @@ import pytest
 
 matplotlib = pytest.importorskip("matplotlib")
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib import animation as mpl_animation  # noqa: E402
 
 from crashsim.animation import (HOLD, MAX_FRAMES, animate_scene, animation_formats, frame_times,  # noqa: E402
@@ -40,12 +39,6 @@ DT = 0.5
 @functools.lru_cache(maxsize=None)
 def _scene(path: Path):
     return run_scene(load_scenario(path))
-
-
-@pytest.fixture(autouse=True)
-def _close_figures():
-    yield
-    plt.close("all")
 
 
 def _run_end(scene) -> float:

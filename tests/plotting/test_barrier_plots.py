@@ -16,12 +16,6 @@ from crashsim.impact.sweeps import barrier_angle_sweep  # noqa: E402
 from crashsim.plotting import BarrierAxes, plot_barrier_figures, plot_barrier_sweep  # noqa: E402
 
 
-@pytest.fixture(autouse=True)
-def _close_figures():
-    yield
-    plt.close("all")
-
-
 @pytest.fixture(scope="module")
 def sweeps():
     return {t: barrier_angle_sweep(t, n=91) for t in ("loaded", "empty")}

@@ -37,12 +37,6 @@ def _scene(path: Path):
     return run_scene(load_scenario(path))
 
 
-@pytest.fixture(autouse=True)
-def _close_figures():
-    yield
-    plt.close("all")
-
-
 def _with_layout(scene, zones=(), lines=()):
     """The same computed scene with another road layout (drawing only: the run is not redone)."""
     sc = scene.scenario

@@ -38,12 +38,6 @@ def _scene(path: Path):
     return run_scene(load_scenario(path))
 
 
-@pytest.fixture(autouse=True)
-def _close_figures():
-    yield
-    plt.close("all")
-
-
 def _gids(ax, prefix: str):
     return [p for p in ax.patches if (p.get_gid() or "").startswith(prefix)]
 

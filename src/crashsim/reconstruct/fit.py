@@ -805,8 +805,9 @@ def _best_header(res: FitResult, data: dict) -> str:
     from .. import __version__
     from ..report import fmt
 
-    system = (data.get("scenario") or {}).get("units", "SI")
-    system = system if system in ("SI", "US") else "SI"
+    from ..units import resolve_system
+
+    system = resolve_system((data.get("scenario") or {}).get("units"), "SI")
     when = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     pct = f"{100 * res.confidence:g} %"
     lines = [f"Written by crashsim {__version__} (crashsim fit --write-best) on {when}",

@@ -105,12 +105,9 @@ def frame_times(t_end: float, dt: float, *, field: str = "dt") -> np.ndarray:
     allowed = f"allowed dt > 0 s and >= {dt_min:.3g} s (at most {MAX_FRAMES} frames for {t_end:.4g} s)"
     if not (isinstance(dt, (int, float, np.floating)) and math.isfinite(dt) and dt > 0):
         raise ScenarioError(f"time between frames {dt!r} s is not a positive time; {allowed}", field=field)
-    n = math.floor(t_end / dt + 1e-9)
-    times = dt * np.arange(n + 1, dtype=float)
-    if t_end - times[-1] > 1e-9 * dt:
-        times = np.append(times, t_end)
-    else:
-        times[-1] = t_end
+    from .reconstruct.scene import time_grid
+
+    times = time_grid(t_end, dt)
     if len(times) > MAX_FRAMES:
         raise ScenarioError(f"time between frames {dt:g} s gives {len(times)} frames; {allowed}", field=field)
     return times

@@ -215,8 +215,7 @@ class SceneResult:
         if n > 1_000_000:
             raise ScenarioError(f"dt = {dt:g} s gives {n} steps over {self.t_end:.4g} s; allowed at most "
                                 f"1,000,000 (dt >= {self.t_end / 1e6:.3g} s)", field="dt")
-        t = np.arange(n + 1) * dt
-        return t if t[-1] >= self.t_end - 1e-12 else np.append(t, self.t_end)
+        return time_grid(self.t_end, dt)
 
     def history(self, dt: float | None = None) -> dict:
         """Every body's state at common times, as arrays (SI): the positions at any time step.
@@ -326,6 +325,19 @@ class SceneResult:
                         w.writerow([key, t, _convert(x, "length", system), _convert(y, "length", system), int(sl)])
             written.append(path)
         return written
+
+
+def time_grid(t_end: float, dt: float):
+    """0, dt, 2 dt, ... below ``t_end``, and ``t_end`` itself as the last time [s] (a multiple of
+    dt within 1e-9 dt of ``t_end`` is replaced by it); ``dt`` > 0 is the caller's to check."""
+    import numpy as np
+
+    n = int(np.floor(t_end / dt + 1e-9))
+    times = dt * np.arange(n + 1, dtype=float)
+    if t_end - times[-1] > 1e-9 * dt:
+        return np.append(times, t_end)
+    times[-1] = t_end
+    return times
 
 
 #: The kind of a CSV column from its SI unit label.

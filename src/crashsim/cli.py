@@ -174,7 +174,8 @@ def _cmd_plot(args) -> int:
     scene = run_scene(load_scenario(args.file))
     written = save_scene_figures(scene, Path(args.output), histories_path=args.histories and Path(args.histories),
                                  dpi=args.dpi, interval=interval, system=args.units,
-                                 time_distance_path=args.time_distance and Path(args.time_distance))
+                                 time_distance_path=args.time_distance and Path(args.time_distance),
+                                 approach=not args.no_approach)
     for path in written:
         sys.stdout.write(f"wrote {path}\n")
     return 0
@@ -238,6 +239,8 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("--histories", metavar="FILE", help="also draw speed, yaw rate and articulation histories")
     pl.add_argument("--time-distance", metavar="FILE",
                     help="also draw the time-distance and speed-time chart (approach, impacts, run-out to rest)")
+    pl.add_argument("--no-approach", action="store_true",
+                    help="leave the approaches out of the scene diagram (a close view of impact and run-out)")
     pl.add_argument("--interval", metavar="TIME", help='time between ghost outlines, e.g. "0.5 s"')
     pl.add_argument("--units", type=_units, default=None, help="SI or US: units of the figure (default: the scenario's)")
     pl.add_argument("--dpi", type=int, default=150)

@@ -58,6 +58,12 @@ class InadmissibleImpactError(ScenarioError):
         super().__init__(message, field=field, file=file)
 
 
+class UnreachableImpactError(ScenarioError):
+    """Valid inputs whose motion cannot reach the impact: an approach that stops before it, or
+    passes the impact position too far away.  A fit or Monte Carlo sample in such a region fails
+    (like an inadmissible impact); a bound of a fit unknown may lie in one."""
+
+
 def with_file(exc: ScenarioError, file: str | None) -> ScenarioError:
     """``exc`` with the scenario file named (a copy of the same type), unless it names one already."""
     if file is None or exc.file is not None:
@@ -95,13 +101,16 @@ class IllConditionedError(SolverError):
 def failure_reason(exc: BaseException) -> str:
     """A short category of why a scene evaluation failed, for the tallies of fits and Monte Carlo.
 
-    ``"inadmissible impact: <rule>"``, ``"ill-conditioned impact"``, ``"invalid input"``,
+    ``"inadmissible impact: <rule>"``, ``"ill-conditioned impact"``, ``"approach does not reach the
+    impact"``, ``"invalid input"``,
     ``"solver error"``, or the exception's type name.
     """
     if isinstance(exc, InadmissibleImpactError):
         return f"inadmissible impact: {exc.reason}"
     if isinstance(exc, IllConditionedError):
         return "ill-conditioned impact"
+    if isinstance(exc, UnreachableImpactError):
+        return "approach does not reach the impact"
     if isinstance(exc, ScenarioError):
         text = str(exc)
         if "not approaching" in text:

@@ -458,7 +458,8 @@ def _residual_text(c, system) -> str:
 
 
 def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evidence: bool = True,
-               arrows: bool = True, system: str | None = None, legend=True, axles: bool = True):
+               arrows: bool = True, system: str | None = None, legend=True, axles: bool = True,
+               approach: bool = True):
     """Scale diagram of a reconstructed scene in the ground frame: impact, run-out, evidence.
 
     Parameters
@@ -486,6 +487,10 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
         location string (``"best"``, ``"upper left"``): inside; False: none.
     axles : bool
         Draw the axles (at impact and at rest) as thin cross lines.
+    approach : bool
+        Draw the vehicles' approaches (``[vehicles.<name>.approach]``): tyre tracks, CG paths, the
+        outlines at the start of braking and the perception point. False leaves them out (a
+        close view of the impact and run-out when the approach is long).
 
     Returns
     -------
@@ -554,7 +559,7 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
         S.legend_entry("at impact", Patch(facecolor="0.85", edgecolor="0.3", lw=1.4))
 
     # -- approach: tracks, CG paths, the start of braking and the perception point -------------
-    if getattr(sc, "approaches", None):
+    if approach and getattr(sc, "approaches", None):
         _draw_approaches(S)
 
     # -- run-out: tracks, CG paths, ghosts, rest -----------------------------------------------
@@ -1598,7 +1603,7 @@ def plot_histories(scene, axes=None, *, system: str | None = None):
 
 
 def save_scene_figures(scene, path, *, histories_path=None, dpi: int = 150, interval: float | None = None,
-                       system: str | None = None, time_distance_path=None) -> list:
+                       system: str | None = None, time_distance_path=None, approach: bool = True) -> list:
     """Write the scene diagram (and optionally the histories) to files; closes its figures.
 
     Parameters
@@ -1610,6 +1615,8 @@ def save_scene_figures(scene, path, *, histories_path=None, dpi: int = 150, inte
         Run-out histories (:func:`plot_histories`), same suffixes; needs a run-out.
     time_distance_path : str or Path, optional
         Time-distance and speed-time chart (:func:`plot_time_distance`), same suffixes.
+    approach : bool
+        Draw the approaches on the scene diagram (see :func:`plot_scene`).
     dpi : int
         Resolution of raster output [dots per inch].
     interval : float, optional
@@ -1644,7 +1651,7 @@ def save_scene_figures(scene, path, *, histories_path=None, dpi: int = 150, inte
                             f"{scene.scenario.title!r} has no run-out (impact only)", field="histories_path")
     plt = _plt()
     written = []
-    ax = plot_scene(scene, interval=interval, system=system)
+    ax = plot_scene(scene, interval=interval, system=system, approach=approach)
     try:
         targets[0].parent.mkdir(parents=True, exist_ok=True)
         ax.figure.savefig(targets[0], dpi=dpi)

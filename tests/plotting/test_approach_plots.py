@@ -66,3 +66,11 @@ def test_save_writes_the_chart(result, tmp_path):
     out = save_scene_figures(result, tmp_path / "s.png", time_distance_path=tmp_path / "td.svg")
     assert [p.name for p in out] == ["s.png", "td.svg"]
     assert (tmp_path / "td.svg").read_text().count("<svg") == 1
+
+
+def test_scene_figure_without_the_approach(result):
+    ax = plot_scene(result, approach=False)
+    assert not [ln for ln in ax.lines if (ln.get_gid() or "").startswith("approach:")]
+    assert not any((p.get_gid() or "").startswith("outline:braking:") for p in ax.patches)
+    # the view then holds the impact and run-out only: the start of braking (18 m back) is outside
+    assert ax.get_xlim()[0] > result.scenario.approaches["A"].braking_start["carA"][0]

@@ -155,3 +155,21 @@ def test_articulated_approach_jackknife_warns():
     assert abs(art) > 2.0  # locked drive axles with a steer input: the tractor yaws against the trailer
     res = run_scene(sc)
     assert any("approach of truck" in w and "articulation" in w for w in res.warnings)
+
+
+def test_monte_carlo_outputs_of_an_approach():
+    """Each sample records the speed at impact that the approach gave, and the approach's own numbers."""
+    from crashsim.reconstruct.montecarlo import OUTPUT_KINDS, scene_outputs
+
+    res = run_scene(scenario_from_dict(scene()))
+    out = scene_outputs(res)
+    a = res.scenario.approaches["A"]
+    assert out["speed.A"] == pytest.approx(a.speed_at_impact)
+    assert out["speed.B"] == pytest.approx(10.0)
+    assert out["speed_at_braking.A"] == pytest.approx(50 * 0.44704)
+    assert out["braking_distance.A"] == pytest.approx(18.0)
+    assert out["perception_distance.A"] == pytest.approx(18.0 + 1.5 * 50 * 0.44704)
+    assert out["time_to_impact.A"] == pytest.approx(a.time_to_impact)
+    assert out["mu.impact"] == pytest.approx(res.impact.mu)
+    for key in out:
+        assert key.split(".", 1)[0] in OUTPUT_KINDS

@@ -44,7 +44,7 @@ from typing import Mapping
 
 import numpy as np
 
-from ..errors import ScenarioError
+from ..errors import ScenarioError, UnreachableImpactError
 from ..geometry import rotate
 from ..vehicles import BodyState, Vehicle, chain_states
 from .loads import STANDARD_GRAVITY
@@ -238,7 +238,7 @@ def _end_time(run: RunoutResult, spec: ApproachSpec, vehicle: Vehicle, target) -
     s = _path_length(b.sol, grid)
     if spec.mode == "distance":
         if s[-1] < spec.distance:
-            raise ScenarioError(
+            raise UnreachableImpactError(
                 f"the vehicle stops {s[-1]:.2f} m after the start of braking, before the impact (distance = "
                 f"{spec.distance:.2f} m): the approach does not reach the impact; raise the speed at braking or "
                 "shorten the distance", field=f"{spec.key}.distance")
@@ -246,11 +246,11 @@ def _end_time(run: RunoutResult, spec: ApproachSpec, vehicle: Vehicle, target) -
         return ti, float(spec.distance)
     if spec.mode == "time":
         if run.status == "rest" and (b.time_to_rest or t_end) < spec.time:
-            raise ScenarioError(
+            raise UnreachableImpactError(
                 f"the vehicle stops {b.time_to_rest or t_end:.3f} s after the start of braking, before the impact "
                 f"(time = {spec.time:.3f} s): the approach does not reach the impact", field=f"{spec.key}.time")
         if spec.time > t_end:
-            raise ScenarioError(f"the approach simulation ended ({run.status}) at {t_end:.3f} s, before time = "
+            raise UnreachableImpactError(f"the approach simulation ended ({run.status}) at {t_end:.3f} s, before time = "
                                 f"{spec.time:.3f} s", field=f"{spec.key}.time")
         return float(spec.time), float(np.interp(spec.time, grid, s))
     sv = np.asarray(b.sol(grid))
@@ -370,7 +370,7 @@ def _approach(vehicle, spec, impact_states, road, options, speed) -> ApproachRes
         miss = float(np.hypot(*(np.asarray(states[first].position) - target)))
         hmiss = float((heading_first - h_imp + math.pi) % (2 * math.pi) - math.pi)
         if miss > spec.tolerance:
-            raise ScenarioError(
+            raise UnreachableImpactError(
                 f"the approach from start_position passes the impact position {miss:.2f} m away at its closest "
                 f"(tolerance {spec.tolerance:.2f} m): it does not reach the impact configuration",
                 field=f"{spec.key}.start_position")
@@ -410,7 +410,7 @@ def approach_speed_at_braking(vehicle: Vehicle, spec: ApproachSpec, impact_state
     def f(v):
         try:
             return _approach(vehicle, spec, impact_states, road, options, v).speed_at_impact - speed_at_impact
-        except ScenarioError:
+        except UnreachableImpactError:
             return -speed_at_impact  # stops before the impact: far too slow
 
     lo = speed_at_impact
@@ -427,6 +427,6 @@ def approach_speed_at_braking(vehicle: Vehicle, spec: ApproachSpec, impact_state
             break
         hi *= 1.5
     else:
-        raise ScenarioError(f"no speed at braking up to {hi:.1f} m/s reaches the impact at {speed_at_impact:.2f} m/s",
+        raise UnreachableImpactError(f"no speed at braking up to {hi:.1f} m/s reaches the impact at {speed_at_impact:.2f} m/s",
                             field=f"{spec.key}.speed")
     return float(brentq(f, lo, hi, xtol=xtol, rtol=4 * np.finfo(float).eps))

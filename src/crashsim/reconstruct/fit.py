@@ -57,7 +57,7 @@ from typing import Any, Callable
 import numpy as np
 
 
-from ..errors import ScenarioError, SolverError, failure_reason
+from ..errors import ScenarioError, SolverError, UnreachableImpactError, failure_reason
 from ..geometry import wrap_angle
 from .evidence import signed_distance_to_polyline
 from .overrides import ScenarioOverrides, default_engine, parse_value
@@ -459,6 +459,8 @@ class FitProblem:
                 x[j] = v
                 try:
                     self.overrides.scenario(x)
+                except UnreachableImpactError:
+                    continue  # valid, but the motion cannot reach the impact there: those evaluations fail
                 except ScenarioError as exc:
                     raise ScenarioError(f"{which} bound of {u.path} gives an invalid scenario: {exc.field}: {_bare(exc)}",
                                         field=f"fit.unknowns[{j}].{which}", file=self.file) from None

@@ -44,6 +44,8 @@ def _display(values, kind: str, system: str):
         return 100.0 * v, "%"
     if kind == "count":
         return v, "count"
+    if kind == "ratio":
+        return v, "ratio"
     _, label = to_unit(1.0, kind, system)
     factor = to_unit(1.0, kind, system)[0]
     return v * factor, label

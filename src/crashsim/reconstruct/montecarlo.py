@@ -257,19 +257,33 @@ def sample_inputs(spec: UncertaintySpec, seed: int, i: int) -> np.ndarray:
 #: Unit kind of each output, by the prefix of its key ("delta_v.car").
 OUTPUT_KINDS = {"delta_v": "speed", "speed": "speed", "speed_after": "speed", "energy_loss": "dimensionless",
                 "rest_x": "length", "rest_y": "length", "rest_heading": "angle", "distance": "length",
-                "delta_v_event": "speed", "impacts": "count"}
+                "delta_v_event": "speed", "impacts": "count", "speed_at_braking": "speed", "time_to_impact": "time",
+                "braking_distance": "length", "perception_distance": "length", "mu": "ratio",
+                "mu_over_mu_max": "dimensionless"}
 
 
 def scene_outputs(scene) -> dict[str, float]:
-    """Flat outputs of one scene (SI): delta-v, speeds before/after, energy loss, rest positions;
+    """Flat outputs of one scene (SI): delta-v, speeds before/after, energy loss, rest positions,
+    the impulse ratio mu and mu / mu_max of the first impact, and for each vehicle with an approach
+    its speed at the start of braking, the time and distance from it to the impact and the
+    distance from perception;
     with a joint run-out also each body's delta-v over the whole event (``delta_v_event``: the
     magnitude of the sum over all its impacts, as a recorder accumulating the event sees it)
     and the number of impacts after the first (``impacts.later``)."""
     imp = scene.impact
     out: dict[str, float] = {}
-    data = scene.scenario.data
-    for vname, v in (data.get("vehicles") or {}).items():
-        out[f"speed.{vname}"] = float(v["speed"])
+    sc = scene.scenario
+    for veh in sc.vehicles:  # the first body's CG speed at impact (from the file, or from its approach)
+        if not veh.is_barrier:
+            out[f"speed.{veh.name}"] = float(np.hypot(*sc.states[veh.bodies[0].name].velocity))
+    for vname, a in (getattr(sc, "approaches", None) or {}).items():
+        out[f"speed_at_braking.{vname}"] = a.speed_at_braking
+        out[f"time_to_impact.{vname}"] = a.time_to_impact
+        out[f"braking_distance.{vname}"] = a.distance
+        out[f"perception_distance.{vname}"] = a.distance + a.reaction_distance
+    out["mu.impact"] = float(imp.mu)
+    if imp.mu_fraction is not None:
+        out["mu_over_mu_max.impact"] = float(imp.mu_fraction)
     for name, b in imp.bodies.items():
         if b.fixed:
             continue
@@ -505,6 +519,8 @@ class MCResult:
                 return f"{100 * v:.1f} %"
             if kind == "count":
                 return f"{v:.3g}"
+            if kind == "ratio":
+                return f"{v:.4g}"
             return fmt(v, kind, system)
 
         title = self.nominal.scenario.title if self.nominal is not None else ""

@@ -1,5 +1,7 @@
 """Regenerate the committed figures of every shipped scene (plots/scene_<name>.png and
-plots/scene_<name>_histories.png) with the project's own command, ``crashsim plot``.
+plots/scene_<name>_histories.png; for a scene with an approach also its time-distance chart
+plots/scene_<name>_time_distance.png and a close view without the approach,
+plots/scene_<name>_impact.png) with the project's own command, ``crashsim plot``.
 
 Run from the repository root: ``python benchmarks/scene_figures.py`` (every scene of
 scenarios/scenes/, among them verge_run_off: friction zone and road layout), or name some
@@ -30,7 +32,14 @@ def main(names: list[str] | None = None) -> int:
     for scene in scenes:
         out = ROOT / "plots" / f"scene_{scene.stem}.png"
         hist = ROOT / "plots" / f"scene_{scene.stem}_histories.png"
-        code = crashsim(["plot", str(scene), "-o", str(out), "--histories", str(hist)])
+        args = ["plot", str(scene), "-o", str(out), "--histories", str(hist)]
+        if "approach]" in scene.read_text():
+            args += ["--time-distance", str(ROOT / "plots" / f"scene_{scene.stem}_time_distance.png")]
+            code = crashsim(["plot", str(scene), "-o", str(ROOT / "plots" / f"scene_{scene.stem}_impact.png"),
+                             "--no-approach"])
+            if code:
+                return code
+        code = crashsim(args)
         if code:
             return code
     return 0

@@ -285,6 +285,7 @@ class _Scene:
         self.labels: list[np.ndarray] = []  # positions of the text labels placed so far
         self.texts: list = []  # labels anchored in data coordinates
         self.no_outline: set[str] = set()  # bodies drawn as a skeleton
+        self.approach = True  # draw the approaches (and pre-impact marks)
         self.body_of = {b.name: b for v in self.sc.vehicles for b in v.bodies}
         self.vehicle_of = {b.name: v for v in self.sc.vehicles for b in v.bodies}
         movable = [v for v in self.sc.vehicles if not v.is_barrier]
@@ -430,6 +431,8 @@ def _check_map(scene) -> dict:
         take("mark", i, m.name or f"mark {i + 1}")
     for i, x in enumerate(ev.delta_v):
         take("delta-v", i, x.name or f"delta-v of {x.body} ({x.component})")
+    for i, x in enumerate(getattr(ev, "recorder", ())):
+        take("recorder", i, x.name or f"recorder in {x.body}")
     return out
 
 
@@ -528,6 +531,7 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
         # laid out by _layout_scene_figure (exact equal-aspect box plus legend), not by a layout engine
         ax = _plt().figure(figsize=(10.0, 6.0)).add_subplot()
     S = _Scene(scene, ax, system)
+    S.approach = approach
     sc = S.sc
     runout = scene.runout or {}
 
@@ -892,6 +896,8 @@ def _draw_evidence(S: _Scene, checks: dict) -> None:
         S.legend_entry(label, Line2D([], [], ls=(0, (4, 2)), color=_EVIDENCE, lw=1.2, marker="x", ms=6, mew=1.5),
                        color)
     for i, m in enumerate(ev.marks):
+        if m.phase == "approach" and not S.approach:
+            continue  # a pre-impact mark belongs to the approach, left out of this view
         c = checks.get(("mark", i))
         verdict, color = _verdict([c])
         xy = S.d(m.points)
@@ -919,6 +925,16 @@ def _draw_evidence(S: _Scene, checks: dict) -> None:
         name = x.name or f"delta-v of {x.body} ({x.component})"
         detail = _residual_text(c, system)
         S.legend_entry(_wrap(f"recorded \u0394v \u201c{name}\u201d: {verdict}", 52)
+                       + (f"\n  {detail}" if detail else ""),
+                       Line2D([], [], ls="none"), color)
+    for i, x in enumerate(getattr(ev, "recorder", ())):
+        c = checks.get(("recorder", i))
+        verdict, color = _verdict([c])
+        name = x.name or f"recorder in {x.body}"
+        detail = ""
+        if c is not None and "times" in c.details:
+            detail = (f"{len(x.times)} pre-crash speeds, worst {_residual_text(c, system)}")
+        S.legend_entry(_wrap(f"recorded speeds \u201c{name}\u201d: {verdict}", 52)
                        + (f"\n  {detail}" if detail else ""),
                        Line2D([], [], ls="none"), color)
 

@@ -27,7 +27,7 @@ def test_there_are_shipped_scenes():
     names = {p.stem for p in SCENES}
     assert {"intersection_car_trailer_wheels", "barrier_15deg", "barrier_75deg", "car_trailer_side_impact",
             "median_barrier_slide", "third_vehicle_waiting_car", "trailer_swings_into_car",
-            "verge_run_off"} <= names
+            "verge_run_off", "truck_brakes_into_car"} <= names
 
 
 @pytest.mark.parametrize("path", SCENES, ids=[p.stem for p in SCENES])
@@ -150,3 +150,30 @@ def test_sliding_along_the_median_barrier(capsys):
         assert p["contact_time"] > 0.5 * t_end and p["contact_work"] < 0
     assert [(i["body1"], i["body2"]) for i in out["impacts"][1:]] == [("trailer", "median")]
     assert out["runout"]["energy"]["contacts"] > 0
+
+
+def test_truck_brakes_before_the_impact(capsys):
+    """The braking tractor-semitrailer: the approach gives the impact speed, the pre-impact marks and
+    the engine module's speeds are checked against it, and the energy of the approach adds up: the
+    kinetic energy lost from the start of braking to the impact is the work of the tyres over it."""
+    path = ROOT / "scenarios" / "scenes" / "truck_brakes_into_car.toml"
+    assert main(["run", str(path), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    a = out["approach"]["truck"]
+    assert a["speed_at_braking"] == pytest.approx(55 * 0.44704)
+    assert a["distance"] == pytest.approx(120 * 0.3048)
+    assert a["reaction_time"] == 1.5 and a["time_to_impact"] > 1.0
+    first = out["impacts"][0]
+    assert first["closing_speed"] == pytest.approx(a["speed_at_impact"], rel=1e-6)  # the car crosses at 90 deg
+    kinds = {c["kind"] for c in out["evidence"]["checks"]}
+    assert {"mark", "recorder", "delta-v", "rest"} <= kinds
+    assert out["evidence"]["all_passed"]
+    sc = load_scenario(path)
+    ap = sc.approaches["truck"]
+    run = ap.runout
+    m = sum(b.mass for v in sc.vehicles if v.name == "truck" for b in v.bodies)
+    lost = 0.5 * m * (ap.speed_at_braking**2 - ap.speed_at_impact**2)
+    # tyre work over the approach: the braking phase runs on past the impact; the tracks are cut at it
+    work = sum(w.energy for w in run.wheels.values())  # to rest, beyond the impact
+    assert work == pytest.approx(0.5 * m * ap.speed_at_braking**2, rel=1e-3)
+    assert 0 < lost < work

@@ -173,3 +173,19 @@ def test_monte_carlo_outputs_of_an_approach():
     assert out["mu.impact"] == pytest.approx(res.impact.mu)
     for key in out:
         assert key.split(".", 1)[0] in OUTPUT_KINDS
+
+
+def test_csv_of_the_approach(tmp_path):
+    import csv
+
+    res = run_scene(scenario_from_dict(scene()))
+    written = res.write_csv(tmp_path, system="US")
+    path = tmp_path / "A_approach.csv"
+    assert path in written
+    rows = list(csv.reader(path.open()))
+    assert rows[0] == ["t from impact [s]", "distance from impact [ft]", "speed [mph]"]
+    a = res.scenario.approaches["A"]
+    first, last = [float(x) for x in rows[1]], [float(x) for x in rows[-1]]
+    assert first == pytest.approx([-a.time_to_impact - 1.5, -(18.0 + 1.5 * 50 * 0.44704) / 0.3048, 50.0])
+    assert last[:2] == pytest.approx([0.0, 0.0], abs=1e-4)
+    assert last[2] == pytest.approx(a.speed_at_impact / 0.44704)

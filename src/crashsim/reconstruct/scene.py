@@ -281,7 +281,9 @@ class SceneResult:
         ``impact.csv``: one row per body (velocities before/after, delta-v, yaw rates);
         ``<vehicle>_history.csv``: the run-out history of every body and hitch, at the stored
         samples or every ``dt`` [s] (:meth:`crashsim.motion.RunoutResult.table`);
-        ``<vehicle>_tracks.csv``: every wheel's track (time, x, y, sliding flag).
+        ``<vehicle>_tracks.csv``: every wheel's track (time, x, y, sliding flag);
+        ``<vehicle>_approach.csv``: a vehicle's approach as a time-distance-speed table (time and
+        distance from the impact, the first body's CG; perception, then the braking phase).
         ``system``: ``"SI"`` (angles in rad) or ``"US"`` (ft, mph, lbf, deg); default the
         scenario's ``units``.
         """
@@ -330,6 +332,16 @@ class SceneResult:
                 for key, tr in r.wheels.items():
                     for t, (x, y), sl in zip(tr.t.tolist(), tr.points.tolist(), tr.sliding.tolist()):
                         w.writerow([key, t, _convert(x, "length", system), _convert(y, "length", system), int(sl)])
+            written.append(path)
+        for vname, a in self.scenario.approaches.items():
+            path = directory / f"{vname}_approach.csv"
+            tab = a.table()
+            lu, vu = _unit("length", system), _unit("speed", system)
+            with path.open("w", newline="") as fh:
+                w = csv.writer(fh)
+                w.writerow(["t from impact [s]", f"distance from impact [{lu}]", f"speed [{vu}]"])
+                for t, d, v in zip(tab["t"].tolist(), tab["s"].tolist(), tab["v"].tolist()):
+                    w.writerow([t, _convert(d, "length", system), _convert(v, "speed", system)])
             written.append(path)
         return written
 

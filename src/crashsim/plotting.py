@@ -598,17 +598,7 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
             v = next(x for x in sc.vehicles if x.name == vn)
             fill, line, dark = S.family[vn]
             for tr in r.wheels.values():
-                for seg in tr.segments:
-                    if len(seg.points) < 2:
-                        continue
-                    xy = S.d(seg.points)
-                    if seg.kind == "sliding":
-                        ax.plot(xy[:, 0], xy[:, 1], "-", color=dark, lw=2.2, alpha=0.85, zorder=_Z_TRACK,
-                                solid_capstyle="butt")
-                    else:
-                        ax.plot(xy[:, 0], xy[:, 1], "--", color=line, lw=0.7, alpha=0.8, zorder=_Z_TRACK,
-                                dashes=(4, 3))
-                    S.add(xy)
+                _draw_track(S, tr, line, dark)
             for name, br in r.bodies.items():
                 h = br.history
                 xy = S.d(np.column_stack([h.x, h.y]))
@@ -721,6 +711,20 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     return ax
 
 
+def _draw_track(S: _Scene, track, line, dark, gid: str | None = None) -> None:
+    """A wheel's track: sliding stretches bold and dark (a tyre mark expected), rolling ones thin and dashed."""
+    for seg in track.segments:
+        if len(seg.points) < 2:
+            continue
+        xy = S.d(seg.points)
+        if seg.kind == "sliding":
+            S.ax.plot(xy[:, 0], xy[:, 1], "-", color=dark, lw=2.2, alpha=0.85, zorder=_Z_TRACK, solid_capstyle="butt",
+                      gid=gid)
+        else:
+            S.ax.plot(xy[:, 0], xy[:, 1], "--", color=line, lw=0.7, alpha=0.8, zorder=_Z_TRACK, dashes=(4, 3), gid=gid)
+        S.add(xy)
+
+
 def _draw_approaches(S: _Scene) -> None:
     """The approach of each vehicle before the impact: its tyre tracks (sliding bold: pre-impact
     marks expected), the CG paths (dash-dot), the outlines at the start of braking (thin,
@@ -735,17 +739,7 @@ def _draw_approaches(S: _Scene) -> None:
         v = next(x for x in S.sc.vehicles if x.name == vn)
         fill, line, dark = S.family[vn]
         for tr in a.tracks.values():
-            for seg in tr.segments:
-                if len(seg.points) < 2:
-                    continue
-                xy = S.d(seg.points)
-                if seg.kind == "sliding":
-                    ax.plot(xy[:, 0], xy[:, 1], "-", color=dark, lw=2.2, alpha=0.85, zorder=_Z_TRACK,
-                            solid_capstyle="butt", gid=f"approach:track:{tr.key}")
-                else:
-                    ax.plot(xy[:, 0], xy[:, 1], "--", color=line, lw=0.7, alpha=0.8, zorder=_Z_TRACK, dashes=(4, 3),
-                            gid=f"approach:track:{tr.key}")
-                S.add(xy)
+            _draw_track(S, tr, line, dark, gid=f"approach:track:{tr.key}")
         poses = {}
         for name, rows in a.bodies.items():
             xy = S.d(rows[:, 1:3])

@@ -87,7 +87,8 @@ def test_runout_scene_diagram(path):
     texts = _legend_texts(ax)
     assert len(texts) == len(set(texts)), "legend entries are deduplicated"
     assert any(t.startswith("tyre track, sliding") for t in texts)
-    assert _scalebar_text(ax).endswith(" m")
+    # in the scenario's units (SI unless its [scenario] says units = "US")
+    assert _scalebar_text(ax).endswith(" ft" if scene.scenario.units.upper() == "US" else " m")
     assert ax.get_xlabel() == "X [m]" and ax.get_ylabel() == "Y [m]"
     assert ax.get_title().replace("\n", " ") == scene.scenario.title
     # one delta-v arrow per moving body, a PDOF arrow per movable body in contact

@@ -23,6 +23,8 @@ delta-v         computed minus recorded delta-v of a body [m/s]: its magnitude, 
                 a recorder records one event, normally the first), or summed over all the
                 body's impacts (``impacts = "all"``: a recorder that accumulates a whole event
                 which includes a later impact).
+crush energy    the impact model's energy loss at the crush surface minus the CRASH3 crush energy
+                of the bodies [J], per group of crush items (:mod:`crashsim.reconstruct.crush`).
 """
 
 from __future__ import annotations
@@ -231,10 +233,11 @@ class Evidence:
     marks: tuple[MarkEvidence, ...] = ()
     impact_point: ImpactPointEvidence | None = None
     delta_v: tuple[DeltaVEvidence, ...] = ()
+    crush: tuple = ()  # CrushEvidence (crashsim.reconstruct.crush)
 
     @property
     def empty(self) -> bool:
-        return not (self.rest or self.marks or self.delta_v or self.impact_point)
+        return not (self.rest or self.marks or self.delta_v or self.impact_point or self.crush)
 
 
 @dataclass(frozen=True)
@@ -243,7 +246,7 @@ class Check:
 
     Attributes
     ----------
-    kind : {"rest", "rest heading", "mark", "point of impact", "delta-v"}
+    kind : {"rest", "rest heading", "mark", "point of impact", "delta-v", "crush energy"}
     name : str
     residual : float
         Computed minus measured (or a distance) in SI: m, rad or m/s (``quantity`` says which);
@@ -253,7 +256,7 @@ class Check:
     passed : bool
         ``abs(residual) <= tolerance``.
     quantity : str
-        Unit kind of residual and tolerance ("length", "angle", "speed").
+        Unit kind of residual and tolerance ("length", "angle", "speed", "energy").
     details : dict
         Computed and measured values and any extra figure (mean distance, matched wheel).
     """
@@ -466,4 +469,8 @@ def evaluate_evidence(evidence: Evidence, impact, runout: dict | None, contact_p
         checks.append(Check("delta-v", name, res, ev.tolerance, abs(res) <= ev.tolerance, "speed",
                             {"computed": computed, "measured": ev.value, "component": ev.component,
                              "impacts": ev.impacts, "impacts_counted": n_imp}))
+    if evidence.crush:
+        from .crush import crush_checks
+
+        checks += crush_checks(evidence.crush, impact, secondary)
     return EvidenceReport(tuple(checks))

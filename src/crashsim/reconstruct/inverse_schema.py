@@ -154,6 +154,11 @@ EVIDENCE_SIGMA_FIELDS = {
         Field("sigma", Kind.SPEED, required=False, minimum=0, exclusive_minimum=True, example="0.5 mph",
               description="Standard uncertainty of the recorded delta-v (fit)"),
     ),
+    "crush": (
+        Field("sigma", Kind.ENERGY, required=False, minimum=0, exclusive_minimum=True, example="8 kJ",
+              description="Standard uncertainty of this item's crush energy (fit; a group's sigma is the root sum "
+                          "of squares of its items')"),
+    ),
 }
 
 

@@ -240,8 +240,14 @@ _CRUSH_COMPARE = {"total": "crush energies with the force-direction factor again
                             "parts T_n + T_M (Brach & Brach's partition)"}
 
 
+def _mean_depth(profile) -> float:
+    """Mean crush depth over the damage width [m]: the area of the piecewise-linear profile over its width."""
+    return sum(a + b for a, b in zip(profile[:-1], profile[1:])) / (2 * (len(profile) - 1))
+
+
 def format_crush(report, system: str = "SI") -> str:
-    """The crush-energy section: per body its CRASH3 inputs, force-direction factor, energy and EES;
+    """The crush-energy section: per body its CRASH3 inputs (the profile as its count, its mean depth over
+    the width and its largest depth), force-direction factor, energy and EES;
     per group the impacts' energy loss split into normal, tangential and moment work, and the verdict."""
     s = system
     E = lambda v: fmt(v, "energy", s, 6)  # noqa: E731
@@ -261,7 +267,7 @@ def format_crush(report, system: str = "SI") -> str:
                     prof = it["profile"]
                     inputs = [fmt(it["A"], "force_per_length", s, 6), fmt(it["B"], "force_per_area", s, 6),
                               fmt(it["width"], "length", s),
-                              f"{len(prof)} points, mean {fmt(sum(prof) / len(prof), 'length', s, 3)}, "
+                              f"{len(prof)} points, mean {fmt(_mean_depth(prof), 'length', s, 3)}, "
                               f"max {fmt(max(prof), 'length', s, 3)}"]
                 factor = "none (EES)" if "ees_given" in it else (
                     f"{it['factor']:.4f}" + (" (capped)" if it["factor_capped"] else ""))

@@ -140,3 +140,28 @@ def test_oblique_force_gets_the_factor_and_normal_comparison_drops_it():
     assert c2.details["measured"] == pytest.approx(55_175.0, rel=1e-12)
     assert c2.details["computed"] == pytest.approx(base.impact.energy_loss_normal + base.impact.energy_loss_moment,
                                                    rel=1e-12)
+
+
+def test_all_impacts_group_counts_the_run_out_impacts_of_the_body():
+    """barrier_75deg: the tractor strikes the barrier, then the trailer swings into it (t = 0.47 s).
+    A trailer item with impacts = "all" is compared with the trailer's own (secondary) impact; the
+    barrier is rigid, so the comparison is complete. With impacts = "first" the trailer was not in
+    contact, and the check fails with that reason."""
+    d = tomllib.loads((ROOT / "scenarios" / "scenes" / "barrier_75deg.toml").read_text())
+    item = {"body": "trailer", "face": "right", "ees": "20 km/h", "tolerance": "50 kJ", "impacts": "all"}
+    d["evidence"] = {"crush": [dict(item), {"body": "tractor", "face": "front", "ees": "25 km/h",
+                                            "tolerance": "50 kJ", "impacts": "first"}]}
+    scene = run_scene(scenario_from_dict(d))
+    later, first = [c for c in scene.evidence.checks if c.kind == "crush energy"]  # groups in order of appearance
+    assert (later.details["impacts"], first.details["impacts"]) == ("all", "first")
+    (s,) = [s for s in scene.joint.impacts if "trailer" in (s.body1, s.body2)]
+    assert [x["time"] for x in later.details["impacts_counted"]] == [s.t]
+    assert later.details["computed"] == pytest.approx(s.result.energy_loss_crush, rel=1e-12)
+    assert later.details["complete"]
+    assert later.details["measured"] == pytest.approx(0.5 * 20_000.0 * (20 / 3.6) ** 2, rel=1e-12)  # loaded trailer
+    assert first.details["computed"] == pytest.approx(scene.impact.energy_loss_crush, rel=1e-12)
+    assert [x["time"] for x in first.details["impacts_counted"]] == [0.0]
+    d["evidence"]["crush"][0]["impacts"] = "first"
+    d["evidence"]["crush"].pop(1)
+    (c,) = run_scene(scenario_from_dict(d)).evidence.checks
+    assert not c.passed and c.residual == float("inf") and "trailer not in contact" in c.details["reason"]

@@ -17,6 +17,7 @@ normal impulse (1 + e) m v, and T_L = (1 - e^2) 75 000 J (74 250 J for e = 0.1, 
 from __future__ import annotations
 
 import copy
+import math
 import tomllib
 from pathlib import Path
 
@@ -122,8 +123,6 @@ def test_crush_check_compares_with_the_loss_at_the_crush_surface():
 def test_oblique_force_gets_the_factor_and_normal_comparison_drops_it():
     """An oblique normal (20 deg) turns the PDOF of car A by 20 deg from its front: factor 1/cos^2(20 deg),
     used with compare = "total" (against T_n + T_t + T_M) and not with compare = "normal" (against T_n + T_M)."""
-    import math
-
     d = _head_on(normal="200 deg", point=["2.3 m", "0 m"], tangential="ratio", mu=0.0)  # impulse along n
     del d["evidence"]["crush"][1]
     base = run_scene(scenario_from_dict(d))
@@ -165,3 +164,20 @@ def test_all_impacts_group_counts_the_run_out_impacts_of_the_body():
     d["evidence"]["crush"].pop(1)
     (c,) = run_scene(scenario_from_dict(d)).evidence.checks
     assert not c.passed and c.residual == float("inf") and "trailer not in contact" in c.details["reason"]
+
+
+def test_factor_beyond_45_degrees_is_held_at_2_with_a_warning():
+    """A crush force 60 deg off the face normal: CRASH3's factor applies up to 45 deg only, so it is held
+    at 2 and the report says so; relative_tolerance scales with the corrected energy."""
+    d = _head_on(normal="240 deg", tangential="ratio", mu=0.0)
+    d["evidence"]["crush"] = [{"body": "carA", "face": "front", "A": "50000 N/m", "B": "600000 N/m^2",
+                               "width": "1.5 m", "profile": ["0.3 m", "0.3 m"], "relative_tolerance": "25 %"}]
+    scene = run_scene(scenario_from_dict(d))
+    (c,) = scene.evidence.checks
+    item = c.details["bodies"]["carA"]["items"][0]
+    assert abs(item["alpha"]) == pytest.approx(math.radians(60.0), abs=1e-9)
+    assert item["factor"] == 2.0 and item["factor_capped"]
+    assert item["energy"] == pytest.approx(2 * 66_125.0, rel=1e-12)  # worked example 3, uniform 0.30 m
+    assert c.tolerance == pytest.approx(0.25 * 2 * 66_125.0, rel=1e-12)
+    text = scene.report()
+    assert "2.0000 (capped)" in text and "beyond the 45 deg" in text

@@ -213,3 +213,9 @@ def test_schema_documents_the_crush_item():
         assert key in doc
     assert "list of 2, 4 or 6 x length [m]" in doc
     assert "force per length [N/m]" in doc and "lbf/in" in doc
+
+
+def test_presets_command_lists_the_crush_stiffness_and_its_source(capsys):
+    assert main(["presets"]) == 0
+    out = capsys.readouterr().out
+    assert "crush stiffness, front: A 50250 N/m, B 556488 N/m^2" in out and "DERIVED EXAMPLE" in out

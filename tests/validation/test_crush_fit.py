@@ -95,3 +95,22 @@ def test_fit_restitution_from_crush_made_by_the_model(tmp_path, capsys):
 def _write(path: Path, text: str) -> Path:
     path.write_text(text)
     return path
+
+
+def test_fit_residual_of_a_lower_bound_is_one_sided(tmp_path):
+    """Only car A measured: its crush is a lower bound of the energy absorbed, so the fit penalises only
+    crush in excess of the model's loss (residual min(loss - crush, 0))."""
+    from crashsim.reconstruct.fit import EvidenceModel
+
+    text = SCENE.read_text()
+    text = text[: text.rindex("[[evidence.crush]]")]
+    sc = load_scenario(_write(tmp_path / "one.toml", text))
+    model = EvidenceModel(sc)
+    (res,), _ = model.raw_residuals(run_scene(sc))
+    assert res.tolist() == [0.0]  # 74 250 J lost >= 55 175 J of crush: consistent
+    deep = text.replace('["0.10 m", "0.20 m", "0.30 m", "0.35 m", "0.30 m", "0.20 m"]', '["0.4 m", "0.4 m"]')
+    sc = load_scenario(_write(tmp_path / "deep.toml", deep))
+    (res,), _ = EvidenceModel(sc).raw_residuals(run_scene(sc))
+    crush = 1.5 * (50_000.0 + 600_000.0 * 0.4) ** 2 / (2 * 600_000.0)  # uniform 0.4 m: 105 125 J
+    assert res[0] == pytest.approx(74_250.0 - crush, rel=1e-12) and res[0] < 0
+    assert model.weights().tolist() == [1 / 5_000.0]

@@ -173,7 +173,8 @@ def _cmd_plot(args) -> int:
     interval = None if args.interval is None else parse(args.interval, Kind.TIME, field="--interval")
     scene = run_scene(load_scenario(args.file))
     written = save_scene_figures(scene, Path(args.output), histories_path=args.histories and Path(args.histories),
-                                 dpi=args.dpi, interval=interval, system=args.units)
+                                 dpi=args.dpi, interval=interval, system=args.units,
+                                 time_distance_path=args.time_distance and Path(args.time_distance))
     for path in written:
         sys.stdout.write(f"wrote {path}\n")
     return 0
@@ -237,6 +238,8 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("file", help="scenario file (TOML)")
     pl.add_argument("-o", "--output", required=True, help="scene diagram: .png, .svg or .pdf")
     pl.add_argument("--histories", metavar="FILE", help="also draw speed, yaw rate and articulation histories")
+    pl.add_argument("--time-distance", metavar="FILE",
+                    help="also draw the time-distance and speed-time chart (approach, impacts, run-out to rest)")
     pl.add_argument("--interval", metavar="TIME", help='time between ghost outlines, e.g. "0.5 s"')
     pl.add_argument("--units", type=_units, default=None, help="SI or US: units of the figure (default: the scenario's)")
     pl.add_argument("--dpi", type=int, default=150)

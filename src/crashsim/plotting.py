@@ -580,6 +580,10 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     if evidence and sc.evidence.crush:
         _draw_crush(S, sc)
 
+    # -- approach: tracks, CG paths, the start of braking and the perception point -------------
+    if getattr(sc, "approaches", None):
+        _draw_approaches(S)
+
     # -- run-out: tracks, CG paths, ghosts, rest -----------------------------------------------
     if runout:
         # body names go at the CGs at impact and at rest: keep the ghost time labels off them
@@ -733,6 +737,152 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     xl = ax.get_xlim()
     _scale_bar(S, xl[1] - xl[0])
     return ax
+
+
+def _draw_approaches(S: _Scene) -> None:
+    """The approach of each vehicle before the impact: its tyre tracks (sliding bold: pre-impact
+    marks expected), the CG paths (dash-dot), the outlines at the start of braking (thin,
+    dashed) and the first body's CG at perception (open diamond, joined by a dotted line)."""
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    from .report import fmt
+
+    ax = S.ax
+    for vn, a in S.sc.approaches.items():
+        v = next(x for x in S.sc.vehicles if x.name == vn)
+        fill, line, dark = S.family[vn]
+        for tr in a.tracks.values():
+            for seg in tr.segments:
+                if len(seg.points) < 2:
+                    continue
+                xy = S.d(seg.points)
+                if seg.kind == "sliding":
+                    ax.plot(xy[:, 0], xy[:, 1], "-", color=dark, lw=2.2, alpha=0.85, zorder=_Z_TRACK,
+                            solid_capstyle="butt", gid=f"approach:track:{tr.key}")
+                else:
+                    ax.plot(xy[:, 0], xy[:, 1], "--", color=line, lw=0.7, alpha=0.8, zorder=_Z_TRACK, dashes=(4, 3),
+                            gid=f"approach:track:{tr.key}")
+                S.add(xy)
+        poses = {}
+        for name, rows in a.bodies.items():
+            xy = S.d(rows[:, 1:3])
+            ax.plot(xy[:, 0], xy[:, 1], "-.", color=dark, lw=0.9, zorder=_Z_TRACK, gid=f"approach:path:{name}")
+            S.add(xy)
+            poses[name] = ((rows[0, 1], rows[0, 2]), rows[0, 3])
+            S.outline(S.body_of[name], poses[name][0], poses[name][1], gid=f"outline:braking:{name}", fill=None,
+                      edge=line, lw=0.8, ls="--", alpha=0.8, zorder=_Z_GHOST)
+        S.pins(v, poses, line, 2.5, alpha=0.7, zorder=_Z_GHOST)
+        first = next(iter(a.bodies))
+        start = S.d(a.bodies[first][0, 1:3])
+        S.text(start, f"braking starts, {fmt(a.speed_at_braking, 'speed', S.system)}", fontsize=6.5, color=dark,
+               ha="center", va="bottom", path_effects=_halo(1.8))
+        S.labels.append(start)
+        if a.reaction_time > 0:
+            pp = S.d(a.perception_point)
+            ax.plot([pp[0], start[0]], [pp[1], start[1]], ":", color=dark, lw=1.0, zorder=_Z_TRACK)
+            ax.plot(*pp, "D", ms=5, mfc="white", mec=dark, zorder=_Z_IMPACT, gid=f"approach:perception:{vn}")
+            S.text(pp, f"perception ({a.reaction_time:g} s before braking)", fontsize=6.5, color=dark, ha="center",
+                   va="bottom", path_effects=_halo(1.8))
+            S.labels.append(pp)
+            S.add(pp)
+    S.legend_entry("approach: CG path from the start of braking", Line2D([], [], color="0.2", lw=0.9, ls="-."))
+    S.legend_entry("at the start of braking", Patch(facecolor="none", edgecolor="0.3", lw=0.8, ls="--"))
+    if any(a.reaction_time > 0 for a in S.sc.approaches.values()):
+        S.legend_entry("perception point (reaction at constant speed)",
+                       Line2D([], [], ls=":", color="0.2", marker="D", ms=5, mfc="white", mec="0.2"))
+
+
+def plot_time_distance(scene, axes=None, *, system: str | None = None):
+    """Time-distance and speed-time chart of every vehicle, from the start of its approach to rest.
+
+    The time axis has the first impact at 0 (negative before it); the distance axis is the path
+    length of each vehicle's first body's CG, 0 at the first impact (negative before it), as
+    reconstruction reports draw it.  The approach (if the vehicle has one) shows the
+    perception-reaction interval at constant speed and the braking phase; the run-out follows
+    to rest.  Vertical lines mark the impacts (the first at 0, later ones of the run-out at
+    their times); markers show perception (open diamond) and the start of braking (filled).
+
+    Parameters
+    ----------
+    scene : SceneResult
+    axes : (Axes, Axes), optional
+        Distance and speed panels; a new figure (shared time axis) if None.
+    system : {"SI", "US"}, optional
+        Display units (m or ft, km/h... as the units module shows speeds: m/s or mph).
+
+    Returns
+    -------
+    matplotlib Figure
+    """
+    from .motion.approach import _path_length
+    from .report import fmt
+    from .units import Kind, to_unit
+
+    system = _system(scene, system)
+    plt = _plt()
+    if axes is None:
+        fig, axes = plt.subplots(2, 1, figsize=(9.0, 6.5), sharex=True, layout="constrained")
+    else:
+        fig = axes[0].figure
+    ax_s, ax_v = axes
+    kl, lu = to_unit(1.0, Kind.LENGTH, system)
+    kv, vu = to_unit(1.0, Kind.SPEED, system)
+    sc = scene.scenario
+    movable = [v for v in sc.vehicles if not v.is_barrier]
+    colors = {v.name: _FAMILIES[i % len(_FAMILIES)][2] for i, v in enumerate(movable)}
+    for v in movable:
+        c = colors[v.name]
+        first = v.bodies[0].name
+        a = sc.approaches.get(v.name)
+        if a is not None:
+            tab = a.table()
+            ax_s.plot(tab["t"], kl * tab["s"], "-", color=c, lw=1.6, gid=f"td:approach:{v.name}")
+            ax_v.plot(tab["t"], kv * tab["v"], "-", color=c, lw=1.6)
+            tb, sb = -a.time_to_impact, -a.distance
+            for axx, y in ((ax_s, kl * sb), (ax_v, kv * a.speed_at_braking)):
+                axx.plot(tb, y, "o", color=c, ms=5, zorder=5)
+            if a.reaction_time > 0:
+                tp = tb - a.reaction_time
+                for axx, y in ((ax_s, kl * (sb - a.reaction_distance)), (ax_v, kv * a.speed_at_braking)):
+                    axx.plot(tp, y, "D", mfc="white", mec=c, ms=5, zorder=5)
+            ax_s.annotate(f"{v.name}: braking {fmt(a.speed_at_braking, 'speed', system)}", (tb, kl * sb),
+                          xytext=(4, -10), textcoords="offset points", fontsize=7, color=c)
+        if scene.runout and v.name in scene.runout:
+            br = scene.runout[v.name].bodies[first]
+            t_end = scene.runout[v.name].t_end
+            t = np.linspace(0.0, t_end, 400)
+            sv = np.asarray(br.sol(t))
+            ax_s.plot(t, kl * _path_length(br.sol, t), "-", color=c, lw=1.6, label=f"vehicle {v.name} ({first})",
+                      gid=f"td:runout:{v.name}")
+            ax_v.plot(t, kv * np.hypot(sv[3], sv[4]), "-", color=c, lw=1.6)
+            if br.time_to_rest is not None:
+                ax_s.plot(br.time_to_rest, kl * br.distance, "s", color=c, ms=5)
+        else:
+            ax_s.plot([], [], "-", color=c, label=f"vehicle {v.name} ({first})")
+    impacts = [0.0] + [float(i.t) for i in (scene.joint.impacts if scene.joint is not None else ())]
+    for k, ti in enumerate(impacts):
+        for axx in (ax_s, ax_v):
+            axx.axvline(ti, color="#b30000" if k == 0 else "#e07b00", lw=1.0, ls="-" if k == 0 else "--", zorder=1)
+        ax_s.annotate("impact" if k == 0 else f"impact {k + 1}", (ti, 1.0), xycoords=("data", "axes fraction"),
+                      xytext=(3, -10), textcoords="offset points", fontsize=7,
+                      color="#b30000" if k == 0 else "#e07b00")
+    ax_s.axhline(0.0, color="0.6", lw=0.6)
+    ax_s.set_ylabel(f"distance from the impact [{lu}]")
+    ax_v.set_ylabel(f"speed [{vu}]")
+    ax_v.set_xlabel("time from the first impact [s]")
+    for axx in (ax_s, ax_v):
+        axx.grid(True, color="0.9", lw=0.6)
+    ax_v.set_ylim(bottom=0.0)
+    from matplotlib.lines import Line2D
+
+    handles, labels = ax_s.get_legend_handles_labels()
+    extra = [(Line2D([], [], ls="none", marker="D", mfc="white", mec="0.2"), "perception"),
+             (Line2D([], [], ls="none", marker="o", color="0.2"), "start of braking"),
+             (Line2D([], [], ls="none", marker="s", color="0.2"), "at rest")]
+    ax_s.legend(handles + [h for h, _ in extra], labels + [t for _, t in extra], fontsize=7, loc="upper left")
+    ax_s.set_title(_wrap(f"Time-distance: {sc.title}", 100), fontsize=10)
+    return fig
 
 
 def _draw_evidence(S: _Scene, checks: dict) -> None:
@@ -1475,7 +1625,7 @@ def plot_histories(scene, axes=None, *, system: str | None = None):
 
 
 def save_scene_figures(scene, path, *, histories_path=None, dpi: int = 150, interval: float | None = None,
-                       system: str | None = None) -> list:
+                       system: str | None = None, time_distance_path=None) -> list:
     """Write the scene diagram (and optionally the histories) to files; closes its figures.
 
     Parameters
@@ -1485,6 +1635,8 @@ def save_scene_figures(scene, path, *, histories_path=None, dpi: int = 150, inte
         Scene diagram; the format follows the suffix: ``.png``, ``.svg`` or ``.pdf``.
     histories_path : str or Path, optional
         Run-out histories (:func:`plot_histories`), same suffixes; needs a run-out.
+    time_distance_path : str or Path, optional
+        Time-distance and speed-time chart (:func:`plot_time_distance`), same suffixes.
     dpi : int
         Resolution of raster output [dots per inch].
     interval : float, optional
@@ -1507,8 +1659,10 @@ def save_scene_figures(scene, path, *, histories_path=None, dpi: int = 150, inte
 
     from .errors import ScenarioError
 
-    targets = [Path(path)] + ([Path(histories_path)] if histories_path is not None else [])
-    for p, key in zip(targets, ("path", "histories_path")):
+    named = [(Path(path), "path")] + ([(Path(histories_path), "histories_path")] if histories_path is not None else [])
+    named += [(Path(time_distance_path), "time_distance_path")] if time_distance_path is not None else []
+    targets = [p for p, _ in named]
+    for p, key in named:
         if p.suffix.lower() not in SCENE_FIGURE_SUFFIXES:
             raise ScenarioError(f"cannot write a figure to {str(p)!r}: unsupported suffix {p.suffix!r}; allowed "
                                 f"{', '.join(SCENE_FIGURE_SUFFIXES)}", field=key)
@@ -1524,12 +1678,12 @@ def save_scene_figures(scene, path, *, histories_path=None, dpi: int = 150, inte
         written.append(targets[0])
     finally:
         plt.close(ax.figure)
-    if histories_path is not None:
-        fig = plot_histories(scene, system=system)
+    for p, key in named[1:]:
+        fig = (plot_histories if key == "histories_path" else plot_time_distance)(scene, system=system)
         try:
-            targets[1].parent.mkdir(parents=True, exist_ok=True)
-            fig.savefig(targets[1], dpi=dpi)
-            written.append(targets[1])
+            p.parent.mkdir(parents=True, exist_ok=True)
+            fig.savefig(p, dpi=dpi)
+            written.append(p)
         finally:
             plt.close(fig)
     return written

@@ -8,8 +8,8 @@ import numpy as np
 
 from .units import Kind, format_value, to_unit
 
-__all__ = ["format_impact", "format_runout", "format_joint", "format_events", "format_evidence", "format_crush",
-           "describe_event", "fmt", "table"]
+__all__ = ["format_approach", "format_impact", "format_runout", "format_joint", "format_events", "format_evidence",
+           "format_crush", "describe_event", "fmt", "table"]
 
 
 fmt = format_value  # an SI value in the display unit of a system (crashsim.units.format_value)
@@ -228,6 +228,11 @@ def format_evidence(report, system: str = "SI") -> str:
             extra = f"closest track: {c.details['matched_wheel']}"
         elif "reason" in c.details:
             extra = c.details["reason"]
+        elif c.kind == "recorder":
+            k = c.details["worst_sample"]
+            extra = (f"worst of {len(c.details['times'])} samples at {fmt(c.details['times'][k], 'time', s)}: "
+                     f"recorded {fmt(c.details['recorded'][k], 'speed', s)}, computed "
+                     f"{fmt(c.details['computed'][k], 'speed', s)}")
         rows.append(["PASS" if c.passed else "FAIL", c.kind, c.name, f"residual {res}", f"tolerance {tol}", extra])
     lines += table(rows)
     return "\n".join(lines)
@@ -296,4 +301,35 @@ def format_crush(report, system: str = "SI") -> str:
             lines.append(f"    not compared: {d['reason']}")
         for w in d["warnings"]:
             lines.append(f"    WARNING: {w}")
+    return "\n".join(lines)
+
+
+def format_approach(approaches: dict, system: str = "SI") -> str:
+    """The approaches before the impact: one block per vehicle (speeds, times, distances, placement)."""
+    s = system
+    lines = ["Approach before the impact (simulated from the start of braking; constant speed before it)"]
+    for name, a in approaches.items():
+        how = {"distance": "braking distance given", "time": "braking time given",
+               "start": "start position given"}[a.mode]
+        speed_note = "solved from the speed at impact" if a.speed_solved else "given"
+        lines.append(f"  vehicle {name} ({how}; speed at braking {speed_note})")
+        rows = [
+            ["speed at the start of braking", fmt(a.speed_at_braking, "speed", s)],
+            ["speed at impact", fmt(a.speed_at_impact, "speed", s)],
+            ["perception-reaction time", fmt(a.reaction_time, "time", s),
+             f"distance {fmt(a.reaction_distance, 'length', s)} at constant speed"],
+            ["from the start of braking to impact", fmt(a.time_to_impact, "time", s),
+             f"distance {fmt(a.distance, 'length', s)} (CG path of the first body)"],
+            ["from perception to impact", fmt(a.reaction_time + a.time_to_impact, "time", s),
+             f"distance {fmt(a.reaction_distance + a.distance, 'length', s)}"],
+            ["start of braking, first body's CG", _vec(a.braking_start[next(iter(a.braking_start))], "length", s)],
+            ["perception point, first body's CG", _vec(a.perception_point, "length", s)],
+        ]
+        if a.articulation_at_impact:
+            rows.append(["articulation at impact (approach)",
+                         ", ".join(f"{math.degrees(x):.1f} deg" for x in a.articulation_at_impact)])
+        if a.mode == "start":
+            rows.append(["miss of the impact position", fmt(a.miss, "length", s),
+                         f"heading off by {math.degrees(a.heading_miss):+.1f} deg"])
+        lines += table(rows, indent="    ")
     return "\n".join(lines)

@@ -29,7 +29,8 @@ from .impact import (CrushSurface, ExternalImpulse, ImpactProblem, TangentialLaw
                      tyre_friction_impulse)
 from .schema import ArrayOf, Field, Section, Table, document, load_toml, validate
 from .units import Kind
-from .reconstruct.evidence import DeltaVEvidence, Evidence, ImpactPointEvidence, MarkEvidence, RestEvidence
+from .reconstruct.evidence import (DeltaVEvidence, Evidence, ImpactPointEvidence, MarkEvidence, RecorderEvidence,
+                                   RestEvidence)
 from .vehicles import Axle, Body, BodyState, Hitch, Vehicle, chain_states
 
 __all__ = ["SCHEMA", "MAP_LINE_STYLES", "MapLine", "Scenario", "RunoutSpec", "load_scenario", "presets",
@@ -124,20 +125,63 @@ WHEEL_CHANGE = Section("wheel_change", [
     Field("select", "str", example="tractor", description="Which wheels (as in wheels[].select)"),
 ] + _wheel_fields(True), description="A change of wheel settings from a given time on (brakes released, ...)")
 
+APPROACH_WHEEL_CHANGE = Section("wheel_change", [
+    Field("at", Kind.TIME, minimum=0, exclusive_minimum=True, example="0.3 s",
+          description="Time after the start of braking (brake lag, trailer brakes applying later)"),
+    Field("select", "str", example="trailer", description="Which wheels (as in wheels[].select)"),
+] + _wheel_fields(True), description="A change of the approach's wheel settings from a given time on")
+
+#: Largest approach (distance from the start of braking to the impact [m], time [s]).
+MAX_APPROACH_DISTANCE = 2000.0
+MAX_APPROACH_TIME = 120.0
+
+APPROACH = Section("approach", [
+    Field("speed", Kind.SPEED, required=False, minimum=0, exclusive_minimum=True, maximum=MAX_SPEED, example="55 mph",
+          description="CG speed of the first body at the start of braking; absent: solved from the speed at impact "
+                      "(vehicles.<name>.speed). Give one of the two"),
+    Field("distance", Kind.LENGTH, required=False, minimum=0, exclusive_minimum=True, maximum=MAX_APPROACH_DISTANCE,
+          example="38 m", description="Path length of the first body's CG from the start of braking to the impact "
+                                      "(give one of distance, time, start_position)"),
+    Field("time", Kind.TIME, required=False, minimum=0, exclusive_minimum=True, maximum=MAX_APPROACH_TIME,
+          example="2.1 s", description="Time from the start of braking to the impact"),
+    Field("start_position", Kind.LENGTH, n=2, required=False, example='["-60 m", "0 m"]',
+          description="First body's CG at the start of braking, world frame (the approach then ends where the CG "
+                      "passes closest to its position at impact)"),
+    Field("start_heading", Kind.ANGLE, required=False, example="0 deg",
+          description="First body's heading at the start of braking (with start_position)"),
+    Field("tolerance", Kind.LENGTH, minimum=0, exclusive_minimum=True, default="0.5 m", example="0.5 m",
+          description="With start_position: largest distance by which the approach may miss the impact position"),
+    Field("reaction_time", Kind.TIME, minimum=0, maximum=10, default="0 s", example="1.5 s",
+          description="Perception-reaction time before the start of braking, at constant speed (reported with its "
+                      "distance; no standard value exists: state the expectancy assumed)"),
+    Field("road_friction", "float", required=False, minimum=0, maximum=2, exclusive_minimum=True, example="0.7",
+          description="Road friction coefficient of the approach (default: runout.road_friction, with its zones)"),
+], subsections=[
+    Section("tyres", _wheel_fields(False), description="Wheel state and tyre data of every wheel from the start of "
+                                                       "braking (e.g. state = \"locked\")"),
+    ArrayOf("wheels", WHEEL, required=False, description="Per-wheel overrides of the approach's tyres section"),
+    ArrayOf("wheel_changes", APPROACH_WHEEL_CHANGE, required=False,
+            description="Scheduled changes of the approach's wheel settings (times after the start of braking)"),
+], required=False, description="The motion before the impact, from the start of braking, simulated with the run-out's "
+                               "tyre model and engine; it gives the vehicle's velocity and yaw rates at impact")
+
 VEHICLE = Section("vehicle", [
     Field("description", "str", default="", description="Free text for the report"),
     Field("position", Kind.LENGTH, n=2, example='["0 m", "0 m"]',
           description="CG of the first (front) body at impact, world frame"),
     Field("heading", Kind.ANGLE, example="90 deg", description="Heading of the first body at impact"),
-    Field("speed", Kind.SPEED, minimum=0, maximum=MAX_SPEED, example="30 mph",
-          description="CG speed of the first body at impact"),
+    Field("speed", Kind.SPEED, required=False, minimum=0, maximum=MAX_SPEED, example="30 mph",
+          description="CG speed of the first body at impact (required unless approach.speed gives the speed at the "
+                      "start of braking)"),
     Field("course", Kind.ANGLE, required=False, example="95 deg",
-          description="Direction of the first body's CG velocity (default: its heading, no side slip)"),
+          description="Direction of the first body's CG velocity (default: its heading, no side slip; with an "
+                      "approach it follows from the approach)"),
 ], subsections=[
     ArrayOf("bodies", BODY, min_items=1, description="The bodies, front to rear, joined by hitches"),
     TYRES,
     ArrayOf("wheels", WHEEL, required=False, description="Per-wheel overrides of the tyres section"),
     ArrayOf("wheel_changes", WHEEL_CHANGE, required=False, description="Scheduled changes of wheel settings"),
+    APPROACH,
 ], description="A vehicle: a chain of bodies (car; car + trailer; tractor + semitrailer; doubles)")
 
 BARRIER = Section("barrier", [
@@ -294,6 +338,9 @@ EV_MARK = Section("mark", [
     Field("tolerance", Kind.LENGTH, minimum=0, example="0.3 m",
           description="Largest acceptable distance of any point of the mark from the computed track"),
     Field("sliding_only", "bool", default=True, description="Compare with the sliding parts of tracks only"),
+    Field("phase", choices=("runout", "approach"), default="runout",
+          description="runout: left after the impact; approach: before it (a pre-impact skid or yaw mark, compared "
+                      "with the tracks of the vehicles' approaches)"),
 ], description="A tyre mark measured at the scene")
 EV_POI = Section("impact_point", [
     Field("position", Kind.LENGTH, n=2, example='["-9.6 m", "-1.2 m"]', description="Measured point of impact, world"),
@@ -354,11 +401,33 @@ EV_CRUSH = Section("crush", [
           example="25 %", description="Tolerance as a fraction of this item's crush energy, instead of tolerance"),
 ], description="The measured crush of one face of one body (CRASH3): its energy is compared with the impact "
                "model's energy loss")
+EV_RECORDER_SAMPLE = Section("sample", [
+    Field("time", Kind.TIME, maximum=0, example="-2.5 s",
+          description="Time of the sample relative to the impact (negative: before it; pre-crash data end at the "
+                      "impact)"),
+    Field("speed", Kind.SPEED, minimum=0, maximum=MAX_SPEED, example="52 mph", description="Recorded speed"),
+    Field("brake", "bool", default=False,
+          description="Service brake on at this sample: wheel-speed recorders under-read while braking (locked or "
+                      "ABS-cycling wheels), so the sample counts as a lower bound of the speed"),
+], description="One pre-crash sample")
+EV_RECORDER = Section("recorder", [
+    Field("name", "str", default="", description="Label for the report (\"tractor ECM hard-brake record\")"),
+    Field("body", "str", example="tractor", description="Body carrying the recorder (its vehicle needs an approach)"),
+    Field("tolerance", Kind.SPEED, minimum=0, exclusive_minimum=True, example="1 mph",
+          description="Largest acceptable difference of every sample (49 CFR 563 asks +-1 km/h of the speed the "
+                      "vehicle reports)"),
+    Field("time_offset", Kind.TIME, default="0 s", minimum=-5, maximum=5, example="-0.2 s",
+          description="Added to every sample time: the recorder's time zero is not the first contact (latency)"),
+], subsections=[ArrayOf("samples", EV_RECORDER_SAMPLE, min_items=1,
+                        description="The samples, e.g. [{time = \"-2 s\", speed = \"55 mph\"}, ...]")],
+    description="Pre-crash speeds of an event data recorder")
+
 EVIDENCE = Section("evidence", [], subsections=[
     ArrayOf("rest", EV_REST, required=False, description="Rest positions"),
     ArrayOf("marks", EV_MARK, required=False, description="Tyre marks"),
     EV_POI,
     ArrayOf("delta_v", EV_DV, required=False, description="Recorded delta-v"),
+    ArrayOf("recorder", EV_RECORDER, required=False, description="Recorded pre-crash speeds (needs an approach)"),
     ArrayOf("crush", EV_CRUSH, required=False, description="Crush profiles (CRASH3) or EES of damaged faces"),
 ], required=False, description="What was found at the scene; each item is checked against its tolerance")
 
@@ -545,6 +614,9 @@ class Scenario:
         The validated file contents (SI floats), for traceability.
     map_lines : tuple of MapLine
         The road layout of ``[[map.lines]]`` (drawing only; empty without a ``[map]``).
+    approaches : dict of ApproachResult
+        By vehicle name: the simulated approach of each vehicle with ``[vehicles.<name>.approach]``
+        (its velocity and yaw rates at impact are in ``states``).
     """
 
     path: str | None
@@ -558,6 +630,7 @@ class Scenario:
     evidence: Evidence
     data: dict = field(repr=False)
     map_lines: tuple[MapLine, ...] = ()
+    approaches: dict = field(default_factory=dict)
 
     @property
     def barrier_extent(self) -> tuple[float, float] | None:
@@ -600,13 +673,15 @@ def _rewrap(exc: ScenarioError, prefix: str, file: str | None) -> ScenarioError:
     return ScenarioError(msg, field=key, file=file)
 
 
-def _build_wheels(vehicle: Vehicle, v: dict, file: str | None) -> WheelSettings:
+def _build_wheels(vehicle: Vehicle, v: dict, file: str | None, prefix: str | None = None) -> WheelSettings:
+    """The wheel settings of ``v`` (a vehicle's, or its approach's: ``prefix`` names where they are)."""
     name = vehicle.name
+    prefix = prefix or f"vehicles.{name}"
     tyres = v["tyres"]
     if tyres is None:
-        raise _err("the run-out needs the wheel state and tyre data of every wheel: add a [vehicles."
-                   f"{name}.tyres] section with at least state = \"locked\" (or rolling/braked with "
-                   "cornering_coefficient and rolling_resistance)", f"vehicles.{name}.tyres", file)
+        raise _err("the run-out needs the wheel state and tyre data of every wheel: add a ["
+                   f"{prefix}.tyres] section with at least state = \"locked\" (or rolling/braked with "
+                   "cornering_coefficient and rolling_resistance)", f"{prefix}.tyres", file)
     for i, b in enumerate(v["bodies"]):
         if not b["axles"]:
             raise _err(f"body {b['name']!r} has no axles; the run-out needs them ([[vehicles.{name}.bodies.axles]] "
@@ -614,15 +689,15 @@ def _build_wheels(vehicle: Vehicle, v: dict, file: str | None) -> WheelSettings:
     try:
         default = WheelSetting(**_given(tyres))
     except ScenarioError as exc:
-        raise _rewrap(exc, f"vehicles.{name}.tyres", file) from None
+        raise _rewrap(exc, f"{prefix}.tyres", file) from None
     if not default.is_sliding:
         if default.cornering_stiffness is None and default.cornering_coefficient is None:
             raise _err(f'state = "{default.state}" needs cornering_coefficient (cornering stiffness per unit load, '
                        "1/rad: about 8.6 for car tyres, 6 for truck tyres) or cornering_stiffness (N/rad per tyre)",
-                       f"vehicles.{name}.tyres.cornering_coefficient", file)
+                       f"{prefix}.tyres.cornering_coefficient", file)
         if default.rolling_resistance is None:
             raise _err(f'state = "{default.state}" needs rolling_resistance (in [0, 0.5]: about 0.012 for car tyres, '
-                       "0.008 for truck tyres)", f"vehicles.{name}.tyres.rolling_resistance", file)
+                       "0.008 for truck tyres)", f"{prefix}.tyres.rolling_resistance", file)
     overrides = {}
     for i, w in enumerate(v["wheels"]):
         merged = {**_given(tyres), **_given(w)}
@@ -634,13 +709,13 @@ def _build_wheels(vehicle: Vehicle, v: dict, file: str | None) -> WheelSettings:
         try:
             overrides[w["select"]] = WheelSetting(**merged)
         except ScenarioError as exc:
-            raise _rewrap(exc, f"vehicles.{name}.wheels[{i}]", file) from None
+            raise _rewrap(exc, f"{prefix}.wheels[{i}]", file) from None
     try:
         schedule = [ScheduledChange(c["at"], c["select"], _given(c)) for c in v["wheel_changes"]]
         ws = WheelSettings(default, overrides, schedule)
         ws.resolve(vehicle)
     except ScenarioError as exc:
-        raise _rewrap(exc, f"vehicles.{name}", file) from None
+        raise _rewrap(exc, prefix, file) from None
     return ws
 
 
@@ -791,10 +866,44 @@ def _build_vehicle(name: str, v: dict, file: str | None) -> tuple[Vehicle, dict[
     except ScenarioError as exc:
         raise _err(str(exc), f"vehicles.{name}", file) from None
     course = v["heading"] if v["course"] is None else v["course"]
-    vel = v["speed"] * np.array([math.cos(course), math.sin(course)])
+    speed = 0.0 if v["speed"] is None else v["speed"]  # None: set by the approach (scenario_from_dict)
+    vel = speed * np.array([math.cos(course), math.sin(course)])
     states = chain_states(veh, v["position"], v["heading"], vel,
                           [b["yaw_rate"] for b in raw], [b["articulation"] for b in raw[1:]])
     return veh, states
+
+
+def _build_approach(veh: Vehicle, v: dict, runout: "RunoutSpec | None", states: dict, file: str | None):
+    """Simulate the approach of ``veh`` (``v["approach"]``) to its impact configuration in ``states``."""
+    from .errors import with_file
+    from .motion.approach import ApproachSpec, simulate_approach
+
+    a = v["approach"]
+    key = f"vehicles.{veh.name}.approach"
+    if a["speed"] is not None and v["speed"] is not None:
+        raise _err(f"both the speed at impact (vehicles.{veh.name}.speed) and the speed at the start of braking "
+                   f"({key}.speed) are given: give one, the approach gives the other", f"{key}.speed", file)
+    if v["course"] is not None:
+        raise _err("with an approach the direction of the velocity at impact follows from the approach; remove "
+                   "course", f"vehicles.{veh.name}.course", file)
+    wheels = _build_wheels(veh, {"tyres": a["tyres"], "wheels": a["wheels"], "wheel_changes": a["wheel_changes"],
+                                 "bodies": v["bodies"]}, file, prefix=key)
+    if a["road_friction"] is not None:
+        road = Road(a["road_friction"], runout.road.zones if runout is not None else ())
+    elif runout is not None:
+        road = runout.road
+    else:
+        raise _err("the approach needs the road friction: give road_friction here or a [runout] section",
+                   f"{key}.road_friction", file)
+    options = runout.options if runout is not None else RunoutOptions()
+    try:
+        spec = ApproachSpec(wheels, a["speed"], a["distance"], a["time"],
+                            None if a["start_position"] is None else tuple(a["start_position"]), a["start_heading"],
+                            a["reaction_time"], a["tolerance"], key)
+        return simulate_approach(veh, spec, {b.name: states[b.name] for b in veh.bodies}, road, options,
+                                 speed_at_impact=v["speed"])
+    except ScenarioError as exc:
+        raise with_file(exc, file) from None
 
 
 def _frame_xform(frame: str, states: dict, key: str, file: str | None):
@@ -874,8 +983,30 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
             if bn in states:
                 raise _err(f"body name {bn!r} is used twice; body names must be unique in the scene",
                            f"vehicles.{name}.bodies", file)
+        if v["speed"] is None and v["approach"] is None:
+            raise _err("the speed at impact is missing: give speed (CG speed of the first body at impact), or an "
+                       "[vehicles.<name>.approach] with the speed at the start of braking", f"vehicles.{name}.speed",
+                       file)
+        if v["approach"] is not None and v["approach"]["speed"] is None and v["speed"] is None:
+            raise _err("the approach needs the speed at the start of braking (approach.speed) or the speed at "
+                       "impact (speed)", f"vehicles.{name}.approach.speed", file)
         vehicles.append(veh)
         states.update(st)
+    runout = None
+    if d["runout"] is not None:
+        raw_runout = data.get("runout") if isinstance(data.get("runout"), dict) else {}
+        runout = _build_runout(d["runout"], vehicles, d["vehicles"], file, raw_runout)
+    approaches = {}
+    for veh in vehicles:
+        v = d["vehicles"][veh.name]
+        if v["approach"] is None:
+            continue
+        res = _build_approach(veh, v, runout, states, file)
+        approaches[veh.name] = res
+        end = res.impact_states
+        states.update(chain_states(veh, v["position"], v["heading"], end[veh.bodies[0].name].velocity,
+                                   [end[b.name].yaw_rate for b in veh.bodies],
+                                   [b["articulation"] for b in v["bodies"][1:]]))
     imp = d["impact"]
     if d["barrier"] is not None:
         bname = d["barrier"]["name"]
@@ -964,12 +1095,10 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
     except ScenarioError as exc:
         raise ScenarioError(str(exc), field=exc.field, file=file) from None
     _check_contact_point(problem, imp["contact_tolerance"], d["scenario"]["units"], file)
-    runout = None
-    if d["runout"] is not None:
-        raw_runout = data.get("runout") if isinstance(data.get("runout"), dict) else {}
-        runout = _build_runout(d["runout"], vehicles, d["vehicles"], file, raw_runout)
+    if runout is not None:
         runout = _with_contact(runout, d, vehicles, problem, file)
-    evidence = _build_evidence(d["evidence"], states, file, vehicles)
+    evidence = _build_evidence(d["evidence"], states, file, vehicles,
+                               {n: v["approach"] for n, v in d["vehicles"].items()})
     if d["evidence"] is not None and d["evidence"]["crush"]:
         import dataclasses
 
@@ -977,7 +1106,7 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
     map_lines = _build_map_lines(d["map"], file)
     meta = d["scenario"]
     return Scenario(file, meta["title"], meta["source"], meta["units"], tuple(vehicles), states, problem, runout,
-                    evidence, d, map_lines)
+                    evidence, d, map_lines, approaches)
 
 
 def _check_contact_point(problem: ImpactProblem, tolerance: float, system: str, file: str | None) -> None:
@@ -1055,7 +1184,9 @@ def _rest_registration(r: dict, body: Body, key: str, file: str | None):
         raise _err(f"{exc}: {shown}", f"{key}.points", file) from None
 
 
-def _build_evidence(e: dict | None, states: dict, file: str | None, vehicles=()) -> Evidence:
+def _build_evidence(e: dict | None, states: dict, file: str | None, vehicles=(), d_approach: dict | None = None
+                    ) -> Evidence:
+    """The evidence items; ``d_approach``: the validated approach section of each vehicle (or None)."""
     if e is None:
         return Evidence()
     import difflib
@@ -1095,14 +1226,34 @@ def _build_evidence(e: dict | None, states: dict, file: str | None, vehicles=())
                 _select(vehicle, enumerate_wheels(vehicle), sel, key)
             except ScenarioError as exc:
                 raise _err(str(exc).removeprefix(f"{key}: "), key, file) from None
+        if m["phase"] == "approach":
+            owner = (sel.split("/")[0] if sel != "*" else None)
+            with_approach = [v for v in vehicles if (d_approach or {}).get(v.name)]
+            if not with_approach or (owner is not None and not any(owner in {b.name for b in v.bodies}
+                                                                   for v in with_approach)):
+                raise _err("a pre-impact mark (phase = \"approach\") needs an approach of the vehicle that left it "
+                           f"({owner or 'any vehicle'}): add [vehicles.<name>.approach]",
+                           f"evidence.marks[{i}].phase", file)
         marks.append(MarkEvidence(np.asarray(m["points"], dtype=float), m["tolerance"], sel, m["sliding_only"],
-                                  m["name"]))
+                                  m["name"], m["phase"]))
     poi = None
     if e["impact_point"] is not None:
         poi = ImpactPointEvidence(tuple(e["impact_point"]["position"]), e["impact_point"]["tolerance"])
     dv = [DeltaVEvidence(body(x["body"], f"evidence.delta_v[{i}].body"), x["value"], x["tolerance"], x["component"],
                          x["name"], x["impacts"]) for i, x in enumerate(e["delta_v"])]
-    return Evidence(tuple(rest), tuple(marks), poi, tuple(dv))
+    recorder = []
+    for i, x in enumerate(e["recorder"]):
+        key = f"evidence.recorder[{i}]"
+        name = body(x["body"], f"{key}.body")
+        veh = next(v for v in vehicles if name in {b.name for b in v.bodies})
+        if not (d_approach or {}).get(veh.name):
+            raise _err(f"recorder samples are compared with the approach of vehicle {veh.name!r}, which has none: add "
+                       f"[vehicles.{veh.name}.approach]", f"{key}.body", file)
+        smp = x["samples"]
+        recorder.append(RecorderEvidence(name, tuple(p["time"] for p in smp), tuple(p["speed"] for p in smp),
+                                         tuple(bool(p["brake"]) for p in smp), x["tolerance"], x["time_offset"],
+                                         x["name"]))
+    return Evidence(tuple(rest), tuple(marks), poi, tuple(dv), tuple(recorder))
 
 
 def _build_crush(items: list, d: dict, vehicles, file: str | None) -> tuple:

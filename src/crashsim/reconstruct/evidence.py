@@ -206,6 +206,7 @@ class MarkEvidence:
     wheel: str | None = None  # "*", "<body>", "<body>/<axle>", "<body>/<axle>/<side>"
     sliding_only: bool = True
     name: str = ""
+    phase: str = "runout"  # "runout": left after the impact; "approach": before it (pre-impact skid or yaw mark)
 
 
 @dataclass(frozen=True)
@@ -226,6 +227,24 @@ class DeltaVEvidence:
 
 
 @dataclass(frozen=True)
+class RecorderEvidence:
+    """Pre-crash speed samples of a recorder (EDR, engine ECM) in a body, SI.
+
+    ``times`` are relative to the impact (<= 0) after adding ``time_offset``; ``lower_bound``
+    marks samples taken with the service brake on: wheel-speed-based recorders under-read while
+    the wheels lock or the ABS cycles, so such a sample only says the speed was at least that.
+    """
+
+    body: str
+    times: tuple[float, ...]
+    speeds: tuple[float, ...]
+    lower_bound: tuple[bool, ...]
+    tolerance: float
+    time_offset: float = 0.0
+    name: str = ""
+
+
+@dataclass(frozen=True)
 class Evidence:
     """All evidence of a scene."""
 
@@ -233,11 +252,38 @@ class Evidence:
     marks: tuple[MarkEvidence, ...] = ()
     impact_point: ImpactPointEvidence | None = None
     delta_v: tuple[DeltaVEvidence, ...] = ()
+    recorder: tuple[RecorderEvidence, ...] = ()
     crush: tuple = ()  # CrushEvidence (crashsim.reconstruct.crush)
 
     @property
     def empty(self) -> bool:
-        return not (self.rest or self.marks or self.delta_v or self.impact_point or self.crush)
+        return not (self.rest or self.marks or self.delta_v or self.impact_point or self.recorder
+                    or self.crush)
+
+
+def recorder_residuals(ev: RecorderEvidence, approach) -> tuple[np.ndarray, np.ndarray]:
+    """(computed speeds [m/s], residuals computed - recorded) of a recorder's samples; a
+    lower-bound sample has residual 0 when the computed speed is above it."""
+    t = np.asarray(ev.times, float) + ev.time_offset
+    computed = np.asarray(approach.speed_at(t, body=ev.body), float)
+    res = computed - np.asarray(ev.speeds, float)
+    res = np.where(np.asarray(ev.lower_bound, bool), np.minimum(res, 0.0), res)
+    return computed, res
+
+
+def _check_recorder(ev: RecorderEvidence, approach, index: int) -> Check:
+    name = ev.name or f"recorder in {ev.body}"
+    if approach is None:
+        return Check("recorder", name, math.inf, ev.tolerance, False, "speed",
+                     {"reason": "no approach was computed for this body's vehicle"})
+    computed, res = recorder_residuals(ev, approach)
+    k = int(np.argmax(np.abs(res)))
+    worst = float(res[k])
+    return Check("recorder", name, worst, ev.tolerance, bool(np.all(np.abs(res) <= ev.tolerance)), "speed",
+                 {"times": [float(x) for x in ev.times], "recorded": [float(x) for x in ev.speeds],
+                  "computed": computed.tolist(), "residuals": res.tolist(), "lower_bound": list(ev.lower_bound),
+                  "time_offset": ev.time_offset, "worst_sample": k,
+                  "rms": float(np.sqrt(np.mean(res * res)))})
 
 
 @dataclass(frozen=True)
@@ -396,7 +442,24 @@ def body_impacts(body: str, impact, secondary=()) -> list:
     return own
 
 
-def evaluate_evidence(evidence: Evidence, impact, runout: dict | None, contact_point, secondary=()) -> EvidenceReport:
+def approach_tracks(approaches: dict | None) -> dict:
+    """The tyre tracks of every approach (world frame, times relative to the impact)."""
+    out = {}
+    for a in (approaches or {}).values():
+        out.update(a.tracks)
+    return out
+
+
+def approach_of_body(approaches: dict | None, body: str):
+    """The ApproachResult of the vehicle ``body`` belongs to, or None."""
+    for a in (approaches or {}).values():
+        if body in a.bodies:
+            return a
+    return None
+
+
+def evaluate_evidence(evidence: Evidence, impact, runout: dict | None, contact_point, secondary=(),
+                      approaches: dict | None = None) -> EvidenceReport:
     """Residual and verdict of every evidence item.
 
     Parameters
@@ -447,8 +510,9 @@ def evaluate_evidence(evidence: Evidence, impact, runout: dict | None, contact_p
                                 abs(err) <= ev.heading_tolerance and at_rest, "angle",
                                 {"computed": float(wrap_angle(b.rest_heading)), "measured": ev.heading,
                                  "at_rest": at_rest, **extra}))
+    pre = approach_tracks(approaches) if any(m.phase == "approach" for m in evidence.marks) else {}
     for i, ev in enumerate(evidence.marks):
-        checks.append(_check_mark(ev, tracks, i))
+        checks.append(_check_mark(ev, pre if ev.phase == "approach" else tracks, i))
     for i, ev in enumerate(evidence.delta_v):
         name = ev.name or f"delta-v of {ev.body} ({ev.component})"
         own = body_impacts(ev.body, impact, secondary)
@@ -469,6 +533,8 @@ def evaluate_evidence(evidence: Evidence, impact, runout: dict | None, contact_p
         checks.append(Check("delta-v", name, res, ev.tolerance, abs(res) <= ev.tolerance, "speed",
                             {"computed": computed, "measured": ev.value, "component": ev.component,
                              "impacts": ev.impacts, "impacts_counted": n_imp}))
+    for i, ev in enumerate(evidence.recorder):
+        checks.append(_check_recorder(ev, approach_of_body(approaches, ev.body), i))
     if evidence.crush:
         from .crush import crush_checks
 

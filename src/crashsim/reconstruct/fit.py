@@ -276,7 +276,7 @@ class EvidenceModel:
         if ev.rest and scenario.runout is None:
             raise ScenarioError("rest-position evidence needs a run-out: add [runout]", field="evidence.rest",
                                 file=scenario.path)
-        if ev.marks and scenario.runout is None:
+        if any(m.phase == "runout" for m in ev.marks) and scenario.runout is None:
             raise ScenarioError("tyre-mark evidence needs a run-out: add [runout]", field="evidence.marks",
                                 file=scenario.path)
         for i, r in enumerate(ev.rest):
@@ -299,6 +299,12 @@ class EvidenceModel:
             s, src = sig(entry, "sigma", x.tolerance, f"evidence.delta_v[{i}]")
             items.append(_Item("delta-v", x.name or f"delta-v of {x.body} ({x.component})", "speed", s, src, 1, 1.0,
                                i, body=x.body, measured=float(x.value)))
+        for i, x in enumerate(ev.recorder):
+            entry = (raw.get("recorder") or [{}] * (i + 1))[i]
+            s, src = sig(entry, "sigma", x.tolerance, f"evidence.recorder[{i}]")
+            n = len(x.times)
+            items.append(_Item("recorder", x.name or f"recorder in {x.body}", "speed", s, src, n, float(n), i,
+                               body=x.body, measured=x))
         if ev.crush:
             from .crush import GROUP_TITLES, crush_groups
 
@@ -349,6 +355,8 @@ class EvidenceModel:
         for r in (scene.runout or {}).values():
             bodies.update(r.bodies)
             tracks.update(r.wheels)
+        approaches = getattr(scene.scenario, "approaches", None) or {}
+        pre_tracks = None
         out, det = [], []
         for it, c in zip(self.items, item_checks):
             if it.kind == "point of impact":
@@ -366,6 +374,25 @@ class EvidenceModel:
                 b = bodies[it.body]
                 out.append(np.array([float(wrap_angle(b.rest_heading - it.measured))]))
                 det.append({"computed": float(wrap_angle(b.rest_heading))})
+            elif it.kind == "recorder":
+                from .evidence import approach_of_body, recorder_residuals
+
+                a = approach_of_body(approaches, it.body)
+                if a is None:
+                    out.append(np.full(it.size, np.nan))
+                    det.append({"computed": None})
+                else:
+                    computed, res = recorder_residuals(it.measured, a)
+                    out.append(res)
+                    det.append({"computed": computed.tolist()})
+            elif it.kind == "mark" and it.mark.phase == "approach":
+                if pre_tracks is None:
+                    from .evidence import approach_tracks
+
+                    pre_tracks = approach_tracks(approaches)
+                d, key = _mark_distances(it, pre_tracks, self.mark_points)
+                out.append(d)
+                det.append({"matched_wheel": key, "rms_distance": float(np.sqrt(np.mean(d * d)))})
             elif it.kind == "mark":
                 d, key = _mark_distances(it, tracks, self.mark_points)
                 out.append(d)

@@ -145,6 +145,8 @@ class SceneResult:
                              "vehicles": list(e.vehicles), **e.data} for e in j.events],
                     obstacles=[{"name": o.name, "points": [list(p) for p in o.points], "thickness": o.thickness,
                                 "closed": o.closed} for o in sc.runout.obstacles])
+        if sc.approaches:
+            out["approach"] = {name: a.to_dict() for name, a in sc.approaches.items()}
         if self.evidence is not None:
             out["evidence"] = self.evidence.to_dict()
             crush = crush_by_body(self.evidence)
@@ -172,7 +174,12 @@ class SceneResult:
         if sc.path:
             head.append(f"file: {sc.path}")
         head.append(f"units: {system}")
-        text = "\n".join(head) + "\n\n" + format_impact(self.impact, system)
+        text = "\n".join(head) + "\n\n"
+        if sc.approaches:
+            from ..report import format_approach
+
+            text += format_approach(sc.approaches, system) + "\n\n"
+        text += format_impact(self.impact, system)
         if self.runout is not None:
             from ..report import format_events, format_runout
 
@@ -454,8 +461,10 @@ def run_scene(scenario) -> SceneResult:
         from .evidence import evaluate_evidence
 
         evidence = evaluate_evidence(scenario.evidence, impact, runout, scenario.impact.surface.point,
-                                     secondary=joint.impacts if joint is not None else ())
-    warnings = [f"impact: {w}" for w in impact.warnings]
+                                     secondary=joint.impacts if joint is not None else (),
+                                     approaches=scenario.approaches)
+    warnings = [f"approach of {name}: {w}" for name, a in scenario.approaches.items() for w in a.warnings]
+    warnings += [f"impact: {w}" for w in impact.warnings]
     if runout is not None:
         if joint is None:
             warnings += barrier_crossings(scenario, runout)

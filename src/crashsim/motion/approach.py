@@ -1,0 +1,432 @@
+"""The approach: a vehicle's motion before the impact (reaction, braking, possibly jack-knifing).
+
+The approach of a vehicle is simulated with the same tyre model and engines as the run-out
+(:func:`~crashsim.motion.simulate_runout`), from the **start of braking** to the impact:
+
+* Before braking, during the driver's perception-reaction time ``reaction_time``, the vehicle
+  keeps its speed (the constant-speed interval of a time-distance analysis); it is not
+  simulated.
+* From the start of braking (time 0 of the approach) the vehicle moves under its approach
+  wheel settings: every wheel's state (locked, braked with a fraction, rolling), with
+  scheduled changes at times after the start of braking (air-brake lag, trailer brakes that
+  apply later, a wheel that locks later, brakes released).  An articulated vehicle can
+  jack-knife on the way.
+* The approach ends at the impact, found one of three ways:
+
+  ``distance``
+      the first body's CG has travelled this path length since the start of braking;
+  ``time``
+      this time has passed since the start of braking;
+  ``start`` (a start position and heading, world frame)
+      the first body's CG passes closest to its position at impact.
+
+With ``distance`` or ``time`` the path is placed in the scene by the rigid motion that puts
+the first body's CG and heading at the end of the approach on the impact configuration.  On a
+uniform road the equations of motion do not change under a rigid motion of the plane, so the
+placed path is itself a solution; where friction zones exist the approach is simulated again
+from the placed start until the placement no longer moves (``_PLACEMENT_TOL``).  With a start
+position nothing is moved: the miss of the impact position is reported, and more than
+``tolerance`` is an error.
+
+The speed at the start of braking is either given (the impact speed then follows) or solved
+from the impact speed (the root of ``v_impact(v_braking) = v`` by Brent's method; the impact
+speed grows with the braking speed).
+
+Closed form (tests/analytic/test_approach.py): a straight slide on locked wheels over a
+distance ``d`` at friction ``mu`` gives ``v_b^2 = v_i^2 + 2 mu g d``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from typing import Mapping
+
+import numpy as np
+
+from ..errors import ScenarioError
+from ..geometry import rotate
+from ..vehicles import BodyState, Vehicle, chain_states
+from .loads import STANDARD_GRAVITY
+from .options import RunoutOptions
+from .result import RunoutResult, TrackSegment, WheelTrack
+from .road import Road
+from .wheels import WheelSettings
+
+__all__ = ["ApproachSpec", "ApproachResult", "simulate_approach", "approach_speed_at_braking"]
+
+#: Placement of the approach path with friction zones: iterate until the start moves less than this [m].
+_PLACEMENT_TOL = 1e-4
+#: Samples per second of the dense solution used to measure the CG path length.
+_PATH_SAMPLES_PER_S = 4000
+
+
+@dataclass(frozen=True)
+class ApproachSpec:
+    """How one vehicle approached the impact (SI).
+
+    Parameters
+    ----------
+    speed : float or None
+        CG speed of the first body at the start of braking [m/s]; None: solved from the
+        vehicle's speed at impact.
+    distance, time : float or None
+        Path length of the first body's CG [m], or time [s], from the start of braking to the
+        impact (exactly one of ``distance``, ``time`` and ``start_position``).
+    start_position, start_heading : optional
+        First body's CG [m] and heading [rad] at the start of braking, world frame.
+    reaction_time : float
+        Perception-reaction time before braking [s] (constant speed).
+    wheels : WheelSettings
+        Wheel states during the approach; scheduled changes at times after the start of braking.
+    tolerance : float
+        With a start position: the largest miss of the impact position [m].
+    key : str
+        Where it came from in the file (``vehicles.<name>.approach``), for messages.
+    """
+
+    wheels: WheelSettings
+    speed: float | None = None
+    distance: float | None = None
+    time: float | None = None
+    start_position: tuple[float, float] | None = None
+    start_heading: float | None = None
+    reaction_time: float = 0.0
+    tolerance: float = 0.5
+    key: str = "approach"
+
+    def __post_init__(self):
+        given = [k for k in ("distance", "time", "start_position") if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ScenarioError("give exactly one of distance (from the start of braking to the impact), time, or "
+                                f"start_position with start_heading; got {given or 'none'}", field=self.key)
+        if (self.start_position is None) != (self.start_heading is None):
+            raise ScenarioError("start_position and start_heading go together", field=f"{self.key}.start_heading")
+
+    @property
+    def mode(self) -> str:
+        return "distance" if self.distance is not None else "time" if self.time is not None else "start"
+
+
+@dataclass(frozen=True, eq=False)
+class ApproachResult:
+    """The approach of one vehicle, from the driver's perception to the impact.
+
+    Times ``t`` are relative to the impact (negative before it); path distances ``s`` are the
+    first body's CG path length relative to the impact point (negative before it).
+
+    Attributes
+    ----------
+    vehicle : str
+    speed_at_braking, speed_at_impact : float
+        First body's CG speed at the start of braking and at the impact [m/s].
+    time_to_impact, distance : float
+        Time [s] and CG path length [m] from the start of braking to the impact.
+    reaction_time, reaction_distance : float
+        Perception-reaction time [s] and the distance covered in it at constant speed [m].
+    impact_states : dict of BodyState
+        Every body's state at the impact from the approach (world; positions and headings of
+        the placed path, velocities and yaw rates).
+    bodies : dict of str to ndarray (n, 4)
+        Per body, samples of (t, x, y, heading) of the braking phase, world frame.
+    tracks : dict of str to WheelTrack
+        Tyre tracks of the braking phase, world frame, times relative to the impact.
+    braking_start : dict of str to (float, float)
+        Each body's CG at the start of braking [m]; ``perception_point``: the first body's CG
+        at the start of the reaction time.
+    miss, heading_miss : float
+        With a start position: distance of the closest CG pass from the impact position [m],
+        and the heading difference there [rad]; 0 when the path was placed.
+    articulation_at_impact : tuple of float
+        Articulation angles at the end of the approach [rad] (the impact configuration in the
+        file may differ: ``warnings`` says so).
+    runout : RunoutResult
+        The simulation (local frame, times from the start of braking, beyond the impact).
+    """
+
+    vehicle: str
+    mode: str
+    speed_at_braking: float
+    speed_at_impact: float
+    time_to_impact: float
+    distance: float
+    reaction_time: float
+    reaction_distance: float
+    impact_states: dict
+    bodies: dict
+    tracks: dict
+    braking_start: dict
+    perception_point: tuple
+    miss: float
+    heading_miss: float
+    articulation_at_impact: tuple
+    runout: RunoutResult = field(repr=False)
+    speed_solved: bool = False
+    warnings: tuple = ()
+
+    def speed_at(self, t, body: str | None = None) -> np.ndarray:
+        """CG speed [m/s] of ``body`` (default the first) at times ``t`` relative to the impact
+        (<= 0); constant before the start of braking (the reaction time and before)."""
+        t = np.asarray(t, dtype=float)
+        b = self.runout.bodies[body or next(iter(self.bodies))]
+        tl = np.clip(t + self.time_to_impact, 0.0, self.time_to_impact)
+        sv = np.asarray(b.sol(tl.ravel()))
+        v = np.hypot(sv[3], sv[4]).reshape(tl.shape)
+        v0 = float(np.hypot(*np.asarray(b.sol(0.0))[3:5]))
+        return np.where(t < -self.time_to_impact, v0, v)
+
+    def table(self, n: int = 201) -> dict[str, np.ndarray]:
+        """Time-distance-speed of the first body from perception to impact: ``t`` [s] relative to
+        the impact, ``s`` [m] path distance relative to the impact point, ``v`` [m/s]."""
+        first = next(iter(self.bodies))
+        sol = self.runout.bodies[first].sol
+        tb = np.linspace(0.0, self.time_to_impact, max(n, 2))
+        s_b = _path_length(sol, tb)
+        t = np.concatenate([[-self.time_to_impact - self.reaction_time], tb - self.time_to_impact])
+        s = np.concatenate([[-self.distance - self.reaction_distance], s_b - self.distance])
+        sv = np.asarray(sol(tb))
+        v = np.concatenate([[self.speed_at_braking], np.hypot(sv[3], sv[4])])
+        return {"t": t, "s": s, "v": v}
+
+    def to_dict(self) -> dict:
+        return {
+            "mode": self.mode,
+            "speed_at_braking": self.speed_at_braking,
+            "speed_solved": self.speed_solved,
+            "speed_at_impact": self.speed_at_impact,
+            "time_to_impact": self.time_to_impact,
+            "distance": self.distance,
+            "reaction_time": self.reaction_time,
+            "reaction_distance": self.reaction_distance,
+            "perception_point": list(self.perception_point),
+            "braking_start": {k: list(v) for k, v in self.braking_start.items()},
+            "miss": self.miss,
+            "heading_miss": self.heading_miss,
+            "articulation_at_impact": list(self.articulation_at_impact),
+            "warnings": list(self.warnings),
+        }
+
+
+def _path_length(sol, t: np.ndarray) -> np.ndarray:
+    """Cumulative CG path length at sorted times ``t`` from ``t[0]`` (trapezoid on a fine grid of the dense output)."""
+    t = np.asarray(t, dtype=float)
+    if len(t) == 0:
+        return t
+    n = max(int((t[-1] - t[0]) * _PATH_SAMPLES_PER_S), 16)
+    grid = np.union1d(np.linspace(t[0], t[-1], n + 1), t)
+    sv = np.asarray(sol(grid))
+    v = np.hypot(sv[3], sv[4])
+    s = np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(grid))])
+    return np.interp(t, grid, s)
+
+
+def _run(vehicle: Vehicle, spec: ApproachSpec, speed: float, position, heading: float, road: Road,
+         options: RunoutOptions) -> RunoutResult:
+    vel = speed * np.array([math.cos(heading), math.sin(heading)])
+    init = chain_states(vehicle, position, heading, vel)
+    from .simulate import simulate_runout
+
+    return simulate_runout(vehicle, init, spec.wheels, road, options)
+
+
+def _end_time(run: RunoutResult, spec: ApproachSpec, vehicle: Vehicle, target) -> tuple[float, float]:
+    """(time of the impact from the start of braking, CG path length to it)."""
+    first = vehicle.bodies[0].name
+    b = run.bodies[first]
+    t_end = run.t_end
+    grid = np.linspace(0.0, t_end, max(int(t_end * _PATH_SAMPLES_PER_S), 16) + 1)
+    s = _path_length(b.sol, grid)
+    if spec.mode == "distance":
+        if s[-1] < spec.distance:
+            raise ScenarioError(
+                f"the vehicle stops {s[-1]:.2f} m after the start of braking, before the impact (distance = "
+                f"{spec.distance:.2f} m): the approach does not reach the impact; raise the speed at braking or "
+                "shorten the distance", field=f"{spec.key}.distance")
+        ti = float(np.interp(spec.distance, s, grid))
+        return ti, float(spec.distance)
+    if spec.mode == "time":
+        if run.status == "rest" and (b.time_to_rest or t_end) < spec.time:
+            raise ScenarioError(
+                f"the vehicle stops {b.time_to_rest or t_end:.3f} s after the start of braking, before the impact "
+                f"(time = {spec.time:.3f} s): the approach does not reach the impact", field=f"{spec.key}.time")
+        if spec.time > t_end:
+            raise ScenarioError(f"the approach simulation ended ({run.status}) at {t_end:.3f} s, before time = "
+                                f"{spec.time:.3f} s", field=f"{spec.key}.time")
+        return float(spec.time), float(np.interp(spec.time, grid, s))
+    sv = np.asarray(b.sol(grid))
+    d = np.hypot(sv[0] - target[0], sv[1] - target[1])
+    k = int(np.argmin(d))
+    lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
+    from scipy.optimize import minimize_scalar
+
+    if hi > lo:
+        r = minimize_scalar(lambda tt: float(np.hypot(*(np.asarray(b.sol(tt))[:2] - target))), bounds=(lo, hi),
+                            method="bounded", options={"xatol": 1e-9})
+        ti = float(r.x)
+    else:
+        ti = float(grid[k])
+    return ti, float(np.interp(ti, grid, s))
+
+
+def _trim_track(w: WheelTrack, ti: float, R: np.ndarray, T: np.ndarray) -> WheelTrack:
+    from .postprocess import split_track
+
+    keep = w.t <= ti + 1e-12
+    t = w.t[keep] - ti
+    pts = w.points[keep] @ R.T + T
+    sliding = w.sliding[keep]
+    segs = split_track(t, pts, sliding)
+    path = float(np.sum(np.hypot(*np.diff(pts, axis=0).T))) if len(pts) > 1 else 0.0
+    slide = sum(s.length for s in segs if s.kind == "sliding")
+    return replace(w, t=t, points=pts, sliding=sliding, load=w.load[keep], segments=segs, path_length=path,
+                   sliding_length=float(slide), energy=math.nan)
+
+
+def simulate_approach(vehicle: Vehicle, spec: ApproachSpec, impact_states: Mapping[str, BodyState], road: Road,
+                      options: RunoutOptions, *, speed_at_impact: float | None = None) -> ApproachResult:
+    """Simulate a vehicle's approach from the start of braking to the impact.
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+    spec : ApproachSpec
+    impact_states : mapping of BodyState
+        The impact configuration of the vehicle's bodies (positions and headings are used).
+    road : Road
+    options : RunoutOptions
+    speed_at_impact : float, optional
+        Needed when ``spec.speed`` is None: the speed at braking is then solved from it.
+
+    Raises
+    ------
+    ScenarioError
+        The approach does not reach the impact (the vehicle stops first, or passes the impact
+        position further than ``spec.tolerance`` away), or a speed cannot be solved.
+    """
+    solved = spec.speed is None
+    if solved:
+        if speed_at_impact is None:
+            raise ScenarioError("give the speed at the start of braking (approach.speed) or the speed at impact",
+                                field=f"{spec.key}.speed")
+        speed = approach_speed_at_braking(vehicle, spec, impact_states, road, options, speed_at_impact)
+    else:
+        speed = float(spec.speed)
+    res = _approach(vehicle, spec, impact_states, road, options, speed)
+    return replace(res, speed_solved=solved)
+
+
+def _approach(vehicle, spec, impact_states, road, options, speed) -> ApproachResult:
+    first = vehicle.bodies[0].name
+    target = np.asarray(impact_states[first].position, dtype=float)
+    h_imp = float(impact_states[first].heading)
+    if spec.mode == "start":
+        p0, h0 = np.asarray(spec.start_position, float), float(spec.start_heading)
+        run = _run(vehicle, spec, speed, p0, h0, road, options)
+        ti, dist = _end_time(run, spec, vehicle, target)
+        R, T = np.eye(2), np.zeros(2)
+    else:
+        # first guess: straight back along the impact heading; placed exactly by a rigid motion
+        guess = spec.distance if spec.distance is not None else speed * spec.time
+        p0 = target - guess * np.array([math.cos(h_imp), math.sin(h_imp)])
+        h0 = h_imp
+        for _ in range(8):
+            run = _run(vehicle, spec, speed, p0, h0, road, options)
+            ti, dist = _end_time(run, spec, vehicle, target)
+            end = np.asarray(run.bodies[first].sol(ti))
+            phi = h_imp - float(end[2])
+            c, s_ = math.cos(phi), math.sin(phi)
+            R = np.array([[c, -s_], [s_, c]])
+            T = target - R @ end[:2]
+            new_p0, new_h0 = R @ p0 + T, h0 + phi
+            moved = float(np.hypot(*(new_p0 - p0)))
+            if not road.zones or (moved < _PLACEMENT_TOL and abs(phi) < 1e-6):
+                break
+            p0, h0 = new_p0, new_h0
+        else:
+            raise ScenarioError("the approach path could not be placed on the impact configuration with the friction "
+                                f"zones (the start still moved {moved:.3g} m)", field=spec.key)
+    states, bodies, start = {}, {}, {}
+    for b in vehicle.bodies:
+        br = run.bodies[b.name]
+        e = np.asarray(br.sol(ti))
+        vel = R @ e[3:5]
+        pos = R @ e[:2] + T
+        head = float(e[2]) + math.atan2(R[1, 0], R[0, 0])
+        states[b.name] = BodyState((float(pos[0]), float(pos[1])), head, (float(vel[0]), float(vel[1])), float(e[5]))
+        h = br.history
+        keep = h.t <= ti
+        xy = np.column_stack([h.x[keep], h.y[keep]]) @ R.T + T
+        rows = np.column_stack([h.t[keep] - ti, xy, h.heading[keep] + math.atan2(R[1, 0], R[0, 0])])
+        rows = np.vstack([rows, [0.0, pos[0], pos[1], head]])
+        bodies[b.name] = rows
+        start[b.name] = tuple(float(v) for v in rows[0, 1:3])
+    v_imp = float(np.hypot(*states[first].velocity))
+    heading_first = states[first].heading
+    perception = np.asarray(start[first]) - speed * spec.reaction_time * np.array(
+        [math.cos(bodies[first][0, 3]), math.sin(bodies[first][0, 3])])
+    miss, hmiss = 0.0, 0.0
+    warnings = []
+    if spec.mode == "start":
+        miss = float(np.hypot(*(np.asarray(states[first].position) - target)))
+        hmiss = float((heading_first - h_imp + math.pi) % (2 * math.pi) - math.pi)
+        if miss > spec.tolerance:
+            raise ScenarioError(
+                f"the approach from start_position passes the impact position {miss:.2f} m away at its closest "
+                f"(tolerance {spec.tolerance:.2f} m): it does not reach the impact configuration",
+                field=f"{spec.key}.start_position")
+    art = tuple(float(states[a.name].heading - states[b.name].heading)
+                for a, b in zip(vehicle.bodies[:-1], vehicle.bodies[1:]))
+    for i, (a, b) in enumerate(zip(vehicle.bodies[:-1], vehicle.bodies[1:])):
+        given = float(impact_states[a.name].heading - impact_states[b.name].heading)
+        if abs(art[i] - given) > math.radians(2.0):
+            warnings.append(f"the approach ends with articulation {math.degrees(art[i]):.1f} deg at the hitch "
+                            f"{a.name}/{b.name}; the impact configuration has {math.degrees(given):.1f} deg")
+    if spec.mode == "start" and abs(hmiss) > math.radians(2.0):
+        warnings.append(f"the approach reaches the impact position with heading {math.degrees(hmiss):+.1f} deg off "
+                        "the impact configuration")
+    tracks = {k: _trim_track(w, ti, R, T) for k, w in run.wheels.items()}
+    return ApproachResult(
+        vehicle=vehicle.name, mode=spec.mode, speed_at_braking=speed, speed_at_impact=v_imp, time_to_impact=ti,
+        distance=dist, reaction_time=spec.reaction_time, reaction_distance=speed * spec.reaction_time,
+        impact_states=states, bodies=bodies, tracks=tracks, braking_start=start,
+        perception_point=(float(perception[0]), float(perception[1])), miss=miss, heading_miss=hmiss,
+        articulation_at_impact=art, runout=run, warnings=tuple(warnings))
+
+
+def approach_speed_at_braking(vehicle: Vehicle, spec: ApproachSpec, impact_states, road: Road, options: RunoutOptions,
+                              speed_at_impact: float, *, xtol: float = 1e-9) -> float:
+    """The speed at the start of braking [m/s] whose approach reaches the impact at ``speed_at_impact``.
+
+    Brent's method on ``v_impact(v_b) - speed_at_impact`` (``v_impact`` grows with ``v_b``).
+    """
+    from scipy.optimize import brentq
+
+    if not (speed_at_impact > 0.0):
+        raise ScenarioError(f"solving the speed at braking needs a moving vehicle at impact, got "
+                            f"{speed_at_impact} m/s", field=f"{spec.key}.speed")
+    mu = max([road.mu] + [z.mu for z in road.zones])
+    reach = spec.distance if spec.distance is not None else None
+
+    def f(v):
+        try:
+            return _approach(vehicle, spec, impact_states, road, options, v).speed_at_impact - speed_at_impact
+        except ScenarioError:
+            return -speed_at_impact  # stops before the impact: far too slow
+
+    lo = speed_at_impact
+    if reach is not None:
+        hi = math.sqrt(speed_at_impact ** 2 + 2.0 * STANDARD_GRAVITY * 1.2 * mu * reach) + 1.0
+    else:
+        hi = speed_at_impact + 1.2 * mu * STANDARD_GRAVITY * spec.time + 1.0
+    flo = f(lo)
+    if flo >= 0.0:
+        return lo
+    for _ in range(20):
+        fhi = f(hi)
+        if fhi > 0.0:
+            break
+        hi *= 1.5
+    else:
+        raise ScenarioError(f"no speed at braking up to {hi:.1f} m/s reaches the impact at {speed_at_impact:.2f} m/s",
+                            field=f"{spec.key}.speed")
+    return float(brentq(f, lo, hi, xtol=xtol, rtol=4 * np.finfo(float).eps))

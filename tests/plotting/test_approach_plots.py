@@ -1,0 +1,68 @@
+"""The approach on the scene figure and the time-distance chart: the drawn data are the computed ones."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "unit"))
+
+from test_approach_scenario import scene as approach_scene  # noqa: E402
+
+from crashsim.plotting import plot_scene, plot_time_distance, save_scene_figures  # noqa: E402
+from crashsim.reconstruct.scene import run_scene  # noqa: E402
+from crashsim.scenario import scenario_from_dict  # noqa: E402
+
+FT = 0.3048
+
+
+@pytest.fixture(scope="module")
+def result():
+    return run_scene(scenario_from_dict(approach_scene()))
+
+
+def _line(ax, gid):
+    found = [ln for ln in ax.lines if ln.get_gid() == gid]
+    assert found, f"no line {gid!r}"
+    return found[0]
+
+
+def test_scene_figure_draws_the_approach(result):
+    ax = plot_scene(result, system="US")
+    a = result.scenario.approaches["A"]
+    path = np.asarray(_line(ax, "approach:path:carA").get_xydata())
+    assert np.allclose(path[-1] * FT, result.scenario.states["carA"].position, atol=1e-6)
+    assert np.allclose(path[0] * FT, a.braking_start["carA"], atol=1e-6)
+    assert any((p.get_gid() or "") == "outline:braking:carA" for p in ax.patches)
+    mark = np.asarray(_line(ax, "approach:perception:A").get_xydata())[0]
+    assert np.allclose(mark * FT, a.perception_point, atol=1e-6)
+    tracks = [ln for ln in ax.lines if (ln.get_gid() or "").startswith("approach:track:carA/")]
+    assert len(tracks) >= 4  # four locked wheels leave sliding tracks
+
+
+@pytest.mark.parametrize("system, k", [("SI", 1.0), ("US", 1 / FT)])
+def test_time_distance_chart(result, system, k):
+    fig = plot_time_distance(result, system=system)
+    ax_s, ax_v = fig.axes[:2]
+    a = result.scenario.approaches["A"]
+    xy = np.asarray(_line(ax_s, "td:approach:A").get_xydata())
+    assert xy[0, 0] == pytest.approx(-a.time_to_impact - a.reaction_time)
+    assert xy[0, 1] == pytest.approx(-k * (a.distance + a.reaction_distance), rel=1e-9)
+    assert xy[-1] == pytest.approx([0.0, 0.0], abs=1e-4)
+    run = np.asarray(_line(ax_s, "td:runout:A").get_xydata())
+    assert run[0] == pytest.approx([0.0, 0.0], abs=1e-9)
+    body = result.runout["A"].bodies["carA"]
+    assert run[-1, 1] == pytest.approx(k * body.distance, rel=2e-3)
+    # a vehicle without approach starts at the impact
+    assert not [ln for ln in ax_s.lines if ln.get_gid() == "td:approach:B"]
+    assert np.asarray(_line(ax_s, "td:runout:B").get_xydata())[0, 0] == 0.0
+    assert "distance from the impact [" + ("m" if system == "SI" else "ft") + "]" == ax_s.get_ylabel()
+
+
+def test_save_writes_the_chart(result, tmp_path):
+    out = save_scene_figures(result, tmp_path / "s.png", time_distance_path=tmp_path / "td.svg")
+    assert [p.name for p in out] == ["s.png", "td.svg"]
+    assert (tmp_path / "td.svg").read_text().count("<svg") == 1

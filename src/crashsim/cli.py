@@ -211,6 +211,8 @@ def _cmd_presets(args) -> int:
     for name, p in presets().items():
         sys.stdout.write(f"{name}\n    mass {p['mass']}, yaw inertia {p['yaw_inertia']}, "
                          f"{len(p.get('axles', []))} axles\n    source: {p['source']}\n")
+        for face, c in p.get("crush", {}).items():
+            sys.stdout.write(f"    crush stiffness, {face}: A {c['A']}, B {c['B']}\n      source: {c['source']}\n")
     return 0
 
 

@@ -460,6 +460,31 @@ def _residual_text(c, system) -> str:
     return f"{fmt(abs(c.residual), c.quantity, system, 2)} (tol. {fmt(c.tolerance, c.quantity, system, 2)})"
 
 
+def _draw_crush(S, sc) -> None:
+    """Each measured crush profile (``[[evidence.crush]]``) on the damaged face of its body's outline at
+    impact, to scale (gid ``"crush:<body>:<face>"``)."""
+    from matplotlib.patches import Patch, Polygon
+
+    from .geometry import to_world
+    from .reconstruct.crush import profile_outline
+
+    drawn = False
+    for it in sc.evidence.crush:
+        body = S.body_of.get(it.body)
+        poly = None if body is None else profile_outline(body, it)
+        if poly is None:
+            continue
+        st = sc.states[it.body]
+        xy = S.d(to_world(poly, st.position, st.heading))
+        _, _, dark = S.colors(it.body)
+        S.ax.add_patch(Polygon(xy, closed=True, facecolor="none", edgecolor=dark, hatch="xxxx", lw=1.0,
+                               zorder=_Z_IMPACT + 0.5, gid=f"crush:{it.body}:{it.face}"))
+        S.add(xy)
+        drawn = True
+    if drawn:
+        S.legend_entry("measured crush (to scale)", Patch(facecolor="none", edgecolor="0.2", hatch="xxxx", lw=1.0))
+
+
 def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evidence: bool = True,
                arrows: bool = True, system: str | None = None, legend=True, axles: bool = True,
                approach: bool = True):
@@ -561,6 +586,8 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
         S.pins(v, poses, line, 4.0, zorder=_Z_IMPACT)
     if any((p.get_gid() or "").startswith("outline:impact:") for p in ax.patches):
         S.legend_entry("at impact", Patch(facecolor="0.85", edgecolor="0.3", lw=1.4))
+    if evidence and sc.evidence.crush:
+        _draw_crush(S, sc)
 
     # -- approach: tracks, CG paths, the start of braking and the perception point -------------
     if approach and getattr(sc, "approaches", None):

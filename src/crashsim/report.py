@@ -8,8 +8,8 @@ import numpy as np
 
 from .units import Kind, format_value, to_unit
 
-__all__ = ["format_approach", "format_impact", "format_runout", "format_joint", "format_events", "format_evidence", "describe_event",
-           "fmt", "table"]
+__all__ = ["format_approach", "format_impact", "format_runout", "format_joint", "format_events", "format_evidence",
+           "format_crush", "describe_event", "fmt", "table"]
 
 
 fmt = format_value  # an SI value in the display unit of a system (crashsim.units.format_value)
@@ -235,6 +235,72 @@ def format_evidence(report, system: str = "SI") -> str:
                      f"{fmt(c.details['computed'][k], 'speed', s)}")
         rows.append(["PASS" if c.passed else "FAIL", c.kind, c.name, f"residual {res}", f"tolerance {tol}", extra])
     lines += table(rows)
+    return "\n".join(lines)
+
+
+#: What each crush comparison compares, for the report.
+_CRUSH_COMPARE = {"total": "crush energies with the force-direction factor against the whole loss at the crush "
+                           "surface T_n + T_t + T_M",
+                  "normal": "crush energies without the force-direction factor against the normal and moment "
+                            "parts T_n + T_M (Brach & Brach's partition)"}
+
+
+def _mean_depth(profile) -> float:
+    """Mean crush depth over the damage width [m]: the area of the piecewise-linear profile over its width."""
+    return sum(a + b for a, b in zip(profile[:-1], profile[1:])) / (2 * (len(profile) - 1))
+
+
+def format_crush(report, system: str = "SI") -> str:
+    """The crush-energy section: per body its CRASH3 inputs (the profile as its count, its mean depth over
+    the width and its largest depth), force-direction factor, energy and EES;
+    per group the impacts' energy loss split into normal, tangential and moment work, and the verdict."""
+    s = system
+    E = lambda v: fmt(v, "energy", s, 6)  # noqa: E731
+    deg = lambda a: "n/a" if a is None else f"{math.degrees(a):.1f} deg"  # noqa: E731
+    lines = ["Crush energy (CRASH3; docs/crush-energy.md)"]
+    for c in report.checks:
+        if c.kind != "crush energy":
+            continue
+        d = c.details
+        lines.append(f"  {c.name}: {_CRUSH_COMPARE[d['compare']]}")
+        rows = [["body", "face", "A", "B", "width", "profile", "PDOF", "alpha", "factor", "energy", "EES"]]
+        for name, b in d["bodies"].items():
+            for it in b["items"]:
+                if "ees_given" in it:
+                    inputs = ["", "", "", f"EES given {fmt(it['ees_given'], 'speed', s)}"]
+                else:
+                    prof = it["profile"]
+                    inputs = [fmt(it["A"], "force_per_length", s, 6), fmt(it["B"], "force_per_area", s, 6),
+                              fmt(it["width"], "length", s),
+                              f"{len(prof)} points, mean {fmt(_mean_depth(prof), 'length', s, 3)}, "
+                              f"max {fmt(max(prof), 'length', s, 3)}"]
+                factor = "none (EES)" if "ees_given" in it else (
+                    f"{it['factor']:.4f}" + (" (capped)" if it["factor_capped"] else ""))
+                rows.append([name, it["face"], *inputs, deg(it["pdof"]), deg(it["alpha"]), factor, E(it["energy"]),
+                             ""])
+            rows.append([name, "total", "", "", "", "", "", "", "", E(b["energy"]), fmt(b["ees"], "speed", s)])
+        lines += table(rows, "llrrrlrrrrr", indent="    ")
+        for name, b in d["bodies"].items():
+            for it in b["items"]:
+                if it["source"] != "given in the scenario" and "ees_given" not in it:
+                    lines.append(f"    {name} {it['face']}: A and B from {it['source']}")
+        if "impacts_counted" in d:
+            rows = [["impact", "time", "kinetic loss", "normal T_n", "tangential T_t", "moment T_M", "T_n + T_t + T_M"]]
+            for x in d["impacts_counted"]:
+                rows.append([f"{x['body1']} / {x['body2']}", fmt(x["time"], "time", s), E(x["energy_loss"]),
+                             E(x["normal"]), E(x["tangential"]), E(x["moment"]), E(x["crush_surface"])])
+            lines += table(rows, "llrrrrr", indent="    ")
+            ratio = "" if d["ratio"] is None else f" (crush / loss = {d['ratio']:.3f})"
+            lines.append(f"    model loss {E(d['computed'])} against crush energy {E(d['measured'])}{ratio}: residual "
+                         f"{E(c.residual)}, tolerance {E(c.tolerance)}: {'PASS' if c.passed else 'FAIL'}")
+            if not d["complete"]:
+                lines.append(f"    only part of the pair has a crush item (none for {', '.join(d['missing'])}): the crush "
+                             "energy is a lower bound of the energy absorbed, so the check is one-sided (it fails only "
+                             "if the crush energy exceeds the loss by more than the tolerance)")
+        else:
+            lines.append(f"    not compared: {d['reason']}")
+        for w in d["warnings"]:
+            lines.append(f"    WARNING: {w}")
     return "\n".join(lines)
 
 

@@ -357,6 +357,50 @@ EV_DV = Section("delta_v", [
           description="Which impacts the recorder saw: the first (default: a recorder records one event, normally the "
                       "first impact) or all of the body's impacts summed (a later secondary impact in the same event)"),
 ], description="A delta-v recorded by an event data recorder")
+EV_CRUSH = Section("crush", [
+    Field("name", "str", default="", description="Label for the report"),
+    Field("body", "str", example="car", description="Body whose crush was measured"),
+    Field("face", choices=("front", "rear", "left", "right"), example="front",
+          description="Damaged face of the body; the angle of the computed crush force (PDOF) to this face's "
+                      "normal sets the force-direction factor"),
+    Field("A", Kind.FORCE_PER_LENGTH, required=False, minimum=0, maximum=1e8, example="50000 N/m",
+          description="CRASH3 stiffness coefficient A: force per unit damage width at zero residual crush "
+                      "(lb/in is read as lbf/in: in CRASH3 practice lb is pound-force); with B, width and "
+                      "profile; omit A and B to use the body preset's stiffness of this face (crashsim presets)"),
+    Field("B", Kind.FORCE_PER_AREA, required=False, minimum=0, exclusive_minimum=True, maximum=1e10,
+          example="600000 N/m^2",
+          description="CRASH3 stiffness coefficient B: force per unit width per unit crush (lb/in^2 is read as "
+                      "lbf/in^2)"),
+    Field("width", Kind.LENGTH, required=False, minimum=0, exclusive_minimum=True, maximum=MAX_LENGTH,
+          example="1.5 m", description="Damage width L over which the profile was measured"),
+    Field("profile", Kind.LENGTH, counts=(2, 4, 6), required=False, minimum=0, maximum=5.0,
+          example='["0.10 m", "0.20 m", "0.30 m", "0.35 m", "0.30 m", "0.20 m"]',
+          description="Residual crush depths C1..Cn, equally spaced over the width (2, 4 or 6 of them; "
+                      "from the body's left to its right on the front and rear faces, "
+                      "front to rear on the sides)"),
+    Field("offset", Kind.LENGTH, default="0 m", minimum=-MAX_LENGTH, maximum=MAX_LENGTH,
+          description="Centre of the damage from the centre of the face, along the face (front/rear: to the "
+                      "body's left; left/right: forward); for the figure"),
+    Field("ees", Kind.SPEED, required=False, minimum=0, maximum=MAX_SPEED, example="30 km/h",
+          description="Energy equivalent speed, instead of A, B, width and profile: crush energy 1/2 m EES^2 "
+                      "(m the body's mass), taken as it is (no force-direction factor)"),
+    Field("correction", choices=("pdof", "none"), default="pdof",
+          description="Force-direction factor 1 + tan^2(alpha), alpha the angle of the computed PDOF to the face "
+                      "normal, applied up to 45 deg (factor 2; beyond: held at 2, with a warning): pdof, or none"),
+    Field("impacts", choices=("first", "all"), default="first",
+          description="Which impacts made this damage: the first, or all the body's impacts (the first and the "
+                      "run-out's); items with the same setting are summed and compared as one group"),
+    Field("compare", choices=("total", "normal"), default="total",
+          description="total: the group's crush energies (with the factor) against the whole loss at the crush "
+                      "surface T_n + T_t + T_M; normal: the energies without the factor against the normal and "
+                      "moment parts T_n + T_M (Brach & Brach's partition); the same in every item of a group"),
+    Field("tolerance", Kind.ENERGY, required=False, minimum=0, example="10 kJ",
+          description="This item's share of the group's tolerance (the group's is the sum of its items'); "
+                      "or give relative_tolerance"),
+    Field("relative_tolerance", Kind.DIMENSIONLESS, required=False, minimum=0, exclusive_minimum=True, maximum=10,
+          example="25 %", description="Tolerance as a fraction of this item's crush energy, instead of tolerance"),
+], description="The measured crush of one face of one body (CRASH3): its energy is compared with the impact "
+               "model's energy loss")
 EV_RECORDER_SAMPLE = Section("sample", [
     Field("time", Kind.TIME, maximum=0, example="-2.5 s",
           description="Time of the sample relative to the impact (negative: before it; pre-crash data end at the "
@@ -384,6 +428,7 @@ EVIDENCE = Section("evidence", [], subsections=[
     EV_POI,
     ArrayOf("delta_v", EV_DV, required=False, description="Recorded delta-v"),
     ArrayOf("recorder", EV_RECORDER, required=False, description="Recorded pre-crash speeds (needs an approach)"),
+    ArrayOf("crush", EV_CRUSH, required=False, description="Crush profiles (CRASH3) or EES of damaged faces"),
 ], required=False, description="What was found at the scene; each item is checked against its tolerance")
 
 _CM = ContactModel()
@@ -913,7 +958,7 @@ def _apply_presets(data: dict, file: str | None) -> dict:
                 hint = f"; did you mean {', '.join(map(repr, near))}?" if near else ""
                 raise _err(f"unknown preset {name!r}{hint} Presets: {', '.join(library)}",
                            f"vehicles.{vname}.bodies[{i}].preset", file)
-            base = {k: copy.deepcopy(val) for k, val in library[name].items() if k != "source"}
+            base = {k: copy.deepcopy(val) for k, val in library[name].items() if k not in ("source", "crush")}
             base.update({k: val for k, val in b.items()})
             bodies[i] = base
     return data
@@ -1054,6 +1099,10 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
         runout = _with_contact(runout, d, vehicles, problem, file)
     evidence = _build_evidence(d["evidence"], states, file, vehicles,
                                {n: v["approach"] for n, v in d["vehicles"].items()})
+    if d["evidence"] is not None and d["evidence"]["crush"]:
+        import dataclasses
+
+        evidence = dataclasses.replace(evidence, crush=_build_crush(d["evidence"]["crush"], d, vehicles, file))
     map_lines = _build_map_lines(d["map"], file)
     meta = d["scenario"]
     return Scenario(file, meta["title"], meta["source"], meta["units"], tuple(vehicles), states, problem, runout,
@@ -1205,6 +1254,70 @@ def _build_evidence(e: dict | None, states: dict, file: str | None, vehicles=(),
                                          tuple(bool(p["brake"]) for p in smp), x["tolerance"], x["time_offset"],
                                          x["name"]))
     return Evidence(tuple(rest), tuple(marks), poi, tuple(dv), tuple(recorder))
+
+
+def _build_crush(items: list, d: dict, vehicles, file: str | None) -> tuple:
+    """The ``[[evidence.crush]]`` items as CrushEvidence (A and B from the body's preset where omitted)."""
+    import difflib
+
+    from .reconstruct.crush import CrushEvidence, crush_groups
+    from .units import parse
+
+    by_name = {b.name: b for v in vehicles for b in v.bodies}
+    preset_of = {b["name"]: b.get("preset") for v in d["vehicles"].values() for b in v["bodies"]}
+    out = []
+    for i, c in enumerate(items):
+        key = f"evidence.crush[{i}]"
+        name = c["body"]
+        if name not in by_name or by_name[name].is_fixed:
+            near = difflib.get_close_matches(name, [n for n, b in by_name.items() if not b.is_fixed], n=1)
+            hint = f"; did you mean {near[0]!r}?" if near else ""
+            raise _err(f"unknown body {name!r}{hint} (a movable body of a vehicle)", f"{key}.body", file)
+        profile_keys = ("A", "B", "width", "profile")
+        given = [k for k in profile_keys if c[k] is not None]
+        A, B, source = c["A"], c["B"], "given in the scenario"
+        if c["ees"] is not None:
+            if given:
+                raise _err(f"give either ees or a crush profile (A, B, width, profile), not both (ees with "
+                           f"{', '.join(given)})", f"{key}.ees", file)
+        else:
+            if A is None and B is None and c["profile"] is not None:
+                preset = preset_of.get(name)
+                stiff = (presets().get(preset, {}).get("crush", {}).get(c["face"]) if preset else None)
+                if stiff is None:
+                    raise _err(f"needs A and B (CRASH3 stiffness of the {c['face']} face of {name!r}, e.g. "
+                               "A = \"50000 N/m\", B = \"600000 N/m^2\"); "
+                               + (f"preset {preset!r} has no crush stiffness for this face" if preset
+                                  else "the body has no preset with crush stiffness"), f"{key}.A", file)
+                where = f"vehicles library preset {preset!r} crush.{c['face']}"
+                A = parse(stiff["A"], Kind.FORCE_PER_LENGTH, field=f"{where}.A")
+                B = parse(stiff["B"], Kind.FORCE_PER_AREA, field=f"{where}.B")
+                source = f"preset {preset!r}: {stiff['source']}"
+            for k, v in (("A", A), ("B", B), ("width", c["width"]), ("profile", c["profile"])):
+                if v is None:
+                    raise _err(f"missing {k}: a crush item needs A, B, width and profile (CRASH3), or ees; "
+                               f"given: {', '.join(given) or 'none of them'}", f"{key}.{k}", file)
+        if (c["tolerance"] is None) == (c["relative_tolerance"] is None):
+            raise _err("give tolerance (an energy, e.g. \"10 kJ\") or relative_tolerance (e.g. \"25 %\"), "
+                       f"{'not both' if c['tolerance'] is not None else 'one of them'}", f"{key}.tolerance", file)
+        out.append(CrushEvidence(name, c["face"], by_name[name].mass, A, B, c["width"],
+                                 None if c["profile"] is None else tuple(c["profile"]), c["offset"], c["ees"],
+                                 c["tolerance"], c["relative_tolerance"], c["impacts"], c["compare"],
+                                 c["correction"] == "pdof", source, c["name"]))
+    for which, idx in crush_groups(out):
+        modes = {out[i].compare for i in idx}
+        if len(modes) > 1:
+            j = next(i for i in idx if out[i].compare != out[idx[0]].compare)
+            raise _err(f"compare = {out[j].compare!r}, but evidence.crush[{idx[0]}] (same impacts = {which!r}) has "
+                       f"{out[idx[0]].compare!r}: the items of a group are compared together",
+                       f"evidence.crush[{j}].compare", file)
+    bodies_seen: dict[str, str] = {}
+    for i, it in enumerate(out):
+        if bodies_seen.setdefault(it.body, it.impacts) != it.impacts:
+            raise _err(f"impacts = {it.impacts!r}, but another crush item of {it.body!r} has "
+                       f"{bodies_seen[it.body]!r}: a body's damage belongs to one group", f"evidence.crush[{i}].impacts",
+                       file)
+    return tuple(out)
 
 
 def load_scenario(path: str | Path) -> Scenario:

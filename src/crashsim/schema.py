@@ -102,6 +102,9 @@ class Field:
     n
         For a vector of quantities (or of plain numbers): the number of components; the
         value is then a list such as ``["1 m", "2 m"]``, returned as a tuple.
+    counts
+        For a list of quantities whose length may vary (``n`` not given): the allowed numbers
+        of values, e.g. ``(2, 4, 6)``; returned as a tuple.
     example
         An example value as written in a file, for messages and documentation.
     """
@@ -121,6 +124,7 @@ class Field:
     points: bool = False
     min_points: int = 1
     example: str | None = None
+    counts: tuple[int, ...] = ()
 
     def __post_init__(self) -> None:
         where = f"Field {self.name!r}"
@@ -153,6 +157,9 @@ class Field:
             raise TypeError(f"{where}: n= (a vector) needs a quantity kind or 'float'")
         if self.points and self.n is None:
             raise TypeError(f"{where}: points=True (a list of points) needs n= (components per point)")
+        object.__setattr__(self, "counts", tuple(self.counts))
+        if self.counts and (self.n is not None or self.points or not isinstance(kind, Kind)):
+            raise TypeError(f"{where}: counts= (a list of varying length) needs a quantity kind, without n= or points=")
 
     @property
     def is_quantity(self) -> bool:
@@ -281,7 +288,7 @@ def _in_range(x: float, f: Field) -> bool:
 
 def _example(f: Field) -> str | None:
     """An example of the field's value as TOML text (quoted where TOML needs quotes)."""
-    quoted = f.n is None and (f.is_quantity or f.kind in ("str", "choice"))
+    quoted = f.n is None and not f.counts and (f.is_quantity or f.kind in ("str", "choice"))
     if f.example is not None:
         return f'"{f.example}"' if quoted else f.example
     if isinstance(f.kind, Kind):
@@ -300,7 +307,15 @@ def _short_type(f: Field) -> str:
         text = _TYPE_NAMES[str(f.kind)]
     if f.points:
         return f"list of points, each {f.n} x {text}"
+    if f.counts:
+        return f"list of {_counts(f)} x {text}"
     return f"list of {f.n} x {text}" if f.n else text
+
+
+def _counts(f: Field) -> str:
+    """The allowed list lengths of a ``counts`` field in words: "2, 4 or 6"."""
+    c = [str(k) for k in f.counts]
+    return c[0] if len(c) == 1 else ", ".join(c[:-1]) + " or " + c[-1]
 
 
 def _number(value: object, path: str, integer: bool, problems: _Problems) -> float | None:
@@ -357,6 +372,20 @@ def _field(value: object, f: Field, path: str, problems: _Problems) -> Any:
         got = [_field(v, item, f"{path}[{i}]", problems) for i, v in enumerate(value)]
         return None if any(g is None for g in got) else tuple(got)
     kind = f.kind
+    if f.counts:
+        if not isinstance(value, list) or len(value) not in f.counts:
+            what = f"has {len(value)} values" if isinstance(value, list) else "is not a list"
+            problems.append((path, f"{toml_repr(value)} {what}; allowed a list of {_counts(f)} values such as "
+                                   f"{_example(f) or '[...]'}"))
+            return None
+        try:
+            got = units.parse_vector(value, kind, None, field=path)
+        except ScenarioError as exc:
+            problems.append((exc.field or path, str(exc).removeprefix(f"{exc.field}: ")))
+            return None
+        for i, (x, raw) in enumerate(zip(got, value)):
+            _check_range(x, raw, f, f"{path}[{i}]", problems)
+        return got
     if isinstance(kind, Kind):
         try:
             if f.n is not None:
@@ -568,6 +597,8 @@ def _type_text(f: Field) -> str:
     text = units.describe(f.kind)
     if f.points:
         return f"list of >= {f.min_points} points, each a list of {f.n} x {text}"
+    if f.counts:
+        return f"list of {_counts(f)} x {text}"
     return f"list of {f.n} x {text}" if f.n else text
 
 

@@ -18,7 +18,8 @@ Conventions (decided here, and only here)
 * **lb for lbf in US practice.** Where reading ``lb`` as a mass gives the wrong dimension
   and reading it as ``lbf`` gives the expected one, ``lbf`` is meant: ``"90639 lb-s"`` is
   an impulse in lbf s, ``"1.95e6 ft-lb"`` an energy in ft lbf, ``"15489 ft-lb-s^2"`` a yaw
-  inertia in lbf ft s^2 (= slug ft^2), ``"8143 lb"`` a force in lbf. Where the literal
+  inertia in lbf ft s^2 (= slug ft^2), ``"8143 lb"`` a force in lbf, ``"285.5 lb/in"`` a
+  CRASH3 stiffness A in lbf/in and ``"87 lb/in^2"`` a stiffness B in lbf/in^2. Where the literal
   reading already fits it wins (``"lb ft^2"`` is a yaw inertia in pound-mass ft^2).
 * **g is standard gravity for an acceleration.** A unit written exactly ``g`` for an
   :attr:`Kind.ACCELERATION` means ``G0`` (``"0.7 g"``); anywhere else pint's ``g`` (gram).
@@ -99,6 +100,8 @@ class Kind(str, enum.Enum):
     MOMENT_IMPULSE = "moment_impulse"
     ACCELERATION = "acceleration"
     ENERGY = "energy"
+    FORCE_PER_LENGTH = "force_per_length"
+    FORCE_PER_AREA = "force_per_area"
     DIMENSIONLESS = "dimensionless"
 
     def __str__(self) -> str:
@@ -141,6 +144,10 @@ _SPECS: dict[Kind, _Spec] = {
                              ("9.81 m/s^2", "0.7 g"), ("m/s^2", "ft/s^2", "g")),
     Kind.ENERGY: _Spec("an energy", "J, kJ, N m, ft lbf (ft-lb)",
                        ("2.65e6 J", "1.95e6 ft-lb"), ("J", "kJ", "MJ", "N m", "ft lbf", "ft-lb")),
+    Kind.FORCE_PER_LENGTH: _Spec("a force per length", "N/m, kN/m, lbf/in (lb/in: the pound-force of CRASH3 practice)",
+                                 ("50000 N/m", "285.5 lb/in"), ("N/m", "kN/m", "lbf/in", "lb/in")),
+    Kind.FORCE_PER_AREA: _Spec("a force per area", "N/m^2, kN/m^2, MN/m^2, lbf/in^2 (lb/in^2: pound-force)",
+                               ("600000 N/m^2", "87.0 lb/in^2"), ("N/m^2", "kN/m^2", "MN/m^2", "lbf/in^2", "lb/in^2")),
     Kind.DIMENSIONLESS: _Spec("a plain number", "a number, or a percentage", ("0.6", "5 %"),
                               ("%",)),
 }
@@ -158,6 +165,8 @@ DISPLAY_UNITS: dict[Kind, dict[str, str]] = {
     Kind.MOMENT_IMPULSE: {"SI": "N m s", "US": "lbf ft s"},
     Kind.ACCELERATION: {"SI": "m/s^2", "US": "ft/s^2"},
     Kind.ENERGY: {"SI": "J", "US": "ft lbf"},
+    Kind.FORCE_PER_LENGTH: {"SI": "N/m", "US": "lbf/in"},
+    Kind.FORCE_PER_AREA: {"SI": "N/m^2", "US": "lbf/in^2"},
     Kind.DIMENSIONLESS: {"SI": "", "US": ""},
 }
 """Display unit of each kind in each system: the one table behind :func:`to_unit`.

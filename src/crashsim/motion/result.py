@@ -570,7 +570,17 @@ class SecondaryImpact:
             "tangential_impulse": self.tangential_impulse, "energy_loss": self.energy_loss,
             "delta_v": {k: {"vector": list(v), "magnitude": float(np.hypot(*v))} for k, v in self.delta_v.items()},
             "law": self.law, "restitution": self.restitution, "friction": self.friction, "warning": self.warning,
+            **_work_split(self.result),
         })
+
+
+def _work_split(result) -> dict:
+    """The energy loss at the crush surface by the work of the impulses [J] (normal, tangential and moment
+    parts: :attr:`crashsim.impact.ImpactResult.energy_loss_normal` and friends); empty without a result."""
+    if result is None:
+        return {}
+    return {"energy_loss_normal": result.energy_loss_normal, "energy_loss_tangential": result.energy_loss_tangential,
+            "energy_loss_moment": result.energy_loss_moment}
 
 
 @dataclass(frozen=True, eq=False)

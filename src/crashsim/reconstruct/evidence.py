@@ -23,6 +23,8 @@ delta-v         computed minus recorded delta-v of a body [m/s]: its magnitude, 
                 a recorder records one event, normally the first), or summed over all the
                 body's impacts (``impacts = "all"``: a recorder that accumulates a whole event
                 which includes a later impact).
+crush energy    the impact model's energy loss at the crush surface minus the CRASH3 crush energy
+                of the bodies [J], per group of crush items (:mod:`crashsim.reconstruct.crush`).
 """
 
 from __future__ import annotations
@@ -251,10 +253,12 @@ class Evidence:
     impact_point: ImpactPointEvidence | None = None
     delta_v: tuple[DeltaVEvidence, ...] = ()
     recorder: tuple[RecorderEvidence, ...] = ()
+    crush: tuple = ()  # CrushEvidence (crashsim.reconstruct.crush)
 
     @property
     def empty(self) -> bool:
-        return not (self.rest or self.marks or self.delta_v or self.impact_point or self.recorder)
+        return not (self.rest or self.marks or self.delta_v or self.impact_point or self.recorder
+                    or self.crush)
 
 
 def recorder_residuals(ev: RecorderEvidence, approach) -> tuple[np.ndarray, np.ndarray]:
@@ -288,7 +292,7 @@ class Check:
 
     Attributes
     ----------
-    kind : {"rest", "rest heading", "mark", "point of impact", "delta-v"}
+    kind : {"rest", "rest heading", "mark", "point of impact", "delta-v", "crush energy"}
     name : str
     residual : float
         Computed minus measured (or a distance) in SI: m, rad or m/s (``quantity`` says which);
@@ -298,7 +302,7 @@ class Check:
     passed : bool
         ``abs(residual) <= tolerance``.
     quantity : str
-        Unit kind of residual and tolerance ("length", "angle", "speed").
+        Unit kind of residual and tolerance ("length", "angle", "speed", "energy").
     details : dict
         Computed and measured values and any extra figure (mean distance, matched wheel).
     """
@@ -531,4 +535,8 @@ def evaluate_evidence(evidence: Evidence, impact, runout: dict | None, contact_p
                              "impacts": ev.impacts, "impacts_counted": n_imp}))
     for i, ev in enumerate(evidence.recorder):
         checks.append(_check_recorder(ev, approach_of_body(approaches, ev.body), i))
+    if evidence.crush:
+        from .crush import crush_checks
+
+        checks += crush_checks(evidence.crush, impact, secondary)
     return EvidenceReport(tuple(checks))

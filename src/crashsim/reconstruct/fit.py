@@ -305,6 +305,24 @@ class EvidenceModel:
             n = len(x.times)
             items.append(_Item("recorder", x.name or f"recorder in {x.body}", "speed", s, src, n, float(n), i,
                                body=x.body, measured=x))
+        if ev.crush:
+            from .crush import GROUP_TITLES, crush_groups
+
+            for which, idx in crush_groups(ev.crush):
+                # the group's sigma: root sum of squares of its items' (independent measurements)
+                parts, srcs = [], set()
+                for i in idx:
+                    entry = (raw.get("crush") or [{}] * (i + 1))[i]
+                    c = ev.crush[i]
+                    if entry.get("sigma") is None and c.tolerance is None and sigma_from_tolerance is not None:
+                        raise ScenarioError("the fit needs this crush item's sigma (an energy): its tolerance is "
+                                            "relative to an energy that changes with the fit; add sigma = ...",
+                                            field=f"evidence.crush[{i}].sigma", file=scenario.path)
+                    s_i, src = sig(entry, "sigma", c.tolerance or 0.0, f"evidence.crush[{i}]")
+                    parts.append(s_i)
+                    srcs.add(src)
+                items.append(_Item("crush energy", f"crush energy, {GROUP_TITLES[which]}", "energy",
+                                   math.sqrt(sum(p * p for p in parts)), ", ".join(sorted(srcs)), 1, 1.0, idx[0]))
         if not items:
             raise ScenarioError("the scenario has no evidence to fit: add [evidence] items with their sigma",
                                 field="evidence", file=scenario.path)
@@ -379,6 +397,10 @@ class EvidenceModel:
                 d, key = _mark_distances(it, tracks, self.mark_points)
                 out.append(d)
                 det.append({"matched_wheel": key, "rms_distance": float(np.sqrt(np.mean(d * d)))})
+            elif it.kind == "crush energy":  # loss minus crush energy; one-sided when a crushed body has no item
+                r = c.residual if c.details.get("complete", True) else min(c.residual, 0.0)
+                out.append(np.array([r]))
+                det.append({"computed": c.details.get("computed"), "measured": c.details.get("measured")})
             else:  # delta-v: the check's signed residual (one definition of the components)
                 out.append(np.array([c.residual]))
                 det.append({"computed": c.details.get("computed")})

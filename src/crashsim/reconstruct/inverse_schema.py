@@ -158,6 +158,11 @@ EVIDENCE_SIGMA_FIELDS = {
         Field("sigma", Kind.SPEED, required=False, minimum=0, exclusive_minimum=True, example="0.6 mph",
               description="Standard uncertainty of each recorded speed sample (fit, posterior)"),
     ),
+    "crush": (
+        Field("sigma", Kind.ENERGY, required=False, minimum=0, exclusive_minimum=True, example="8 kJ",
+              description="Standard uncertainty of this item's crush energy (fit; a group's sigma is the root sum "
+                          "of squares of its items')"),
+    ),
 }
 
 

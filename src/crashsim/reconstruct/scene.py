@@ -87,8 +87,9 @@ class SceneResult:
         """Every impact in time order, the first (t = 0) and those of the run-out (SI, world frame).
 
         Each: ``time`` [s] after the first separation, ``body1``, ``body2``, ``point`` [m],
-        ``normal``, ``normal_impulse`` and ``tangential_impulse`` [N s], ``energy_loss`` [J],
-        ``delta_v`` (per body of the two vehicles: ``vector`` [m/s] and ``magnitude``).
+        ``normal``, ``normal_impulse`` and ``tangential_impulse`` [N s], ``energy_loss`` [J] (kinetic)
+        and its parts by the work of the impulses ``energy_loss_normal``, ``energy_loss_tangential``,
+        ``energy_loss_moment`` [J], ``delta_v`` (per body of the two vehicles: ``vector`` [m/s] and ``magnitude``).
         """
         imp = self.impact
         ke = imp.kinetic_energy["system"]
@@ -96,6 +97,8 @@ class SceneResult:
                  "normal": [float(v) for v in imp.normal], "normal_impulse": imp.normal_impulse,
                  "tangential_impulse": imp.tangential_impulse, "energy_loss": ke["before"] - ke["after"],
                  "closing_speed": -imp.closing_velocity, "law": imp.tangential_law,
+                 "energy_loss_normal": imp.energy_loss_normal, "energy_loss_tangential": imp.energy_loss_tangential,
+                 "energy_loss_moment": imp.energy_loss_moment,
                  "delta_v": {n: {"vector": [float(v) for v in b.delta_v], "magnitude": b.delta_v_magnitude}
                              for n, b in imp.bodies.items() if not b.fixed}}
         later = [i.to_dict() for i in self.joint.impacts] if self.joint is not None else []
@@ -146,6 +149,9 @@ class SceneResult:
             out["approach"] = {name: a.to_dict() for name, a in sc.approaches.items()}
         if self.evidence is not None:
             out["evidence"] = self.evidence.to_dict()
+            crush = crush_by_body(self.evidence)
+            if crush:
+                out["crush"] = crush
         if self.accuracy is not None:
             out["accuracy"] = {name: rep.to_dict() for name, rep in self.accuracy.items()}
         if self.scenario.runout is not None:
@@ -196,6 +202,10 @@ class SceneResult:
 
             text += "\n\n" + format_evidence(self.evidence, system)
             text += _format_registrations(self.scenario.evidence, system)
+            if any(c.kind == "crush energy" for c in self.evidence.checks):
+                from ..report import format_crush
+
+                text += "\n\n" + format_crush(self.evidence, system)
         if self.warnings:
             text += "\n\nWarnings\n" + "\n".join(f"  - {w}" for w in self.warnings)
         return text
@@ -344,6 +354,19 @@ class SceneResult:
                     w.writerow([t, _convert(d, "length", system), _convert(v, "speed", system)])
             written.append(path)
         return written
+
+
+def crush_by_body(evidence) -> dict:
+    """Per crushed body, from the crush-energy checks: ``energy`` [J] (CRASH3, with the force-direction
+    factor), ``energy_uncorrected`` [J], ``ees`` [m/s] and the ``impacts`` group ("first" or "all")."""
+    out = {}
+    for c in evidence.checks:
+        if c.kind != "crush energy":
+            continue
+        for name, b in c.details["bodies"].items():
+            out[name] = {"energy": b["energy"], "energy_uncorrected": b["energy_uncorrected"], "ees": b["ees"],
+                         "impacts": c.details["impacts"]}
+    return out
 
 
 def time_grid(t_end: float, dt: float):

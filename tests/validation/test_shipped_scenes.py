@@ -166,7 +166,9 @@ def test_truck_brakes_before_the_impact(capsys):
     first = out["impacts"][0]
     assert first["closing_speed"] == pytest.approx(a["speed_at_impact"], rel=1e-6)  # the car crosses at 90 deg
     kinds = {c["kind"] for c in out["evidence"]["checks"]}
-    assert {"mark", "recorder", "delta-v", "rest"} <= kinds
+    assert {"mark", "recorder", "delta-v", "rest", "crush energy"} <= kinds
+    assert set(out["crush"]) == {"car", "tractor"}
+    assert out["impacts"][0]["energy_loss_normal"] > out["impacts"][0]["energy_loss_tangential"] > 0
     assert out["evidence"]["all_passed"]
     sc = load_scenario(path)
     ap = sc.approaches["truck"]

@@ -948,6 +948,11 @@ def _draw_evidence(S: _Scene, checks: dict) -> None:
         S.legend_entry(_wrap(f"recorded \u0394v \u201c{name}\u201d: {verdict}", 52)
                        + (f"\n  {detail}" if detail else ""),
                        Line2D([], [], ls="none"), color)
+    for c in (S.scene.evidence.checks if S.scene.evidence is not None else ()):
+        if c.kind == "crush energy":  # one check per group of crush items (drawn on the faces)
+            verdict, color = _verdict([c])
+            S.legend_entry(_wrap(f"{c.name}: {verdict}", 52) + f"\n  |model loss - crush| {_residual_text(c, system)}",
+                           Line2D([], [], ls="none"), color)
     for i, x in enumerate(getattr(ev, "recorder", ())):
         c = checks.get(("recorder", i))
         verdict, color = _verdict([c])

@@ -74,3 +74,17 @@ def test_scene_figure_without_the_approach(result):
     assert not any((p.get_gid() or "").startswith("outline:braking:") for p in ax.patches)
     # the view then holds the impact and run-out only: the start of braking (18 m back) is outside
     assert ax.get_xlim()[0] > result.scenario.approaches["A"].braking_start["carA"][0]
+
+
+def test_shipped_scene_legend_has_every_verdict():
+    """Recorder and crush-energy checks have no place on the map: their verdicts are in the legend."""
+    from crashsim.scenario import load_scenario
+
+    path = Path(__file__).resolve().parents[2] / "scenarios" / "scenes" / "truck_brakes_into_car.toml"
+    res = run_scene(load_scenario(path))
+    ax = plot_scene(res)
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    for c in res.evidence.checks:
+        if c.kind in ("recorder", "crush energy"):
+            entry = next(t for t in texts if c.name in t.replace("\n", " ") or c.name[:30] in t)
+            assert ("PASS" if c.passed else "FAIL") in entry

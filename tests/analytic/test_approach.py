@@ -151,3 +151,18 @@ def test_speed_history_and_table():
     assert tab["s"][-1] == pytest.approx(0.0, abs=1e-5)
     assert res.perception_point == pytest.approx((4.0 - (d + 1.5 * vb) * math.cos(0.6),
                                                   -2.0 - (d + 1.5 * vb) * math.sin(0.6)), abs=1e-5)
+
+
+def test_combined_speed_formula_in_us_units():
+    """US practice: S = sqrt(S_i^2 + 30 d f) [mph, ft] (Fricke & Baker; the combined-speed rule).
+    The 30 is 2 g (15/22)^2 = 29.91 rounded: with it a 100 ft skid at f = 0.7 after which 20 mph
+    remain gives 50 mph; the exact constant gives 49.94 mph, which is what the model must give."""
+    mph, ft = 0.44704, 0.3048
+    veh = car()
+    res = simulate_approach(veh, ApproachSpec(LOCKED, distance=100 * ft), impact_pose(veh), Road(0.7),
+                            RunoutOptions(), speed_at_impact=20 * mph)
+    exact = 2 * G / ft * (mph / ft) ** -2  # 2 g in ft/s^2 over (ft/s per mph)^2
+    assert exact == pytest.approx(29.91, abs=0.005)
+    s = res.speed_at_braking / mph
+    assert s == pytest.approx(math.sqrt(20**2 + exact * 100 * 0.7), rel=1e-6)
+    assert s == pytest.approx(math.sqrt(20**2 + 30 * 100 * 0.7), rel=2e-3)  # the rounded rule of thumb

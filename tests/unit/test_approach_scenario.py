@@ -189,3 +189,19 @@ def test_csv_of_the_approach(tmp_path):
     assert first == pytest.approx([-a.time_to_impact - 1.5, -(18.0 + 1.5 * 50 * 0.44704) / 0.3048, 50.0])
     assert last[:2] == pytest.approx([0.0, 0.0], abs=1e-4)
     assert last[2] == pytest.approx(a.speed_at_impact / 0.44704)
+
+
+def test_mc_histograms_show_the_speed_at_braking():
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from crashsim.reconstruct.mc_plots import _label, default_histogram_keys
+
+    outputs = {"delta_v.carA": np.array([1.0, 2.0]), "speed.A": np.array([10.0, 11.0]),
+               "speed_at_braking.A": np.array([20.0, 21.0]), "perception_distance.A": np.array([50.0, 60.0]),
+               "braking_distance.A": np.array([18.0, 18.0])}
+    keys = default_histogram_keys(SimpleNamespace(outputs=outputs))
+    assert "speed_at_braking.A" in keys and "perception_distance.A" in keys
+    assert "braking_distance.A" not in keys  # given, not varied
+    assert _label("speed_at_braking.A") == "speed at the start of braking, A"

@@ -78,7 +78,10 @@ def _label(key: str) -> str:
     names = {"delta_v": "delta-v", "speed": "impact speed", "speed_after": "speed after impact",
              "energy_loss": "energy loss", "rest_x": "rest x", "rest_y": "rest y", "rest_heading": "rest heading",
              "distance": "distance travelled", "delta_v_event": "delta-v, whole event",
-             "impacts": "impacts after the first"}
+             "impacts": "impacts after the first", "speed_at_braking": "speed at the start of braking",
+             "time_to_impact": "time from braking to impact", "braking_distance": "braking distance",
+             "perception_distance": "distance from perception to impact", "mu": "impulse ratio mu",
+             "mu_over_mu_max": "mu / mu_max"}
     if what == "impacts":
         return names[what]
     return f"{names.get(what, what)}, {who}" if who else names.get(what, what)
@@ -86,12 +89,14 @@ def _label(key: str) -> str:
 
 def default_histogram_keys(mc) -> list[str]:
     """Delta-v of every moving body (first impact, and over the whole event where later impacts
-    add to it), impact speeds of the vehicles, system energy loss, the number of later impacts;
+    add to it), impact speeds of the vehicles, the speed at the start of braking and the distance
+    from perception of vehicles with an approach, system energy loss, the number of later impacts;
     outputs that do not vary over the samples (a fixed speed, a car at rest) are left out."""
     keys = [k for k in mc.outputs if k.startswith("delta_v.")]
     keys += [k for k in mc.outputs if k.startswith("delta_v_event.")
              and not np.allclose(mc.outputs[k], mc.outputs.get("delta_v." + k.split(".", 1)[1], np.nan), equal_nan=False)]
     keys += [k for k in mc.outputs if k.startswith("speed.")]
+    keys += [k for k in mc.outputs if k.startswith(("speed_at_braking.", "perception_distance."))]
     keys += [k for k in ("energy_loss.system", "impacts.later") if k in mc.outputs]
 
     def varies(k):

@@ -36,12 +36,15 @@ The system is equilibrated (rows, then columns, scaled to unit max-norm); the ex
 condition number of the equilibrated matrix is reported so an ill-posed configuration is
 visible, and a solution is only returned where it is below :data:`COND_LIMIT`.
 
-Two implementations of the same solve (:func:`solve_arrays` picks one):
+Three implementations of the same solve (:func:`solve_arrays` picks one):
 
-* dense (:func:`_solve_chunk`): the K x K systems formed and inverted as batched arrays;
-  small batches, and every call with ``condition=True`` (the SVD condition number and the
-  equilibrated matrix that :func:`crashsim.impact.solve.solve_impact` diagnoses);
-* reduced (:func:`_solve_chunk_reduced`): batches of at least :data:`REDUCED_MIN` items.
+* compiled (:func:`solve_compiled`, :mod:`crashsim.impact._kernel`): the dense path's
+  algorithm item by item in a numba kernel (compiled on first use, cached on disk); every call
+  without ``condition=True``, and the single solve (:func:`solve_packed`);
+* dense (:func:`_solve_chunk`): the K x K systems formed and inverted as batched numpy arrays;
+  every call with ``condition=True`` (the SVD condition number and the equilibrated matrix
+  that :func:`crashsim.impact.solve.solve_impact` diagnoses when it refuses a system);
+* reduced (:func:`_solve_chunk_reduced`): ``method="reduced"`` (numpy, no compiler).
   The hitch and constraint impulses are eliminated (Cholesky factorisation of their SPD
   block), the 3 x 3 contact system is solved by pivoted elimination, and the full system's
   inverse is formed by blocks for the same exact condition number. Same outputs, flags and

@@ -152,6 +152,16 @@ def solve_impact(problem: ImpactProblem, *, check: bool = True) -> ImpactResult:
     Returns
     -------
     ImpactResult
+        Its per-body objects (``bodies``) and the SVD condition number (``condition_number``)
+        are computed on first access.
+
+    Notes
+    -----
+    The equations are solved by the compiled kernel (:mod:`crashsim.impact._kernel`; the
+    cost of a call is measured in ``plots/impact_speed.md``). An impact that is not clearly
+    approaching, solvable, well inside the condition limit and admissible is solved again by
+    the dense numpy path with the SVD condition number (:func:`_solve_impact_full`), which
+    words the refusal or the warning as before.
 
     Raises
     ------

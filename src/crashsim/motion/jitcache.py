@@ -73,7 +73,6 @@ def _digest() -> str:
     here = Path(__file__).parent
     for name in ("_kernels.py", "tyres.py", "options.py"):  # the sources the kernels compile in
         h.update((here / name).read_bytes())
-    h.update((here.parent / "impact" / "_kernel.py").read_bytes())  # the impact kernels (compiled by the same run)
     return h.hexdigest()[:16]
 
 

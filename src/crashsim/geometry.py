@@ -14,6 +14,8 @@ All functions broadcast over leading dimensions; the last axis holds (x, y).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 __all__ = ["rotation", "rotate", "perp", "cross", "unit", "to_body", "to_world", "wrap_angle"]
@@ -61,6 +63,10 @@ def to_body(point_world, position, heading):
 
 
 def wrap_angle(angle):
-    """Wrap an angle to (-pi, pi]."""
+    """Wrap an angle to (-pi, pi]. A python float gives a python float (the same arithmetic:
+    numpy's mod of floats is Python's %), anything else an array."""
+    if type(angle) is float:
+        a = (angle + math.pi) % (2 * math.pi) - math.pi
+        return math.pi if a == -math.pi else a
     a = np.mod(np.asarray(angle, dtype=float) + np.pi, 2 * np.pi) - np.pi
     return np.where(a == -np.pi, np.pi, a)

@@ -6,10 +6,12 @@ geometry, states, contact point, normal, tangent sign, e, e', mu or f, constrain
 impulses. Their arrays are stacked into one batch; for the friction law the batch mixes
 sticking and sliding items, which the solver handles on a subset.
 
-Tolerance: small batches (and any batch asked for condition numbers) run the same dense code
-as the single solve on the same numbers; only the batched LAPACK call may round differently,
-so results agree to a few ulps of the answer's scale (``1e-12`` relative to ``velocity_scale``
-/ ``impulse_scale`` leaves ~4500 eps). Large batches take the reduced path, checked separately.
+Tolerance: a batch asked for condition numbers runs the same dense code as the single solve's
+full path (``solve._solve_impact_full``, the path of its refusals) on the same numbers; only the
+batched LAPACK call may round differently, so results agree to a few ulps of the answer's scale
+(``1e-12`` relative to ``velocity_scale`` / ``impulse_scale`` leaves ~4500 eps). Without
+condition numbers batches take the compiled kernel, as ``solve_impact`` does: checked against
+it to a cond-scaled tolerance (another sequence of roundings than the dense path).
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ from impact_scenes import EPS, EXAMPLES, SETTINGS, impulse_scale, lever_length, 
 
 from crashsim import ImpactBatch, solve_impact as _solve_impact
 from crashsim.impact import compile_problem
+from crashsim.impact import solve as solve_mod
 
 RTOL = 1e-12
 
@@ -56,7 +59,7 @@ def test_batch_equals_single_solves(family):
     out = batch.solve(condition=True)
     names = batch.structure.body_names
     for i, p in enumerate(problems):
-        r = solve_impact(p)
+        r = solve_mod._solve_impact_full(p, *compile_problem(p), False)  # the dense path, as the batch
         vs, isc, L = velocity_scale(p, r), impulse_scale(r), lever_length(p)
         for j, name in enumerate(names):
             b = r.bodies[name]
@@ -93,10 +96,10 @@ def test_batch_equals_single_solves(family):
 @settings(max_examples=max(10, EXAMPLES // 4), deadline=None)  # each example solves >= 512 items
 @given(families())
 def test_large_batch_equals_single_solves(family):
-    """Batches of at least REDUCED_MIN items without condition numbers take the reduced path
-    (hitch and constraint impulses eliminated, contact system in closed form): same answers.
-    The family is tiled to that size. A different sequence of roundings: agreement to
-    1e3 cond eps (+1e-12) of the answer's scale, as for the invariance tests."""
+    """Batches without condition numbers take the compiled kernel (here tiled to REDUCED_MIN
+    items): the answers of solve_impact, which solves by the same kernel unless it refuses or
+    warns (then by the dense path: a different sequence of roundings, so agreement to 1e3 cond
+    eps (+1e-12) of the answer's scale, as for the invariance tests)."""
     from crashsim.impact import core
 
     problems = [s.problem for s in family]

@@ -1,9 +1,10 @@
-"""Property: the large-batch solver (elimination) gives the dense solver's answers.
+"""Property: the batch solvers (elimination; the compiled kernel) give the dense solver's answers.
 
-``core.solve_arrays`` solves batches of at least ``REDUCED_MIN`` items without
-``condition=True`` by ``_solve_chunk_reduced`` (hitch and constraint impulses eliminated by a
-Cholesky factorisation, the 3 x 3 contact system by its adjugate); smaller batches and
-``condition=True`` go through ``_solve_chunk`` (equilibrated K x K inverses). Both must return
+``core.solve_arrays(method="reduced")`` solves by ``_solve_chunk_reduced`` (hitch and
+constraint impulses eliminated by a Cholesky factorisation, the 3 x 3 contact system by
+pivoted elimination); ``method="compiled"`` (the default without ``condition=True``) by the
+numba kernel of ``crashsim.impact._kernel`` (the dense algorithm item by item);
+``condition=True`` goes through ``_solve_chunk`` (equilibrated K x K inverses). All must return
 the same dict: keys, shapes, dtypes, the ``ok`` rule (finite and 1-norm condition of the
 equilibrated system < COND_LIMIT), NaN for not-ok items, mu_max NaN where the no-slide system
 is not ok, the friction fallback (slide against the initial slip), the ratio law independent
@@ -352,7 +353,11 @@ def _solve_all_laws(S, A, seed):
         dense = core.solve_arrays(S_l, A_l, method="dense")
         red = core.solve_arrays(S_l, A_l, method="reduced")
         check_agreement(S_l, A_l, dense, red, ns)
-        yield S_l, A_l, dense, red
+        # the compiled kernel (crashsim.impact._kernel): the dense path's algorithm item by
+        # item, so the same tolerances and threshold rules
+        comp = core.solve_arrays(S_l, A_l, method="compiled")
+        check_agreement(S_l, A_l, dense, comp, ns)
+        yield S_l, A_l, dense, red, comp
 
 
 # ------------------------------------------------------------------------------------ tests
@@ -377,17 +382,20 @@ def test_reduced_path_agrees_against_barriers(batch, seed):
 
 @settings(max_examples=max(10, EXAMPLES // 4), deadline=None)  # the dispatch, not the numbers
 @given(batches(), st.integers(0, 2**32 - 1))
-def test_large_batches_take_the_reduced_path(batch, seed):
-    """solve_arrays / ImpactBatch.solve with >= REDUCED_MIN items (and no condition number) give
-    the reduced path's numbers exactly (items are independent: chunking does not matter);
+def test_batches_take_the_compiled_path(batch, seed):
+    """solve_arrays / ImpactBatch.solve without a condition number give the compiled kernel's
+    numbers exactly, at any size (items are independent: repeating them changes nothing);
     condition=True keeps the dense path."""
     S, A = batch
-    for S_l, A_l, dense, red in _solve_all_laws(S, A, seed):
+    for S_l, A_l, dense, red, comp in _solve_all_laws(S, A, seed):
         reps = -(-(REDUCED_MIN + 37) // A.size)
         big = replace(A_l, **{f.name: np.concatenate([getattr(A_l, f.name)] * reps) for f in fields(A_l)})
         out = ImpactBatch(S_l, big).solve()
         for k in SOLVE_KEYS:
-            np.testing.assert_array_equal(out[k], np.concatenate([red[k]] * reps), err_msg=k)
+            np.testing.assert_array_equal(out[k], np.concatenate([comp[k]] * reps), err_msg=k)
+        small = core.solve_arrays(S_l, A_l)
+        for k in SOLVE_KEYS:
+            np.testing.assert_array_equal(small[k], comp[k], err_msg=k)
         # condition=True: the dense path, whatever the size
         dc = core.solve_arrays(S_l, big, condition=True)
         np.testing.assert_array_equal(dc["ok"], np.concatenate([dense["ok"]] * reps))
@@ -437,7 +445,7 @@ def test_car_between_constraints_at_every_angle(law):
         for f in fields(Ai):
             getattr(A, f.name)[i] = getattr(Ai, f.name)[0]
     dense = core.solve_arrays(S, A, method="dense")
-    red = core.solve_arrays(S, A)  # 600 items: the reduced path
+    red = core.solve_arrays(S, A, method="reduced")
     np.testing.assert_array_equal(red["ok"], dense["ok"])
     np.testing.assert_array_equal(red["sliding"], dense["sliding"])
     assert np.all(np.isnan(red["mu_max"])) and np.all(np.isnan(dense["mu_max"]))
@@ -448,6 +456,12 @@ def test_car_between_constraints_at_every_angle(law):
     if law == "friction":
         assert red["sliding"].all()
         np.testing.assert_allclose(np.abs(red["mu"]), value, rtol=1e-12)
+    comp = core.solve_arrays(S, A)  # the compiled path
+    np.testing.assert_array_equal(comp["ok"], dense["ok"])
+    np.testing.assert_array_equal(comp["sliding"], dense["sliding"])
+    assert np.all(np.isnan(comp["mu_max"]))
+    if law != "no_slide":
+        check_agreement(S, A, dense, comp, ns)
 
 
 @pytest.mark.parametrize("law", LAWS)
@@ -468,7 +482,7 @@ def test_chunks_do_not_change_the_answers(law, monkeypatch):
     A.constraint_value[conflict, 1] = 0.5
     one = core.solve_arrays(S, A, method="reduced")
     monkeypatch.setattr(core, "REDUCED_CHUNK", 97)
-    chunked = core.solve_arrays(S, A)
+    chunked = core.solve_arrays(S, A, method="reduced")
     for k in SOLVE_KEYS:
         np.testing.assert_array_equal(chunked[k], one[k], err_msg=k)
     assert not one["ok"].all()
@@ -481,5 +495,7 @@ def test_empty_batch():
     A = replace(A, **{f.name: getattr(A, f.name)[:0] for f in fields(A)})
     dense = core.solve_arrays(S, A, method="dense")
     red = core.solve_arrays(S, A, method="reduced")
+    comp = core.solve_arrays(S, A, method="compiled")
     for k in SOLVE_KEYS:
         assert red[k].shape == dense[k].shape and red[k].shape[0] == 0, k
+        assert comp[k].shape == dense[k].shape and comp[k].dtype == dense[k].dtype, k

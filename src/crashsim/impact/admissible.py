@@ -50,7 +50,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..errors import InadmissibleImpactError
-from .core import ImpactArrays, ImpactStructure, _jacobian_rows, solve_arrays
+from .core import WORK_KEYS, ImpactArrays, ImpactStructure, _c, _kernel_structure, solve_arrays
 
 __all__ = ["impulse_work", "admissibility", "check_admissible", "REASONS"]
 
@@ -78,39 +78,19 @@ def impulse_work(S: ImpactStructure, A: ImpactArrays, out: dict) -> dict[str, np
     dict of ndarray, shape (B,)
         ``normal``, ``tangential``, ``moment`` (crush surface), ``hitches``, ``constraints``,
         ``external``; their sum equals ``KE_after - KE_before`` of the batch item.
+
+    The formula is coded once, in :func:`crashsim.impact._kernel.impulse_work_item` (compiled;
+    the single solve calls it inside its kernel).
     """
-    rows, _ = _jacobian_rows(S, A)
-    n = len(S.body_names)
-    before = [(A.velocity[:, b, 0], A.velocity[:, b, 1], A.yaw_rate[:, b]) for b in range(n)]
-    after = [(out["velocity"][:, b, 0], out["velocity"][:, b, 1], out["yaw_rate"][:, b]) for b in range(n)]
+    from . import _kernel
 
-    def mean_rate(k):
-        acc = 0.0
-        for b, (jx, jy, jw) in rows[k].items():
-            if S.fixed[b]:
-                continue
-            (x0, y0, w0), (x1, y1, w1) = before[b], after[b]
-            acc = acc + jx * (x0 + x1) + jy * (y0 + y1) + jw * (w0 + w1)
-        return 0.5 * np.broadcast_to(acc, (A.size,))
-
-    lam = out["impulses"]
-    h = len(S.hitches)
-    work = {name: lam[:, k] * mean_rate(k) for k, name in enumerate(("normal", "tangential", "moment"))}
-    work["hitches"] = sum((lam[:, k] * mean_rate(k) for k in range(3, 3 + 2 * h)), np.zeros(A.size))
-    work["constraints"] = sum((lam[:, k] * mean_rate(k) for k in range(3 + 2 * h, S.n_unknowns)), np.zeros(A.size))
-    ext = np.zeros(A.size)
-    for x, b in enumerate(S.external_bodies):
-        if S.fixed[b]:
-            continue
-        p = A.external_impulse[:, x]
-        r = A.external_point[:, x] - A.position[:, b]
-        (x0, y0, w0), (x1, y1, w1) = before[b], after[b]
-        # velocity of the point of application: v + w perp(r)
-        vx = 0.5 * ((x0 + x1) - (w0 + w1) * r[:, 1])
-        vy = 0.5 * ((y0 + y1) + (w0 + w1) * r[:, 0])
-        ext += p[:, 0] * vx + p[:, 1] * vy
-    work["external"] = ext
-    return work
+    fixed, b1, b2, _, hitches, cb, xb = _kernel_structure(S)
+    W = _kernel.work_batch(fixed, b1, b2, hitches, cb, xb, _c(A.position), _c(A.heading), _c(A.velocity),
+                           _c(A.yaw_rate), _c(A.hitch_front_point), _c(A.hitch_rear_point), _c(A.point),
+                           _c(A.normal_angle), _c(A.tangent_sign), _c(A.constraint_point),
+                           _c(A.constraint_direction), _c(A.external_point), _c(A.external_impulse),
+                           _c(out["velocity"]), _c(out["yaw_rate"]), _c(out["impulses"]))
+    return {key: W[:, j] for j, key in enumerate(WORK_KEYS)}
 
 
 def admissibility(S: ImpactStructure, A: ImpactArrays, out: dict, work: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -120,26 +100,17 @@ def admissibility(S: ImpactStructure, A: ImpactArrays, out: dict, work: dict | N
     -------
     (ok, reason) : ndarray of bool, ndarray of int, shape (B,)
         ``reason`` indexes :data:`REASONS` (0 where admissible; the first rule broken otherwise).
+    The rules are coded once, in :func:`crashsim.impact._kernel.reason_item` (compiled; the
+    single solve calls it inside its kernel), with the allowances of this module.
     """
+    from . import _kernel
+
     work = impulse_work(S, A, out) if work is None else work
-    pn = out["normal_impulse"]
-    lam = out["impulses"]
-    scale = np.nanmax(np.abs(lam), axis=1) if lam.shape[1] else np.abs(pn)
-    reason = np.zeros(A.size, dtype=int)
-    solved = out["ok"] & np.isfinite(pn)
-    reason[~solved] = 5
-    with np.errstate(invalid="ignore"):
-        tensile = solved & (pn < -_REL_IMPULSE * scale)
-        reason[tensile & (reason == 0)] = 1
-        if S.tangential == "ratio":
-            q = A.law_value / out["mu_max"]
-            known = np.isfinite(q)
-            reason[known & (q > 1.0 + _REL_RATIO) & (reason == 0)] = 2
-            reason[known & (q < -_REL_RATIO) & (reason == 0)] = 3
-        ke0 = out["ke_before"].sum(axis=1)
-        gain = work["normal"] + work["tangential"] + work["moment"]
-        allowance = _REL_ENERGY * (ke0 + np.abs(work["external"]) + np.abs(work["constraints"]) + 1.0)
-        reason[solved & (gain > allowance) & (reason == 0)] = 4
+    W = np.ascontiguousarray(np.stack([np.broadcast_to(work[key], (A.size,)) for key in WORK_KEYS], axis=1),
+                             dtype=float)
+    reason = _kernel.reason_batch(np.ascontiguousarray(out["ok"], dtype=bool), _c(out["impulses"]),
+                                  _kernel.LAW_CODES[S.tangential], _c(A.law_value), _c(out["mu_max"]),
+                                  _c(out["ke_before"].sum(axis=1)), W, _kernel.limits())
     return reason == 0, reason
 
 

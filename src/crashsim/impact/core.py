@@ -36,12 +36,15 @@ The system is equilibrated (rows, then columns, scaled to unit max-norm); the ex
 condition number of the equilibrated matrix is reported so an ill-posed configuration is
 visible, and a solution is only returned where it is below :data:`COND_LIMIT`.
 
-Two implementations of the same solve (:func:`solve_arrays` picks one):
+Three implementations of the same solve (:func:`solve_arrays` picks one):
 
-* dense (:func:`_solve_chunk`): the K x K systems formed and inverted as batched arrays;
-  small batches, and every call with ``condition=True`` (the SVD condition number and the
-  equilibrated matrix that :func:`crashsim.impact.solve.solve_impact` diagnoses);
-* reduced (:func:`_solve_chunk_reduced`): batches of at least :data:`REDUCED_MIN` items.
+* compiled (:func:`solve_compiled`, :mod:`crashsim.impact._kernel`): the dense path's
+  algorithm item by item in a numba kernel (compiled on first use, cached on disk); every call
+  without ``condition=True``, and the single solve (:func:`solve_packed`);
+* dense (:func:`_solve_chunk`): the K x K systems formed and inverted as batched numpy arrays;
+  every call with ``condition=True`` (the SVD condition number and the equilibrated matrix
+  that :func:`crashsim.impact.solve.solve_impact` diagnoses when it refuses a system);
+* reduced (:func:`_solve_chunk_reduced`): ``method="reduced"`` (numpy, no compiler).
   The hitch and constraint impulses are eliminated (Cholesky factorisation of their SPD
   block), the 3 x 3 contact system is solved by pivoted elimination, and the full system's
   inverse is formed by blocks for the same exact condition number. Same outputs, flags and
@@ -50,6 +53,7 @@ Two implementations of the same solve (:func:`solve_arrays` picks one):
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
@@ -57,6 +61,10 @@ import numpy as np
 __all__ = ["ImpactStructure", "ImpactArrays", "solve_arrays", "energy_loss_fraction", "TANGENTIAL_KINDS"]
 
 TANGENTIAL_KINDS = ("ratio", "fraction", "no_slide", "friction")
+
+#: The groups of impulses whose work ``admissible.impulse_work`` reports (the columns of the
+#: compiled kernels' work arrays).
+WORK_KEYS = ("normal", "tangential", "moment", "hitches", "constraints", "external")
 
 
 @dataclass(frozen=True)
@@ -169,6 +177,8 @@ def energy_loss_fraction(before, after):
     A body nearly at rest that is struck gains energy: the fraction is then large and
     negative, -inf if ``before`` is subnormal. Used by both the single and the batch solve.
     """
+    if type(before) is float and type(after) is float:  # one impact (ImpactResult): the same IEEE division
+        return (before - after) / before if before > 0 else math.nan
     before = np.asarray(before, dtype=float)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         frac = (before - np.asarray(after, dtype=float)) / before
@@ -311,25 +321,29 @@ def solve_arrays(S: ImpactStructure, A: ImpactArrays, *, condition: bool = False
         Also compute the 2-norm condition number and return the equilibrated matrix
         (dense path only; see :func:`_solve_chunk`).
     method : {"auto", "dense", "reduced"}
-        ``"dense"``: :func:`_solve_chunk` (equilibrated K x K inverses), in chunks of
+        ``"dense"``: :func:`_solve_chunk` (equilibrated K x K inverses, numpy), in chunks of
         :data:`CHUNK`. ``"reduced"``: :func:`_solve_chunk_reduced` (the hitch and constraint
         impulses eliminated, the 3 x 3 contact system by pivoted elimination), in chunks of
         :data:`REDUCED_CHUNK`: the same equations, laws, ``ok`` rule, keys and shapes, the
-        numbers to about cond * eps; 2-4x faster from a few hundred items on
-        (``plots/impact_speed.md``). ``"auto"`` (default): reduced for batches of at least
-        :data:`REDUCED_MIN` items when ``condition`` is False, dense otherwise.
+        numbers to about cond * eps; 2-4x faster than dense from a few hundred items on.
+        ``"compiled"``: :func:`solve_compiled` (the dense path's algorithm item by item in a
+        numba kernel, :mod:`crashsim.impact._kernel`; compiled on first use, cached on disk):
+        the same outputs, the numbers to about cond * eps. ``"auto"`` (default): compiled
+        when ``condition`` is False, dense otherwise.
 
     Returns
     -------
     dict of ndarray
         See :func:`_solve_chunk`.
     """
-    if method not in ("auto", "dense", "reduced"):
-        raise ValueError(f"method must be 'auto', 'dense' or 'reduced', got {method!r}")
-    if method == "reduced" and condition:
-        raise ValueError("method='reduced' cannot compute the SVD condition number; use condition=False or 'dense'")
+    if method not in ("auto", "dense", "reduced", "compiled"):
+        raise ValueError(f"method must be 'auto', 'dense', 'reduced' or 'compiled', got {method!r}")
+    if method in ("reduced", "compiled") and condition:
+        raise ValueError(f"method={method!r} cannot compute the SVD condition number; use condition=False or 'dense'")
     B = A.size
-    if method == "reduced" or (method == "auto" and not condition and B >= REDUCED_MIN):
+    if method == "compiled" or (method == "auto" and not condition):
+        return solve_compiled(S, A)[0]
+    if method == "reduced":
         solver, chunk = _solve_chunk_reduced, REDUCED_CHUNK
     else:
         def solver(S_, A_):
@@ -915,3 +929,137 @@ def _solve_chunk_reduced(S: ImpactStructure, A: ImpactArrays) -> dict[str, np.nd
         "ok": ok,
         "condition_1norm": cond1,
     }
+
+
+# --------------------------------------------------------------------------------------------
+# The compiled path: the dense path's algorithm item by item (crashsim.impact._kernel)
+# --------------------------------------------------------------------------------------------
+
+def _kernel_structure(S: ImpactStructure) -> tuple:
+    """The structure as the kernels take it (int arrays), kept on S after the first call."""
+    meta = S.__dict__.get("_kernel_meta")
+    if meta is None:
+        from . import _kernel
+
+        meta = (np.asarray(S.fixed, dtype=np.bool_), S.body1, S.body2, _kernel.LAW_CODES[S.tangential],
+                np.asarray(S.hitches, dtype=np.int64).reshape(len(S.hitches), 2),
+                np.asarray(S.constraint_bodies, dtype=np.int64), np.asarray(S.external_bodies, dtype=np.int64))
+        object.__setattr__(S, "_kernel_meta", meta)  # a cache, not a field: eq, hash, replace unaffected
+    return meta
+
+
+_LIMITS = None
+
+
+def _c(a):
+    return a if a.flags.c_contiguous and a.dtype == np.float64 else np.ascontiguousarray(a, dtype=np.float64)
+
+
+def input_shapes(n: int, h: int, c: int, x: int) -> tuple:
+    """(field, shape of one item) of :class:`ImpactArrays`, in field order: the layout of the
+    packed input vector of ``_kernel.solve_packed`` (field by field, each (B,) + shape)."""
+    return (("mass", (n,)), ("yaw_inertia", (n,)), ("position", (n, 2)), ("heading", (n,)), ("velocity", (n, 2)),
+            ("yaw_rate", (n,)), ("hitch_front_point", (h, 2)), ("hitch_rear_point", (h, 2)), ("point", (2,)),
+            ("normal_angle", ()), ("tangent_sign", ()), ("restitution", ()), ("law_value", ()),
+            ("moment_restitution", ()), ("constraint_point", (c, 2)), ("constraint_direction", (c,)),
+            ("constraint_value", (c,)), ("external_point", (x, 2)), ("external_impulse", (x, 2)))
+
+
+def output_shapes(n: int, K: int, extras: bool) -> tuple:
+    """(key, shape of one item) of the compiled kernels' output vector, in its order
+    (``_kernel._out_views``; flags stored as 0.0 / 1.0)."""
+    return ((("velocity", (n, 2)), ("yaw_rate", (n,)), ("impulses", (K,)), ("mu", ()), ("mu_max", ()),
+             ("sliding", ()), ("closing_velocity", ()), ("separation_normal", ()), ("separation_tangential", ()),
+             ("ok", ()), ("ke_before", (n,)), ("ke_after", (n,)), ("normal", (2,)), ("tangent", (2,)),
+             ("condition_1norm", ()))
+            + ((("work", (6,)), ("reason", ())) if extras else ()))
+
+
+def unpack(S: ImpactStructure, Y: np.ndarray, B: int, extras: bool = False):
+    """The dict of :func:`_solve_chunk` from a compiled kernel's output vector Y (views), and
+    the work (B, 6) and admissibility codes (B,) if ``extras`` (else None, None)."""
+    h = len(S.hitches)
+    K = S.n_unknowns
+    out = {}
+    o = 0
+    for key, shape in output_shapes(S.n_bodies, K, extras):
+        size = B * math.prod(shape)
+        out[key] = Y[o:o + size].reshape((B,) + shape)
+        o += size
+    out["sliding"] = out["sliding"] != 0.0
+    out["ok"] = out["ok"] != 0.0
+    lam = out["impulses"]
+    k0 = 3 + 2 * h
+    out["normal_impulse"] = lam[:, 0]
+    out["tangential_impulse"] = lam[:, 1]
+    out["moment_impulse"] = lam[:, 2]
+    out["hitch_impulse"] = lam[:, 3:k0].reshape(B, h, 2)
+    out["constraint_impulse"] = lam[:, k0:]
+    work = out.pop("work", None)
+    reason = out.pop("reason", None)
+    return out, work, (reason.astype(np.int64) if reason is not None else None)
+
+
+def solve_compiled(S: ImpactStructure, A: ImpactArrays, extras: bool = False):
+    """Solve a batch with the compiled kernel (:mod:`crashsim.impact._kernel`).
+
+    Returns ``(out, work, reason)``: ``out`` the dict of :func:`_solve_chunk` (without the SVD
+    condition number); with ``extras`` also the work of each group of impulses (B, 6), in the
+    order of :data:`WORK_KEYS`, and the admissibility code (B,) of ``admissible.REASONS``
+    (else None, None).
+    """
+    global _LIMITS
+    from . import _kernel
+
+    if _LIMITS is None:
+        _LIMITS = _kernel.limits()
+    fixed, b1, b2, law, hitches, cb, xb = _kernel_structure(S)
+    Y = _kernel.solve_batch(
+        fixed, b1, b2, law, hitches, cb, xb, _c(A.mass), _c(A.yaw_inertia), _c(A.position), _c(A.heading),
+        _c(A.velocity), _c(A.yaw_rate), _c(A.hitch_front_point), _c(A.hitch_rear_point), _c(A.point),
+        _c(A.normal_angle), _c(A.tangent_sign), _c(A.restitution), _c(A.law_value), _c(A.moment_restitution),
+        _c(A.constraint_point), _c(A.constraint_direction), _c(A.constraint_value), _c(A.external_point),
+        _c(A.external_impulse), _LIMITS, extras)
+    return unpack(S, Y, A.size, extras)
+
+
+def flat_spec(shapes) -> tuple:
+    """((name, start, stop), ...) of a batch of one laid out by ``shapes``; stop None for a scalar."""
+    spec, o = [], 0
+    for key, shape in shapes:
+        size = math.prod(shape)
+        spec.append((key, o, None if shape == () else o + size))
+        o += size
+    return tuple(spec)
+
+
+def _flat_fields(spec, values: list) -> dict:
+    """Split a list of numbers laid out by ``spec`` (:func:`flat_spec`) into {name: list or float}."""
+    return {key: values[a] if b is None else values[a:b] for key, a, b in spec}
+
+
+def solve_packed(S: ImpactStructure, X: np.ndarray) -> dict:
+    """One impact by the compiled kernel, from its numbers packed as ``input_shapes`` lays them
+    out (``solve._values``). Returns the outputs of :func:`output_shapes` (with work and
+    admissibility code) as python floats and flat lists: the single solve's fast path.
+    ``inputs(S, values)`` splits the input list the same way."""
+    global _LIMITS
+    from . import _kernel
+
+    if _LIMITS is None:
+        _LIMITS = _kernel.limits()
+    meta = S.__dict__.get("_packed_meta")
+    if meta is None:
+        fixed, b1, b2, law, hitches, cb, xb = _kernel_structure(S)
+        ints = np.array([S.n_bodies, len(S.hitches), len(S.constraint_bodies), len(S.external_bodies), b1, b2, law],
+                        dtype=np.int64)
+        meta = (ints, fixed, hitches, cb, xb, flat_spec(output_shapes(S.n_bodies, S.n_unknowns, True)),
+                flat_spec(input_shapes(S.n_bodies, len(S.hitches), len(S.constraint_bodies), len(S.external_bodies))))
+        object.__setattr__(S, "_packed_meta", meta)
+    Y = _kernel.solve_packed(meta[0], meta[1], meta[2], meta[3], meta[4], X, _LIMITS, True)
+    return _flat_fields(meta[5], Y.tolist())
+
+
+def inputs(S: ImpactStructure, values: list) -> dict:
+    """The fields of ImpactArrays of a batch of one from their packed list (:func:`solve_packed`)."""
+    return _flat_fields(S.__dict__["_packed_meta"][6], values)

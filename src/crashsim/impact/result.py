@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import math
+import functools
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..geometry import rotate, wrap_angle
+from .admissible import REASONS
 from .core import energy_loss_fraction
 
 __all__ = ["ImpactResult", "BodyImpact", "HitchImpulse", "ConstraintImpulse", "clock_direction", "pdof_from_force"]
@@ -18,6 +21,87 @@ def _row(A, i: int):
     from dataclasses import fields, replace
 
     return replace(A, **{f.name: getattr(A, f.name)[i : i + 1] for f in fields(A)})
+
+
+class LazyDict(Mapping):
+    """A read-only mapping built on first use by ``build()`` (the per-body results of a single
+    solve: most callers of :func:`crashsim.impact.solve_impact` never read them all). It
+    pickles, compares and prints as the dict it stands for."""
+
+    __slots__ = ("_build", "_dict")
+
+    def __init__(self, build):
+        self._build = build
+        self._dict = None
+
+    def _get(self) -> dict:
+        if self._dict is None:
+            self._dict = self._build()
+            self._build = None
+        return self._dict
+
+    def __getitem__(self, key):
+        return self._get()[key]
+
+    def __iter__(self):
+        return iter(self._get())
+
+    def __len__(self) -> int:
+        return len(self._get())
+
+    def __eq__(self, other):
+        return self._get() == (other._get() if isinstance(other, LazyDict) else other)
+
+    __hash__ = None
+
+    def __repr__(self) -> str:
+        return repr(self._get())
+
+    def __reduce__(self):
+        return (dict, (self._get(),))
+
+
+def _body_impacts(S, inp: dict, out: dict, px: float, py: float) -> dict:
+    """{body name: BodyImpact} of one solved impact (``ImpactResult.from_item``'s inputs; (px, py)
+    the crush impulse on body 1)."""
+    heading = inp["heading"]
+    v0 = inp["velocity"]
+    v1 = out["velocity"]
+    w0 = inp["yaw_rate"]
+    w1 = out["yaw_rate"]
+    ke0 = out["ke_before"]
+    ke1 = out["ke_after"]
+    mass = inp["mass"]
+    bodies = {}
+    vnames = S.vehicle_names
+    for k, name in enumerate(S.body_names):
+        crush = None
+        pdof = None
+        if k == S.body1:
+            crush = np.array([px, py])
+        elif k == S.body2:
+            crush = -np.array([px, py])
+        if crush is not None:
+            pdof = pdof_from_force(crush, heading[k])
+        a, b = v0[2 * k:2 * k + 2], v1[2 * k:2 * k + 2]
+        bodies[name] = BodyImpact(
+            name=name, vehicle=vnames[S.vehicle_index[k]], heading=heading[k],
+            velocity_before=np.array(a), velocity=np.array(b),
+            yaw_rate_before=w0[k], yaw_rate=w1[k],
+            delta_v=np.array([b[0] - a[0], b[1] - a[1]]), crush_impulse=crush, pdof=pdof,
+            ke_before=ke0[k], ke_after=ke1[k], mass=mass[k], fixed=bool(S.fixed[k]),
+        )
+    return bodies
+
+
+def _sum(xs: list) -> float:
+    """numpy's sum of a few floats, in its order (sequential below 8 terms), without the array."""
+    if len(xs) >= 8:
+        return float(np.sum(xs))
+    acc = 0.0
+    for x in xs:
+        acc += x
+    return acc
 
 
 def clock_direction(pdof: float) -> int:
@@ -178,90 +262,118 @@ class ImpactResult:
     separation_tangential_velocity: float
     kinetic_energy: dict
     energy_loss: dict
-    condition_number: float
     success: bool = True
     message: str = "solved"
     warnings: tuple[str, ...] = ()
     work: dict = field(default_factory=dict)
+    #: the 2-norm condition number, or a function computing it (:attr:`condition_number`)
+    _condition: object = field(default=math.nan, repr=False, compare=False)
 
     @classmethod
-    def from_arrays(cls, problem, S, A, out, i: int, work: dict | None = None) -> "ImpactResult":
-        P = out["normal_impulse"][i] * out["normal"][i] + out["tangential_impulse"][i] * out["tangent"][i]
-        bodies = {}
-        vnames = S.vehicle_names
-        for k, name in enumerate(S.body_names):
-            crush = None
-            pdof = None
-            if k == S.body1:
-                crush = P.copy()
-            elif k == S.body2:
-                crush = -P
-            if crush is not None:
-                pdof = pdof_from_force(crush, float(A.heading[i, k]))
-            bodies[name] = BodyImpact(
-                name=name, vehicle=vnames[S.vehicle_index[k]], heading=float(A.heading[i, k]),
-                velocity_before=A.velocity[i, k].copy(), velocity=out["velocity"][i, k].copy(),
-                yaw_rate_before=float(A.yaw_rate[i, k]), yaw_rate=float(out["yaw_rate"][i, k]),
-                delta_v=out["velocity"][i, k] - A.velocity[i, k], crush_impulse=crush, pdof=pdof,
-                ke_before=float(out["ke_before"][i, k]), ke_after=float(out["ke_after"][i, k]),
-                mass=float(A.mass[i, k]), fixed=bool(S.fixed[k]),
-            )
-        hitches = {
-            nm: HitchImpulse(nm, out["hitch_impulse"][i, j].copy(), float(A.heading[i, S.hitches[j][0]]))
-            for j, nm in enumerate(S.hitch_names)
-        }
-        cons = {}
-        for c, nm in enumerate(S.constraint_names):
-            d = A.constraint_direction[i, c]
-            lam = float(out["constraint_impulse"][i, c])
-            cons[nm] = ConstraintImpulse(nm, S.body_names[S.constraint_bodies[c]], lam,
-                                         lam * np.array([math.cos(d), math.sin(d)]))
-        ext = {nm: {"body": S.body_names[S.external_bodies[x]], "impulse": A.external_impulse[i, x].copy(),
-                    "point": A.external_point[i, x].copy()} for x, nm in enumerate(S.external_names)}
-        ke = {}
-        loss = {}
-        vidx = np.asarray(S.vehicle_index)
-        for v, vn in enumerate(vnames):
-            sel = vidx == v
-            e0 = float(out["ke_before"][i, sel].sum())
-            e1 = float(out["ke_after"][i, sel].sum())
-            ke[vn] = {"before": e0, "after": e1}
-            if not S.fixed[np.nonzero(sel)[0][0]]:
-                loss[vn] = float(energy_loss_fraction(e0, e1))
-        e0 = float(out["ke_before"][i].sum())
-        e1 = float(out["ke_after"][i].sum())
-        ke["system"] = {"before": e0, "after": e1}
-        loss["system"] = float(energy_loss_fraction(e0, e1))
-        from .admissible import REASONS, admissibility, impulse_work
+    def from_arrays(cls, problem, S, A, out, i: int, work: dict | None = None, reason: int | None = None,
+                    condition=None) -> "ImpactResult":
+        """The result of batch item ``i`` of a solve (``out`` of ``core.solve_arrays``).
+
+        ``work``: the work of each group of impulses (``admissible.impulse_work``; computed if
+        None). ``reason``: the item's admissibility code (``admissible.REASONS``; computed if
+        None). ``condition``: the 2-norm condition number, or a function computing it on first
+        access of :attr:`condition_number` (default: ``out["condition"]``, NaN if absent).
+        """
+        from dataclasses import fields
+
+        from .admissible import admissibility, impulse_work
 
         if work is None:
             work = impulse_work(S, A, out)
-        sl = slice(i, i + 1)
-        one = {k: v[sl] for k, v in out.items() if isinstance(v, np.ndarray) and v.ndim and v.shape[0] == out["ok"].shape[0]}
-        ok, reason = admissibility(S, _row(A, i), one, {k: v[sl] for k, v in work.items()})
-        warn = []
-        if not ok[0] and reason[0] != 5:
-            warn.append(f"inadmissible impact ({REASONS[int(reason[0])]}): solved with the admissibility check "
-                        "switched off; no collision produces these coefficients for this geometry")
-        work_i = {k: float(v[i]) for k, v in work.items()}
+        if reason is None:
+            sl = slice(i, i + 1)
+            one = {k: v[sl] for k, v in out.items()
+                   if isinstance(v, np.ndarray) and v.ndim and v.shape[0] == out["ok"].shape[0]}
+            reason = int(admissibility(S, _row(A, i), one, {k: v[sl] for k, v in work.items()})[1][0])
+        if condition is None:
+            condition = float(out["condition"][i]) if "condition" in out else float("nan")
+
+        def item(a):
+            return a[i].ravel().tolist() if a.ndim > 1 else a[i].item()
+
+        inp = {f.name: item(getattr(A, f.name)) for f in fields(A)}
+        res = {k: item(v) for k, v in out.items() if k not in ("condition", "matrix")}
+        return cls.from_item(problem, S, inp, res, {k: float(v[i]) for k, v in work.items()}, reason, condition)
+
+    @classmethod
+    def from_item(cls, problem, S, inp: dict, out: dict, work: dict, reason: int, condition) -> "ImpactResult":
+        """The result of one solved impact from its numbers as python floats and flat lists:
+        ``inp`` the fields of ``core.ImpactArrays`` and ``out`` the outputs of the solve (of
+        one batch item, flattened), ``work`` {group: work [J]}, ``reason`` the admissibility
+        code, ``condition`` the 2-norm condition number or a function computing it."""
+        nrm = out["normal"]
+        tng = out["tangent"]
+        lam = out["impulses"]
+        pn, pt = lam[0], lam[1]
+        px, py = pn * nrm[0] + pt * tng[0], pn * nrm[1] + pt * tng[1]
+        heading = inp["heading"]
+        ke0 = out["ke_before"]
+        ke1 = out["ke_after"]
+        bodies = LazyDict(functools.partial(_body_impacts, S, inp, out, px, py))
+        vnames = S.vehicle_names
+        hitches = {nm: HitchImpulse(nm, np.array(lam[3 + 2 * j:5 + 2 * j]), heading[S.hitches[j][0]])
+                   for j, nm in enumerate(S.hitch_names)}
+        k0 = 3 + 2 * len(S.hitches)
+        cons = {}
+        for c, nm in enumerate(S.constraint_names):
+            d = inp["constraint_direction"][c]
+            lc = lam[k0 + c]
+            cons[nm] = ConstraintImpulse(nm, S.body_names[S.constraint_bodies[c]], lc,
+                                         lc * np.array([math.cos(d), math.sin(d)]))
+        ext = {nm: {"body": S.body_names[S.external_bodies[x]],
+                    "impulse": np.array(inp["external_impulse"][2 * x:2 * x + 2]),
+                    "point": np.array(inp["external_point"][2 * x:2 * x + 2])} for x, nm in enumerate(S.external_names)}
+        ke = {}
+        loss = {}
+        vidx = S.vehicle_index
+        for v, vn in enumerate(vnames):
+            sel = [k for k in range(len(vidx)) if vidx[k] == v]
+            e0 = _sum([ke0[k] for k in sel])
+            e1 = _sum([ke1[k] for k in sel])
+            ke[vn] = {"before": e0, "after": e1}
+            if not S.fixed[sel[0]]:
+                loss[vn] = float(energy_loss_fraction(e0, e1))
+        e0 = _sum(ke0)
+        e1 = _sum(ke1)
+        ke["system"] = {"before": e0, "after": e1}
+        loss["system"] = float(energy_loss_fraction(e0, e1))
+        warn = ()
+        if reason not in (0, 5):
+            warn = (f"inadmissible impact ({REASONS[int(reason)]}): solved with the admissibility check "
+                    "switched off; no collision produces these coefficients for this geometry",)
         return cls(
             body1=S.body_names[S.body1], body2=S.body_names[S.body2],
-            normal=out["normal"][i].copy(), tangent=out["tangent"][i].copy(), point=A.point[i].copy(),
+            normal=np.array(nrm), tangent=np.array(tng), point=np.array(inp["point"]),
             bodies=bodies,
-            normal_impulse=float(out["normal_impulse"][i]),
-            tangential_impulse=float(out["tangential_impulse"][i]),
-            moment_impulse=float(out["moment_impulse"][i]),
-            mu=float(out["mu"][i]), mu_max=float(out["mu_max"][i]), sliding=bool(out["sliding"][i]),
+            normal_impulse=pn,
+            tangential_impulse=pt,
+            moment_impulse=lam[2],
+            mu=out["mu"], mu_max=out["mu_max"], sliding=bool(out["sliding"]),
             tangential_law=S.tangential,
             hitches=hitches, constraints=cons, external=ext,
-            closing_velocity=float(out["closing_velocity"][i]),
-            separation_normal_velocity=float(out["separation_normal"][i]),
-            separation_tangential_velocity=float(out["separation_tangential"][i]),
+            closing_velocity=out["closing_velocity"],
+            separation_normal_velocity=out["separation_normal"],
+            separation_tangential_velocity=out["separation_tangential"],
             kinetic_energy=ke, energy_loss=loss,
-            condition_number=float(out["condition"][i]) if "condition" in out else float("nan"),
-            warnings=tuple(warn),
-            work=work_i,
+            warnings=warn,
+            work=work,
+            _condition=condition,
         )
+
+    @property
+    def condition_number(self) -> float:
+        """2-norm condition number of the equilibrated impulse system (an SVD; the single solve
+        computes it on first access)."""
+        c = self._condition
+        if callable(c):
+            c = float(c())
+            object.__setattr__(self, "_condition", c)
+        return c
 
     @property
     def energy_loss_normal(self) -> float:

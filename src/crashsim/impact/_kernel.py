@@ -1,0 +1,558 @@
+"""The impact equations compiled item by item (numba): the single solve and large batches.
+
+The same equations, unknowns, laws, ``ok`` rule and outputs as the dense path
+(:func:`crashsim.impact.core._solve_chunk`, which documents them), solved per batch item in
+compiled loops instead of as batched numpy arrays:
+
+1. the rows of J (crush normal and tangent, moment, hitch pins, velocity constraints) and the
+   known external impulses, entry by entry as in ``core._assemble``;
+2. W = J Minv J^T, u0 = J q, u_free = J (q + Minv p_ext), the law rows (Eqs. 4-7);
+3. the system equilibrated (rows, then columns to unit max-norm, as ``core._equilibrate``),
+   inverted by Gaussian elimination with partial pivoting (the LU of LAPACK's ``gesv`` that
+   ``numpy.linalg.inv`` calls: same pivot choice; an exactly zero pivot = singular = NaN), the
+   solution x = Ms^-1 b and the exact 1-norm condition number from the inverse;
+4. the tangential law (no sliding -> mu_max; ratio, fraction, friction with its fallback);
+5. the velocities after, the separation velocities, the kinetic energies, and (for the
+   admissibility check of the single solve) the work of each group of impulses and the
+   admissibility code: :func:`impulse_work_item` and :func:`reason_item` are the only
+   implementations of those (``crashsim.impact.admissible`` calls them for numpy batches too).
+
+The numbers agree with the dense path to about cond * eps (another sequence of roundings;
+tests/properties/test_impact_fast_batch.py). Importing this module defines the kernels;
+numba compiles them on first use and caches them on disk (``crashsim.motion.jitcache``), so
+importing :mod:`crashsim` does not pay for it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ..motion.jitcache import configure as _configure_cache
+from .core import WORK_KEYS  # noqa: F401  (the columns of the work arrays)
+
+_configure_cache()
+
+__all__ = ["solve_batch", "solve_packed", "work_batch", "reason_batch", "impulse_work_item", "reason_item", "LAW_CODES"]
+
+_JIT = {"cache": True, "error_model": "numpy", "nogil": True}
+# Helpers that allocate nothing are compiled without NRT reference counting (as in
+# crashsim.motion._kernels): numba otherwise increfs/decrefs every array argument on every call.
+_HOT = dict(_JIT, _nrt=False)
+_INLINE = dict(_HOT, inline="always")
+
+#: Tangential law codes of the kernels (index in core.TANGENTIAL_KINDS).
+LAW_CODES = {"ratio": 0, "fraction": 1, "no_slide": 2, "friction": 3}
+_RATIO, _FRACTION, _NO_SLIDE, _FRICTION = 0, 1, 2, 3
+
+#: Layout of the ``limits`` argument (the thresholds live with the code that owns them:
+#: core.COND_LIMIT, core.MU_MAX_LIMIT, admissible._REL_*; :func:`limits` collects them).
+L_COND, L_MU_MAX, L_REL_IMPULSE, L_REL_RATIO, L_REL_ENERGY = range(5)
+
+
+def limits() -> np.ndarray:
+    """The thresholds the kernels use, from the modules that define them."""
+    from . import admissible, core
+
+    return np.array([core.COND_LIMIT, core.MU_MAX_LIMIT, admissible._REL_IMPULSE, admissible._REL_RATIO,
+                     admissible._REL_ENERGY])
+
+
+
+
+@njit(**_HOT)
+def _rows(fixed, body1, body2, hitches, cbodies, position, heading, hfp, hrp, point, normal_angle, tangent_sign,
+          cpoint, cdir, i, J, rowb):
+    """Rows of J (K, n, 3) of batch item i (zeroed here), and the bodies of each row (ascending)."""
+    for k in range(J.shape[0]):
+        for b in range(J.shape[1]):
+            J[k, b, 0] = J[k, b, 1] = J[k, b, 2] = 0.0
+    nx, ny = math.cos(normal_angle[i]), math.sin(normal_angle[i])
+    tx, ty = tangent_sign[i] * -ny, tangent_sign[i] * nx
+    r1x, r1y = point[i, 0] - position[i, body1, 0], point[i, 1] - position[i, body1, 1]
+    r2x, r2y = point[i, 0] - position[i, body2, 0], point[i, 1] - position[i, body2, 1]
+    lo, hi = min(body1, body2), max(body1, body2)
+    for k in range(2):
+        ux, uy = (nx, ny) if k == 0 else (tx, ty)
+        J[k, body1, 0] += ux
+        J[k, body1, 1] += uy
+        J[k, body1, 2] += r1x * uy - r1y * ux
+        J[k, body2, 0] += -ux
+        J[k, body2, 1] += -uy
+        J[k, body2, 2] += -(r2x * uy - r2y * ux)
+        rowb[k, 0], rowb[k, 1] = lo, hi
+    J[2, body1, 2] += 1.0
+    J[2, body2, 2] -= 1.0
+    rowb[2, 0], rowb[2, 1] = lo, hi
+    for j in range(hitches.shape[0]):
+        f, r = hitches[j, 0], hitches[j, 1]
+        cf, sf = math.cos(heading[i, f]), math.sin(heading[i, f])
+        cr, sr = math.cos(heading[i, r]), math.sin(heading[i, r])
+        pfx, pfy, prx, pry = hfp[i, j, 0], hfp[i, j, 1], hrp[i, j, 0], hrp[i, j, 1]
+        rfx, rfy = cf * pfx - sf * pfy, sf * pfx + cf * pfy
+        rrx, rry = cr * prx - sr * pry, sr * prx + cr * pry
+        kx, ky = 3 + 2 * j, 4 + 2 * j
+        J[kx, f, 0] += 1.0
+        J[kx, f, 2] += -rfy        # r x e_x = -r_y
+        J[kx, r, 0] -= 1.0
+        J[kx, r, 2] -= -rry
+        J[ky, f, 1] += 1.0
+        J[ky, f, 2] += rfx         # r x e_y = r_x
+        J[ky, r, 1] -= 1.0
+        J[ky, r, 2] -= rrx
+        rowb[kx, 0], rowb[kx, 1] = min(f, r), max(f, r)
+        rowb[ky, 0], rowb[ky, 1] = min(f, r), max(f, r)
+    k0 = 3 + 2 * hitches.shape[0]
+    for c in range(cbodies.shape[0]):
+        b = cbodies[c]
+        dx, dy = math.cos(cdir[i, c]), math.sin(cdir[i, c])
+        rx, ry = cpoint[i, c, 0] - position[i, b, 0], cpoint[i, c, 1] - position[i, b, 1]
+        J[k0 + c, b, 0] += dx
+        J[k0 + c, b, 1] += dy
+        J[k0 + c, b, 2] += rx * dy - ry * dx
+        rowb[k0 + c, 0], rowb[k0 + c, 1] = b, -1
+    return nx, ny, tx, ty
+
+
+@njit(**_INLINE)
+def _row_dot(J, rowb, k, v, w):
+    """J_k . (v, w) over the (at most two) bodies of row k."""
+    acc = 0.0
+    for a in range(2):
+        b = rowb[k, a]
+        if b >= 0:
+            acc += J[k, b, 0] * v[b, 0] + J[k, b, 1] * v[b, 1] + J[k, b, 2] * w[b]
+    return acc
+
+
+@njit(**_HOT)
+def _solve_system(Mat, rhs, K, Ms, aug, x, cond_limit, sc):
+    """Equilibrate Mat (rows, then columns to unit max-norm), invert by Gaussian elimination
+    with partial pivoting; x = solution. Returns (ok, cond1) as ``core._solve``. ``sc`` is
+    scratch space (3, K). Divisions by a scale or pivot are multiplications by its reciprocal
+    (a rounding of difference from numpy's divisions; the same pivots)."""
+    rinv = sc[0]
+    cinv = sc[1]
+    bs = sc[2]
+    for i in range(K):
+        m = 0.0
+        for j in range(K):
+            a = abs(Mat[i, j])
+            if a > m or a != a:
+                m = a
+        rinv[i] = 1.0 if m == 0.0 else 1.0 / m
+        bs[i] = rhs[i] * rinv[i]
+    for j in range(K):
+        m = 0.0
+        for i in range(K):
+            a = abs(Mat[i, j] * rinv[i])
+            if a > m or a != a:
+                m = a
+        cinv[j] = 1.0 if m == 0.0 else 1.0 / m
+    for i in range(K):
+        for j in range(K):
+            v = Mat[i, j] * rinv[i] * cinv[j]
+            Ms[i, j] = v
+            aug[i, j] = v
+            aug[i, K + j] = 0.0
+        aug[i, K + i] = 1.0
+    # [Ms | I] -> [U | L^-1 P] by Gaussian elimination with partial pivoting
+    K2 = 2 * K
+    for col in range(K):
+        p = col
+        best = abs(aug[col, col])
+        for i in range(col + 1, K):
+            a = abs(aug[i, col])
+            if a > best:
+                best = a
+                p = i
+        if best == 0.0:
+            for i in range(K):
+                x[i] = np.nan
+            return False, np.inf
+        if p != col:
+            for j in range(col, K2):
+                t = aug[col, j]
+                aug[col, j] = aug[p, j]
+                aug[p, j] = t
+        pinv = 1.0 / aug[col, col]
+        for i in range(col + 1, K):
+            f = aug[i, col] * pinv
+            if f != 0.0:
+                for j in range(col + 1, K2):
+                    aug[i, j] -= f * aug[col, j]
+    for i in range(K):            # back substitution, all columns of the inverse at once
+        ii = K - 1 - i
+        for j in range(ii + 1, K):
+            a = aug[ii, j]
+            for col in range(K, K2):
+                aug[ii, col] -= a * aug[j, col]
+        dinv = 1.0 / aug[ii, ii]
+        for col in range(K, K2):
+            aug[ii, col] *= dinv
+    n_ms = 0.0
+    n_inv = 0.0
+    for j in range(K):
+        s1 = 0.0
+        s2 = 0.0
+        for i in range(K):
+            s1 += abs(Ms[i, j])
+            s2 += abs(aug[i, K + j])
+        n_ms = max(n_ms, s1)
+        n_inv = max(n_inv, s2)
+    finite = True
+    for i in range(K):
+        s = 0.0
+        for j in range(K):
+            s += aug[i, K + j] * bs[j]
+        x[i] = s * cinv[i]
+        if not math.isfinite(s):
+            finite = False
+    cond = n_ms * n_inv
+    if not math.isfinite(cond):
+        cond = np.inf
+    return finite and cond < cond_limit, cond
+
+
+@njit(**_HOT)
+def impulse_work_item(fixed, hitches, cbodies, xbodies, J, rowb, position, v0, w0, v1, w1, lam, xpoint, ximp, i,
+                      work):
+    """Work of each group of impulses of batch item i (``admissible.impulse_work``'s formula):
+    ``lambda_k (u_k^- + u_k^+) / 2`` over the non-fixed bodies of row k, and
+    ``p . (v^- + v^+) / 2`` at the point of a known external impulse. Fills ``work`` (6,)."""
+    K = lam.shape[1]
+    k0 = 3 + 2 * hitches.shape[0]
+    work[i, 3] = 0.0
+    work[i, 4] = 0.0
+    for k in range(K):
+        acc = 0.0
+        for a in range(2):
+            b = rowb[k, a]
+            if b < 0 or fixed[b]:
+                continue
+            acc = acc + J[k, b, 0] * (v0[i, b, 0] + v1[i, b, 0]) + J[k, b, 1] * (v0[i, b, 1] + v1[i, b, 1]) \
+                + J[k, b, 2] * (w0[i, b] + w1[i, b])
+        wk = lam[i, k] * (0.5 * acc)
+        if k < 3:
+            work[i, k] = wk
+        elif k < k0:
+            work[i, 3] += wk
+        else:
+            work[i, 4] += wk
+    ext = 0.0
+    for x in range(xbodies.shape[0]):
+        b = xbodies[x]
+        if fixed[b]:
+            continue
+        rx, ry = xpoint[i, x, 0] - position[i, b, 0], xpoint[i, x, 1] - position[i, b, 1]
+        ws = w0[i, b] + w1[i, b]
+        vx = 0.5 * ((v0[i, b, 0] + v1[i, b, 0]) - ws * ry)
+        vy = 0.5 * ((v0[i, b, 1] + v1[i, b, 1]) + ws * rx)
+        ext += ximp[i, x, 0] * vx + ximp[i, x, 1] * vy
+    work[i, 5] = ext
+
+
+@njit(**_HOT)
+def reason_item(ok, lam, law, law_value, mu_max, ke0, work, limits, i):
+    """Admissibility code of one solved item (``admissible.REASONS``; rules in that module):
+    0 admissible, 1 tensile P_n, 2 mu beyond mu_max, 3 mu drives the sliding, 4 energy created
+    at the crush surface, 5 not solvable."""
+    pn = lam[i, 0]
+    if not (ok and math.isfinite(pn)):
+        return 5
+    scale = 0.0
+    for k in range(lam.shape[1]):
+        a = abs(lam[i, k])
+        if a > scale:
+            scale = a
+    if pn < -limits[L_REL_IMPULSE] * scale:
+        return 1
+    if law == _RATIO:
+        q = law_value / mu_max
+        if math.isfinite(q):
+            if q > 1.0 + limits[L_REL_RATIO]:
+                return 2
+            if q < -limits[L_REL_RATIO]:
+                return 3
+    gain = work[i, 0] + work[i, 1] + work[i, 2]
+    allowance = limits[L_REL_ENERGY] * (ke0 + abs(work[i, 5]) + abs(work[i, 4]) + 1.0)
+    if gain > allowance:
+        return 4
+    return 0
+
+
+@njit(**_JIT)
+def work_batch(fixed, body1, body2, hitches, cbodies, xbodies, position, heading, velocity, yaw_rate, hfp, hrp,
+               point, normal_angle, tangent_sign, cpoint, cdir, xpoint, ximp, vel_after, yaw_after, lam):
+    """:func:`impulse_work_item` over a batch: (B, 6) in the order of :data:`WORK_KEYS`."""
+    B, n = yaw_rate.shape
+    K = lam.shape[1]
+    J = np.empty((K, n, 3))
+    rowb = np.empty((K, 2), dtype=np.int64)
+    out = np.empty((B, 6))
+    for i in range(B):
+        _rows(fixed, body1, body2, hitches, cbodies, position, heading, hfp, hrp, point, normal_angle, tangent_sign,
+              cpoint, cdir, i, J, rowb)
+        impulse_work_item(fixed, hitches, cbodies, xbodies, J, rowb, position, velocity, yaw_rate, vel_after,
+                          yaw_after, lam, xpoint, ximp, i, out)
+    return out
+
+
+@njit(**_JIT)
+def reason_batch(ok, lam, law, law_value, mu_max, ke0, work, limits):
+    """:func:`reason_item` over a batch: (B,) int64."""
+    B = ok.shape[0]
+    out = np.empty(B, dtype=np.int64)
+    for i in range(B):
+        out[i] = reason_item(ok[i], lam, law, law_value[i], mu_max[i], ke0[i], work, limits, i)
+    return out
+
+
+@njit(**_JIT)
+def _out_views(Y, B, n, K, extras):
+    """The outputs as views of Y, field by field (the order of ``core.OUT_LAYOUT``)."""
+    o = 0
+    v_out = Y[o:o + B * n * 2].reshape((B, n, 2))
+    o += B * n * 2
+    w_out = Y[o:o + B * n].reshape((B, n))
+    o += B * n
+    lam_out = Y[o:o + B * K].reshape((B, K))
+    o += B * K
+    sc = Y[o:o + 7 * B].reshape((7, B))  # mu, mu_max, sliding, closing, sep_n, sep_t, ok
+    o += 7 * B
+    ke0_out = Y[o:o + B * n].reshape((B, n))
+    o += B * n
+    ke1_out = Y[o:o + B * n].reshape((B, n))
+    o += B * n
+    normal = Y[o:o + 2 * B].reshape((B, 2))
+    o += 2 * B
+    tangent = Y[o:o + 2 * B].reshape((B, 2))
+    o += 2 * B
+    cond_out = Y[o:o + B]
+    o += B
+    ne = B if extras else 0
+    work_out = Y[o:o + 6 * ne].reshape((ne, 6))
+    o += 6 * ne
+    reason_out = Y[o:o + ne]
+    return v_out, w_out, lam_out, sc, ke0_out, ke1_out, normal, tangent, cond_out, work_out, reason_out
+
+
+@njit(**_JIT)
+def out_size(n, K, extras):
+    """Floats per item of the output buffer."""
+    return 5 * n + K + 7 + 4 + 1 + (7 if extras else 0)
+
+
+@njit(**_JIT)
+def solve_packed(meta, fixed, hitches, cbodies, xbodies, X, limits, extras):
+    """:func:`solve_batch` on inputs packed field by field into one float64 vector X (the order of
+    ``core.ImpactArrays``' fields; ``meta`` = (n, h, c, x, body1, body2, law)): the single solve's
+    entry point (four array arguments instead of nineteen)."""
+    n, h, c, x = meta[0], meta[1], meta[2], meta[3]
+    P = 8 * n + 4 * h + 7 + 4 * c + 4 * x
+    B = X.size // P
+    o = 0
+    mass = X[o:o + B * n].reshape((B, n))
+    o += B * n
+    inertia = X[o:o + B * n].reshape((B, n))
+    o += B * n
+    position = X[o:o + 2 * B * n].reshape((B, n, 2))
+    o += 2 * B * n
+    heading = X[o:o + B * n].reshape((B, n))
+    o += B * n
+    velocity = X[o:o + 2 * B * n].reshape((B, n, 2))
+    o += 2 * B * n
+    yaw_rate = X[o:o + B * n].reshape((B, n))
+    o += B * n
+    hfp = X[o:o + 2 * B * h].reshape((B, h, 2))
+    o += 2 * B * h
+    hrp = X[o:o + 2 * B * h].reshape((B, h, 2))
+    o += 2 * B * h
+    point = X[o:o + 2 * B].reshape((B, 2))
+    o += 2 * B
+    normal_angle = X[o:o + B]
+    o += B
+    tangent_sign = X[o:o + B]
+    o += B
+    restitution = X[o:o + B]
+    o += B
+    law_value = X[o:o + B]
+    o += B
+    moment_restitution = X[o:o + B]
+    o += B
+    cpoint = X[o:o + 2 * B * c].reshape((B, c, 2))
+    o += 2 * B * c
+    cdir = X[o:o + B * c].reshape((B, c))
+    o += B * c
+    cval = X[o:o + B * c].reshape((B, c))
+    o += B * c
+    xpoint = X[o:o + 2 * B * x].reshape((B, x, 2))
+    o += 2 * B * x
+    ximp = X[o:o + 2 * B * x].reshape((B, x, 2))
+    return solve_batch(fixed, meta[4], meta[5], meta[6], hitches, cbodies, xbodies, mass, inertia, position, heading,
+                       velocity, yaw_rate, hfp, hrp, point, normal_angle, tangent_sign, restitution, law_value,
+                       moment_restitution, cpoint, cdir, cval, xpoint, ximp, limits, extras)
+
+
+@njit(**_JIT)
+def solve_batch(fixed, body1, body2, law, hitches, cbodies, xbodies, mass, inertia, position, heading, velocity,
+                yaw_rate, hfp, hrp, point, normal_angle, tangent_sign, restitution, law_value, moment_restitution,
+                cpoint, cdir, cval, xpoint, ximp, limits, extras):
+    """Solve every item of a batch (module docstring). Inputs as ``core.ImpactArrays`` (C order,
+    float64), the structure as int arrays. Returns one float64 vector holding the outputs
+    field by field (``core.OUT_LAYOUT``; flags as 0.0 / 1.0); ``extras``: with the work (B, 6)
+    and the admissibility code (B,) of every item."""
+    B, n = mass.shape
+    h = hitches.shape[0]
+    nc = cbodies.shape[0]
+    K = 3 + 2 * h + nc
+    k0 = 3 + 2 * h
+    Y = np.empty(B * out_size(n, K, extras))
+    v_out, w_out, lam_out, sc, ke0_out, ke1_out, normal, tangent, cond_out, work_out, reason_out = \
+        _out_views(Y, B, n, K, extras)
+    mu_out, mumax_out, sliding_out, closing, sep_n, sep_t, ok_out = sc[0], sc[1], sc[2], sc[3], sc[4], sc[5], sc[6]
+
+    J = np.empty((K, n, 3))
+    rowb = np.empty((K, 2), dtype=np.int64)
+    minv = np.empty((n, 3))
+    pext = np.zeros((n, 3))
+    vfree = np.empty((n, 2))
+    wfree = np.empty(n)
+    u0 = np.empty(K)
+    uf = np.empty(K)
+    W = np.empty((K, K))
+    Mat = np.empty((K, K))
+    rhs = np.empty(K)
+    Ms = np.empty((K, K))
+    aug = np.empty((K, 2 * K))
+    scr = np.empty((3, K))
+    lam_ns = np.empty(K)
+    lam_r = np.empty(K)
+    vq = np.empty((n, 2))
+    wq = np.empty(n)
+    vo = np.empty((n, 2))
+    wo = np.empty(n)
+    for i in range(B):
+        nxv, nyv, txv, tyv = _rows(fixed, body1, body2, hitches, cbodies, position, heading, hfp, hrp, point,
+                                   normal_angle, tangent_sign, cpoint, cdir, i, J, rowb)
+        normal[i, 0], normal[i, 1] = nxv, nyv
+        tangent[i, 0], tangent[i, 1] = txv, tyv
+        for b in range(n):
+            if fixed[b]:
+                minv[b, 0] = minv[b, 1] = minv[b, 2] = 0.0
+            else:
+                minv[b, 0] = minv[b, 1] = 1.0 / mass[i, b]
+                minv[b, 2] = 1.0 / inertia[i, b]
+            pext[b, 0] = pext[b, 1] = pext[b, 2] = 0.0
+            vq[b, 0], vq[b, 1], wq[b] = velocity[i, b, 0], velocity[i, b, 1], yaw_rate[i, b]
+        for x in range(xbodies.shape[0]):
+            b = xbodies[x]
+            ix, iy = ximp[i, x, 0], ximp[i, x, 1]
+            rx, ry = xpoint[i, x, 0] - position[i, b, 0], xpoint[i, x, 1] - position[i, b, 1]
+            pext[b, 0] += ix
+            pext[b, 1] += iy
+            pext[b, 2] += rx * iy - ry * ix
+        for b in range(n):
+            vfree[b, 0] = vq[b, 0] + minv[b, 0] * pext[b, 0]
+            vfree[b, 1] = vq[b, 1] + minv[b, 1] * pext[b, 1]
+            wfree[b] = wq[b] + minv[b, 2] * pext[b, 2]
+        for k in range(K):
+            u0[k] = _row_dot(J, rowb, k, vq, wq)
+            uf[k] = _row_dot(J, rowb, k, vfree, wfree)
+            for l in range(k, K):      # W is symmetric
+                acc = 0.0
+                for a in range(2):
+                    b = rowb[k, a]
+                    if b >= 0 and (rowb[l, 0] == b or rowb[l, 1] == b):
+                        acc += (J[k, b, 0] * minv[b, 0] * J[l, b, 0] + J[k, b, 1] * minv[b, 1] * J[l, b, 1]
+                                + J[k, b, 2] * minv[b, 2] * J[l, b, 2])
+                W[k, l] = acc
+                W[l, k] = acc
+        e = restitution[i]
+        ep = moment_restitution[i]
+        inv_ibar = minv[body1, 2] + minv[body2, 2]
+        ibar = 1.0 / inv_ibar if inv_ibar > 0 else 0.0
+        g = (1.0 + ep) * ibar
+        for k in range(K):
+            for l in range(K):
+                Mat[k, l] = W[k, l]
+            rhs[k] = -uf[k]
+        rhs[0] = -e * u0[0] - uf[0]
+        for l in range(K):
+            Mat[2, l] = -g * W[2, l]
+        Mat[2, 2] += ep
+        rhs[2] = g * uf[2]
+        for c in range(nc):
+            rhs[k0 + c] = cval[i, c] - uf[k0 + c]
+
+        ok, cond = _solve_system(Mat, rhs, K, Ms, aug, lam_ns, limits[L_COND], scr)
+        mu_max = lam_ns[1] / lam_ns[0] if ok else np.nan
+        sliding = False
+        redo = False
+        mu_used = 0.0
+        if law == _RATIO:
+            redo = True
+            mu_used = law_value[i]
+        elif law == _FRACTION:
+            redo = True
+            mu_used = law_value[i] * mu_max
+        elif law == _FRICTION:
+            f = law_value[i]
+            stoppable = ok and abs(mu_max) <= limits[L_MU_MAX]
+            redo = not (stoppable and abs(mu_max) <= f)
+            if stoppable:
+                sgn = 1.0 if mu_max > 0 else (-1.0 if mu_max < 0 else 0.0)
+            else:
+                sgn = -1.0 if u0[1] > 0 else (1.0 if u0[1] < 0 else 0.0)
+            mu_used = f * sgn
+        if redo:
+            for l in range(K):
+                Mat[1, l] = 0.0
+            Mat[1, 1] = 1.0
+            Mat[1, 0] = -mu_used
+            rhs[1] = 0.0
+            ok, cond = _solve_system(Mat, rhs, K, Ms, aug, lam_r, limits[L_COND], scr)
+            sliding = True
+        for k in range(K):
+            lam_out[i, k] = (lam_r[k] if redo else lam_ns[k]) if ok else np.nan
+        for b in range(n):
+            dx, dy, dw = pext[b, 0], pext[b, 1], pext[b, 2]
+            for k in range(K):
+                if rowb[k, 0] == b or rowb[k, 1] == b:
+                    lk = lam_out[i, k]
+                    dx += J[k, b, 0] * lk
+                    dy += J[k, b, 1] * lk
+                    dw += J[k, b, 2] * lk
+            if not ok:
+                dx = dy = dw = np.nan
+            vo[b, 0] = vq[b, 0] + minv[b, 0] * dx
+            vo[b, 1] = vq[b, 1] + minv[b, 1] * dy
+            wo[b] = wq[b] + minv[b, 2] * dw
+            v_out[i, b, 0], v_out[i, b, 1], w_out[i, b] = vo[b, 0], vo[b, 1], wo[b]
+        sn = _row_dot(J, rowb, 0, vo, wo)
+        st = _row_dot(J, rowb, 1, vo, wo)
+        if law == _RATIO or law == _FRACTION:
+            sliding = abs(st) > 1e-9 * (1.0 + abs(u0[1]))
+        ke0 = 0.0
+        for b in range(n):
+            m = 0.0 if fixed[b] else mass[i, b]
+            inr = 0.0 if fixed[b] else inertia[i, b]
+            e0 = 0.5 * m * (vq[b, 0] * vq[b, 0] + vq[b, 1] * vq[b, 1]) + 0.5 * inr * wq[b] * wq[b]
+            ke0_out[i, b] = e0
+            ke1_out[i, b] = 0.5 * m * (vo[b, 0] * vo[b, 0] + vo[b, 1] * vo[b, 1]) + 0.5 * inr * wo[b] * wo[b]
+            ke0 += e0
+        mu_out[i] = lam_out[i, 1] / lam_out[i, 0]
+        mumax_out[i] = mu_max
+        sliding_out[i] = 1.0 if sliding else 0.0
+        closing[i] = u0[0]
+        sep_n[i] = sn
+        sep_t[i] = st
+        ok_out[i] = 1.0 if ok else 0.0
+        cond_out[i] = cond
+        if extras:
+            impulse_work_item(fixed, hitches, cbodies, xbodies, J, rowb, position, velocity, yaw_rate, v_out, w_out,
+                              lam_out, xpoint, ximp, i, work_out)
+            reason_out[i] = reason_item(ok, lam_out, law, law_value[i], mu_max, ke0, work_out, limits, i)
+    return Y

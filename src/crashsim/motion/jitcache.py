@@ -1,7 +1,8 @@
-"""Where the compiled run-out kernels are cached, and their one-time compile.
+"""Where the compiled kernels are cached, and their one-time compile.
 
-The kernels of :mod:`crashsim.motion._kernels` are compiled by numba on first use (about a
-minute or two on one core) and cached on disk. The cache lives in a user-writable directory,
+The kernels of :mod:`crashsim.motion._kernels` (the run-out) and :mod:`crashsim.impact._kernel`
+(the impact solver) are compiled by numba on first use (about a minute or two on one core) and
+cached on disk. The cache lives in a user-writable directory,
 so an installation into a read-only or non-editable location keeps it too:
 
 1. ``$CRASHSIM_CACHE_DIR`` if set;
@@ -71,8 +72,9 @@ def _digest() -> str:
 
     h = hashlib.sha256(numba.__version__.encode())
     here = Path(__file__).parent
-    for name in ("_kernels.py", "tyres.py", "options.py"):  # the sources the kernels compile in
-        h.update((here / name).read_bytes())
+    # the sources the kernels compile in: the run-out's, and the impact solver's (impact/_kernel.py)
+    for path in (here / "_kernels.py", here / "tyres.py", here / "options.py", here.parent / "impact" / "_kernel.py"):
+        h.update(path.read_bytes())
     return h.hexdigest()[:16]
 
 

@@ -865,12 +865,18 @@ def _build_vehicle(name: str, v: dict, file: str | None) -> tuple[Vehicle, dict[
         veh = Vehicle(name, tuple(bodies), tuple(hitches))
     except ScenarioError as exc:
         raise _err(str(exc), f"vehicles.{name}", file) from None
+    return veh, _vehicle_states(veh, v)
+
+
+def _vehicle_states(veh: Vehicle, v: dict) -> dict[str, BodyState]:
+    """The states at impact of a vehicle's bodies from its validated table ``v`` (position, heading,
+    course, speed, the bodies' yaw rates and articulations)."""
+    raw = v["bodies"]
     course = v["heading"] if v["course"] is None else v["course"]
     speed = 0.0 if v["speed"] is None else v["speed"]  # None: set by the approach (scenario_from_dict)
     vel = speed * np.array([math.cos(course), math.sin(course)])
-    states = chain_states(veh, v["position"], v["heading"], vel,
-                          [b["yaw_rate"] for b in raw], [b["articulation"] for b in raw[1:]])
-    return veh, states
+    return chain_states(veh, v["position"], v["heading"], vel,
+                        [b["yaw_rate"] for b in raw], [b["articulation"] for b in raw[1:]])
 
 
 def _build_approach(veh: Vehicle, v: dict, runout: "RunoutSpec | None", states: dict, file: str | None):

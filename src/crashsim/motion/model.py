@@ -217,6 +217,7 @@ class SceneModel:
         cfg[k.C_SDT] = options.sample_dt
         cfg[k.C_ROADMU] = road.mu
         cfg[k.C_ZRES] = ZONE_RESOLUTION
+        self._cfg = cfg
         scheme = SCHEMES[options.scheme]
         icfg = np.zeros(k.N_ICFG, dtype=np.int64)
         icfg[k.I_FIALA] = 1 if options.lateral_model == "fiala" else 0
@@ -290,6 +291,23 @@ class SceneModel:
                   np.array(pr_ptr, dtype=np.int64), np.array(pp, dtype=np.int64).reshape(-1, 2),
                   np.array(pr_par, dtype=float).reshape(-1, k.N_R))
         self.n_bodies, self.n_wheels, self.n_hitches = nb, nw, nh
+
+    def with_road(self, road: Road) -> "SceneModel":
+        """This model on another road with the same friction zones (objects): only its friction
+        coefficient differs, which enters the arrays in one place (``cfg[C_ROADMU]``).  The same
+        model as ``SceneModel(..., road, ...)`` built from scratch, without building it again."""
+        import copy
+
+        if road.zones is not self.road.zones:
+            raise ScenarioError("with_road keeps the friction zones; build a new SceneModel for other zones",
+                                field="road.zones")
+        new = copy.copy(self)
+        new.road = road
+        cfg = self._cfg.copy()
+        cfg[kernels().C_ROADMU] = road.mu
+        new._cfg = cfg
+        new.M = tuple(cfg if a is self._cfg else a for a in self.M)
+        return new
 
     # ------------------------------------------------------------------ pairs
     def _pair_model(self, ia: int, ib: int | None, obstacle: Obstacle | None, overrides: Mapping) -> ContactModel:

@@ -46,6 +46,10 @@ __all__ = ["Target", "resolve_path", "parse_value", "format_value", "set_value",
 #: they are removed before the forward scenario is built.
 INVERSE_SECTIONS = ("fit", "uncertainty")
 
+#: Default of ``ScenarioOverrides(fast=...)``: False builds every scenario of a fit or Monte Carlo
+#: run the full way (the reference the fast path is tested and benchmarked against).
+FAST = True
+
 _TOKEN = re.compile(r"^(?P<name>[A-Za-z_][A-Za-z0-9_\-]*)(?:\[(?P<index>\d+)\])?$")
 
 
@@ -344,6 +348,11 @@ class ScenarioOverrides:
         Number of recent scenarios kept (keyed by the value vector).
     max_wall_time : float, optional
         Wall-clock limit [s] of each run-out (``RunoutOptions.max_wall_time``); None: the file's.
+    fast : bool, optional
+        Default :data:`FAST`. Build the scenarios of the common paths (speeds, impact coefficients, point of impact,
+        road friction) from the first one built, changing only the objects each value reaches
+        (:mod:`crashsim.reconstruct.patch`: the same scenario, value for value); other paths and
+        invalid values go through the full build. False: every scenario the full way.
 
     Examples
     --------
@@ -352,10 +361,13 @@ class ScenarioOverrides:
     """
 
     def __init__(self, data: dict, paths: Sequence[str], *, engine: str | None = None, file: str | None = None,
-                 cache: int = 8, field_prefix: str = "path", max_wall_time: float | None = None):
+                 cache: int = 8, field_prefix: str = "path", max_wall_time: float | None = None,
+                 fast: bool | None = None):
         from ..scenario import SCHEMA
 
         self.file = file
+        self.fast = FAST if fast is None else bool(fast)
+        self._fast_base = None  # the first scenario built the full way (the base of the fast path)
         self.engine = engine
         self.max_wall_time = max_wall_time
         self.base = forward_data(data, file=file)
@@ -413,12 +425,20 @@ class ScenarioOverrides:
         if hit is not None:
             self._cache.move_to_end(key)
             return hit
-        sc = scenario_from_dict(self.data(key), file=self.file)
-        if sc.runout is not None and (self.engine is not None or self.max_wall_time is not None):
-            options = _engine_options(sc.runout.options, self.engine)
-            if self.max_wall_time is not None:
-                options = replace(options, max_wall_time=float(self.max_wall_time))
-            sc = replace(sc, runout=replace(sc.runout, options=options))
+        sc = None
+        if self._fast_base is not None:
+            from .patch import patch_scenario
+
+            sc = patch_scenario(self._fast_base, self.targets, key, self.file)
+        if sc is None:
+            sc = scenario_from_dict(self.data(key), file=self.file)
+            if sc.runout is not None and (self.engine is not None or self.max_wall_time is not None):
+                options = _engine_options(sc.runout.options, self.engine)
+                if self.max_wall_time is not None:
+                    options = replace(options, max_wall_time=float(self.max_wall_time))
+                sc = replace(sc, runout=replace(sc.runout, options=options))
+            if self.fast and self._fast_base is None:
+                self._fast_base = sc
         self._cache[key] = sc
         while len(self._cache) > self._cache_size:
             self._cache.popitem(last=False)

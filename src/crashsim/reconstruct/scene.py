@@ -492,11 +492,13 @@ def run_scene(scenario) -> SceneResult:
 
 def _joint_runout(movable, initial, spec):
     """Every vehicle together, with contact (and to an accuracy target if the scenario asks)."""
-    from ..motion import simulate_scene
-
     kwargs = dict(contact=spec.contact, pair_contact=spec.pair_contact, obstacles=spec.obstacles)
     if spec.accuracy is None:
-        return simulate_scene(movable, initial, spec.wheels, spec.road, spec.options, **kwargs), None
+        from ..motion.engine import run_model
+        from .models import scene_model
+
+        # the same as simulate_scene(...), with the scene model reused across fit/MC samples
+        return run_model(scene_model(movable, spec), initial), None
     from ..motion.accuracy import scene_to_accuracy
 
     joint, report = scene_to_accuracy(movable, initial, spec.wheels, spec.road, spec.accuracy, spec.accuracy_heading,

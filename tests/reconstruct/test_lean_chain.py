@@ -1,0 +1,98 @@
+"""The fit and Monte Carlo chain gives the same numbers on its fast path as on the full one.
+
+The fast path (:mod:`crashsim.reconstruct.patch` scenarios, the reused scene model of
+:mod:`crashsim.reconstruct.models`, the per-coordinate polyline distances of the evidence
+checks) is compared with the full path (``crashsim.reconstruct.overrides.FAST = False``: every
+scenario validated and built from the file dict, every scene model built again) on the shipped
+fit scene: fit residuals and Monte Carlo sample records must agree exactly.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import crashsim.reconstruct.overrides as overrides
+from crashsim.reconstruct import models
+from crashsim.reconstruct.evidence import _nearest_on_polyline
+from crashsim.reconstruct.fit import FitProblem, FitSpec
+from crashsim.reconstruct.montecarlo import monte_carlo
+from crashsim.schema import load_toml
+
+from scenes import ENGINE
+
+FILE = Path(__file__).resolve().parents[2] / "scenarios" / "fit" / "intersection_fit.toml"
+
+
+@pytest.fixture()
+def raw():
+    return load_toml(FILE)
+
+
+def _full_path(monkeypatch):
+    monkeypatch.setattr(overrides, "FAST", False)
+    models.clear()
+
+
+def test_fit_residuals_identical(raw, monkeypatch):
+    """FitProblem.evaluate on both paths at the start, in both basins and near the bounds: the same
+    weighted residuals (to 1e-12; they come out bit for bit) and the same scene numbers."""
+    spec = FitSpec.from_dict(raw["fit"], raw, file=str(FILE))
+    points = [np.array([0.5, 0.5, 0.5, 0.5]), np.array([0.44, 0.44, 0.125, 0.5]),
+              np.array([0.44, 0.44, 0.375, 0.5]), np.array([0.02, 0.97, 0.01, 0.99])]
+    fast = FitProblem(raw, spec, engine=ENGINE, file=str(FILE))
+    got = [fast.evaluate(z) for z in points]
+    assert fast.overrides._fast_base is not None
+    _full_path(monkeypatch)
+    full = FitProblem(raw, spec, engine=ENGINE, file=str(FILE))
+    assert not full.overrides.fast
+    for z, (r_fast, scene_fast) in zip(points, got):
+        r_full, scene_full = full.evaluate(z)
+        np.testing.assert_allclose(r_fast, r_full, rtol=0, atol=1e-12)
+        assert json.dumps(scene_fast.to_dict(), sort_keys=True) == json.dumps(scene_full.to_dict(), sort_keys=True)
+
+
+def test_monte_carlo_records_identical(raw, monkeypatch, tmp_path):
+    """The JSON-lines records of the same seed: identical line for line (inputs, outputs, checks)."""
+    files = {}
+    for name in ("fast", "full"):
+        if name == "full":
+            _full_path(monkeypatch)
+        files[name] = tmp_path / f"{name}.jsonl"
+        monte_carlo(raw, n=12, engine=ENGINE, workers=1, out_path=files[name], progress=False, file=str(FILE))
+    fast_lines = files["fast"].read_text().splitlines()
+    full_lines = files["full"].read_text().splitlines()
+    assert len(fast_lines) == 13 and fast_lines == full_lines
+    assert all("checks" in json.loads(line) for line in fast_lines[1:])
+
+
+def _reference_nearest(points, polyline):
+    """The (n, m, 2)-array form of the point-to-polyline distance the evidence checks used before
+    (kept here as the reference the per-coordinate form must reproduce bit for bit)."""
+    p = np.asarray(points, dtype=float)[:, None, :]
+    line = np.asarray(polyline, dtype=float)
+    a = line[:-1][None]
+    ab = (line[1:] - line[:-1])[None]
+    denom = np.sum(ab * ab, -1)
+    t = np.clip(np.sum((p - a) * ab, -1) / np.where(denom > 0, denom, 1.0), 0.0, 1.0)
+    d = p - (a + t[..., None] * ab)
+    dist = np.hypot(d[..., 0], d[..., 1])
+    j = np.argmin(dist, axis=1)
+    rows = np.arange(p.shape[0])
+    cross = ab[0, j, 0] * (p[:, 0, 1] - a[0, j, 1]) - ab[0, j, 1] * (p[:, 0, 0] - a[0, j, 0])
+    return dist[rows, j], np.where(cross >= 0, 1.0, -1.0)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_polyline_distance_bit_for_bit(seed):
+    """Random tracks (with repeated vertices: zero-length segments) and points on, near and far off them."""
+    rng = np.random.default_rng(seed)
+    line = np.cumsum(rng.normal(size=(rng.integers(2, 80), 2)), axis=0)
+    line[len(line) // 2] = line[len(line) // 2 - 1]
+    pts = np.vstack([rng.normal(size=(150, 2)) * 6, line[::3], line[:-1] + 0.5 * np.diff(line, axis=0)])
+    d_new, s_new = _nearest_on_polyline(pts, line)
+    d_ref, s_ref = _reference_nearest(pts, line)
+    assert np.array_equal(d_new, d_ref) and np.array_equal(s_new, s_ref)

@@ -1,0 +1,156 @@
+"""The fast override path (:mod:`crashsim.reconstruct.patch`) gives the scenario of the full build.
+
+Every supported path kind is compared with the full rebuild (``ScenarioOverrides(fast=False)``)
+object by object, value for value (floats exactly), and by the scene it runs; unsupported paths
+and invalid values fall back to the full build (same scenario, same error).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from crashsim.errors import ScenarioError
+from crashsim.reconstruct.overrides import ScenarioOverrides
+from crashsim.reconstruct.patch import patch_kind
+from crashsim.reconstruct.scene import run_scene
+from crashsim.schema import load_toml
+
+from scenes import ENGINE, car_car, car_trailer
+
+ROOT = Path(__file__).resolve().parents[2]
+SHIPPED = ROOT / "scenarios" / "fit" / "intersection_fit.toml"
+
+
+def same(a, b, where="scenario") -> None:
+    """Recursive equality: dataclasses field by field, arrays and floats exactly (NaN equal to NaN)."""
+    if dataclasses.is_dataclass(a) and not isinstance(a, type):
+        assert type(a) is type(b), where
+        for f in dataclasses.fields(a):
+            same(getattr(a, f.name), getattr(b, f.name), f"{where}.{f.name}")
+    elif isinstance(a, dict):
+        assert isinstance(b, dict) and list(a) == list(b), where
+        for k in a:
+            same(a[k], b[k], f"{where}[{k!r}]")
+    elif isinstance(a, (list, tuple)):
+        assert type(a) is type(b) and len(a) == len(b), where
+        for i, (x, y) in enumerate(zip(a, b)):
+            same(x, y, f"{where}[{i}]")
+    elif isinstance(a, np.ndarray):
+        assert isinstance(b, np.ndarray) and a.shape == b.shape and a.dtype == b.dtype, where
+        assert np.array_equal(a, b, equal_nan=a.dtype.kind == "f"), where
+    elif isinstance(a, float) and math.isnan(a):
+        assert isinstance(b, float) and math.isnan(b), where
+    else:
+        assert type(a) is type(b) and a == b, f"{where}: {a!r} != {b!r}"
+
+
+def _pair(data, paths, file=None):
+    fast = ScenarioOverrides(data, paths, engine=ENGINE, file=file, cache=1, max_wall_time=30.0)
+    full = ScenarioOverrides(data, paths, engine=ENGINE, file=file, cache=1, max_wall_time=30.0, fast=False)
+    return fast, full
+
+
+SHIPPED_PATHS = ["vehicles.A.speed", "vehicles.B.speed", "impact.restitution", "runout.road_friction",
+                 "impact.point[0]", "impact.point[1]", "impact.normal"]
+
+
+@pytest.fixture(scope="module")
+def shipped():
+    import crashsim.scenario as sm
+    from crashsim.reconstruct.inverse_schema import with_inverse_sections
+
+    saved = sm.SCHEMA
+    sm.SCHEMA = with_inverse_sections(saved)
+    try:
+        yield load_toml(SHIPPED)
+    finally:
+        sm.SCHEMA = saved
+
+
+def test_every_kind_matches_the_full_build(shipped):
+    """All supported kinds of the shipped fit scene at once, and each alone, at random values."""
+    rng = np.random.default_rng(7)
+    fast, full = _pair(shipped, SHIPPED_PATHS, file="intersection_fit.toml")
+    base = np.array([13.41, 13.41, 0.05, 0.7, -2.517, -1.157, math.pi / 2])
+    fast.scenario(base)  # the base of the fast path (built the full way)
+    kinds = {patch_kind(t, fast._fast_base.data) for t in fast.targets}
+    assert kinds == {"speed", "restitution", "road_friction", "point", "normal"}
+    for k in range(6):
+        x = base + rng.normal(0, 1, base.size) * np.array([1.5, 1.5, 0.03, 0.05, 0.1, 0.05, 0.02])
+        a, b = fast.scenario(x), full.scenario(x)
+        assert a.vehicles is fast._fast_base.vehicles  # patched, not rebuilt
+        same(a, b)
+    for j in range(len(base)):  # one path at a time (the others keep their base objects)
+        x = base.copy()
+        x[j] += 0.01
+        same(fast.scenario(x), full.scenario(x))
+
+
+def test_patched_scene_runs_identically(shipped):
+    """The scene of a patched scenario: the same result dict as the full build's (every number, exactly)."""
+    fast, full = _pair(shipped, SHIPPED_PATHS[:5])
+    fast.scenario([13.41, 13.41, 0.05, 0.7, -2.517])
+    x = [14.2, 12.9, 0.08, 0.74, -2.4]
+    assert fast.scenario(x).vehicles is fast._fast_base.vehicles  # patched
+    a, b = run_scene(fast.scenario(x)), run_scene(full.scenario(x))
+    assert json.dumps(a.to_dict(), sort_keys=True) == json.dumps(b.to_dict(), sort_keys=True)
+
+
+def test_tangential_law_value():
+    """impact.friction (the scene's law is "friction") is patched; mu (another law's key) is not a fast kind."""
+    data = car_car()
+    fast, full = _pair(data, ["impact.friction", "vehicles.B.speed"])
+    fast.scenario([0.5, 10.0])
+    assert patch_kind(fast.targets[0], fast._fast_base.data) == "law"
+    for x in ([0.3, 9.0], [0.62, 11.5]):
+        a = fast.scenario(x)
+        assert a.vehicles is fast._fast_base.vehicles  # patched, not rebuilt
+        same(a, full.scenario(x))
+    t_mu = ScenarioOverrides(car_car(), ["impact.mu"], fast=True).targets[0]
+    assert patch_kind(t_mu, fast._fast_base.data) is None
+
+
+def test_unsupported_path_falls_back():
+    """A path the fast path does not handle (a body's mass, the heading) is built the full way."""
+    data = car_trailer()
+    paths = ["vehicles.towing.bodies[1].mass", "vehicles.striking.heading", "vehicles.striking.speed"]
+    fast, full = _pair(data, paths)
+    fast.scenario([700.0, math.pi / 2, 11.0])
+    assert patch_kind(fast.targets[0], fast._fast_base.data) is None
+    assert patch_kind(fast.targets[1], fast._fast_base.data) is None
+    for x in ([650.0, 1.6, 10.5], [720.0, 1.55, 11.7]):
+        a = fast.scenario(x)
+        same(a, full.scenario(x))
+        assert a.vehicles[0] is not fast._fast_base.vehicles[0]  # rebuilt, not patched
+
+
+def test_invalid_values_give_the_full_build_error():
+    """Out of range (a negative restitution) or inadmissible (a contact point off both outlines): the error
+    of the full build."""
+    data = car_trailer()
+    paths = ["impact.restitution", "impact.point[1]"]
+    fast, full = _pair(data, paths)
+    fast.scenario([0.1, -0.9])
+    for x in ([-0.2, -0.9], [0.1, -9.0], [float("nan"), -0.9]):
+        with pytest.raises(ScenarioError) as e_fast:
+            fast.scenario(x)
+        with pytest.raises(ScenarioError) as e_full:
+            full.scenario(x)
+        assert str(e_fast.value) == str(e_full.value)
+
+
+def test_unchanged_objects_keep_their_identity(shipped):
+    """A speed or friction sample keeps the vehicles, wheels, contact and options objects (the run-out's
+    compiled scene model is reused for them)."""
+    fast, _ = _pair(shipped, ["vehicles.A.speed", "runout.road_friction"])
+    base = fast.scenario([13.41, 0.7])
+    sc = fast.scenario([12.0, 0.65])
+    assert sc.vehicles is base.vehicles and sc.runout.wheels is base.runout.wheels
+    assert sc.runout.options is base.runout.options and sc.runout.obstacles is base.runout.obstacles
+    assert sc.runout.road.mu == 0.65 and base.runout.road.mu == 0.7

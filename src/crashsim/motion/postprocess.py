@@ -433,10 +433,30 @@ def _vehicle_rows(model, name: str) -> np.ndarray:
     return np.concatenate([np.arange(f * nb + b0, f * nb + b1) for f in range(fields)])
 
 
+def _vehicle_statics(model) -> dict:
+    """Per vehicle of a scene model, what its results need of the model: its state rows and its
+    :class:`_VehicleView`; built once per model (a model reused across runs keeps them)."""
+    static = model.__dict__.get("_vehicle_statics")
+    if static is None:
+        from .layout import StateLayout
+
+        o = model.options
+        opts = o.to_dict()
+        static = {}
+        for v in model.vehicles:
+            b0, b1 = model.body_range[v.name]
+            w0, w1 = model.wheel_range[v.name]
+            layout = StateLayout(tuple(b.name for b in v.bodies), accel_filter=o.load_transfer)
+            static[v.name] = (_vehicle_rows(model, v.name),
+                              _VehicleView(v, layout, model.specs[w0:w1], model.static_load[w0:w1],
+                                           model.loads[v.name], model.mass[b0:b1], model.inertia[b0:b1], opts))
+        model.__dict__["_vehicle_statics"] = static
+    return static
+
+
 def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_end, quad, events, impacts, nfev, mode):
     """The :class:`~crashsim.motion.result.SceneRunout` of a run (per vehicle, impacts, pairs, ledger)."""
     from .engine import _segment_arrays, _snapshot
-    from .layout import StateLayout
     from .model import kernels
     from .result import PairSummary, SceneRunout
 
@@ -456,7 +476,7 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
         if miss_k >= 0:
             missed = (float(miss_t), int(miss_k))
     nb, nw = model.n_bodies, model.n_wheels
-    opts = o.to_dict()
+    static = _vehicle_statics(model)
 
     # ---- per vehicle
     rest_time = {}
@@ -476,13 +496,10 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
         Tv = T[cols].copy()
         if Tv.size:
             Tv[-1] = min(Tv[-1], t_v) if at_rest else Tv[-1]
-        rows = _vehicle_rows(model, v.name)
+        rows, view = static[v.name]
         b0, b1 = model.body_range[v.name]
         w0, w1 = model.wheel_range[v.name]
         h0, h1 = model.hitch_range[v.name]
-        layout = StateLayout(tuple(b.name for b in v.bodies), accel_filter=o.load_transfer)
-        view = _VehicleView(v, layout, model.specs[w0:w1], model.static_load[w0:w1], model.loads[v.name],
-                            model.mass[b0:b1], model.inertia[b0:b1], opts)
         v_events = [e for e in events if not e.vehicles or v.name in e.vehicles]
         if at_rest:
             v_status, v_message = "rest", f"all bodies below v_stop = {o.v_stop} m/s at t = {t_v:.4f} s"

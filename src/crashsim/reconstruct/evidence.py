@@ -349,6 +349,23 @@ def _densify(points: np.ndarray, spacing: float) -> np.ndarray:
     return np.vstack(out)
 
 
+#: Densified marks by evidence object: a fit or Monte Carlo run checks the same marks at every sample.
+_DENSE: dict[int, tuple] = {}
+
+
+def _densified(ev: MarkEvidence) -> np.ndarray:
+    """``_densify(ev.points, MARK_SPACING)``, kept for the evidence object (read-only)."""
+    hit = _DENSE.get(id(ev))
+    if hit is not None and hit[0] is ev:
+        return hit[1]
+    pts = _densify(ev.points, MARK_SPACING)
+    pts.flags.writeable = False
+    if len(_DENSE) >= 64:
+        _DENSE.clear()
+    _DENSE[id(ev)] = (ev, pts)  # holds ev: its id is not reused while it is cached
+    return pts
+
+
 def _nearest_on_polyline(points, polyline) -> tuple[np.ndarray, np.ndarray]:
     """For each point (n, 2): its distance to a polyline (m, 2) [m] and the side it lies on
     (+1 left of the nearest segment's direction, -1 right; +1 for a one-vertex polyline)."""
@@ -407,7 +424,7 @@ def _bbox_lower_bound(pts: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> float:
 
 def _check_mark(ev: MarkEvidence, tracks: dict, index: int) -> Check:
     name = ev.name or f"mark {index + 1}"
-    pts = _densify(ev.points, MARK_SPACING)
+    pts = _densified(ev)
     candidates = []
     for key, tr in tracks.items():
         if not _wheel_matches(tr, ev.wheel):

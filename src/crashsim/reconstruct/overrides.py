@@ -12,9 +12,14 @@ Per evaluation cost
 -------------------
 The presets are merged once (:class:`ScenarioOverrides` keeps the merged dict, without the
 ``preset`` keys, so :func:`scenario_from_dict` does not read the preset library again);
-only the dicts and lists along the overridden paths are copied. What is left is the
-validation and construction of the scenario: about 3-6 ms for the shipped scenes
-(``benchmarks/fit_mc.py`` measures it), small beside a run-out.
+only the dicts and lists along the overridden paths are copied. The first scenario is
+validated and built the full way (about 1.5-3 ms for the shipped scenes). After it, the
+common paths (vehicle speeds, restitution, the tangential law's coefficient, the crush
+normal and point of impact, the road friction) are patched into it: only the objects a
+value reaches are rebuilt, the rest keep their identity (:mod:`crashsim.reconstruct.patch`,
+about a third of the cost; the same scenario value for value, tested against the full
+build). Any other path, and any value the fast path cannot vouch for, takes the full build
+(``benchmarks/fit_mc.py`` measures both).
 
 Path grammar
 ------------

@@ -154,3 +154,31 @@ def test_unchanged_objects_keep_their_identity(shipped):
     assert sc.vehicles is base.vehicles and sc.runout.wheels is base.runout.wheels
     assert sc.runout.options is base.runout.options and sc.runout.obstacles is base.runout.obstacles
     assert sc.runout.road.mu == 0.65 and base.runout.road.mu == 0.7
+
+
+@pytest.mark.parametrize("name, paths", [
+    # a [barrier] scene: speed and restitution are patched (the point of impact goes the full way, below)
+    ("barrier_15deg.toml", ["vehicles.{v}.speed", "impact.restitution"]),
+    # friction zones: the road friction is patched around the zones (the scene model keeps their arrays)
+    ("verge_run_off.toml", ["runout.road_friction", "vehicles.{v}.speed"]),
+])
+def test_shipped_scenes_with_a_barrier_or_zones(name, paths):
+    """The fast path on other shipped scenes: the same scenario and the same scene as the full build."""
+    data = load_toml(ROOT / "scenarios" / "scenes" / name)
+    vname = next(iter(data["vehicles"]))
+    paths = [p.format(v=vname) for p in paths]
+    fast, full = _pair(data, paths)
+    x0 = np.array([fast.base_value(i) for i in range(len(paths))], dtype=float)
+    fast.scenario(x0)
+    assert None not in [patch_kind(t, fast._fast_base.data) for t in fast.targets]
+    if fast._fast_base.data.get("barrier") is not None:  # the barrier's obstacle is built from the point
+        from crashsim.reconstruct.overrides import resolve_path
+
+        assert patch_kind(resolve_path("impact.point[0]"), fast._fast_base.data) is None
+    for scale in (0.97, 1.04):
+        x = x0 * scale
+        a, b = fast.scenario(x), full.scenario(x)
+        assert a.vehicles is fast._fast_base.vehicles  # patched
+        same(a, b)
+        ra, rb = run_scene(a), run_scene(b)
+        assert json.dumps(ra.to_dict(), sort_keys=True) == json.dumps(rb.to_dict(), sort_keys=True)

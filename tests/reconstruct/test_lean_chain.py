@@ -87,12 +87,25 @@ def _reference_nearest(points, polyline):
 
 
 @pytest.mark.parametrize("seed", range(5))
-def test_polyline_distance_bit_for_bit(seed):
-    """Random tracks (with repeated vertices: zero-length segments) and points on, near and far off them."""
+@pytest.mark.parametrize("compiled", [False, True])
+def test_polyline_distance_bit_for_bit(seed, compiled, monkeypatch):
+    """Random tracks (with repeated vertices: zero-length segments) and points on, near and far off them:
+    the array form and the compiled loop both give the reference's bits."""
+    import crashsim.reconstruct.evidence as evidence
+
+    monkeypatch.setattr(evidence, "_COMPILED_FROM", 0 if compiled else 10**12)
     rng = np.random.default_rng(seed)
     line = np.cumsum(rng.normal(size=(rng.integers(2, 80), 2)), axis=0)
     line[len(line) // 2] = line[len(line) // 2 - 1]
+    grid = rng.integers(-5, 5, size=(30, 2)).astype(float)  # integer tracks: many exact ties between segments
     pts = np.vstack([rng.normal(size=(150, 2)) * 6, line[::3], line[:-1] + 0.5 * np.diff(line, axis=0)])
+    on_grid = rng.integers(-6, 6, size=(80, 2)) * 0.5
+    for got, ref in zip(_nearest_on_polyline(on_grid, grid), _reference_nearest(on_grid, grid)):
+        assert np.array_equal(got, ref)
+    if compiled:
+        from crashsim.reconstruct._polyline import nearest_on_polyline
+
+        assert nearest_on_polyline(pts, line) is not None  # numba is there: the loop is what is tested
     d_new, s_new = _nearest_on_polyline(pts, line)
     d_ref, s_ref = _reference_nearest(pts, line)
     assert np.array_equal(d_new, d_ref) and np.array_equal(s_new, s_ref)

@@ -349,6 +349,10 @@ def _densify(points: np.ndarray, spacing: float) -> np.ndarray:
     return np.vstack(out)
 
 
+#: Points x vertices from which the point-to-polyline distances are computed by the compiled loop
+#: (:mod:`crashsim.reconstruct._polyline`, the same bits); below, by the array form.
+_COMPILED_FROM = 2000
+
 #: Densified marks by evidence object: a fit or Monte Carlo run checks the same marks at every sample.
 _DENSE: dict[int, tuple] = {}
 
@@ -373,6 +377,12 @@ def _nearest_on_polyline(points, polyline) -> tuple[np.ndarray, np.ndarray]:
     line = np.asarray(polyline, dtype=float)
     if len(line) == 1:
         return np.hypot(*(p - line[0]).T), np.ones(p.shape[0])
+    if len(p) * len(line) >= _COMPILED_FROM:
+        from ._polyline import nearest_on_polyline
+
+        out = nearest_on_polyline(p, line)
+        if out is not None:
+            return out
     # one (n, m) array per coordinate (the same operations, in the same order, as on (n, m, 2) arrays,
     # at a third of the cost): the segment parameter t, the nearest point's offset, its distance
     ax, ay = line[:-1, 0], line[:-1, 1]

@@ -369,7 +369,7 @@ def main(argv=None) -> int:
     md += ["## Goals (issue 13): fit and Monte Carlo at the speed of their physics", "",
            "| goal | measured | physics alone | goal | verdict |", "| --- | --- | --- | --- | --- |",
            f"| {n:,} Monte Carlo samples of the shipped fit scene, {mc.workers} workers, own elapsed time | "
-           f"{own:.1f} s | {n * phys / mc.workers:.1f} s | <= {mc_goal:.0f} s | {verdict(own, mc_goal)} |",
+           f"{own:.1f} s | {n * phys / mc.workers:.1f} s | <= {mc_goal:g} s | {verdict(own, mc_goal)} |",
            f"| 4-unknown fit, warm, {workers} workers | {warm.elapsed:.2f} s | {fit_alone:.2f} s | "
            f"<= 1 s | {verdict(warm.elapsed, 1.0)} |", "",
            f"Why, Monte Carlo: one sample costs {1e3 * split['total']:.2f} ms of CPU here, of which "

@@ -351,7 +351,7 @@ def _densify(points: np.ndarray, spacing: float) -> np.ndarray:
 
 #: Points x vertices from which the point-to-polyline distances are computed by the compiled loop
 #: (:mod:`crashsim.reconstruct._polyline`, the same bits); below, by the array form.
-_COMPILED_FROM = 2000
+_COMPILED_FROM = 256
 
 #: Densified marks by evidence object: a fit or Monte Carlo run checks the same marks at every sample.
 _DENSE: dict[int, tuple] = {}

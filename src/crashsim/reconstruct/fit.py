@@ -216,11 +216,13 @@ def _resample(points: np.ndarray, k: int) -> np.ndarray:
     return np.column_stack([np.interp(q, s, pts[:, 0]), np.interp(q, s, pts[:, 1])])
 
 
-def _mark_distances(item: _Item, tracks: dict, k: int) -> tuple[np.ndarray, str | None]:
+def _mark_distances(item: _Item, tracks: dict, k: int, pts: np.ndarray | None = None) -> tuple[np.ndarray, str | None]:
+    """Signed distances of ``k`` points spread along the mark to the best-matching wheel's track, and
+    that wheel (``pts``: the mark's ``_resample(points, k)``, if already computed)."""
     from .evidence import _wheel_matches
 
     ev = item.mark
-    pts = _resample(ev.points, k)
+    pts = _resample(ev.points, k) if pts is None else pts
     best = None
     for sliding in ((True, False) if ev.sliding_only else (False,)):
         for key, tr in tracks.items():
@@ -327,6 +329,9 @@ class EvidenceModel:
             raise ScenarioError("the scenario has no evidence to fit: add [evidence] items with their sigma",
                                 field="evidence", file=scenario.path)
         self.items = tuple(items)
+        #: Each mark's points spread along it (the same at every evaluation)
+        self._mark_points = {i: _resample(it.mark.points, self.mark_points) for i, it in enumerate(items)
+                             if it.kind == "mark"}
         self.size = sum(it.size for it in items)
         self.n_measurements = sum(it.weight_size for it in items)
 
@@ -358,7 +363,7 @@ class EvidenceModel:
         approaches = getattr(scene.scenario, "approaches", None) or {}
         pre_tracks = None
         out, det = [], []
-        for it, c in zip(self.items, item_checks):
+        for i, (it, c) in enumerate(zip(self.items, item_checks)):
             if it.kind == "point of impact":
                 computed = np.asarray(scene.scenario.impact.surface.point, float)
                 out.append(computed - it.measured)
@@ -394,7 +399,7 @@ class EvidenceModel:
                 out.append(d)
                 det.append({"matched_wheel": key, "rms_distance": float(np.sqrt(np.mean(d * d)))})
             elif it.kind == "mark":
-                d, key = _mark_distances(it, tracks, self.mark_points)
+                d, key = _mark_distances(it, tracks, self.mark_points, getattr(self, "_mark_points", {}).get(i))
                 out.append(d)
                 det.append({"matched_wheel": key, "rms_distance": float(np.sqrt(np.mean(d * d)))})
             elif it.kind == "crush energy":  # loss minus crush energy; one-sided when a crushed body has no item

@@ -182,3 +182,30 @@ def test_shipped_scenes_with_a_barrier_or_zones(name, paths):
         same(a, b)
         ra, rb = run_scene(a), run_scene(b)
         assert json.dumps(ra.to_dict(), sort_keys=True) == json.dumps(rb.to_dict(), sort_keys=True)
+
+
+def test_a_scene_with_an_approach():
+    """The impact's coefficients are patched (the approach ends at the impact positions, unchanged); the
+    speed of a vehicle with an approach and the road friction are not (the approach depends on them)."""
+    data = load_toml(ROOT / "scenarios" / "scenes" / "truck_brakes_into_car.toml")
+    with_approach = [n for n, v in data["vehicles"].items() if "approach" in v]
+    assert with_approach
+    fast, full = _pair(data, ["impact.restitution"])
+    x0 = fast.base_value(0)
+    fast.scenario([x0])
+    assert fast._fast_base.approaches
+    for x in (0.5 * x0 + 0.01, x0 + 0.02):
+        a, b = fast.scenario([x]), full.scenario([x])
+        assert a.vehicles is fast._fast_base.vehicles and a.approaches is fast._fast_base.approaches  # patched
+        same(replace_approaches(a), replace_approaches(b))
+        assert json.dumps(run_scene(a).to_dict(), sort_keys=True) == json.dumps(run_scene(b).to_dict(), sort_keys=True)
+    from crashsim.reconstruct.overrides import resolve_path
+
+    d = fast._fast_base.data
+    assert patch_kind(resolve_path(f"vehicles.{with_approach[0]}.speed"), d) is None
+    assert patch_kind(resolve_path("runout.road_friction"), d) is None
+
+
+def replace_approaches(sc):
+    """The scenario with its approaches as their result dicts (their dense solutions are functions)."""
+    return dataclasses.replace(sc, approaches={k: a.to_dict() for k, a in sc.approaches.items()})

@@ -395,7 +395,7 @@ class EvidenceModel:
                     from .evidence import approach_tracks
 
                     pre_tracks = approach_tracks(approaches)
-                d, key = _mark_distances(it, pre_tracks, self.mark_points)
+                d, key = _mark_distances(it, pre_tracks, self.mark_points, getattr(self, "_mark_points", {}).get(i))
                 out.append(d)
                 det.append({"matched_wheel": key, "rms_distance": float(np.sqrt(np.mean(d * d)))})
             elif it.kind == "mark":

@@ -209,3 +209,32 @@ def test_a_scene_with_an_approach():
 def replace_approaches(sc):
     """The scenario with its approaches as their result dicts (their dense solutions are functions)."""
     return dataclasses.replace(sc, approaches={k: a.to_dict() for k, a in sc.approaches.items()})
+
+
+def test_scene_model_on_another_road_equals_a_new_model():
+    """SceneModel.with_road (the cached model of reconstruct.models with another road friction) holds the
+    arrays of a model built from scratch on that road; another zone set is refused."""
+    from crashsim.motion.model import SceneModel
+    from crashsim.motion.road import Road
+    from crashsim.reconstruct import models
+
+    data = load_toml(ROOT / "scenarios" / "scenes" / "verge_run_off.toml")
+    sc = ScenarioOverrides(data, ["runout.road_friction"], engine=ENGINE).scenario([0.75])
+    spec = sc.runout
+    movable = [v for v in sc.vehicles if not v.is_barrier]
+    kwargs = dict(contact=spec.contact, pair_contact=spec.pair_contact, obstacles=spec.obstacles)
+    base = SceneModel(movable, spec.wheels, spec.road, spec.options, **kwargs)
+    road = Road(0.55, spec.road.zones)
+    moved, fresh = base.with_road(road), SceneModel(movable, spec.wheels, road, spec.options, **kwargs)
+    assert moved.road is road and base.road is spec.road
+    assert len(moved.M) == len(fresh.M)
+    for a, b, c in zip(moved.M, fresh.M, base.M):
+        assert a.dtype == b.dtype and np.array_equal(a, b)
+    assert not all(np.array_equal(a, c) for a, c in zip(moved.M, base.M))  # the base model is unchanged
+    with pytest.raises(ScenarioError):
+        base.with_road(Road(0.55, ()))
+    models.clear()
+    m1 = models.scene_model(movable, spec)
+    assert models.scene_model(movable, spec) is m1  # cached
+    m2 = models.scene_model(movable, dataclasses.replace(spec, road=road))
+    assert m2 is not m1 and m2.road is road and all(np.array_equal(a, b) for a, b in zip(m2.M, fresh.M))

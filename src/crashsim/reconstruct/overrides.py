@@ -44,7 +44,7 @@ __all__ = ["Target", "resolve_path", "parse_value", "format_value", "set_value",
 
 #: Top-level sections of a file that belong to the inverse side and not to the forward model;
 #: they are removed before the forward scenario is built.
-INVERSE_SECTIONS = ("fit", "uncertainty")
+INVERSE_SECTIONS = ("fit", "uncertainty", "posterior")
 
 _TOKEN = re.compile(r"^(?P<name>[A-Za-z_][A-Za-z0-9_\-]*)(?:\[(?P<index>\d+)\])?$")
 

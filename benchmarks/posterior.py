@@ -21,7 +21,6 @@ import argparse
 import os
 import platform
 import sys
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -92,10 +91,8 @@ def main(argv=None) -> int:
     if args.burn is not None:
         spec = replace(spec, burn=args.burn)
     machine = _machine()
-    t0 = time.perf_counter()
     post = run_posterior(raw, spec, steps=args.steps, start="fit", workers=args.workers, chain_path=args.chain,
                          progress=True, file=rel)
-    wall = time.perf_counter() - t0
     save_posterior_figures(post, PLOTS, system="US")
     d = post.to_dict()["diagnostics"]
     sp = post.spec
@@ -108,7 +105,9 @@ def main(argv=None) -> int:
           f"Sampler: emcee {sp.move} move, {sp.walkers} walkers x {post.steps} steps, burn-in {sp.burn_steps}, "
           f"thin {sp.thin}, seed {sp.seed}; prior: {sp.prior} (uniform on the [fit] bounds); walkers started around "
           f"the best fit. {post.evaluations} scene evaluations ({post.engine} engine, {post.backend}, "
-          f"{post.workers} workers) in {wall / 60:.1f} min, the fit included.", "",
+          f"{post.workers} workers) in {post.elapsed / 60:.1f} min, the fit included"
+          + (f" (over the runs that wrote its chain file; {post.n_resumed} steps were resumed from it)."
+             if post.n_resumed else "."), "",
           "## Fit (linearised) and posterior, 95 %", ""]
     md += comparison_rows(post)
     md += ["", f"Fit: chi^2 = {post.fit['chi2']:.3g} at its best point; highest posterior sample: chi^2 = "

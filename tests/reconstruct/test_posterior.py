@@ -103,14 +103,19 @@ def test_posterior_matches_the_closed_form():
         assert abs(got - exact) < 4 * mcse, (q, got, exact, mcse)
     assert abs(res.percentiles["vehicles.car.speed"]["mean"] - mean) < 4 * sd / math.sqrt(ess)
     assert res.percentiles["vehicles.car.speed"]["sd"] == pytest.approx(sd, rel=0.1)
+    # the upper bound cuts the posterior just above its mode: the report says the prior limits it there
+    assert any("from its upper bound: the bound (the prior)" in w for w in res.warnings)
+    assert not any("from its lower bound" in w for w in res.warnings)
     # derived quantities ride along: delta-v of a central barrier impact is (1 + e) v
     k = res.derived.index("delta_v.car")
     assert np.allclose(res.derived_samples[:, k], (1 + E) * samples, rtol=1e-9)
 
 
 def test_same_seed_same_chain():
+    import crashsim
+
     a = run_posterior(rebound(), workers=1, progress=False, engine=ENGINE)
-    b = run_posterior(rebound(), workers=1, progress=False, engine=ENGINE)
+    b = crashsim.posterior(rebound(), workers=1, engine=ENGINE)  # the top-level API, as the CLI
     c = run_posterior(rebound(seed=4), workers=1, progress=False, engine=ENGINE)
     assert np.array_equal(a.chain, b.chain) and np.array_equal(a.log_prob, b.log_prob)
     assert np.array_equal(a.blobs, b.blobs, equal_nan=True)
@@ -166,9 +171,31 @@ def test_uncertainty_prior_is_the_distribution_truncated_to_the_bounds():
     flat = PosteriorProblem(data, fs, build_priors(data, fs, "fit"), engine=ENGINE)
     norm = PosteriorProblem(data, fs, build_priors(data, fs, "uncertainty"), engine=ENGINE)
     for v in (7.0, 9.7):
-        z = fs and flat.fit.z_of([v])
+        z = flat.fit.z_of([v])
         assert norm.log_prob(z)[0] - flat.log_prob(z)[0] == pytest.approx(-((v - 9.0) / 0.5) ** 2 / 2, rel=1e-12)
     assert norm.log_prior(flat.fit.z_of([HI + 0.1])) == -math.inf
+
+
+def test_a_scene_that_cannot_be_evaluated_has_probability_zero_and_is_counted():
+    """A run-out over its time limit: log-posterior -inf (never accepted), NaN derived values, and
+    its reason, which the pools tally for the report."""
+    from crashsim.reconstruct.fit import FitSpec
+    from crashsim.reconstruct.posterior import PosteriorProblem, _SerialPool, build_priors
+
+    data = rebound()
+    fs = FitSpec.from_dict(data["fit"], data)
+    ok = PosteriorProblem(data, fs, build_priors(data, fs, "fit"), engine="scipy")
+    keys = ok.derived_keys(ok.fit.z_of([9.0]))
+    slow = PosteriorProblem(data, fs, build_priors(data, fs, "fit"), engine="scipy", sample_time_limit=1e-9,
+                            derived=keys)
+    lp, blob, reason = slow.evaluate(ok.fit.z_of([9.0]))
+    assert lp == -math.inf and np.isnan(blob).all() and len(blob) == len(keys)
+    assert reason == "run-out: wall_time_limit"
+    pool = _SerialPool(slow)
+    assert [r[0] for r in pool.map(None, [ok.fit.z_of([8.0]), ok.fit.z_of([9.0])])] == [-math.inf, -math.inf]
+    assert pool.failures == {"run-out: wall_time_limit": 2} and pool.evaluations == 2
+    # outside the prior's support: -inf without running the scene, and not a failure
+    assert ok.evaluate(np.array([1.2]))[0] == -math.inf and ok.evaluate(np.array([1.2]))[2] is None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -240,6 +267,17 @@ def test_cli_json_and_plots(tmp_path, capsys):
         assert (tmp_path / "figs" / name).stat().st_size > 10_000
     code, out, _ = _cli(tmp_path, rebound(), "--units", "US", capsys=capsys)
     assert code == 0 and "mph" in out.out and "Diagnostics" in out.out and "autocorrelation time" in out.out
+
+
+def test_the_shipped_fit_scene_has_a_valid_posterior_table():
+    from pathlib import Path
+
+    from crashsim.schema import load_toml
+
+    raw = load_toml(Path(__file__).resolve().parents[2] / "scenarios" / "fit" / "intersection_fit.toml")
+    spec = PosteriorSpec.from_dict(raw["posterior"])
+    spec.check(len(raw["fit"]["unknowns"]))
+    assert spec.start == "fit" and spec.prior == "fit" and spec.move == "stretch"
 
 
 def test_logpdf_of_the_distributions():

@@ -84,6 +84,9 @@ MIN_KEPT_STEPS = 50
 TAU_FACTOR = 50
 #: Mean acceptance fractions outside this range are flagged (about 0.2-0.5 is good for the stretch move).
 ACCEPTANCE_RANGE = (0.15, 0.7)
+#: A bound "limits" an unknown when more than EDGE_SHARE of its samples lie within EDGE of its
+#: range from it (a posterior well inside its bounds has almost none there).
+EDGE, EDGE_SHARE = 0.05, 0.01
 #: Prefixes of :func:`~crashsim.reconstruct.montecarlo.scene_outputs` kept as derived quantities.
 DERIVED_PREFIXES = ("delta_v", "speed_after", "energy_loss")
 _FORMAT = "crashsim-posterior/1"
@@ -263,6 +266,7 @@ class PosteriorProblem:
         r, scene = self.fit.evaluate(np.asarray(z, float))
         if isinstance(scene, Exception):
             reason = f"run-out: {scene.status}" if isinstance(scene, _NotAtRest) else failure_reason(scene)
+            _log.debug("posterior: proposal rejected, its scene cannot be evaluated (%s): %s", reason, scene)
             return -math.inf, nan, reason
         out = scene_outputs(scene)
         blob = np.array([out.get(k, np.nan) for k in (self.derived or ())], dtype=float)
@@ -409,6 +413,9 @@ class PosteriorResult:
         Acceptance fraction of each walker.
     failure_reasons : dict
         Proposals whose scene could not be evaluated (log-probability -inf), by reason.
+    evaluations, elapsed : int, float
+        Scene evaluations and wall-clock seconds of the whole chain: with a chain file, summed
+        over every run that wrote it.
     fit : dict or None
         With ``start = "fit"``: the fit's best values and linearised intervals
         (``{"x", "interval", "confidence", "chi2"}``) for comparison.
@@ -685,7 +692,8 @@ def _run_hash(data: dict, fit_spec, spec: PosteriorSpec, priors, start: np.ndarr
     return hashlib.sha256(json.dumps(key, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
 
-def _save(path: Path, run_hash: str, z, log_prob, blobs, accepted, rstate, failures, evaluations, derived) -> None:
+def _save(path: Path, run_hash: str, z, log_prob, blobs, accepted, rstate, failures, evaluations, derived,
+          elapsed: float = 0.0) -> None:
     tmp = path.with_name(path.name + ".tmp")
     name, keys, pos, has_gauss, cached = rstate
     with open(tmp, "wb") as fh:
@@ -693,7 +701,8 @@ def _save(path: Path, run_hash: str, z, log_prob, blobs, accepted, rstate, failu
                  accepted=accepted, rng_name=np.array(name), rng_keys=np.asarray(keys, dtype=np.uint32),
                  rng_pos=np.array(int(pos)), rng_has_gauss=np.array(int(has_gauss)),
                  rng_cached=np.array(float(cached)), failures=np.array(json.dumps(failures)),
-                 evaluations=np.array(int(evaluations)), derived=np.array(json.dumps(list(derived))))
+                 evaluations=np.array(int(evaluations)), derived=np.array(json.dumps(list(derived))),
+                 elapsed=np.array(float(elapsed)))
     os.replace(tmp, path)
 
 
@@ -715,6 +724,7 @@ def _load(path: Path, run_hash: str | None) -> dict | None:
     d["failures"] = json.loads(str(d["failures"]))
     d["derived"] = tuple(json.loads(str(d["derived"])))
     d["evaluations"] = int(d["evaluations"])
+    d["elapsed"] = float(d["elapsed"]) if "elapsed" in d else 0.0
     return d
 
 
@@ -827,8 +837,9 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
     problem = PosteriorProblem(scenario_data, fit_spec, priors, engine=engine, file=file, sample_time_limit=limit)
     problem.fit.check_bounds()
     x_init = np.array([u.initial for u in fit_spec.unknowns])
-    _check_start(problem, x_init, "initial", file)
     fit_summary = None
+    if spec.start == "initial":
+        _check_start(problem, x_init, "initial", file)
     if spec.start == "fit":
         fr = fit_scene(scenario_data, fit_spec, engine=engine, workers=workers, file=file, sample_time_limit=limit)
         x0 = np.asarray(fr.x, float)
@@ -855,8 +866,10 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
         failures = dict(saved["failures"])
         evaluations = saved["evaluations"]
         n_resumed = len(z_all)
+        elapsed0 = saved["elapsed"]
     else:
         z_all, lp_all, bl_all, acc_all, failures, evaluations, n_resumed = [], [], [], [], {}, 0, 0
+        elapsed0 = 0.0
 
     if dask_address is not None:
         backend, nw = "dask", 0
@@ -889,7 +902,10 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
             move = emcee.moves.StretchMove() if spec.move == "stretch" else emcee.moves.DEMove()
             sampler = emcee.EnsembleSampler(spec.walkers, ndim, problem.log_prob, pool=pool, moves=move)
             if saved is not None and n_resumed > 0 and len(z_all) == saved["z"].shape[0]:
-                state = emcee.State(saved["z"][-1], log_prob=saved["log_prob"][-1], blobs=saved["blobs"][-1],
+                last_blobs = saved["blobs"][-1]
+                if last_blobs.ndim == 2 and last_blobs.shape[1] == 1:  # as emcee holds a single blob
+                    last_blobs = last_blobs[:, 0]
+                state = emcee.State(saved["z"][-1], log_prob=saved["log_prob"][-1], blobs=last_blobs,
                                     random_state=saved["rstate"])
                 acc0 = saved["accepted"][-1].astype(float)
             elif saved is not None and n_resumed > 0:  # fewer steps asked for than the file holds: nothing to run
@@ -915,7 +931,7 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
                     if chain_path is not None and since >= spec.checkpoint_every:
                         _save(chain_path, run_hash, np.array(z_all), np.array(lp_all), np.array(bl_all),
                               np.array(acc_all), rstate, _merge(failures, pool.failures),
-                              evaluations + pool.evaluations, derived)
+                              evaluations + pool.evaluations, derived, elapsed0 + time.perf_counter() - t0)
                         since = 0
                     if bar is not None:
                         bar.update(1)
@@ -925,7 +941,8 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
         if pool is not None:
             if chain_path is not None and rstate is not None:
                 _save(chain_path, run_hash, np.array(z_all), np.array(lp_all), np.array(bl_all), np.array(acc_all),
-                      rstate, _merge(failures, pool.failures), evaluations + pool.evaluations, derived)
+                      rstate, _merge(failures, pool.failures), evaluations + pool.evaluations, derived,
+                      elapsed0 + time.perf_counter() - t0)
             pool.close()
         if bar is not None:
             bar.close()
@@ -938,7 +955,7 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
     except Exception:  # pragma: no cover - evaluated above already
         nominal = None
     return _assemble(problem, spec, np.array(z_all), np.array(lp_all), np.array(bl_all), np.array(acc_all), derived,
-                     x0, failures, evaluations, time.perf_counter() - t0, engine, backend, nw, n_resumed,
+                     x0, failures, evaluations, elapsed0 + time.perf_counter() - t0, engine, backend, nw, n_resumed,
                      None if chain_path is None else str(chain_path), fit_summary, file, nominal)
 
 
@@ -994,11 +1011,13 @@ def _assemble(problem, spec, z, lp, blobs, acc, derived, x0, failures, evaluatio
         warnings.append(f"{sum(failures.values())} proposal(s) gave a scene that cannot be evaluated and were rejected "
                         "(probability zero); see the diagnostics")
     for j, u in enumerate(fs.unknowns):
-        p = pct[u.path]
-        for q, bound, name in (("p2.5", u.lower, "lower"), ("p97.5", u.upper, "upper")):
-            if abs(p[q] - bound) < 0.02 * u.span:
-                warnings.append(f"the 95 % interval of {u.name} reaches its {name} [fit] bound: the bound, not the "
-                                "evidence, limits it there")
+        for name, near in (("lower", samples[:, j] <= u.lower + EDGE * u.span),
+                           ("upper", samples[:, j] >= u.upper - EDGE * u.span)):
+            share = float(np.mean(near))
+            if share > EDGE_SHARE:
+                warnings.append(f"{100 * share:.1f} % of the samples of {u.name} lie within {100 * EDGE:g} % of its "
+                                f"[fit] range from its {name} bound: the bound (the prior), not the evidence, limits "
+                                "it there")
     i_best = np.unravel_index(int(np.argmax(lp)), lp.shape)
     best = {"x": [float(v) for v in chain[i_best]], "log_prob": float(lp[i_best]),
             "chi2": float(-2 * (lp[i_best] - problem.log_prior(z[i_best])))}

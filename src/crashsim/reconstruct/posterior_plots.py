@@ -162,7 +162,7 @@ def save_posterior_figures(post, directory, *, system: str | None = None, dpi: i
     out.append(path)
     axes = plot_traces(post, system=system)
     path = directory / "posterior_trace.png"
-    axes[0].figure.savefig(path, dpi=dpi)
+    axes[0].figure.savefig(path, dpi=min(dpi, 90))  # thousands of thin lines: a lower resolution keeps the file small
     plt.close(axes[0].figure)
     out.append(path)
     return out

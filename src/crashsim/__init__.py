@@ -18,6 +18,8 @@ fit(scenario_or_path, **options)
     Fit the ``[fit]`` unknowns to the evidence -> FitResult.
 monte_carlo(scenario_or_path, samples, **options)
     Propagate the ``[uncertainty]`` inputs -> MCResult.
+posterior(scenario_or_path, **options)
+    MCMC posterior of the ``[fit]`` unknowns given the evidence -> PosteriorResult.
 
 Lower levels: :func:`solve_impact` with :class:`ImpactProblem` (the impulse-momentum solver),
 :mod:`crashsim.motion` (run-outs), :mod:`crashsim.plotting`, :mod:`crashsim.units`.
@@ -31,7 +33,7 @@ from .vehicles import Axle, Body, BodyState, Hitch, Vehicle, chain_states
 from .impact import (CrushSurface, ExternalImpulse, ImpactBatch, ImpactProblem, ImpactResult, TangentialLaw,
                      VelocityConstraint, solve_impact, tyre_friction_impulse)
 
-from .api import fit, load, monte_carlo, run
+from .api import fit, load, monte_carlo, posterior, run
 
 __version__ = "0.1.0"
 
@@ -40,7 +42,7 @@ __version__ = "0.1.0"
 _logging.getLogger("crashsim").addHandler(_logging.NullHandler())
 
 __all__ = [
-    "load", "run", "fit", "monte_carlo",
+    "load", "run", "fit", "monte_carlo", "posterior",
     "CrashsimError", "IllConditionedError", "ScenarioError", "SolverError",
     "Axle", "Body", "BodyState", "Hitch", "Vehicle", "chain_states",
     "CrushSurface", "ExternalImpulse", "ImpactBatch", "ImpactProblem", "ImpactResult", "TangentialLaw",

@@ -13,7 +13,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any, Mapping
 
-__all__ = ["load", "run", "fit", "monte_carlo", "with_overrides"]
+__all__ = ["load", "run", "fit", "monte_carlo", "posterior", "with_overrides"]
 
 
 def _raw(source) -> tuple[dict, str | None]:
@@ -130,3 +130,19 @@ def monte_carlo(scenario, samples: int | None = None, **options):
     scenario_from_dict(data, file=file)
     options.setdefault("progress", False)
     return _mc(data, None, samples, file=file, **options)
+
+
+def posterior(scenario, **options):
+    """MCMC posterior of the ``[fit]`` unknowns given the evidence (as ``crashsim posterior``).
+
+    ``options`` go to :func:`crashsim.reconstruct.posterior.run_posterior` (``steps``, ``seed``,
+    ``start``, ``engine``, ``workers``, ``dask_address``, ``chain_path``, ``progress``, ...).
+    Returns a :class:`~crashsim.reconstruct.posterior.PosteriorResult`.
+    """
+    from .reconstruct.posterior import run_posterior
+    from .scenario import scenario_from_dict
+
+    data, file = _raw(scenario)
+    scenario_from_dict(data, file=file)
+    options.setdefault("progress", False)
+    return run_posterior(data, None, file=file, **options)

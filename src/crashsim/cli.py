@@ -125,6 +125,38 @@ def _cmd_mc(args) -> int:
     return 0
 
 
+def _cmd_posterior(args) -> int:
+    from .reconstruct.posterior import run_posterior
+    from .scenario import load_scenario
+    from .schema import load_toml
+
+    scenario = load_scenario(args.file)  # the whole file validated first ([fit], [posterior], evidence sigmas)
+    system = _units(args.units or scenario.units)
+    try:
+        result = run_posterior(load_toml(args.file), None, steps=args.steps, seed=args.seed,
+                               start="fit" if args.from_fit else None, engine=args.engine, workers=args.workers,
+                               dask_address=args.dask, chain_path=args.chain, progress=not args.quiet,
+                               file=args.file, sample_time_limit=args.sample_time_limit)
+    except KeyboardInterrupt:
+        kept = f"; the steps done are kept in {args.chain}: run the same command again to resume" if args.chain else ""
+        sys.stderr.write(f"crashsim: stopped{kept}\n")
+        return 130
+    if args.plots:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        from .reconstruct.posterior_plots import save_posterior_figures
+
+        for path in save_posterior_figures(result, Path(args.plots), system=system):
+            sys.stderr.write(f"crashsim: wrote {path}\n")
+    if args.json:
+        json.dump(_clean(result.to_dict()), sys.stdout, indent=2)
+        sys.stdout.write("\n")
+    else:
+        sys.stdout.write(result.report(system) + "\n")
+    return 0
+
+
 def _add_inverse_commands(sub):
     engines = ("compiled", "scipy")
     f = sub.add_parser("fit", help="find the [fit] unknowns from the evidence (weighted least squares, intervals)")
@@ -162,6 +194,26 @@ def _add_inverse_commands(sub):
                    help="wall-clock limit of one sample's run-out (default 30 s); a slower sample fails with that "
                         "reason and the run goes on")
     m.set_defaults(func=_cmd_mc)
+
+    p = sub.add_parser("posterior", help="MCMC posterior of the [fit] unknowns given the evidence (emcee)")
+    p.add_argument("file", help="scenario file (TOML) with a [fit] table, evidence sigmas and optionally [posterior]")
+    p.add_argument("--steps", type=int, default=None, help="steps per walker (default: posterior.steps)")
+    p.add_argument("--seed", type=int, default=None, help="seed (default: posterior.seed)")
+    p.add_argument("--from-fit", action="store_true",
+                   help="start the walkers around the best fit (runs crashsim fit first; posterior.start = \"fit\")")
+    p.add_argument("--chain", metavar="FILE.npz",
+                   help="keep the chain in this file (written as it runs); resume from it if it exists")
+    p.add_argument("--workers", type=int, default=None, help="local processes (default: all cores)")
+    p.add_argument("--dask", metavar="ADDRESS", help="run on an existing Dask cluster (scheduler address)")
+    p.add_argument("--plots", metavar="DIR", help="write the corner plot and the trace plots into DIR")
+    p.add_argument("--json", action="store_true", help="print the summary as one JSON object (SI units)")
+    p.add_argument("--units", type=_units, default=None,
+                   help="SI or US (any case): units of the report and plots (default: the scenario's units)")
+    p.add_argument("--engine", choices=engines, default=None, help="run-out engine (default: compiled if available)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--sample-time-limit", type=float, default=30.0, metavar="SECONDS",
+                   help="wall-clock limit of one evaluation's run-out (default 30 s); a slower one is rejected")
+    p.set_defaults(func=_cmd_posterior)
 
 
 def _cmd_plot(args) -> int:
@@ -268,7 +320,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 #: Commands that run the run-out kernels (and so may compile them on a first run).
-_COMPUTING = ("run", "fit", "mc", "plot", "animate")
+_COMPUTING = ("run", "fit", "mc", "posterior", "plot", "animate")
 
 
 def _first_compile(bar: bool = True) -> None:

@@ -121,3 +121,32 @@ def test_python_example_runs_as_a_doctest(monkeypatch, tmp_path):
         runner.run(test)
         result = runner.summarize(verbose=False)
         assert result.attempted >= 5 and result.failed == 0
+
+
+def test_posterior_section_comes_from_the_posterior_report():
+    """The posterior section's table rows are rows of ``plots/posterior.md`` (written by
+    ``benchmarks/posterior.py``), and every other number in it appears there too."""
+    text = (ROOT / "plots" / "posterior.md").read_text()
+    section = _section("## The posterior beside the fit")
+    rows = [ln for ln in section.splitlines() if ln.startswith("| ") and not ln.startswith("| unknown")]
+    assert len(rows) == 4
+    md_rows = [ln.strip() for ln in text.splitlines()]
+    for row in rows:
+        assert row.strip() in md_rows, row
+    nums = _numbers(section)
+    assert len(nums) >= 20
+    for n in nums:
+        assert n in text, n
+    # the claims of its paragraph, on the numbers of its table
+    vals = {}
+    for row in rows:
+        cells = [c.strip() for c in row.strip().strip("|").split("|")]
+        fit_iv, post_iv = (tuple(float(v) for v in re.findall(r"-?\d+(?:\.\d+)?", c)) for c in (cells[2], cells[4]))
+        vals[cells[0]] = (fit_iv, post_iv)
+    for speed in ("vehicles.A.speed", "vehicles.B.speed"):
+        (flo, fhi), (plo, phi) = vals[speed]
+        assert phi - plo < 0.5 * (fhi - flo)  # "less than half as wide"
+    (flo, fhi), (plo, phi) = vals["runout.road_friction"]
+    assert flo < 0.5 and fhi > 0.9 and 0.5 <= plo < phi <= 0.9  # the fit passes the bounds, the posterior not
+    (flo, fhi), (plo, phi) = vals["impact.restitution"]
+    assert flo - plo > 2 * abs(fhi - phi)  # the longer lower tail

@@ -2,7 +2,8 @@
 
 from .scene import SceneResult, run_scene
 
-__all__ = ["SceneResult", "run_scene", "fit_scene", "FitResult", "monte_carlo", "MCResult"]
+__all__ = ["SceneResult", "run_scene", "fit_scene", "FitResult", "monte_carlo", "MCResult", "run_posterior",
+           "PosteriorResult"]
 
 
 def __getattr__(name):
@@ -15,4 +16,8 @@ def __getattr__(name):
         from . import montecarlo
 
         return getattr(montecarlo, name)
+    if name in ("run_posterior", "PosteriorResult"):
+        from . import posterior
+
+        return getattr(posterior, name)
     raise AttributeError(name)

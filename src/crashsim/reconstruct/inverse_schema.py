@@ -53,8 +53,8 @@ from dataclasses import replace
 from ..schema import ArrayOf, Field, Section, validate
 from ..units import Kind
 
-__all__ = ["UNKNOWN", "FIT", "INPUT", "UNCERTAINTY", "EVIDENCE_SIGMA_FIELDS", "DISTRIBUTIONS",
-           "with_inverse_sections", "validate_fit", "validate_uncertainty"]
+__all__ = ["UNKNOWN", "FIT", "INPUT", "UNCERTAINTY", "POSTERIOR", "EVIDENCE_SIGMA_FIELDS", "DISTRIBUTIONS",
+           "with_inverse_sections", "validate_fit", "validate_uncertainty", "validate_posterior"]
 
 _VALUE = ('written like the value at path, with its unit, in quotes ("20 mph", "85 deg"; a plain '
           'number also in quotes: "0.05")')
@@ -132,6 +132,36 @@ UNCERTAINTY = Section("uncertainty", [
 ], subsections=[ArrayOf("inputs", INPUT, min_items=1, description="The uncertain inputs")],
    required=False, description="Monte Carlo propagation of input uncertainty through impact and run-out (crashsim mc)")
 
+POSTERIOR = Section("posterior", [
+    Field("walkers", "int", default=32, minimum=2, maximum=100000,
+          description="Walkers of the ensemble sampler (emcee); at least twice the number of [fit] unknowns"),
+    Field("steps", "int", default=2000, minimum=1, maximum=10_000_000,
+          description="Steps of every walker (crashsim posterior --steps overrides it); a chain that is stopped "
+                      "and run again with more steps continues where it stopped"),
+    Field("burn", "int", required=False, minimum=0, example="500",
+          description="Steps of every walker discarded at the start (burn-in) before the summaries "
+                      "(default: a quarter of the steps)"),
+    Field("thin", "int", default=1, minimum=1, maximum=100000,
+          description="Keep every thin-th step after the burn-in for the summaries and plots"),
+    Field("seed", "int", default=0, minimum=0,
+          description="Seed of the initial walkers and of the sampler's moves: the same seed gives the same chain"),
+    Field("prior", choices=("fit", "uncertainty"), default="fit",
+          description="fit: uniform on each unknown's [fit] bounds; uncertainty: the [uncertainty] distribution "
+                      "of the same path, truncated to the [fit] bounds (an unknown without one: uniform on its "
+                      "bounds)"),
+    Field("start", choices=("initial", "fit"), default="initial",
+          description="Centre of the initial walkers: the [fit] initial values, or the best fit (crashsim fit "
+                      "is run first; use it where the sum of squares has several basins)"),
+    Field("init_scale", "float", default=0.01, minimum=0, exclusive_minimum=True, maximum=0.5,
+          description="Spread of the initial walkers around the centre, as a fraction of each unknown's bound "
+                      "range (standard deviation of a normal ball, redrawn inside the prior's support)"),
+    Field("move", choices=("stretch", "de"), default="stretch",
+          description="Proposal of emcee: stretch (Goodman-Weare affine-invariant stretch move, emcee's default) "
+                      "or de (differential evolution)"),
+    Field("checkpoint_every", "int", default=50, minimum=1, maximum=1_000_000,
+          description="With a chain file: write it every this many steps (and when stopped)"),
+], required=False, description="Posterior of the [fit] unknowns given the evidence by MCMC (crashsim posterior)")
+
 #: The ``sigma`` keys of the evidence items (standard measurement uncertainties, used by the fit).
 EVIDENCE_SIGMA_FIELDS = {
     "rest": (
@@ -173,7 +203,7 @@ def _add_fields(section: Section, extra) -> Section:
 
 
 def with_inverse_sections(schema: Section) -> Section:
-    """``schema`` (the scenario schema) with [fit], [uncertainty] and the evidence sigma keys.
+    """``schema`` (the scenario schema) with [fit], [uncertainty], [posterior] and the evidence sigma keys.
 
     Idempotent: keys and sections already present are left as they are.
     """
@@ -191,7 +221,7 @@ def with_inverse_sections(schema: Section) -> Section:
             s = replace(s, subsections=tuple(ev_subs))
         subs.append(s)
     names = {s.name for s in subs}
-    subs += [sec for sec in (FIT, UNCERTAINTY) if sec.name not in names]
+    subs += [sec for sec in (FIT, UNCERTAINTY, POSTERIOR) if sec.name not in names]
     return replace(schema, subsections=tuple(subs))
 
 
@@ -208,3 +238,8 @@ def validate_fit(raw: dict, *, file: str | None = None) -> dict:
 def validate_uncertainty(raw: dict, *, file: str | None = None) -> dict:
     """Validate a raw ``[uncertainty]`` table alone."""
     return _validate_one(UNCERTAINTY, raw, file)
+
+
+def validate_posterior(raw: dict, *, file: str | None = None) -> dict:
+    """Validate a raw ``[posterior]`` table alone."""
+    return _validate_one(POSTERIOR, raw, file)

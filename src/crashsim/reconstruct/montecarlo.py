@@ -127,6 +127,31 @@ class InputDistribution:
     def median(self) -> float:
         return self.ppf(0.5)
 
+    def logpdf(self, x: float) -> float:
+        """Log density at ``x`` up to an additive constant (-inf outside the support), for
+        :mod:`crashsim.reconstruct.posterior`'s priors. Triangular: exact; normal (truncated or
+        not): ``-(x - mean)^2 / (2 sd^2)`` inside [lower, upper]; uniform: 0 inside."""
+        lo = -math.inf if self.lower is None else self.lower
+        hi = math.inf if self.upper is None else self.upper
+        if not lo <= x <= hi:
+            return -math.inf
+        if self.distribution == "uniform":
+            return 0.0
+        if self.distribution == "triangular":
+            if hi == lo:
+                return 0.0
+            c = self.mode
+            p = 2 * (x - lo) / ((hi - lo) * (c - lo)) if x < c else (
+                2 * (hi - x) / ((hi - lo) * (hi - c)) if x > c else 2 / (hi - lo))
+            return math.log(p) if p > 0 else -math.inf
+        return -0.5 * ((x - self.mean) / self.sd) ** 2
+
+    def support(self) -> tuple[float, float]:
+        """Where the density is positive (closed; infinite ends for an untruncated normal)."""
+        lo = -math.inf if self.lower is None else self.lower
+        hi = math.inf if self.upper is None else self.upper
+        return lo, hi
+
 
 @dataclass(frozen=True)
 class UncertaintySpec:

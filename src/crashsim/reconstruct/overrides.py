@@ -49,7 +49,7 @@ __all__ = ["Target", "resolve_path", "parse_value", "format_value", "set_value",
 
 #: Top-level sections of a file that belong to the inverse side and not to the forward model;
 #: they are removed before the forward scenario is built.
-INVERSE_SECTIONS = ("fit", "uncertainty")
+INVERSE_SECTIONS = ("fit", "uncertainty", "posterior")
 
 #: Default of ``ScenarioOverrides(fast=...)``: False builds every scenario of a fit or Monte Carlo
 #: run the full way (the reference the fast path is tested and benchmarked against).

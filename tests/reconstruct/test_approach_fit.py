@@ -83,3 +83,20 @@ def test_recorder_lower_bound_samples():
     chk = next(c for c in s_high.evidence.checks if c.kind == "recorder")
     assert not chk.passed and chk.residual < -5.0
     assert rec["samples"][0]["brake"] is False
+
+
+def test_posterior_derived_quantities_of_an_approach():
+    """With the speed at braking as the unknown, the impact speed it gives is a derived quantity
+    of the posterior (and the unknown itself is not repeated among them)."""
+    from crashsim.reconstruct.posterior import PosteriorProblem, build_priors
+
+    data, _ = _with_approach_evidence(approach_scene(), 16.0)
+    data["fit"] = {"unknowns": [{"path": PATH, "lower": "15 m/s", "upper": "24 m/s", "initial": "17 m/s"}]}
+    fs = FitSpec.from_dict(data["fit"], data)
+    prob = PosteriorProblem(data, fs, build_priors(data, fs, "fit"), engine=ENGINE)
+    keys = prob.derived_keys(prob.fit.z_of([17.0]))
+    assert "speed.A" in keys and "speed.B" in keys and "speed_at_braking.A" not in keys
+    lp, blob, reason = prob.evaluate(prob.fit.z_of([17.0]))
+    assert reason is None and np.isfinite(lp)
+    vi = blob[keys.index("speed.A")]
+    assert vi == pytest.approx(math.sqrt(17.0**2 - 2 * 0.75 * 9.80665 * 14.0), rel=1e-5)

@@ -88,7 +88,7 @@ ACCEPTANCE_RANGE = (0.15, 0.7)
 #: range from it (a posterior well inside its bounds has almost none there).
 EDGE, EDGE_SHARE = 0.05, 0.01
 #: Prefixes of :func:`~crashsim.reconstruct.montecarlo.scene_outputs` kept as derived quantities.
-DERIVED_PREFIXES = ("delta_v", "speed_after", "energy_loss")
+DERIVED_PREFIXES = ("speed", "speed_at_braking", "delta_v", "speed_after", "energy_loss")
 _FORMAT = "crashsim-posterior/1"
 
 
@@ -244,7 +244,12 @@ class PosteriorProblem:
             if isinstance(scene, Exception):
                 raise ScenarioError(f"the scene at the start values cannot be evaluated: {scene}",
                                     field="fit.unknowns", file=self.fit.file)
-            self.derived = tuple(k for k in scene_outputs(scene) if k.split(".", 1)[0] in DERIVED_PREFIXES)
+            # a speed that is an unknown itself is not repeated among the derived quantities
+            own = {f"speed.{p.split('.')[1]}" for p in self.spec.paths if p.startswith("vehicles.") and
+                   p.endswith(".speed") and p.count(".") == 2}
+            own |= {f"speed_at_braking.{p.split('.')[1]}" for p in self.spec.paths if p.endswith(".approach.speed")}
+            self.derived = tuple(k for k in scene_outputs(scene)
+                                 if k.split(".", 1)[0] in DERIVED_PREFIXES and k not in own)
         return self.derived
 
     def log_prior(self, z) -> float:

@@ -46,6 +46,8 @@ import time  # noqa: E402
 from dataclasses import replace  # noqa: E402
 from pathlib import Path  # noqa: E402
 
+from _machine import cpu_name  # noqa: E402
+
 import numpy as np  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -325,14 +327,7 @@ def _kind(key: str) -> str:
 # --------------------------------------------------------------------------------------------
 
 def machine_info() -> dict:
-    cpu = platform.processor() or ""
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
+    cpu = cpu_name("")
     import numba
 
     return {"cpu": cpu or "unknown", "os.cpu_count": os.cpu_count(), "platform": platform.platform(),

@@ -23,20 +23,15 @@ import platform
 import sys
 from pathlib import Path
 
+from _machine import cpu_name
+
 ROOT = Path(__file__).resolve().parents[1]
 FILE = ROOT / "scenarios" / "fit" / "intersection_fit.toml"
 PLOTS = ROOT / "plots"
 
 
 def _machine() -> str:
-    cpu = platform.processor() or "?"
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
+    cpu = cpu_name()
     import emcee
     import numpy
 

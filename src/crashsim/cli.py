@@ -107,9 +107,7 @@ def _cmd_mc(args) -> int:
                              progress=not args.quiet, file=args.file, sample_time_limit=args.sample_time_limit,
                              accept=args.accept)
     except KeyboardInterrupt:
-        kept = f"; the samples done are kept in {args.out}: run the same command again to resume" if args.out else ""
-        sys.stderr.write(f"crashsim: stopped{kept}\n")
-        return 130
+        return _stopped("samples", args.out)
     if args.plots:
         import matplotlib
 
@@ -125,6 +123,13 @@ def _cmd_mc(args) -> int:
     return 0
 
 
+def _stopped(what: str, kept_in) -> int:
+    """Ctrl-C in a long run: say where the work done is kept (resumable), exit code 130."""
+    kept = f"; the {what} done are kept in {kept_in}: run the same command again to resume" if kept_in else ""
+    sys.stderr.write(f"crashsim: stopped{kept}\n")
+    return 130
+
+
 def _cmd_posterior(args) -> int:
     from .reconstruct.posterior import run_posterior
     from .scenario import load_scenario
@@ -138,9 +143,7 @@ def _cmd_posterior(args) -> int:
                                dask_address=args.dask, chain_path=args.chain, progress=not args.quiet,
                                file=args.file, sample_time_limit=args.sample_time_limit)
     except KeyboardInterrupt:
-        kept = f"; the steps done are kept in {args.chain}: run the same command again to resume" if args.chain else ""
-        sys.stderr.write(f"crashsim: stopped{kept}\n")
-        return 130
+        return _stopped("steps", args.chain)
     if args.plots:
         import matplotlib
 

@@ -222,11 +222,34 @@ def _path_length(sol, t: np.ndarray) -> np.ndarray:
 
 def _run(vehicle: Vehicle, spec: ApproachSpec, speed: float, position, heading: float, road: Road,
          options: RunoutOptions) -> RunoutResult:
+    """The braking phase from the start pose, long enough to reach the impact (not on to rest).
+
+    The run is first limited to a time the impact is reached in when the vehicle brakes evenly
+    (``2 d / v`` for a distance, the time itself plus a margin for a time); a run that stops on
+    that limit short of the impact is run again with the limit doubled, up to ``options.t_max``.
+    From a start position the run goes on to rest (the closest pass is found on it).
+    """
     vel = speed * np.array([math.cos(heading), math.sin(heading)])
     init = chain_states(vehicle, position, heading, vel)
     from .simulate import simulate_runout
 
-    return simulate_runout(vehicle, init, spec.wheels, road, options)
+    if spec.mode == "distance":
+        limit = 2.0 * spec.distance / speed + 0.1
+    elif spec.mode == "time":
+        limit = spec.time + 0.1
+    else:  # from a start position: the end is the closest pass, found on the run to rest
+        limit = options.t_max
+    first = vehicle.bodies[0].name
+    while True:
+        limit = min(limit, options.t_max)
+        run = simulate_runout(vehicle, init, spec.wheels, road, replace(options, t_max=limit))
+        if run.status != "time_limit" or limit >= options.t_max:
+            return run
+        if spec.mode == "time" and run.t_end >= spec.time:
+            return run
+        if spec.mode == "distance" and run.bodies[first].distance >= spec.distance:
+            return run
+        limit *= 2.0
 
 
 def _end_time(run: RunoutResult, spec: ApproachSpec, vehicle: Vehicle, target) -> tuple[float, float]:

@@ -154,20 +154,37 @@ class SceneAnimation:
         self._S = S
         self._decimals = decimals
         self._end_note = end_note
+        self.before_impact = False  # frames before the impact show the approach (scene_animation sets it)
 
     def __len__(self) -> int:
         return len(self.times)
 
     def poses(self, t: float) -> dict:
-        """Body name -> ``((x, y), heading)`` at scene time ``t`` [s, m, rad] from the dense
-        output ``BodyRunout.sol``, ``t`` clamped to ``[0, t_end]`` of the body's run (a body
-        at rest stays where it stopped)."""
+        """Body name -> ``((x, y), heading)`` at scene time ``t`` [s, m, rad].
+
+        From separation on: the dense output ``BodyRunout.sol``, ``t`` clamped to ``[0, t_end]``
+        of the body's run (a body at rest stays where it stopped). Before the impact (``t < 0``)
+        when the animation shows the approach (``before_impact``): a vehicle with an approach
+        from it (:meth:`~crashsim.motion.approach.ApproachResult.pose`); any other at constant
+        velocity back from its state at impact (the file gives nothing else about its motion).
+        """
         out = {}
-        for r in self.scene.runout.values():
-            tc = min(max(float(t), 0.0), float(r.t_end))
+        t = float(t)
+        before = self.before_impact and t < 0.0
+        approaches = self.scene.scenario.approaches if before else {}
+        states = self.scene.scenario.states if before else {}
+        for vn, r in self.scene.runout.items():
+            a = approaches.get(vn)
             for name, br in r.bodies.items():
-                st = np.asarray(br.sol(tc), dtype=float)
-                out[name] = ((float(st[0]), float(st[1])), float(st[2]))
+                if a is not None:
+                    out[name] = a.pose(name, t)
+                elif before:
+                    st = states[name]
+                    out[name] = ((float(st.position[0] + st.velocity[0] * t),
+                                  float(st.position[1] + st.velocity[1] * t)), float(st.heading + st.yaw_rate * t))
+                else:
+                    st = np.asarray(br.sol(min(max(t, 0.0), float(r.t_end))), dtype=float)
+                    out[name] = ((float(st[0]), float(st[1])), float(st[2]))
         return out
 
     def clock_text(self, k: int) -> str:
@@ -176,7 +193,7 @@ class SceneAnimation:
         from .units import Kind, to_unit
 
         v, unit = to_unit(float(self.times[k]), Kind.TIME, self._S.system)
-        text = f"t = {v:.{self._decimals}f} {unit}"
+        text = f"t = {v:.{self._decimals}f} {unit}" + (", before impact" if v < 0 else "")
         return text + self._end_note if k == len(self.times) - 1 and self._end_note else text
 
     def frame(self, k: int) -> list:
@@ -245,8 +262,8 @@ def _contain(ax, pts: np.ndarray) -> bool:
     return True
 
 
-def scene_animation(scene, *, dt: float = 0.05, system: str | None = None, t_end: float | None = None
-                    ) -> SceneAnimation:
+def scene_animation(scene, *, dt: float = 0.05, system: str | None = None, t_end: float | None = None,
+                    approach: bool = True) -> SceneAnimation:
     """Build the figure of an animation, set to its first frame (nothing written).
 
     Parameters
@@ -259,6 +276,10 @@ def scene_animation(scene, *, dt: float = 0.05, system: str | None = None, t_end
         Display units of the figure and the clock; default the scenario's.
     t_end : float, optional
         Last frame time [s]; default the end of the run-out (the latest vehicle's ``t_end``).
+    approach : bool
+        For a scene with approaches: start at the earliest start of braking (negative times,
+        every dt up to the impact at 0) and show the approach drawn on the figure; vehicles
+        without an approach move at constant velocity then. False: start at the impact.
 
     Returns
     -------
@@ -292,8 +313,18 @@ def scene_animation(scene, *, dt: float = 0.05, system: str | None = None, t_end
         raise ScenarioError(f"end of the animation {t_end!r} s is not a positive time; allowed t_end > 0 s "
                             f"(default: the end of the run-out, {run_end:.4g} s)", field="t_end")
     times = frame_times(float(t_end), dt)
+    approaches = scene.scenario.approaches if approach else {}
+    if approaches:
+        t0 = max(a.time_to_impact for a in approaches.values())
+        before = -frame_times(t0, dt)[::-1]  # -t0, ..., -2 dt, -dt, 0: multiples of dt back from the impact
+        times = np.concatenate([before[:-1], times])
+        if len(times) > MAX_FRAMES:
+            from .errors import ScenarioError
 
-    ax = plot_scene(scene, times=(), system=system)
+            raise ScenarioError(f"time between frames {dt:g} s gives {len(times)} frames from the start of braking "
+                                f"({-t0:.4g} s) to {float(t_end):.4g} s; at most {MAX_FRAMES}", field="dt")
+
+    ax = plot_scene(scene, times=(), system=system, approach=approach)
     fig = ax.figure
     S = _Scene(scene, ax, system)
     outlines, pins = {}, {}
@@ -321,13 +352,14 @@ def scene_animation(scene, *, dt: float = 0.05, system: str | None = None, t_end
     if times[-1] >= run_end:
         end_note = ", at rest" if scene.at_rest else ", run stopped"
     anim = SceneAnimation(scene, fig, ax, times, S, outlines, pins, clock, _decimals(dt), end_note)
+    anim.before_impact = bool(approaches)
     _contain(ax, _frame_points(S, anim))
     anim.frame(0)
     return anim
 
 
 def animate_scene(scene, path, *, dt: float = 0.05, speed: float = 1.0, system: str | None = None, dpi: int = 100,
-                  t_end: float | None = None) -> Path:
+                  t_end: float | None = None, approach: bool = True) -> Path:
     """Write an animation of a scene's run-out to scale: the scene diagram with the bodies moving.
 
     Parameters
@@ -350,6 +382,9 @@ def animate_scene(scene, path, *, dt: float = 0.05, speed: float = 1.0, system: 
         Resolution [dots per inch]; the figure is the scene figure's size (10 in wide).
     t_end : float, optional
         Last frame time [s]; default the end of the run-out (the latest vehicle's ``t_end``).
+    approach : bool
+        A scene with approaches starts at the earliest start of braking (see
+        :func:`scene_animation`); False starts at the impact.
 
     Returns
     -------
@@ -365,7 +400,8 @@ def animate_scene(scene, path, *, dt: float = 0.05, speed: float = 1.0, system: 
     Notes
     -----
     Each frame shows every body at ``BodyRunout.sol(t)``, ``t`` clamped to the end of its
-    vehicle's run (a body at rest stays). GIF frame delays are whole milliseconds rounded to
+    vehicle's run (a body at rest stays); before the impact, on the approach (see
+    :meth:`SceneAnimation.poses`). GIF frame delays are whole milliseconds rounded to
     centiseconds by the format, and most viewers slow delays under 20 ms down, so keep
     ``speed / dt <= 50`` for a GIF (a warning on the "crashsim" logger says so otherwise).
     Identical consecutive GIF frames (the hold) are stored once with their delays summed.
@@ -381,7 +417,7 @@ def animate_scene(scene, path, *, dt: float = 0.05, speed: float = 1.0, system: 
                             field="dpi")
     from matplotlib import animation
 
-    anim = scene_animation(scene, dt=dt, system=system, t_end=t_end)
+    anim = scene_animation(scene, dt=dt, system=system, t_end=t_end, approach=approach)
     fps = float(speed) / float(dt)
     if p.suffix.lower() == ".gif":
         if 1000.0 / fps < _GIF_MIN_DELAY_MS:

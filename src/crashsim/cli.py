@@ -248,7 +248,8 @@ def _cmd_animate(args) -> int:
     scene = run_scene(load_scenario(args.file))
     if scene.runout:
         frame_times(max(r.t_end for r in scene.runout.values()), dt, field="--dt")
-    written = animate_scene(scene, out, dt=dt, speed=args.speed, system=args.units, dpi=args.dpi)
+    written = animate_scene(scene, out, dt=dt, speed=args.speed, system=args.units, dpi=args.dpi,
+                            approach=not args.no_approach)
     sys.stdout.write(f"wrote {written}\n")
     return 0
 
@@ -311,6 +312,8 @@ def build_parser() -> argparse.ArgumentParser:
                     help="playback speed, 1 = real time (frames per second = speed / dt)")
     an.add_argument("--units", type=_units, default=None, help="SI or US: units of the figure (default: the scenario's)")
     an.add_argument("--dpi", type=int, default=100)
+    an.add_argument("--no-approach", action="store_true",
+                    help="start at the impact (a scene with approaches starts at the earliest start of braking)")
     an.set_defaults(func=_cmd_animate)
 
     s = sub.add_parser("schema", help="print the documented scenario-file schema")

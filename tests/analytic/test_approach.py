@@ -166,3 +166,21 @@ def test_combined_speed_formula_in_us_units():
     s = res.speed_at_braking / mph
     assert s == pytest.approx(math.sqrt(20**2 + exact * 100 * 0.7), rel=1e-6)
     assert s == pytest.approx(math.sqrt(20**2 + 30 * 100 * 0.7), rel=2e-3)  # the rounded rule of thumb
+
+
+def test_pose_at_any_time_before_the_impact():
+    veh, vb = semi(), 22.0
+    pose = impact_pose(veh, (3.0, 1.0), 0.4)
+    res = simulate_approach(veh, ApproachSpec(LOCKED, speed=vb, distance=25.0, reaction_time=1.0), pose, Road(0.7),
+                            RunoutOptions())
+    for name, st in pose.items():
+        (x, y), h = res.pose(name, 0.0)
+        assert (x, y) == pytest.approx(st.position, abs=1e-6) and h == pytest.approx(st.heading, abs=1e-9)
+        (x, y), h = res.pose(name, -res.time_to_impact)
+        rows = res.bodies[name]
+        assert (x, y) == pytest.approx(tuple(rows[0, 1:3]), abs=1e-9)
+    # before braking: back along the heading at the speed at braking
+    (x0, y0), _ = res.pose("tractor", -res.time_to_impact)
+    (x1, y1), _ = res.pose("tractor", -res.time_to_impact - 1.0)
+    assert (x0 - x1, y0 - y1) == pytest.approx((vb * math.cos(0.4), vb * math.sin(0.4)), abs=1e-6)
+    assert (x1, y1) == pytest.approx(res.perception_point, abs=1e-6)

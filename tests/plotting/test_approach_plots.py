@@ -88,3 +88,28 @@ def test_shipped_scene_legend_has_every_verdict():
         if c.kind in ("recorder", "crush energy"):
             entry = next(t for t in texts if c.name in t.replace("\n", " ") or c.name[:30] in t)
             assert ("PASS" if c.passed else "FAIL") in entry
+
+
+def test_animation_starts_at_the_start_of_braking(result):
+    """Frames before the impact: the braking car on its approach, the other at constant velocity
+    back from its state at impact; from the impact on, the run-out as before."""
+    from crashsim.animation import scene_animation
+    from crashsim.geometry import to_world
+
+    anim = scene_animation(result, dt=0.1)
+    a = result.scenario.approaches["A"]
+    t = anim.times
+    assert t[0] == pytest.approx(-a.time_to_impact) and 0.0 in t and t[-1] == pytest.approx(result.t_end)
+    assert np.all(np.diff(t) > 0)
+    k = int(np.flatnonzero(t < 0)[len(np.flatnonzero(t < 0)) // 2])
+    anim.frame(k)
+    poses = anim.poses(t[k])
+    assert poses["carA"] == a.pose("carA", t[k])
+    st = result.scenario.states["carB"]
+    assert poses["carB"][0] == pytest.approx(tuple(np.asarray(st.position) + np.asarray(st.velocity) * t[k]))
+    corners = anim._S.body_of["carA"].outline()
+    assert np.allclose(anim.outlines["carA"].get_xy()[:4], to_world(corners, *a.pose("carA", t[k]))[:4])
+    assert anim.clock_text(k).endswith(", before impact")
+    only_runout = scene_animation(result, dt=0.1, approach=False)
+    assert only_runout.times[0] == 0.0
+    assert len(anim.times) - len(only_runout.times) == int(np.sum(t < 0))

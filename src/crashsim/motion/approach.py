@@ -163,6 +163,22 @@ class ApproachResult:
     runout: RunoutResult = field(repr=False)
     speed_solved: bool = False
     warnings: tuple = ()
+    placement: tuple = (0.0, 0.0, 0.0)  # (rotation [rad], x, y [m]): the run's frame -> the scene's
+
+    def pose(self, body: str, t: float) -> tuple[tuple[float, float], float]:
+        """``((x, y), heading)`` of ``body`` at time ``t`` relative to the impact [s, m, rad], scene
+        frame: the braking phase from its dense output; before the start of braking the pose moves
+        back at the speed at braking along the heading there (the reaction time, constant speed)."""
+        phi, tx, ty = self.placement
+        c, s_ = math.cos(phi), math.sin(phi)
+        sol = self.runout.bodies[body].sol
+        tb = float(t) + self.time_to_impact
+        st = np.asarray(sol(max(tb, 0.0)), dtype=float)
+        x, y = c * st[0] - s_ * st[1] + tx, s_ * st[0] + c * st[1] + ty
+        if tb < 0.0:  # constant velocity before braking
+            vx, vy = c * st[3] - s_ * st[4], s_ * st[3] + c * st[4]
+            x, y = x + vx * tb, y + vy * tb
+        return (float(x), float(y)), float(st[2] + phi)
 
     def speed_at(self, t, body: str | None = None) -> np.ndarray:
         """CG speed [m/s] of ``body`` (default the first) at times ``t`` relative to the impact
@@ -413,7 +429,8 @@ def _approach(vehicle, spec, impact_states, road, options, speed) -> ApproachRes
         distance=dist, reaction_time=spec.reaction_time, reaction_distance=speed * spec.reaction_time,
         impact_states=states, bodies=bodies, tracks=tracks, braking_start=start,
         perception_point=(float(perception[0]), float(perception[1])), miss=miss, heading_miss=hmiss,
-        articulation_at_impact=art, runout=run, warnings=tuple(warnings))
+        articulation_at_impact=art, runout=run, warnings=tuple(warnings),
+        placement=(math.atan2(R[1, 0], R[0, 0]), float(T[0]), float(T[1])))
 
 
 def approach_speed_at_braking(vehicle: Vehicle, spec: ApproachSpec, impact_states, road: Road, options: RunoutOptions,

@@ -28,6 +28,9 @@ from _machine import cpu_name
 ROOT = Path(__file__).resolve().parents[1]
 FILE = ROOT / "scenarios" / "fit" / "intersection_fit.toml"
 PLOTS = ROOT / "plots"
+#: What each [posterior] prior setting means, for the report's sampler line.
+PRIOR_WORDS = {"fit": "uniform on the [fit] bounds",
+               "uncertainty": "the [uncertainty] distributions, cut to the [fit] bounds"}
 
 
 def _machine() -> str:
@@ -98,7 +101,7 @@ def main(argv=None) -> int:
           f"Regenerate: `{cmd}` (or `crashsim posterior {rel} --from-fit --plots plots`). Scene: `{rel}`.", "",
           f"Machine: {machine}.", "",
           f"Sampler: emcee {sp.move} move, {sp.walkers} walkers x {post.steps} steps, burn-in {sp.burn_steps}, "
-          f"thin {sp.thin}, seed {sp.seed}; prior: {sp.prior} (uniform on the [fit] bounds); walkers started around "
+          f"thin {sp.thin}, seed {sp.seed}; prior: {sp.prior} ({PRIOR_WORDS[sp.prior]}); walkers started around "
           f"the best fit. {post.evaluations} scene evaluations ({post.engine} engine, {post.backend}, "
           f"{post.workers} workers) in {post.elapsed / 60:.1f} min, the fit included"
           + (f" (over the runs that wrote its chain file; {post.n_resumed} steps were resumed from it)."

@@ -123,6 +123,18 @@ def _cmd_mc(args) -> int:
     return 0
 
 
+def _sampling_options(parser, engines, figures: str) -> None:
+    """The options mc and posterior share: where they run, what they write, in which units."""
+    parser.add_argument("--workers", type=int, default=None, help="local processes (default: all cores)")
+    parser.add_argument("--dask", metavar="ADDRESS", help="run on an existing Dask cluster (scheduler address)")
+    parser.add_argument("--plots", metavar="DIR", help=f"write {figures} into DIR")
+    parser.add_argument("--json", action="store_true", help="print the summary as one JSON object (SI units)")
+    parser.add_argument("--units", type=_units, default=None,
+                        help="SI or US (any case): units of the report and plots (default: the scenario's units)")
+    parser.add_argument("--engine", choices=engines, default=None,
+                        help="run-out engine (default: compiled if available)")
+
+
 def _stopped(what: str, kept_in) -> int:
     """Ctrl-C in a long run: say where the work done is kept (resumable), exit code 130."""
     kept = f"; the {what} done are kept in {kept_in}: run the same command again to resume" if kept_in else ""
@@ -182,13 +194,7 @@ def _add_inverse_commands(sub):
     m.add_argument("--samples", type=int, default=None, help="number of samples (default: uncertainty.samples)")
     m.add_argument("--seed", type=int, default=None, help="seed (default: uncertainty.seed)")
     m.add_argument("--out", metavar="FILE", help="stream samples to this JSON-lines file; resume if it exists")
-    m.add_argument("--workers", type=int, default=None, help="local processes (default: all cores)")
-    m.add_argument("--dask", metavar="ADDRESS", help="run on an existing Dask cluster (scheduler address)")
-    m.add_argument("--plots", metavar="DIR", help="write histograms, rest clouds and tornado charts into DIR")
-    m.add_argument("--json", action="store_true", help="print the summary as one JSON object (SI units)")
-    m.add_argument("--units", type=_units, default=None,
-                   help="SI or US (any case): units of the report and plots (default: the scenario's units)")
-    m.add_argument("--engine", choices=engines, default=None, help="run-out engine (default: compiled if available)")
+    _sampling_options(m, engines, "histograms, rest clouds and tornado charts")
     m.add_argument("--accept", action="store_true",
                    help="rejection sampling: also report the samples that meet ALL the evidence (count, share, "
                         "their percentiles beside all samples'), and draw them apart in the --plots figures")
@@ -206,13 +212,7 @@ def _add_inverse_commands(sub):
                    help="start the walkers around the best fit (runs crashsim fit first; posterior.start = \"fit\")")
     p.add_argument("--chain", metavar="FILE.npz",
                    help="keep the chain in this file (written as it runs); resume from it if it exists")
-    p.add_argument("--workers", type=int, default=None, help="local processes (default: all cores)")
-    p.add_argument("--dask", metavar="ADDRESS", help="run on an existing Dask cluster (scheduler address)")
-    p.add_argument("--plots", metavar="DIR", help="write the corner plot and the trace plots into DIR")
-    p.add_argument("--json", action="store_true", help="print the summary as one JSON object (SI units)")
-    p.add_argument("--units", type=_units, default=None,
-                   help="SI or US (any case): units of the report and plots (default: the scenario's units)")
-    p.add_argument("--engine", choices=engines, default=None, help="run-out engine (default: compiled if available)")
+    _sampling_options(p, engines, "the corner plot and the trace plots")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--sample-time-limit", type=float, default=30.0, metavar="SECONDS",
                    help="wall-clock limit of one evaluation's run-out (default 30 s); a slower one is rejected")

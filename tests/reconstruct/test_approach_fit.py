@@ -100,3 +100,17 @@ def test_posterior_derived_quantities_of_an_approach():
     assert reason is None and np.isfinite(lp)
     vi = blob[keys.index("speed.A")]
     assert vi == pytest.approx(math.sqrt(17.0**2 - 2 * 0.75 * 9.80665 * 14.0), rel=1e-5)
+
+
+def test_a_start_where_the_approach_cannot_reach_the_impact_is_named_so():
+    """Below about 14.2 m/s car A stops before the 14 m of braking end: a start drawn there stays
+    on the failure penalty; the fit says so instead of calling it another minimum."""
+    data, _ = _with_approach_evidence(approach_scene(), 16.0)
+    spec = FitSpec.from_dict({"unknowns": [{"path": PATH, "lower": "10 m/s", "upper": "24 m/s",
+                                            "initial": "20 m/s"}], "starts": 4, "seed": 3})
+    res = fit_scene(data, spec, engine=ENGINE, workers=1)
+    assert res.x[0] == pytest.approx(16.0, abs=0.02)
+    low = [s for s in res.starts if s.x0[0] < 14.0]
+    assert low, "the seed should draw a start below the reachable speeds"
+    assert any("began where the scene cannot be evaluated" in w for w in res.warnings)
+    assert not any("other minima" in w and "e+" in w for w in res.warnings)

@@ -1176,7 +1176,15 @@ def _analyse(problem: FitProblem, spec: FitSpec, outcomes: list[dict], engine: s
     n_agree = sum(s.agrees for s in starts)
     n_same = sum(s.same_cost for s in starts)
     if n_agree < len(starts):
-        others = sorted({round(2 * s.cost, 3) for s in starts if not s.same_cost})
+        # a start at which every residual carries the failure penalty never left a region where the
+        # scene cannot be evaluated: not a minimum
+        stuck = 0.99 * problem.evidence.size * PENALTY**2
+        n_stuck = sum(2 * s.cost >= stuck for s in starts if not s.same_cost)
+        if n_stuck:
+            warnings.append(f"{n_stuck} of {len(starts)} starts began where the scene cannot be evaluated and stayed "
+                            "there (their chi^2 is the failure penalty; the failed evaluations say why); the best "
+                            "was kept")
+        others = sorted({round(2 * s.cost, 3) for s in starts if not s.same_cost and 2 * s.cost < stuck})
         if others:
             warnings.append(f"{len(starts) - n_same} of {len(starts)} starts ended in other minima (chi^2 "
                             f"{', '.join(f'{c:g}' for c in others[:5])}); the best was kept")

@@ -292,8 +292,9 @@ def _solve(M, b):
                 Minv[i] = np.linalg.inv(Ms[i])
             except np.linalg.LinAlgError:
                 pass
-    x = (Minv @ bs[..., None])[..., 0]
+    # a singular item has a NaN inverse (or an overflowing one): its x is NaN or inf and ``ok`` False
     with np.errstate(invalid="ignore", over="ignore"):
+        x = (Minv @ bs[..., None])[..., 0]
         cond1 = _norm1(Ms) * _norm1(Minv)
     cond1 = np.where(np.isfinite(cond1), cond1, np.inf)
     ok = np.all(np.isfinite(x), axis=1) & (cond1 < COND_LIMIT)

@@ -191,6 +191,9 @@ def scenes(draw, structure=None, *, moment=True, solve=True, **kw):
             mu_max = solve_impact(problem(TangentialLaw("no_slide")), check=False).mu_max
         except IllConditionedError:
             assume(False)
+        # a no-slide solution without a finite impulse ratio (seen once in 1000 examples: mu_max NaN,
+        # a degenerate random scene) has no ratio law to draw from
+        assume(np.isfinite(mu_max))
         law = TangentialLaw("ratio", frac * mu_max)
     elif S.law == "friction":
         # The friction law decides stick/slide from the no-slide solve. Scenes whose no-slide

@@ -146,6 +146,19 @@ class InputDistribution:
             return math.log(p) if p > 0 else -math.inf
         return -0.5 * ((x - self.mean) / self.sd) ** 2
 
+    def parameters(self, show) -> str:
+        """The distribution in words with its parameters, each value written by ``show(value)``:
+        ``"uniform [a, b]"``, ``"triangular [a, c, b]"``, ``"normal mean m, sd s"`` (and its truncation)."""
+        if self.distribution == "uniform":
+            return f"uniform [{show(self.lower)}, {show(self.upper)}]"
+        if self.distribution == "triangular":
+            return f"triangular [{show(self.lower)}, {show(self.mode)}, {show(self.upper)}]"
+        par = f"normal mean {show(self.mean)}, sd {show(self.sd)}"
+        if self.lower is not None or self.upper is not None:
+            par += (f", truncated to [{show(self.lower) if self.lower is not None else '-inf'}, "
+                    f"{show(self.upper) if self.upper is not None else 'inf'}]")
+        return par
+
     def support(self) -> tuple[float, float]:
         """Where the density is positive (closed; infinite ends for an untruncated normal)."""
         lo = -math.inf if self.lower is None else self.lower
@@ -561,16 +574,7 @@ class MCResult:
             return f"{v:.4g}" if kind == "dimensionless" and v is not None else output_show(v, kind)
 
         for d in self.spec.inputs:
-            k = d.kind
-            if d.distribution == "uniform":
-                par = f"uniform [{show(d.lower, k)}, {show(d.upper, k)}]"
-            elif d.distribution == "triangular":
-                par = f"triangular [{show(d.lower, k)}, {show(d.mode, k)}, {show(d.upper, k)}]"
-            else:
-                par = f"normal mean {show(d.mean, k)}, sd {show(d.sd, k)}"
-                if d.lower is not None or d.upper is not None:
-                    par += f", truncated to [{show(d.lower, k) if d.lower is not None else '-inf'}, " \
-                           f"{show(d.upper, k) if d.upper is not None else 'inf'}]"
+            par = d.parameters(lambda v, k=d.kind: show(v, k))
             lines.append(f"  {d.name:<34} {par}")
             if d.note:
                 lines.append(f"  {'':<34} ({d.note})")

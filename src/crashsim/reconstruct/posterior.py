@@ -178,13 +178,7 @@ class Prior:
         d = self.dist
         if d is None:
             return f"uniform on the bounds {bounds}"
-        if d.distribution == "uniform":
-            par = f"uniform [{show(d.lower)}, {show(d.upper)}]"
-        elif d.distribution == "triangular":
-            par = f"triangular [{show(d.lower)}, {show(d.mode)}, {show(d.upper)}]"
-        else:
-            par = f"normal mean {show(d.mean)}, sd {show(d.sd)}"
-        return f"{par} (uncertainty), within the bounds {bounds}"
+        return f"{d.parameters(show)} (uncertainty), within the bounds {bounds}"
 
 
 def build_priors(data: dict, spec, prior: str, *, file: str | None = None) -> tuple[Prior, ...]:

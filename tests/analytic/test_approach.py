@@ -184,3 +184,14 @@ def test_pose_at_any_time_before_the_impact():
     (x1, y1), _ = res.pose("tractor", -res.time_to_impact - 1.0)
     assert (x0 - x1, y0 - y1) == pytest.approx((vb * math.cos(0.4), vb * math.sin(0.4)), abs=1e-6)
     assert (x1, y1) == pytest.approx(res.perception_point, abs=1e-6)
+
+
+def test_speed_at_braking_solved_from_a_start_position():
+    """From a start position the braking speed can be solved too (the upper bracket then comes from
+    the distance to the impact position; with only a time it was undefined)."""
+    veh, mu, vi = car(), 0.7, 12.0
+    pose = impact_pose(veh, (0.0, 0.0), 0.0)
+    res = simulate_approach(veh, ApproachSpec(LOCKED, start_position=(-20.0, 0.0), start_heading=0.0), pose,
+                            Road(mu), RunoutOptions(), speed_at_impact=vi)
+    assert res.speed_at_braking == pytest.approx(math.sqrt(vi**2 + 2 * mu * G * 20.0), rel=1e-6)
+    assert res.miss == pytest.approx(0.0, abs=1e-6)

@@ -445,7 +445,11 @@ def approach_speed_at_braking(vehicle: Vehicle, spec: ApproachSpec, impact_state
         raise ScenarioError(f"solving the speed at braking needs a moving vehicle at impact, got "
                             f"{speed_at_impact} m/s", field=f"{spec.key}.speed")
     mu = max([road.mu] + [z.mu for z in road.zones])
-    reach = spec.distance if spec.distance is not None else None
+    if spec.mode == "start":  # the path is at least the straight line to the impact position
+        first = vehicle.bodies[0].name
+        reach = float(np.hypot(*(np.asarray(spec.start_position) - np.asarray(impact_states[first].position))))
+    else:
+        reach = spec.distance
 
     def f(v):
         try:

@@ -50,8 +50,13 @@ def _law_text(result) -> str:
     state = "sliding at separation" if result.sliding else "no sliding at separation"
     words = {"ratio": "given impulse ratio", "fraction": "impulse ratio as a share of mu_max",
              "no_slide": "no sliding at separation", "friction": "crush-surface friction"}.get(law, law)
+    if result.slides_throughout:
+        bound = (f"mu_max = {result.mu_max:.4f} is no bound (stopping the sliding would need a tensile normal "
+                 "impulse: the contact slides throughout, friction against the initial slip)")
+        return f"impulse ratio mu = {result.mu:.4f}; {bound} (law {law}: {words}; {state})"
+    state_words = "" if words == state else f": {words}"
     return (f"impulse ratio mu = {result.mu:.4f}, mu_max = {result.mu_max:.4f}, mu / mu_max = {share} "
-            f"(law {law}: {words}; {state})")
+            f"(law {law}{state_words}; {state})")
 
 
 def format_impact(result, system: str = "SI") -> str:

@@ -24,8 +24,10 @@ NOT guaranteed -- physics of the model, demonstrated by the deterministic tests 
 a. no sliding with e > 0: by 2., dT > 0 when e^2 > -dT(0) / (dT(1) - dT(0)); a car corner
    striking a wall with e = 1 gains 4.5 %.
 b. the no-slide solution can be tensile (P_n < 0) although the contact points approach (a
-   sideswipe). Then P_n(mu) has a pole between 0 and mu_max and ratios in between -- including
-   the friction law's f sign(mu_max) with the paper's f = 0.6 -- create energy.
+   sideswipe). Then P_n(mu) has a pole between 0 and mu_max and ratios in between create
+   energy: mu_max is no bound there.  No compressive impulse can stop the sliding, so the
+   contact slides throughout, and the friction law takes Coulomb's mu = -f sign(u_t) against
+   the initial slip (which dissipates; the ratio law refuses ratios that drive the slip).
 c. e' > 0: Eq. 6 ties M to the *final* relative yaw rate with Ibar = I1 I2 / (I1 + I2) of the
    isolated bodies, although M also feels the lever arms of P. For two equal bodies with
    radius of gyration k struck at a lever arm d, frictionless and plastic, the normal impulse
@@ -48,6 +50,7 @@ from crashsim.impact.core import MU_MAX_LIMIT
 
 from impact_scenes import EPS, SETTINGS, lever_length, scenes, system_energy_change, with_law
 
+from crashsim.errors import InadmissibleImpactError
 from crashsim import (Body, BodyState, CrushSurface, IllConditionedError, ImpactProblem, TangentialLaw, Vehicle,
                       solve_impact as _solve_impact)
 
@@ -150,22 +153,36 @@ def test_a_no_slide_with_restitution_can_gain_energy():
     assert dT[0.5] == pytest.approx(dT[0.0] + 0.25 * (dT[1.0] - dT[0.0]), rel=1e-12)
 
 
-def test_b_tensile_no_slide_solution_lets_the_friction_law_create_energy():
+def test_b_tensile_no_slide_solution_slides_throughout_against_the_slip():
     """b.: a sideswipe -- 1 m/s into the wall, 10 m/s along it, trailing corner (2, -0.8) m --
-    e = 0. The no-slide solution pulls (P_n < 0); the paper's friction rule with f = 0.6 then
-    slides with mu = f sign(mu_max), a quarter of the way to mu_max, and the car leaves with
-    more kinetic energy than it brought."""
+    e = 0. The no-slide solution pulls (P_n < 0), and ratios between 0 and its mu_max pass a
+    pole of P_n: mu_max is no bound.  The friction law slides throughout with Coulomb's
+    mu = -f sign(u_t) (f = 0.6): closed form P_n = -u_n / (W_nn + mu W_nt), P_t = mu P_n, with
+    the corner's mobilities W_nn = 1/m + (r x n)^2 / I and W_nt = (r x n)(r x t) / I; the
+    normal velocity ends at 0 (e = 0), the slip keeps its sign, and energy is dissipated."""
     ns = solve_impact(_car_at_wall((1.0, 10.0), (2.0, -0.8), TangentialLaw("no_slide"), 0.0))
     assert ns.closing_velocity < 0 and ns.normal_impulse < 0
-    assert ns.mu_max == pytest.approx(2.316, abs=1e-3)
-    r = solve_impact(_car_at_wall((1.0, 10.0), (2.0, -0.8), TangentialLaw("friction", 0.6), 0.0))
-    assert r.sliding and r.mu == pytest.approx(0.6, rel=1e-12)
-    assert r.normal_impulse > 0
-    assert system_energy_change(r) > 0.1 * r.kinetic_energy["system"]["before"]
-    # the pole of P_n(mu) between 0 and mu_max
+    assert ns.mu_max == pytest.approx(2.316, abs=1e-3) and ns.slides_throughout
     pn = [solve_impact(_car_at_wall((1.0, 10.0), (2.0, -0.8), TangentialLaw("ratio", x * ns.mu_max), 0.0)
                        ).normal_impulse for x in (0.5, 0.75)]
-    assert pn[0] > 0 > pn[1]
+    assert pn[0] > 0 > pn[1]  # the pole of P_n(mu) between 0 and mu_max
+    f, m, inertia = 0.6, 1500.0, 2800.0
+    r = solve_impact(_car_at_wall((1.0, 10.0), (2.0, -0.8), TangentialLaw("friction", f), 0.0))
+    u_n, u_t = -1.0, 10.0  # n = -x, t = +y at the corner r = (2, -0.8)
+    rxn, rxt = 2.0 * 0.0 - (-0.8) * (-1.0), 2.0 * 1.0 - (-0.8) * 0.0
+    w_nn, w_nt = 1 / m + rxn**2 / inertia, rxn * rxt / inertia
+    mu = -f * math.copysign(1.0, u_t)
+    assert r.sliding and r.slides_throughout and r.mu == pytest.approx(mu, rel=1e-12)
+    assert r.normal_impulse == pytest.approx(-u_n / (w_nn + mu * w_nt), rel=1e-12)
+    assert r.tangential_impulse == pytest.approx(mu * r.normal_impulse, rel=1e-12)
+    assert r.separation_normal_velocity == pytest.approx(0.0, abs=1e-12)
+    assert r.separation_tangential_velocity > 0  # the slip is slowed, not reversed
+    assert system_energy_change(r) < 0
+    # the ratio law: against the slip is admissible, with the slip is refused
+    ok = _solve_impact(_car_at_wall((1.0, 10.0), (2.0, -0.8), TangentialLaw("ratio", -0.4), 0.0))
+    assert ok.normal_impulse > 0 and system_energy_change(ok) < 0
+    with pytest.raises(InadmissibleImpactError, match="drives the sliding"):
+        _solve_impact(_car_at_wall((1.0, 10.0), (2.0, -0.8), TangentialLaw("ratio", 0.4), 0.0))
 
 
 def _equal_bodies(ep, k=1.0, d=2.0, m=1000.0):

@@ -68,7 +68,8 @@ CTOL = 8.0
 LAWS = ("no_slide", "ratio", "friction")
 SOLVE_KEYS = ("velocity", "yaw_rate", "impulses", "normal_impulse", "tangential_impulse", "moment_impulse", "mu",
               "mu_max", "sliding", "hitch_impulse", "constraint_impulse", "closing_velocity", "separation_normal",
-              "separation_tangential", "ke_before", "ke_after", "normal", "tangent", "ok", "condition_1norm")
+              "separation_tangential", "ke_before", "ke_after", "normal", "tangent", "ok", "condition_1norm",
+              "approach_tangential", "no_slide_normal")
 
 
 # ------------------------------------------------------------------------------------ batches
@@ -281,6 +282,9 @@ def check_agreement(S, A, dense, red, ns):
     band = np.maximum(1e-9, tol_ns) * (1.0 + np.abs(mu_max))
     if S.tangential == "friction":
         border |= (np.abs(np.abs(mu_max) - A.law_value) <= band) | (np.abs(np.abs(mu_max) - MU_MAX_LIMIT) <= band)
+        # the sign of the no-slide normal impulse decides whether sliding can stop at all
+        P_ns, _, _, _ = _scales(S, A, ns)
+        border |= np.abs(ns["normal_impulse"]) <= np.maximum(1e-9, tol_ns) * P_ns
     _note(f"{S.tangential}: {int(border.sum())} of {B} items at a threshold, {int(border_ok.sum())} at COND_LIMIT")
 
     # flags, NaN patterns: identical away from the thresholds
@@ -321,7 +325,7 @@ def check_agreement(S, A, dense, red, ns):
         if len(edge):
             f = A.law_value
             mu_r = red["mu_max"]
-            stop_r = np.isfinite(mu_r) & (np.abs(mu_r) <= MU_MAX_LIMIT)
+            stop_r = np.isfinite(mu_r) & (np.abs(mu_r) <= MU_MAX_LIMIT) & (red["no_slide_normal"] > 0)
             stick_r = stop_r & (np.abs(mu_r) <= f)
             np.testing.assert_array_equal(red["sliding"][edge], ~stick_r[edge])
             _note(f"{int(np.sum(red['sliding'][edge] != dense['sliding'][edge]))} friction items took the other branch")

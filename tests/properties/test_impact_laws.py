@@ -123,7 +123,8 @@ def test_restitution_at_the_contact(scene):
 def test_tangential_law(scene):
     """Eqs. 4, 8: no_slide stops relative tangential motion; ratio gives P_t = mu P_n;
     friction either sticks with |mu_max| <= f or slides throughout with mu = f sign(mu_max)
-    (or, where no impulse ratio up to MU_MAX_LIMIT can stop the sliding, mu = -f sign(u_t))."""
+    (or, where no compressive impulse with a ratio up to MU_MAX_LIMIT can stop the sliding --
+    the no-slide normal impulse is tensile --, mu = -f sign(u_t))."""
     p, r = scene.problem, scene.result
     law = p.surface.tangential
     t_angle = p.surface.normal_angle + p.surface.tangent_sign * math.pi / 2
@@ -145,10 +146,12 @@ def test_tangential_law(scene):
         f = law.value
         assert abs(Pt) <= f * abs(Pn) + CONDITION_RTOL * isc
         if r.sliding:
-            if math.isfinite(r.mu_max) and abs(r.mu_max) <= MU_MAX_LIMIT:
+            if not r.slides_throughout:
+                assert math.isfinite(r.mu_max) and abs(r.mu_max) <= MU_MAX_LIMIT
                 assert abs(r.mu_max) > f  # Eq. 8: the friction cannot stop the sliding
                 sign = math.copysign(1.0, r.mu_max)
-            else:  # sliding cannot be stopped at all: Coulomb friction opposes the initial slip
+            else:  # sliding cannot be stopped at all (singular, or a tensile no-slide impulse):
+                # Coulomb friction opposes the initial slip
                 du = _relative_velocity(p, r, p.surface.point, after=False)
                 sign = -float(np.sign(du @ t))
             assert abs(Pt - f * sign * Pn) <= CONDITION_RTOL * isc

@@ -255,10 +255,15 @@ def impulse_work_item(fixed, hitches, cbodies, xbodies, J, rowb, position, v0, w
 
 
 @njit(**_HOT)
-def reason_item(ok, lam, law, law_value, mu_max, ke0, work, limits, i):
+def reason_item(ok, lam, law, law_value, mu_max, pn_no_slide, slip, sep_t, ke0, work, limits, i):
     """Admissibility code of one solved item (``admissible.REASONS``; rules in that module):
-    0 admissible, 1 tensile P_n, 2 mu beyond mu_max, 3 mu drives the sliding, 4 energy created
-    at the crush surface, 5 not solvable."""
+    0 admissible, 1 tensile P_n, 2 mu beyond mu_max (or the sliding reverses), 3 mu drives
+    the sliding, 4 energy created at the crush surface, 5 not solvable.
+
+    ``pn_no_slide`` is the normal impulse of the no-sliding solution: where it is not
+    compressive, sliding cannot be stopped and mu_max is no bound; an impulse ratio must then
+    oppose the initial tangential slip ``slip`` (Coulomb) and not reverse it (the tangential
+    separation velocity ``sep_t`` keeps its sign)."""
     pn = lam[i, 0]
     if not (ok and math.isfinite(pn)):
         return 5
@@ -270,12 +275,17 @@ def reason_item(ok, lam, law, law_value, mu_max, ke0, work, limits, i):
     if pn < -limits[L_REL_IMPULSE] * scale:
         return 1
     if law == _RATIO:
-        q = law_value / mu_max
-        if math.isfinite(q):
+        if pn_no_slide > 0.0 and abs(mu_max) <= limits[L_MU_MAX]:
+            q = law_value / mu_max
             if q > 1.0 + limits[L_REL_RATIO]:
                 return 2
             if q < -limits[L_REL_RATIO]:
                 return 3
+        else:  # sliding cannot stop: Coulomb's rule against the initial slip
+            if law_value * slip > 0.0:
+                return 3
+            if sep_t * slip < 0.0 and abs(sep_t) > limits[L_REL_RATIO] * (1.0 + abs(slip)):
+                return 2
     gain = work[i, 0] + work[i, 1] + work[i, 2]
     allowance = limits[L_REL_ENERGY] * (ke0 + abs(work[i, 5]) + abs(work[i, 4]) + 1.0)
     if gain > allowance:
@@ -301,12 +311,13 @@ def work_batch(fixed, body1, body2, hitches, cbodies, xbodies, position, heading
 
 
 @njit(**_JIT)
-def reason_batch(ok, lam, law, law_value, mu_max, ke0, work, limits):
+def reason_batch(ok, lam, law, law_value, mu_max, pn_no_slide, slip, sep_t, ke0, work, limits):
     """:func:`reason_item` over a batch: (B,) int64."""
     B = ok.shape[0]
     out = np.empty(B, dtype=np.int64)
     for i in range(B):
-        out[i] = reason_item(ok[i], lam, law, law_value[i], mu_max[i], ke0[i], work, limits, i)
+        out[i] = reason_item(ok[i], lam, law, law_value[i], mu_max[i], pn_no_slide[i], slip[i], sep_t[i], ke0[i], work,
+                             limits, i)
     return out
 
 
@@ -320,8 +331,8 @@ def _out_views(Y, B, n, K, extras):
     o += B * n
     lam_out = Y[o:o + B * K].reshape((B, K))
     o += B * K
-    sc = Y[o:o + 7 * B].reshape((7, B))  # mu, mu_max, sliding, closing, sep_n, sep_t, ok
-    o += 7 * B
+    sc = Y[o:o + 9 * B].reshape((9, B))  # mu, mu_max, sliding, closing, sep_n, sep_t, ok, slip, pn_no_slide
+    o += 9 * B
     ke0_out = Y[o:o + B * n].reshape((B, n))
     o += B * n
     ke1_out = Y[o:o + B * n].reshape((B, n))
@@ -342,7 +353,7 @@ def _out_views(Y, B, n, K, extras):
 @njit(**_JIT)
 def out_size(n, K, extras):
     """Floats per item of the output buffer."""
-    return 5 * n + K + 7 + 4 + 1 + (7 if extras else 0)
+    return 5 * n + K + 9 + 4 + 1 + (7 if extras else 0)
 
 
 @njit(**_JIT)
@@ -413,6 +424,7 @@ def solve_batch(fixed, body1, body2, law, hitches, cbodies, xbodies, mass, inert
     v_out, w_out, lam_out, sc, ke0_out, ke1_out, normal, tangent, cond_out, work_out, reason_out = \
         _out_views(Y, B, n, K, extras)
     mu_out, mumax_out, sliding_out, closing, sep_n, sep_t, ok_out = sc[0], sc[1], sc[2], sc[3], sc[4], sc[5], sc[6]
+    slip_out, pn_ns_out = sc[7], sc[8]
 
     J = np.empty((K, n, 3))
     rowb = np.empty((K, 2), dtype=np.int64)
@@ -489,6 +501,7 @@ def solve_batch(fixed, body1, body2, law, hitches, cbodies, xbodies, mass, inert
 
         ok, cond = _solve_system(Mat, rhs, K, Ms, aug, lam_ns, limits[L_COND], scr)
         mu_max = lam_ns[1] / lam_ns[0] if ok else np.nan
+        pn_ns = lam_ns[0] if ok else np.nan
         sliding = False
         redo = False
         mu_used = 0.0
@@ -500,7 +513,8 @@ def solve_batch(fixed, body1, body2, law, hitches, cbodies, xbodies, mass, inert
             mu_used = law_value[i] * mu_max
         elif law == _FRICTION:
             f = law_value[i]
-            stoppable = ok and abs(mu_max) <= limits[L_MU_MAX]
+            # sliding can be stopped only by a compressive no-slide impulse of finite ratio
+            stoppable = ok and lam_ns[0] > 0.0 and abs(mu_max) <= limits[L_MU_MAX]
             redo = not (stoppable and abs(mu_max) <= f)
             if stoppable:
                 sgn = 1.0 if mu_max > 0 else (-1.0 if mu_max < 0 else 0.0)
@@ -550,9 +564,12 @@ def solve_batch(fixed, body1, body2, law, hitches, cbodies, xbodies, mass, inert
         sep_n[i] = sn
         sep_t[i] = st
         ok_out[i] = 1.0 if ok else 0.0
+        slip_out[i] = u0[1]
+        pn_ns_out[i] = pn_ns
         cond_out[i] = cond
         if extras:
             impulse_work_item(fixed, hitches, cbodies, xbodies, J, rowb, position, velocity, yaw_rate, v_out, w_out,
                               lam_out, xpoint, ximp, i, work_out)
-            reason_out[i] = reason_item(ok, lam_out, law, law_value[i], mu_max, ke0, work_out, limits, i)
+            reason_out[i] = reason_item(ok, lam_out, law, law_value[i], mu_max, pn_ns, u0[1], st, ke0, work_out, limits,
+                                        i)
     return Y

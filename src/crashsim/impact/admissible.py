@@ -28,7 +28,13 @@ Brach's equations accept coefficients that no collision can produce.  An impact 
 1. the normal impulse is compressive, ``P_n >= 0`` (surfaces push, they do not pull);
 2. with a given impulse ratio mu (``tangential = "ratio"``): ``0 <= mu / mu_max <= 1``: the
    tangential impulse opposes the sliding and does not reverse it (mu_max is the ratio that
-   just stops the sliding at separation; paper, Eq. 8 and the text around it);
+   just stops the sliding at separation; paper, Eq. 8 and the text around it).  Where the
+   no-sliding solution needs a tensile normal impulse, no compressive impact can stop the
+   sliding and mu_max is no bound: the contact slides throughout, and mu must oppose the
+   initial tangential slip u_t (``mu u_t <= 0``, Coulomb) without reversing it (the
+   tangential separation velocity keeps the sign of u_t).  The friction law takes
+   ``mu = -f sign(u_t)`` there; a body glancing off a wall at a shallow angle is the
+   closed-form case (``P_t = -f P_n sign(u_t)``, tests/analytic/test_contact.py);
 3. the crush surface does not create energy: ``W_n + W_t + W_M <= 0``.  Without external or
    constraint impulses this is "no kinetic-energy gain"; with them, "no gain beyond the work
    those impulses do" (which is computed and reported).
@@ -50,7 +56,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..errors import InadmissibleImpactError
-from .core import WORK_KEYS, ImpactArrays, ImpactStructure, _c, _kernel_structure, solve_arrays
+from .core import MU_MAX_LIMIT, WORK_KEYS, ImpactArrays, ImpactStructure, _c, _kernel_structure, solve_arrays
 
 __all__ = ["impulse_work", "admissibility", "check_admissible", "REASONS"]
 
@@ -63,6 +69,11 @@ REASONS = {
     4: "energy created at the crush surface",
     5: "not solvable",
 }
+
+#: Largest |mu| searched for the admissible range of a sliding-throughout impact (the friction
+#: coefficients of crashsim's inputs lie in [0, 5]).
+_MU_SEARCH = 5.0
+
 
 #: Relative round-off allowances of the tests (impulses; energies relative to the kinetic energy).
 _REL_IMPULSE = 1e-9
@@ -110,7 +121,9 @@ def admissibility(S: ImpactStructure, A: ImpactArrays, out: dict, work: dict | N
                              dtype=float)
     reason = _kernel.reason_batch(np.ascontiguousarray(out["ok"], dtype=bool), _c(out["impulses"]),
                                   _kernel.LAW_CODES[S.tangential], _c(A.law_value), _c(out["mu_max"]),
-                                  _c(out["ke_before"].sum(axis=1)), W, _kernel.limits())
+                                  _c(out["no_slide_normal"]), _c(out["approach_tangential"]),
+                                  _c(out["separation_tangential"]), _c(out["ke_before"].sum(axis=1)), W,
+                                  _kernel.limits())
     return reason == 0, reason
 
 
@@ -186,10 +199,19 @@ def check_admissible(S: ImpactStructure, A: ImpactArrays, out: dict, *, work: di
 
     if law == "ratio" and code in (2, 3):
         mu = float(A.law_value[0])
-        lo, hi = sorted((0.0, mu_max))
+        slip = float(out["approach_tangential"][0])
+        stoppable = float(out["no_slide_normal"][0]) > 0.0 and abs(mu_max) <= MU_MAX_LIMIT
+        if stoppable:
+            lo, hi = sorted((0.0, mu_max))
+        else:  # sliding throughout: any ratio against the slip, up to where it would reverse it
+            lo, hi = sorted((0.0, -math.copysign(_MU_SEARCH, slip)))
         rng = _interval(S, A, "law_value", lo, hi, 0.0)
         allowed = f"{_fmt(rng[0])} <= mu <= {_fmt(rng[1])}" if rng else "no impulse ratio"
-        if code == 2:
+        if not stoppable:
+            why = ("drives the sliding (the no-slide solution would need a tensile normal impulse here, so the "
+                   f"contact slides throughout and mu must oppose the initial tangential slip {_fmt(slip)} m/s)"
+                   if code == 3 else "would reverse the sliding")
+        elif code == 2:
             why = f"exceeds mu_max = {_fmt(mu_max)} for this geometry: the sliding would reverse"
         else:
             why = (f"has the opposite sign of mu_max = {_fmt(mu_max)} for this geometry: the tangential impulse "

@@ -388,8 +388,12 @@ def _solve_chunk(S: ImpactStructure, A: ImpactArrays, condition: bool) -> dict[s
     P_t = mu P_n; mu_max is reported (NaN where the no-slide system is singular, which does
     not affect the answer). ``friction`` keeps the no-slide solution where |mu_max| <= f
     (Eq. 8), else slides with |mu| = f and the sign of mu_max; where sliding cannot be stopped
-    at all (no-slide system singular or |mu_max| > MU_MAX_LIMIT) it slides with mu opposing
-    the initial tangential slip, mu = -f sign(u_t), as Coulomb friction does.
+    at all (no-slide system singular, |mu_max| > MU_MAX_LIMIT, or a no-slide normal impulse
+    that is not compressive: the surfaces would have to pull to stop the sliding, so mu_max
+    is no bound) it slides with mu opposing the initial tangential slip, mu = -f sign(u_t),
+    as Coulomb friction does.  ``approach_tangential`` (B,) is that slip u_t (the relative
+    tangential velocity before) and ``no_slide_normal`` (B,) the normal impulse of the
+    no-slide solution (NaN where not ok).
     """
     J, minv, p_ext, nvec, tvec = _assemble(S, A)
     B, K, n, _ = J.shape
@@ -424,6 +428,7 @@ def _solve_chunk(S: ImpactStructure, A: ImpactArrays, condition: bool) -> dict[s
         mu_max = lam_ns[:, 1] / lam_ns[:, 0]
 
     mu_max = np.where(ok, mu_max, np.nan)
+    pn_no_slide = np.where(ok, lam_ns[:, 0], np.nan)
     if S.tangential == "no_slide":
         lam = lam_ns
         sliding = np.zeros(B, dtype=bool)
@@ -435,7 +440,7 @@ def _solve_chunk(S: ImpactStructure, A: ImpactArrays, condition: bool) -> dict[s
             mu_used = A.law_value * mu_max
             redo = np.ones(B, dtype=bool)
         else:  # friction: keep the no-slide answer where |mu_max| <= f (Eq. 8)
-            stoppable = ok & (np.abs(mu_max) <= MU_MAX_LIMIT)
+            stoppable = ok & (lam_ns[:, 0] > 0) & (np.abs(mu_max) <= MU_MAX_LIMIT)
             redo = ~(stoppable & (np.abs(mu_max) <= A.law_value))
             mu_used = A.law_value * np.where(stoppable, np.sign(mu_max), -np.sign(u0[:, 1]))
         lam = lam_ns.copy()
@@ -494,6 +499,8 @@ def _solve_chunk(S: ImpactStructure, A: ImpactArrays, condition: bool) -> dict[s
         "tangent": tvec,
         "ok": ok,
         "condition_1norm": cond1,
+        "approach_tangential": u0[:, 1],
+        "no_slide_normal": pn_no_slide,
     }
     if condition:
         Mc = np.where(np.isfinite(Ms), Ms, 0.0)
@@ -851,6 +858,7 @@ def _solve_chunk_reduced(S: ImpactStructure, A: ImpactArrays) -> dict[str, np.nd
     lam_ns, ok, cond1 = solve(None)
     with np.errstate(invalid="ignore", divide="ignore"):
         mu_max = np.where(ok, lam_ns[1] / lam_ns[0], np.nan)
+    pn_no_slide = np.where(ok, lam_ns[0], np.nan)
     if S.tangential == "no_slide":
         lam = lam_ns
         sliding = np.zeros(B, dtype=bool)
@@ -862,7 +870,7 @@ def _solve_chunk_reduced(S: ImpactStructure, A: ImpactArrays) -> dict[str, np.nd
             mu_used = A.law_value * mu_max
             redo = np.ones(B, dtype=bool)
         else:  # friction: keep the no-slide answer where |mu_max| <= f (Eq. 8)
-            stoppable = ok & (np.abs(mu_max) <= MU_MAX_LIMIT)
+            stoppable = ok & (lam_ns[0] > 0) & (np.abs(mu_max) <= MU_MAX_LIMIT)
             redo = ~(stoppable & (np.abs(mu_max) <= A.law_value))
             mu_used = A.law_value * np.where(stoppable, np.sign(mu_max), -np.sign(u0[1]))
         lam = lam_ns
@@ -929,6 +937,8 @@ def _solve_chunk_reduced(S: ImpactStructure, A: ImpactArrays) -> dict[str, np.nd
         "tangent": A.tangent_sign[:, None] * np.stack([-nvec[:, 1], nvec[:, 0]], -1),
         "ok": ok,
         "condition_1norm": cond1,
+        "approach_tangential": u0[1],
+        "no_slide_normal": pn_no_slide,
     }
 
 
@@ -971,8 +981,8 @@ def output_shapes(n: int, K: int, extras: bool) -> tuple:
     (``_kernel._out_views``; flags stored as 0.0 / 1.0)."""
     return ((("velocity", (n, 2)), ("yaw_rate", (n,)), ("impulses", (K,)), ("mu", ()), ("mu_max", ()),
              ("sliding", ()), ("closing_velocity", ()), ("separation_normal", ()), ("separation_tangential", ()),
-             ("ok", ()), ("ke_before", (n,)), ("ke_after", (n,)), ("normal", (2,)), ("tangent", (2,)),
-             ("condition_1norm", ()))
+             ("ok", ()), ("approach_tangential", ()), ("no_slide_normal", ()), ("ke_before", (n,)), ("ke_after", (n,)),
+             ("normal", (2,)), ("tangent", (2,)), ("condition_1norm", ()))
             + ((("work", (6,)), ("reason", ())) if extras else ()))
 
 

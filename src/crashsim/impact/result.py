@@ -11,7 +11,7 @@ import numpy as np
 
 from ..geometry import rotate, wrap_angle
 from .admissible import REASONS
-from .core import energy_loss_fraction
+from .core import MU_MAX_LIMIT, energy_loss_fraction
 
 __all__ = ["ImpactResult", "BodyImpact", "HitchImpulse", "ConstraintImpulse", "clock_direction", "pdof_from_force"]
 
@@ -266,6 +266,10 @@ class ImpactResult:
     message: str = "solved"
     warnings: tuple[str, ...] = ()
     work: dict = field(default_factory=dict)
+    #: True where no compressive impulse can stop the sliding (the no-slide solution needs a
+    #: tensile normal impulse, or none exists): mu_max is then no bound, the contact slides
+    #: throughout and friction opposes the initial slip (:mod:`crashsim.impact.admissible`)
+    slides_throughout: bool = False
     #: the 2-norm condition number, or a function computing it (:attr:`condition_number`)
     _condition: object = field(default=math.nan, repr=False, compare=False)
 
@@ -362,6 +366,7 @@ class ImpactResult:
             kinetic_energy=ke, energy_loss=loss,
             warnings=warn,
             work=work,
+            slides_throughout=not (out["no_slide_normal"] > 0.0 and abs(out["mu_max"]) <= MU_MAX_LIMIT),
             _condition=condition,
         )
 
@@ -432,6 +437,7 @@ class ImpactResult:
             "mu": self.mu,
             "mu_max": self.mu_max,
             "mu_fraction": self.mu_fraction,
+            "slides_throughout": self.slides_throughout,
             "sliding": self.sliding,
             "tangential_law": self.tangential_law,
             "closing_velocity": self.closing_velocity,

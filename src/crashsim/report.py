@@ -159,9 +159,15 @@ def format_joint(scene, system: str = "SI") -> str:
     if touched:
         lines.append("Contacts")
         for p in touched:
-            sustained = (f"sustained contact {fmt(p.contact_time, 'time', s)}, peak force {fmt(p.peak_force, 'force', s)}, "
-                         f"deepest {fmt(p.max_penetration, 'length', s)} beyond the crush, "
-                         f"work taken {fmt(-p.contact_work, 'energy', s)}" if p.contact_time > 0 else "no sustained contact")
+            if p.peak_force > 0:
+                sustained = (f"sustained contact {fmt(p.contact_time, 'time', s)}, peak force "
+                             f"{fmt(p.peak_force, 'force', s)}, deepest {fmt(p.max_penetration, 'length', s)} beyond "
+                             f"the crush, work taken {fmt(-p.contact_work, 'energy', s)}")
+            elif p.contact_time > 0:
+                sustained = (f"in contact {fmt(p.contact_time, 'time', s)} until it separated, no sustained contact "
+                             "force")
+            else:
+                sustained = "no sustained contact"
             lines.append(f"  {p.name}: {p.impacts} impact(s), {sustained}")
     ledger = scene.energy_ledger()
     if ledger:

@@ -144,3 +144,61 @@ def test_a_pair_that_never_touches_changes_nothing(engine):
         p0 = runs[0].vehicles[v].bodies[name].rest_position
         p1 = runs[1].vehicles[v].bodies[name].rest_position
         assert np.hypot(*np.subtract(p0, p1)) < 1e-6
+
+
+def _bounce_along_wall(engine, e, f, v_n=2.0, gap=0.1):
+    """A car sliding along a wall at 20 m/s with every wheel steered -30 deg: the saturated side
+    forces push it into the wall with a_n = mu g cos(30 deg) (the sliding case above), and it
+    starts ``gap`` from the face moving into it at ``v_n``."""
+    mu, delta = 0.7, math.radians(-30.0)
+    wheels = WheelSettings(default=WheelSetting("rolling", steer=delta, cornering_coefficient=8.6,
+                                                rolling_resistance=0.0))
+    wall = Obstacle("wall", ((-10.0, -1.0), (200.0, -1.0)), thickness=0.2)  # face at y = -0.9
+    states = {"car": BodyState((0, gap), 0.0, (20.0, -v_n))}
+    run = simulate_scene([box("car")], states, {"car": wheels}, Road(mu), RunoutOptions(engine=engine, t_max=10.0),
+                         contact=ContactModel(restitution=e, friction=f), obstacles=[wall])
+    return run, G * mu * math.cos(delta)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_a_restrike_within_the_arming_distance_is_an_impact(engine):
+    """The re-strike rule: a car pushed into a wall bounces off (e = 0.3) and is pushed back
+    before it has left the arming distance (apex (e c_1)^2 / (2 a_n) = 4 cm < 5 cm).  It arrives
+    at e c_1 >= the 0.5 m/s threshold, so that is an impact, not a penalty force; the next
+    arrival (e^2 c_1 = 0.2 m/s) is sustained contact.  Frictionless face-on contact: the flight
+    between the impacts is a parabola under the constant push, c_1 = sqrt(v_n^2 + 2 a_n gap),
+    the second impact comes 2 e c_1 / a_n later at e c_1, and each separates at e times its
+    closing speed."""
+    e = 0.3
+    run, a_n = _bounce_along_wall(engine, e, 0.0)
+    hits = run.impacts
+    assert [(h.body1, h.body2) for h in hits] == [("car", "wall")] * 2
+    c1 = math.sqrt(2.0**2 + 2 * a_n * 0.1)
+    assert hits[0].closing_speed == pytest.approx(c1, rel=1e-6)
+    assert hits[1].closing_speed == pytest.approx(e * c1, rel=1e-6)
+    assert hits[1].t - hits[0].t == pytest.approx(2 * e * c1 / a_n, rel=1e-6)
+    assert (e * c1) ** 2 / (2 * a_n) < ContactModel().arm_distance  # never re-armed in between
+    between = [ev.kind for ev in run.events if hits[0].t < ev.t < hits[1].t]
+    assert "armed" not in between and "contact_end" not in between
+    for h in hits:
+        r = h.result
+        assert r.separation_normal_velocity == pytest.approx(-e * r.closing_velocity, rel=1e-9)
+        assert h.tangential_impulse == pytest.approx(0.0, abs=1e-9 * h.normal_impulse)
+    assert run.status == "rest"
+    assert run.energy["closing_error"] == pytest.approx(0.0, abs=1e-6 * run.energy["initial"])
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_restrikes_with_friction_obey_e_and_f(engine):
+    """The same with wall friction f = 0.3: the car slides along the face at 20 m/s, so every
+    impact slides throughout (Coulomb): P_t = -f P_n sign(u_t), and the normal separation
+    velocity is e times the closing speed, at the first impact and at every re-strike."""
+    e, f = 0.3, 0.3
+    run, _ = _bounce_along_wall(engine, e, f, v_n=3.0)
+    assert len(run.impacts) >= 2
+    for h in run.impacts:
+        r = h.result
+        assert r.sliding  # the slip (about 20 m/s) is slowed, not stopped: it keeps its sign
+        sign = math.copysign(1.0, r.separation_tangential_velocity)
+        assert h.tangential_impulse == pytest.approx(-f * h.normal_impulse * sign, rel=1e-9)
+        assert r.separation_normal_velocity == pytest.approx(-e * r.closing_velocity, rel=1e-9)

@@ -150,7 +150,7 @@ N_R = 6
 PS_DISARMED, PS_ARMED, PS_CONTACT = 0, 1, 2
 
 # event kinds of a segment
-EV_REST, EV_ZONE, EV_STOP, EV_RELEASE, EV_GAP, EV_ARM, EV_PRESS = range(7)
+EV_REST, EV_ZONE, EV_STOP, EV_RELEASE, EV_GAP, EV_ARM, EV_PRESS, EV_STRIKE = range(8)
 # log record kinds
 (LOG_ZONE_ENTER, LOG_ZONE_EXIT, LOG_SCHEDULE, LOG_STOP_CLOSED, LOG_STOP_IMPACT, LOG_STOP_OPEN, LOG_REST,
  LOG_ARMED, LOG_CONTACT, LOG_PRESS, LOG_CONTACT_END) = range(11)
@@ -935,6 +935,8 @@ def event_value(e, y, M, ev_kind, ev_idx, ev_val, D, sw, dydt, W):
         evaluate(y, M, sw, D, dydt, W)
         return W[4][2 * nh + n] * ev_val[e]
     body_trig(y, nb, cs)
+    if kind == EV_STRIKE:
+        return strike_speed(y, M, D, cs, ev_idx[e], W[7]) - M[29][ev_idx[e], R_VTHR]
     g = pair_gap(y, M, cs, ev_idx[e])
     if kind == EV_GAP:
         return g
@@ -1193,7 +1195,9 @@ def build_events(M, D, offsets, ev_kind, ev_idx, ev_val, ev_dir):
 
     Order: the rest of every moving vehicle, every zone, the stops of every hitch that has a
     limit and is not closed (each side), the release of every closed stop, then per pair the
-    gap (armed), the arming distance (disarmed or in contact) and the press (disarmed).
+    gap (armed), the arming distance (disarmed or in contact), the press (disarmed) and the
+    strike (disarmed or in contact: a point pressed beyond the allowance closing at the
+    impulse threshold or faster, :func:`strike_speed`).
     """
     hitch, zone_mu, pr_par, pr_body = M[3], M[8], M[29], M[26]
     lk_j, lk_th, nlk, shift, pstate, pref, parked = D[1], D[2], D[3][0], D[4], D[5], D[6], D[7]
@@ -1248,6 +1252,11 @@ def build_events(M, D, offsets, ev_kind, ev_idx, ev_val, ev_dir):
             ev_kind[n_ev] = EV_PRESS
             ev_idx[n_ev] = p
             ev_val[n_ev] = pref[p] + pr_par[p, R_ARM]
+            ev_dir[n_ev] = 1.0
+            n_ev += 1
+        if pstate[p] != PS_ARMED:
+            ev_kind[n_ev] = EV_STRIKE
+            ev_idx[n_ev] = p
             ev_dir[n_ev] = 1.0
             n_ev += 1
     return n_ev
@@ -1309,6 +1318,90 @@ def touch_geometry(y, M, p, cs, mf, geo):
     geo[3] = ny
     geo[4] = (vax - vbx) * nx + (vay - vby) * ny
     return True
+
+
+@njit(**_HOT)
+def _strike_scan(y, M, D, cs, p, mf, margin, floor, geo):
+    """Closing speeds of the manifold points of pair ``p`` pressed into each other beyond the
+    pair's allowance (to within ``margin`` [m]).
+
+    Returns the largest closing speed ``-(v_A - v_B) . n`` [m/s] of those points (``-inf`` if
+    none).  With ``floor`` finite, ``geo`` receives ``(x, y, nx, ny, u_n)`` of the piece pair
+    whose point closes fastest: the mean of its points closing at ``floor`` or faster, the
+    normal from B into A and the normal relative velocity at that mean point.
+    """
+    pr_body, pr_ptr, pp = M[26], M[27], M[28]
+    allowance = D[6][p]
+    ia = pr_body[p, 0]
+    ib = pr_body[p, 1]
+    best = -math.inf
+    for q in range(pr_ptr[p], pr_ptr[p + 1]):
+        a = pp[q, 0]
+        b = pp[q, 1]
+        if piece_gap(y, M, cs, a, b) > margin - allowance:
+            continue
+        count, nx, ny = manifold(y, M, cs, a, b, mf, margin - allowance)
+        fastest = -math.inf
+        sx = 0.0
+        sy = 0.0
+        n_fast = 0
+        for m in range(count):
+            px = mf[m, 0]
+            py = mf[m, 1]
+            vax, vay = point_velocity(y, M, ia, px, py)
+            vbx, vby = point_velocity(y, M, ib, px, py)
+            closing = -((vax - vbx) * nx + (vay - vby) * ny)
+            if closing > fastest:
+                fastest = closing
+            if closing >= floor:
+                sx += px
+                sy += py
+                n_fast += 1
+        if fastest > best:
+            best = fastest
+            if n_fast > 0:
+                px = sx / n_fast
+                py = sy / n_fast
+                vax, vay = point_velocity(y, M, ia, px, py)
+                vbx, vby = point_velocity(y, M, ib, px, py)
+                geo[0] = px
+                geo[1] = py
+                geo[2] = nx
+                geo[3] = ny
+                geo[4] = (vax - vbx) * nx + (vay - vby) * ny
+    return best
+
+
+@njit(**_HOT)
+def strike_speed(y, M, D, cs, p, mf):
+    """Largest closing speed [m/s] of the points of pair ``p`` pressed beyond its allowance
+    (0 if none: a pair apart, or only in its crush allowance, does not strike).
+
+    The strike event of a pair in sustained contact or disarmed is this minus the impulse
+    threshold: it crosses zero when a point arrives at the surface (or beyond the crush of the
+    first impact) closing at the threshold or faster (the value jumps there; the root is the
+    arrival), or when a point already in contact is driven in that fast.  Either is an impact.
+    """
+    # an infinite floor writes no geometry (mf[0] only stands in for the unused argument)
+    best = _strike_scan(y, M, D, cs, p, mf, 0.0, math.inf, mf[0])
+    return best if best > 0.0 else 0.0
+
+
+@njit(**_HOT)
+def strike_geometry(y, M, D, cs, p, mf, geo):
+    """Contact point, normal and normal relative velocity of a strike of pair ``p`` (``geo`` as
+    :func:`touch_geometry`), at a state where :func:`strike_speed` reaches the threshold.
+
+    The points count that lie within 1 mm of the surface (the root of a jump is located to
+    round-off on either side of the arrival) and close at the threshold or faster (to a
+    relative 1e-6); the point is their mean in the piece pair of the fastest.  Returns False
+    if no point closes that fast.
+    """
+    thr = M[29][p, R_VTHR]
+    floor = thr * (1.0 - 1e-6)
+    geo[4] = 0.0
+    best = _strike_scan(y, M, D, cs, p, mf, 1e-3, floor, geo)
+    return best >= floor and geo[4] < 0.0
 
 
 @njit(**_HOT)
@@ -1395,6 +1488,12 @@ def handle_event(e, t, y, M, D, offsets, ev_kind, ev_idx, ev_val, ev_dir, sw, dy
         unpark_pair(M, D, p)
         n = _log(rec, n, LOG_CONTACT, p, 0, geo[5] if found else 0.0, 0.0)
         return False, n
+    if kind == EV_STRIKE:
+        p = idx
+        cs = W[5]
+        body_trig(y, M[0].shape[0], cs)
+        geo[0] = p
+        return strike_geometry(y, M, D, cs, p, W[7], geo[1:]), n
     if kind == EV_ARM:
         p = idx
         was = pstate[p]
@@ -1697,7 +1796,7 @@ def run(t0, y0, M, D, offsets, stops, gl_x, gl_w, deadline, counters, quad):
     dydt = np.zeros(n)
     err = np.zeros(n)
     new_memb = np.zeros((nw, nz), np.bool_)
-    n_ev_max = nv + nz + 3 * nh + 2 * npr + 1
+    n_ev_max = nv + nz + 3 * nh + 3 * npr + 1
     ev_kind = np.zeros(n_ev_max, np.int64)
     ev_idx = np.zeros(n_ev_max, np.int64)
     ev_val = np.zeros(n_ev_max)
@@ -2021,6 +2120,33 @@ def settle_at(y, M, D):
     return rec[:n]
 
 
+@njit(**_JIT)
+def pending_strike(y, M, D):
+    """After an impulse: the pair in sustained contact or disarmed whose points now close at
+    its impulse threshold or faster (the fastest such pair), as ``geo`` = (pair, x, y, nx,
+    ny, u_n) of :func:`strike_geometry`; pair -1 if none.  An impulse at one point can leave
+    another point of the same pair, or of another pair of the bodies it moved, striking at
+    that instant: each is an impact of its own."""
+    W = make_work(M)
+    cs = W[5]
+    body_trig(y, M[0].shape[0], cs)
+    geo = np.zeros(6)
+    geo[0] = -1.0
+    tmp = np.zeros(5)
+    pstate, pr_par = D[5], M[29]
+    best = -math.inf
+    for p in range(pr_par.shape[0]):
+        if pstate[p] == PS_ARMED or not strike_geometry(y, M, D, cs, p, W[7], tmp):
+            continue
+        excess = -tmp[4] - pr_par[p, R_VTHR]
+        if excess > best:
+            best = excess
+            geo[0] = p
+            for c in range(5):
+                geo[1 + c] = tmp[c]
+    return geo
+
+
 # ============================================================================= entry points of the SciPy engine
 @njit(**_JIT)
 def rhs(y, M, phase, D):
@@ -2031,6 +2157,22 @@ def rhs(y, M, phase, D):
     dydt = np.zeros(y.shape[0])
     evaluate(y, M, sw, D, dydt, W)
     return dydt
+
+
+@njit(**_JIT)
+def rhs_work(y, M, phase, D, n):
+    """:func:`rhs` of the state ``y[:n]`` followed by the contact powers of every pair [W]: the
+    SciPy engine integrates the contact work with the state while pairs are in contact, so the
+    work it books is that of the forces its own steps felt (the compiled engine sums the same
+    powers with the Runge-Kutta weights of its stages)."""
+    W = make_work(M)
+    sw = np.zeros((M[1].shape[0], N_S))
+    segment_params(phase, D[0], M, sw)
+    out = np.zeros(y.shape[0])
+    evaluate(y[:n], M, sw, D, out[:n], W)
+    for p in range(y.shape[0] - n):
+        out[n + p] = W[6][p]
+    return out
 
 
 @njit(**_JIT)
@@ -2054,7 +2196,7 @@ def rhs_many(Y, M, phase, D):
 @njit(**_JIT)
 def segment_events(M, D, offsets):
     """The events of a segment in mode ``D``: ``(ev_kind, ev_idx, ev_val, ev_dir)`` (:func:`build_events`)."""
-    n_max = D[7].shape[0] + M[8].shape[0] + 3 * M[3].shape[0] + 2 * M[26].shape[0] + 1
+    n_max = D[7].shape[0] + M[8].shape[0] + 3 * M[3].shape[0] + 3 * M[26].shape[0] + 1
     ev_kind = np.zeros(n_max, np.int64)
     ev_idx = np.zeros(n_max, np.int64)
     ev_val = np.zeros(n_max)

@@ -49,6 +49,14 @@ _WALL_CHECK_EVALUATIONS = 256
 # Initial pin gap [m] and pin velocity mismatch (relative to 1 + speed) [m/s] accepted.
 _PIN_GAP_TOL = 1e-3
 _PIN_VELOCITY_TOL = 1e-6
+#: Absolute tolerance of the contact work integrated with the state (SciPy engine), relative to
+#: the kinetic energy at the start of the run: the ledger is to close to 1e-6 of it.
+_WORK_ATOL = 1e-9
+#: Impacts solved at one instant after a touch, one point after another (sequential impulses:
+#: an impulse at one point can leave another point still striking). Beyond this number a
+#: remaining strike is left to the penalty force (a point that cannot be stopped by impulses
+#: at one instant: pinned between two bodies).
+MAX_STRIKES_AT_ONCE = 8
 
 
 def _status_names():
@@ -86,6 +94,7 @@ class _ScipyIntegrator(_Integrator):
         super().__init__(model)
         self.solver_cls = {"LSODA": LSODA, "RK45": RK45, "DOP853": DOP853, "Radau": Radau, "BDF": BDF}[model.options.method]
         self.segments: list[dict] = []
+        self.energy_scale = None  # the kinetic energy at the start of the run [J]: the work's tolerance scale
 
     def integrate(self, t, y, D, offsets, deadline, counters, quad, log):
         k = kernels()
@@ -108,6 +117,11 @@ class _ScipyIntegrator(_Integrator):
             g_old, r_old = k.event_values(y, M, phase, D, ev_kind, ev_idx, ev_val)
             resolution = k.event_resolutions(M, ev_kind, ev_idx)
             snapshot = _snapshot(phase, D)
+            # pairs in contact: their work is integrated with the state (module rhs_work)
+            n = y.size
+            n_work = len(model.pairs) if bool(np.any(D[5] == k.PS_CONTACT)) else 0
+            if self.energy_scale is None:
+                self.energy_scale = max(model.kinetic_energy(y), 1.0)
 
             def fun(tt, yy, phase=phase):
                 n_cols = 1 if yy.ndim == 1 else yy.shape[1]
@@ -117,7 +131,11 @@ class _ScipyIntegrator(_Integrator):
                 crossed = counters[2] // _WALL_CHECK_EVALUATIONS != (counters[2] - n_cols) // _WALL_CHECK_EVALUATIONS
                 if (crossed or counters[2] <= n_cols) and time.perf_counter() > deadline:
                     raise _Budget(k.ST_WALL_TIME)
-                out = k.rhs(yy, M, phase, D) if yy.ndim == 1 else k.rhs_many(np.ascontiguousarray(yy), M, phase, D)
+                if n_work:
+                    out = k.rhs_work(yy, M, phase, D, n) if yy.ndim == 1 else np.stack(
+                        [k.rhs_work(np.ascontiguousarray(c), M, phase, D, n) for c in yy.T], axis=1)
+                else:
+                    out = k.rhs(yy, M, phase, D) if yy.ndim == 1 else k.rhs_many(np.ascontiguousarray(yy), M, phase, D)
                 if not np.all(np.isfinite(out)):
                     raise _Budget(k.ST_NONFINITE)
                 return out
@@ -127,8 +145,13 @@ class _ScipyIntegrator(_Integrator):
             steps = []
             fired = -1
             failure = None
+            y0, atol = y, o.atol
+            if n_work:
+                y0 = np.concatenate([y, np.zeros(n_work)])
+                atol = np.concatenate([np.full(n, o.atol), np.full(n_work, _WORK_ATOL * self.energy_scale)])
+            work = np.zeros(n_work)
             try:
-                solver = self.solver_cls(fun, t, y, t_stop, rtol=o.rtol, atol=o.atol, max_step=o.max_step,
+                solver = self.solver_cls(fun, t, y0, t_stop, rtol=o.rtol, atol=atol, max_step=o.max_step,
                                          first_step=first, vectorized=o.method in ("Radau", "BDF"))
                 while solver.status == "running":
                     message = solver.step()
@@ -136,19 +159,21 @@ class _ScipyIntegrator(_Integrator):
                         failure = (k.ST_STEP_TOO_SMALL, message)
                         break
                     t_old, t_new = solver.t_old, solver.t
-                    dense = solver.dense_output()
-                    g_new, r_new = k.event_values(solver.y, M, phase, D, ev_kind, ev_idx, ev_val)
+                    full = solver.dense_output()
+                    dense = full if not n_work else (lambda tq, full=full: np.asarray(full(tq))[:n])
+                    g_new, r_new = k.event_values(solver.y[:n], M, phase, D, ev_kind, ev_idx, ev_val)
                     root, e = _first_root(k, M, phase, D, t_old, t_new, dense, g_old, g_new, r_old, r_new,
                                           ev_kind, ev_idx, ev_val, ev_dir, resolution)
                     if e >= 0:
                         steps.append((t_old, root, dense))
                         t = root
-                        y = np.array(dense(root), dtype=float)
+                        y_full = np.array(full(root), dtype=float)
+                        y, work = y_full[:n].copy(), y_full[n:]
                         fired = e
                         break
                     steps.append((t_old, t_new, dense))
                     t = t_new
-                    y = np.array(solver.y, dtype=float)
+                    y, work = np.array(solver.y[:n], dtype=float), np.array(solver.y[n:], dtype=float)
                     g_old, r_old = g_new, r_new
                 self.njev += int(getattr(solver, "njev", 0) or 0)
                 self.nlu += int(getattr(solver, "nlu", 0) or 0)
@@ -157,7 +182,7 @@ class _ScipyIntegrator(_Integrator):
             if t > t_seg0:
                 seg = dict(t0=t_seg0, t1=t, steps=steps, mode=snapshot)
                 self.segments.append(seg)
-                _add_quadrature(k, M, seg, quad)
+                _add_quadrature(k, M, seg, quad, work if n_work else None)
                 counters[1] = 0
             else:
                 counters[1] += 1
@@ -189,6 +214,10 @@ class _ScipyIntegrator(_Integrator):
         if T.size:
             Y[:, -1] = y_end
         return Y
+
+    def step_edges(self) -> np.ndarray:
+        """Start and end times of every step taken (sorted)."""
+        return np.unique([t for s in self.segments for a, b, _ in s["steps"] for t in (a, b)])
 
     def solution(self, y_end, t_end):
         return _PiecewiseSolution([(s["t0"], _segment_dense(s)) for s in self.segments], y_end, t_end)
@@ -243,6 +272,11 @@ class _CompiledIntegrator(_Integrator):
         if st is None or not len(T):
             return np.repeat(y_end[:, None], len(T), axis=1)
         return kernels().interpolate_samples(T, seg_of, sg_s, st[0], st[1], st[2], st[3], y_end, len(T))
+
+    def step_edges(self) -> np.ndarray:
+        """Start and end times of every step taken (sorted)."""
+        st, _, _ = self._joined()
+        return np.zeros(0) if st is None else np.unique(np.concatenate([st[0], st[0] + st[1]]))
 
     def solution(self, y_end, t_end):
         from .fast import CompiledSolution
@@ -367,8 +401,13 @@ def _first_root(k, M, phase, D, t, t_new, dense, g_old, g_new, r_old, r_new, ev_
     return t_first, fired
 
 
-def _add_quadrature(k, M, seg, quad):
-    """Path integrals of a SciPy segment: 5-point Gauss-Legendre on each of its steps' dense output."""
+def _add_quadrature(k, M, seg, quad, work=None):
+    """Path integrals of a SciPy segment: 5-point Gauss-Legendre on each of its steps' dense output.
+
+    ``work``: the contact work of every pair over the segment, integrated with the state
+    (pairs in contact); it replaces the quadrature of the contact powers, which would book the
+    forces of depths the dense output interpolates between the solver's own evaluations.
+    """
     nodes, weights, owner = [], [], []
     for a, b, dense in seg["steps"]:
         half = 0.5 * (b - a)
@@ -378,11 +417,16 @@ def _add_quadrature(k, M, seg, quad):
         nodes.append(np.asarray(dense(tq)).reshape(-1, tq.size))
         weights.append(half * _GL_WEIGHTS)
     if not nodes:
+        if work is not None:
+            quad[quad.size - work.size:] += work
         return
     Yq = np.ascontiguousarray(np.concatenate(nodes, axis=1))
     wq = np.concatenate(weights)
     arrays = _segment_arrays([(seg["t0"], seg["t1"], seg["mode"])], None)
-    quad += k.quad_sums(Yq, wq, np.zeros(wq.size, dtype=np.int64), M, *arrays)
+    part = k.quad_sums(Yq, wq, np.zeros(wq.size, dtype=np.int64), M, *arrays)
+    if work is not None:
+        part[part.size - work.size:] = work
+    quad += part
 
 
 # ============================================================================= events and their words
@@ -535,8 +579,7 @@ def _secondary_impact(model: SceneModel, t: float, y: np.ndarray, geo: np.ndarra
     for name, (vx0, vy0) in v_before.items():
         i = names.index(name)
         delta_v[name] = (float(y[L.vx][i] - vx0), float(y[L.vy][i] - vy0))
-    D[5][p] = k.PS_CONTACT
-    D[6][p] = 0.0
+    D[5][p] = k.PS_CONTACT  # the allowance (the crush of the first impact, if any) is kept
     for v in involved:
         D[7][model.vehicles.index(v)] = 0
     record = SecondaryImpact(t=t, body1=pair.a, body2=pair.b, point=np.array(point), normal=np.array(geo[3:5]),
@@ -628,6 +671,14 @@ def run_model(model: SceneModel, initial: Mapping[str, BodyState]) -> SceneRunou
             break
         record, _ = _secondary_impact(model, t, y, geo, D, offsets, log)
         impacts.append(record)
+        # an impulse can leave another point striking at this instant (the other end of an
+        # edge, a pair of the bodies it moved): each is an impact too, up to MAX_STRIKES_AT_ONCE
+        for _ in range(MAX_STRIKES_AT_ONCE):
+            nxt = k.pending_strike(y, M, D)
+            if nxt[0] < 0 or len(impacts) >= o.max_impacts:
+                break
+            record, _ = _secondary_impact(model, t, y, nxt, D, offsets, log)
+            impacts.append(record)
         _log_records(model, t, k.settle_at(y, M, D), log)
     if code is not None:
         status = names[code]

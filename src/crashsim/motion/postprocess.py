@@ -526,19 +526,17 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
     n_imp = {}
     for imp in impacts:
         n_imp[f"{imp.body1}|{imp.body2}"] = n_imp.get(f"{imp.body1}|{imp.body2}", 0) + 1
-    pstate = arrays[5]
-    dt = np.diff(T, append=T[-1]) if T.size else np.zeros(0)
+    span, peak, deepest = contact_summaries(model, integrator, table, arrays, y_end, t_end)
     pairs = []
     for p, pair in enumerate(model.pairs):
-        in_contact = (pstate[seg_of, p] == k.PS_CONTACT) & (CF[:, p] > 0)  # pressed together
-        pairs.append(PairSummary(pair.name, pair.a, pair.b, n_imp.get(pair.name, 0), float(np.sum(dt[in_contact])),
-                                 float(CF[:, p].max()) if CF.shape[0] else 0.0, float(pen[p]),
-                                 float(quad[nb + 3 * nw + p]), T.copy(), CF[:, p].copy()))
+        pairs.append(PairSummary(pair.name, pair.a, pair.b, n_imp.get(pair.name, 0), float(span[p]),
+                                 float(peak[p]), float(max(pen[p], deepest[p])), float(quad[nb + 3 * nw + p]),
+                                 T.copy(), CF[:, p].copy()))
     ke0, ke1 = model.kinetic_energy(y_initial), model.kinetic_energy(y_end)
     tyres = float(np.sum(quad[nb + 2 * nw: nb + 3 * nw]))
     stops = float(sum(e.energy for e in events if e.kind in ("stop_closed", "stop_impact")))
     hits = float(sum(i.energy_loss for i in impacts))
-    contacts = -float(np.sum(quad[nb + 3 * nw:]))
+    contacts = 0.0 - float(np.sum(quad[nb + 3 * nw:]))  # 0.0 -: no "-0" when no contact acted
     ledger = {"initial": ke0, "impacts": hits, "tyres": tyres, "stops": stops, "contacts": contacts, "final": ke1,
               "closing_error": ke0 - (hits + tyres + stops + contacts + ke1)}
     if missed:
@@ -549,6 +547,62 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
     return SceneRunout(vehicles=vehicles, impacts=tuple(impacts), pairs=tuple(pairs), events=tuple(events),
                        energy=ledger, status=status, message=message, t_end=float(t_end), nfev=int(nfev),
                        n_segments=len(table), method=integrator.method, sol=sol, layout=model.layout)
+
+
+#: Points per solver step at which a pair's contact force and depth are evaluated (the step's
+#: start and quarter points; the segment's end closes the grid) for the pair summaries.
+_SUMMARY_POINTS = np.array([0.0, 0.25, 0.5, 0.75])
+
+
+def contact_summaries(model, integrator, table, arrays, y_end, t_end):
+    """Time in sustained contact, peak contact force and deepest penetration of every pair, from
+    the solution itself (not the ``sample_dt`` grid): ``(span, peak, deepest)``, each (npairs,).
+
+    The span is the time the pair spent in sustained contact, from the segments the events cut
+    (so it is the span of the pair's own contact events).  Force and depth are evaluated on the
+    dense solution at every step of the integrator in those segments (its start and quarter
+    points) and the largest force is refined by the parabola through the largest node and its
+    neighbours: the summaries are those of the solution to about the solver tolerance, and the
+    same whatever ``sample_dt`` says.
+    """
+    from .model import kernels
+
+    k = kernels()
+    npr = len(model.pairs)
+    span, peak, deepest = np.zeros(npr), np.zeros(npr), np.zeros(npr)
+    if not npr or not table:
+        return span, peak, deepest
+    pstate = arrays[5]
+    edges = integrator.step_edges()
+    T, G = [], []
+    for g, (t0, t1, _) in enumerate(table):
+        inside = pstate[g] == k.PS_CONTACT
+        if not inside.any() or t1 <= t0:
+            continue
+        span[inside] += t1 - t0
+        e = edges[(edges > t0) & (edges < t1)]
+        knots = np.concatenate([[t0], e, [t1]])
+        fine = (knots[:-1, None] + np.diff(knots)[:, None] * _SUMMARY_POINTS).ravel()
+        T.append(np.append(fine, t1))
+        G.append(np.full(fine.size + 1, g, dtype=np.int64))
+    if not T:
+        return span, peak, deepest
+    # one more node at the run's end: the samplers return the final state there
+    T = np.concatenate(T + [[t_end]])
+    G = np.concatenate(G + [np.array([len(table) - 1], dtype=np.int64)])
+    Y = integrator.sample(T, G, y_end)[:, :-1]
+    T, G = T[:-1], G[:-1]
+    out = k.evaluate_samples(np.ascontiguousarray(Y), G, model.M, *arrays)
+    CF, deepest = out[5], out[7]
+    for p in range(npr):
+        f = np.where(pstate[G, p] == k.PS_CONTACT, CF[:, p], 0.0)
+        j = int(np.argmax(f))
+        peak[p] = f[j]
+        if 0 < j < len(f) - 1 and G[j - 1] == G[j] == G[j + 1] and T[j - 1] < T[j] < T[j + 1]:
+            a, b, c = np.polyfit(T[j - 1:j + 2] - T[j], f[j - 1:j + 2], 2)
+            if a < 0 and T[j - 1] - T[j] <= -b / (2 * a) <= T[j + 1] - T[j]:
+                peak[p] = max(f[j], c - b * b / (4 * a))
+    return span, peak, deepest
 
 
 def event_places(model, sol, events) -> list:

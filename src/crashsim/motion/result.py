@@ -593,11 +593,14 @@ class PairSummary:
     impacts : int
         Secondary impacts of the pair.
     contact_time : float
-        Time spent in sustained contact [s] (at the samples' resolution).
+        Time spent in sustained contact [s]: the span of the pair's contact events (from a
+        touch, a press or an impact to the contact's end, or to the end of the run).
     peak_force : float
-        Largest sustained-contact force [N] over the samples.
+        Largest sustained-contact force [N], from the solution (every integrator step, the
+        largest refined; not the sample grid: ``sample_dt`` does not change it).
     max_penetration : float
-        Largest depth of one body in the other beyond the allowance [m] over the samples:
+        Largest depth of one body in the other beyond the allowance [m], from the solution and
+        the samples:
         ``F / k`` while in sustained contact, round-off while apart; the crush of the first
         impact is the allowance of a pair that started overlapped.
     contact_work : float

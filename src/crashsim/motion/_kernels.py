@@ -1405,6 +1405,30 @@ def strike_geometry(y, M, D, cs, p, mf, geo):
 
 
 @njit(**_HOT)
+def find_strike(y, M, D, cs, mf, geo):
+    """The pair in sustained contact or disarmed whose points close fastest beyond its impulse
+    threshold at ``y`` (after a velocity jump: an impulse, an articulation-stop impact), with
+    its strike geometry in ``geo`` = (pair, x, y, nx, ny, u_n); False if none.
+
+    An impulse at one point can leave another point of the same pair, or a pair of the bodies
+    it moved, striking at that instant: each is an impact of its own."""
+    pstate, pr_par = D[5], M[29]
+    best = -math.inf
+    hit = -1
+    for p in range(pr_par.shape[0]):
+        if pstate[p] == PS_ARMED or not strike_geometry(y, M, D, cs, p, mf, geo[1:]):
+            continue
+        excess = -geo[5] - pr_par[p, R_VTHR]
+        if excess > best:
+            best = excess
+            hit = p
+    if hit < 0:
+        return False
+    geo[0] = hit
+    return strike_geometry(y, M, D, cs, hit, mf, geo[1:])
+
+
+@njit(**_HOT)
 def unpark_pair(M, D, p):
     """Both vehicles of pair ``p`` move again (a contact force or an impulse acts on them)."""
     pr_body, bveh = M[26], M[19]
@@ -1463,7 +1487,8 @@ def handle_event(e, t, y, M, D, offsets, ev_kind, ev_idx, ev_val, ev_dir, sw, dy
             lk_n[0] = nlk
             shift[j] = _left_stop_shift(y, M, j, offsets[j], lim, shift[j])
             n = _log(rec, n, LOG_STOP_IMPACT, j, 0, side * lim, loss)
-        return False, n
+        # the stop impact changed velocities: a point in contact may now strike
+        return find_strike(y, M, D, W[5], W[7], geo), n
     if kind == EV_RELEASE:
         q0 = idx
         jq = lk_j[q0]
@@ -2122,28 +2147,12 @@ def settle_at(y, M, D):
 
 @njit(**_JIT)
 def pending_strike(y, M, D):
-    """After an impulse: the pair in sustained contact or disarmed whose points now close at
-    its impulse threshold or faster (the fastest such pair), as ``geo`` = (pair, x, y, nx,
-    ny, u_n) of :func:`strike_geometry`; pair -1 if none.  An impulse at one point can leave
-    another point of the same pair, or of another pair of the bodies it moved, striking at
-    that instant: each is an impact of its own."""
+    """After an impulse: :func:`find_strike` as ``geo`` = (pair, x, y, nx, ny, u_n); pair -1 if none."""
     W = make_work(M)
-    cs = W[5]
-    body_trig(y, M[0].shape[0], cs)
+    body_trig(y, M[0].shape[0], W[5])
     geo = np.zeros(6)
-    geo[0] = -1.0
-    tmp = np.zeros(5)
-    pstate, pr_par = D[5], M[29]
-    best = -math.inf
-    for p in range(pr_par.shape[0]):
-        if pstate[p] == PS_ARMED or not strike_geometry(y, M, D, cs, p, W[7], tmp):
-            continue
-        excess = -tmp[4] - pr_par[p, R_VTHR]
-        if excess > best:
-            best = excess
-            geo[0] = p
-            for c in range(5):
-                geo[1 + c] = tmp[c]
+    if not find_strike(y, M, D, W[5], W[7], geo):
+        geo[0] = -1.0
     return geo
 
 
@@ -2448,6 +2457,32 @@ def evaluate_samples(Y, seg_of, M, sg_phase, sg_memb, sg_nlk, sg_lkj, sg_lkth, s
                 ia = M[26][q, 0]
                 CF[p, q] = math.sqrt(f_scratch[ia] ** 2 + f_scratch[nb + ia] ** 2)
     return P, SL, LD, LAMH, STOPM, CF, max_gap, pen
+
+
+@njit(**_JIT)
+def strike_speeds(Y, seg_of, M, sg_memb, sg_nlk, sg_lkj, sg_lkth, sg_pstate, sg_pref, sg_parked):
+    """Closing speed [m/s] of the fastest point pressed beyond the allowance, per sample column
+    and pair (:func:`strike_speed`; 0 for a pair that is armed, i.e. apart): (K, npairs).
+
+    While a pair is in contact or disarmed this stays below its impulse threshold except at
+    the instants of its impacts (a strike there is an impact): an audit of the rule."""
+    K = Y.shape[1]
+    npr = M[26].shape[0]
+    out = np.zeros((K, npr))
+    W = make_work(M)
+    cs = W[5]
+    nb = M[0].shape[0]
+    y = np.zeros(Y.shape[0])
+    for col in range(K):
+        s_ = seg_of[col]
+        D = segment_mode(s_, sg_memb, sg_nlk, sg_lkj, sg_lkth, sg_pstate, sg_pref, sg_parked)
+        for i in range(Y.shape[0]):
+            y[i] = Y[i, col]
+        body_trig(y, nb, cs)
+        for p in range(npr):
+            if sg_pstate[s_, p] != PS_ARMED:
+                out[col, p] = strike_speed(y, M, D, cs, p, W[7])
+    return out
 
 
 @njit(**_JIT)

@@ -526,12 +526,12 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
     n_imp = {}
     for imp in impacts:
         n_imp[f"{imp.body1}|{imp.body2}"] = n_imp.get(f"{imp.body1}|{imp.body2}", 0) + 1
-    span, peak, deepest = contact_summaries(model, integrator, table, arrays, y_end, t_end)
+    span, peak, deepest, closing = contact_summaries(model, integrator, table, arrays, y_end, t_end)
     pairs = []
     for p, pair in enumerate(model.pairs):
         pairs.append(PairSummary(pair.name, pair.a, pair.b, n_imp.get(pair.name, 0), float(span[p]),
                                  float(peak[p]), float(max(pen[p], deepest[p])), float(quad[nb + 3 * nw + p]),
-                                 T.copy(), CF[:, p].copy()))
+                                 T.copy(), CF[:, p].copy(), float(closing[p])))
     ke0, ke1 = model.kinetic_energy(y_initial), model.kinetic_energy(y_end)
     tyres = float(np.sum(quad[nb + 2 * nw: nb + 3 * nw]))
     stops = float(sum(e.energy for e in events if e.kind in ("stop_closed", "stop_impact")))
@@ -555,38 +555,41 @@ _SUMMARY_POINTS = np.array([0.0, 0.25, 0.5, 0.75])
 
 
 def contact_summaries(model, integrator, table, arrays, y_end, t_end):
-    """Time in sustained contact, peak contact force and deepest penetration of every pair, from
-    the solution itself (not the ``sample_dt`` grid): ``(span, peak, deepest)``, each (npairs,).
+    """Time in sustained contact, peak contact force, deepest penetration and fastest closing in
+    contact of every pair, from the solution itself (not the ``sample_dt`` grid):
+    ``(span, peak, deepest, closing)``, each (npairs,).
 
     The span is the time the pair spent in sustained contact, from the segments the events cut
-    (so it is the span of the pair's own contact events).  Force and depth are evaluated on the
-    dense solution at every step of the integrator in those segments (its start and quarter
-    points) and the largest force is refined by the parabola through the largest node and its
-    neighbours: the summaries are those of the solution to about the solver tolerance, and the
-    same whatever ``sample_dt`` says.
+    (so it is the span of the pair's own contact events).  Force, depth and the closing speed
+    of points pressed beyond the allowance (:func:`crashsim.motion._kernels.strike_speeds`) are
+    evaluated on the dense solution at every step of the integrator in the segments with a
+    pair in contact or disarmed (its start and quarter points), and the largest force is
+    refined by the parabola through the largest node and its neighbours: the summaries are
+    those of the solution to about the solver tolerance, and the same whatever ``sample_dt``
+    says.
     """
     from .model import kernels
 
     k = kernels()
     npr = len(model.pairs)
-    span, peak, deepest = np.zeros(npr), np.zeros(npr), np.zeros(npr)
+    span, peak, deepest, closing = np.zeros(npr), np.zeros(npr), np.zeros(npr), np.zeros(npr)
     if not npr or not table:
-        return span, peak, deepest
+        return span, peak, deepest, closing
     pstate = arrays[5]
     edges = integrator.step_edges()
     T, G = [], []
     for g, (t0, t1, _) in enumerate(table):
         inside = pstate[g] == k.PS_CONTACT
-        if not inside.any() or t1 <= t0:
-            continue
         span[inside] += t1 - t0
+        if not (pstate[g] != k.PS_ARMED).any() or t1 <= t0:
+            continue
         e = edges[(edges > t0) & (edges < t1)]
         knots = np.concatenate([[t0], e, [t1]])
         fine = (knots[:-1, None] + np.diff(knots)[:, None] * _SUMMARY_POINTS).ravel()
         T.append(np.append(fine, t1))
         G.append(np.full(fine.size + 1, g, dtype=np.int64))
     if not T:
-        return span, peak, deepest
+        return span, peak, deepest, closing
     # one more node at the run's end: the samplers return the final state there
     T = np.concatenate(T + [[t_end]])
     G = np.concatenate(G + [np.array([len(table) - 1], dtype=np.int64)])
@@ -594,6 +597,11 @@ def contact_summaries(model, integrator, table, arrays, y_end, t_end):
     T, G = T[:-1], G[:-1]
     out = k.evaluate_samples(np.ascontiguousarray(Y), G, model.M, *arrays)
     CF, deepest = out[5], out[7]
+    # closing speeds inside the segments: a segment's end is the instant of its event (an
+    # impact's state before the impulse)
+    ends = np.array([t1 for _, t1, _ in table])[G]
+    closing = np.where((T < ends)[:, None], k.strike_speeds(np.ascontiguousarray(Y), G, model.M, *arrays[1:]),
+                       0.0).max(axis=0)
     for p in range(npr):
         f = np.where(pstate[G, p] == k.PS_CONTACT, CF[:, p], 0.0)
         j = int(np.argmax(f))
@@ -602,7 +610,7 @@ def contact_summaries(model, integrator, table, arrays, y_end, t_end):
             a, b, c = np.polyfit(T[j - 1:j + 2] - T[j], f[j - 1:j + 2], 2)
             if a < 0 and T[j - 1] - T[j] <= -b / (2 * a) <= T[j + 1] - T[j]:
                 peak[p] = max(f[j], c - b * b / (4 * a))
-    return span, peak, deepest
+    return span, peak, deepest, closing
 
 
 def event_places(model, sol, events) -> list:

@@ -608,6 +608,10 @@ class PairSummary:
         energy still stored in the penalty spring).
     t, force : ndarray
         The sampled sustained-contact force on body1 [N] against time [s].
+    max_closing : float
+        Fastest closing speed [m/s] of a point pressed beyond the allowance while the pair was
+        in contact or disarmed, outside its impacts (from the solution): below the pair's
+        impulse threshold, since a faster one is an impact (the re-strike rule).
     """
 
     name: str
@@ -620,6 +624,7 @@ class PairSummary:
     contact_work: float
     t: np.ndarray = field(default_factory=lambda: np.zeros(0))
     force: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    max_closing: float = 0.0
 
     def to_dict(self, history: bool = False) -> dict:
         d = {k: v for k, v in self.__dict__.items() if k not in ("t", "force")}

@@ -827,7 +827,29 @@ def _with_contact(spec: "RunoutSpec", d: dict, vehicles, problem: ImpactProblem,
         if va is None and vb is None:
             raise _err(f"{a!r} and {b!r} are both obstacles: obstacles do not meet each other", f"{key}.second", file)
         pairs[(a, b)] = _contact_model(contact, p, key, file)
+    _check_stiffness(contact, pairs, c, vehicles, file)
     return _replace(spec, contact=contact, pair_contact=pairs, obstacles=tuple(obstacles))
+
+
+def _check_stiffness(contact: ContactModel, pairs: dict, raw: dict, vehicles, file: str | None) -> None:
+    """A contact stiffness must hold the heaviest vehicle's weight within WEIGHT_DEPTH."""
+    from .motion.contact import WEIGHT_DEPTH
+    from .motion.loads import STANDARD_GRAVITY
+
+    movable = [v for v in vehicles if not v.is_barrier]
+    if not movable:
+        return
+    heavy = max(movable, key=lambda v: sum(b.mass for b in v.bodies))
+    weight = sum(b.mass for b in heavy.bodies) * STANDARD_GRAVITY
+    least = weight / WEIGHT_DEPTH
+    entries = [("contacts.stiffness", contact, raw.get("stiffness") is not None)]
+    entries += [(f"contacts.pairs[{i}].stiffness", model, p.get("stiffness") is not None)
+                for i, (p, model) in enumerate(zip(raw.get("pairs", []) or [], pairs.values()))]
+    for key, model, given in entries:
+        if given and model.enabled and model.stiffness < least:
+            raise _err(f"{model.stiffness:g} N/m lets the weight of vehicle {heavy.name!r} ({weight:.4g} N) press "
+                       f"{weight / model.stiffness:.3g} m deep; allowed >= {least:.4g} N/m (that weight held within "
+                       f"{WEIGHT_DEPTH:g} m)", key, file)
 
 
 def _err(msg: str, key: str, file: str | None) -> ScenarioError:

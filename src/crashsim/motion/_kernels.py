@@ -1323,7 +1323,8 @@ def touch_geometry(y, M, p, cs, mf, geo):
 @njit(**_HOT)
 def _strike_scan(y, M, D, cs, p, mf, margin, floor, geo):
     """Closing speeds of the manifold points of pair ``p`` pressed into each other beyond the
-    pair's allowance (to within ``margin`` [m]).
+    pair's allowance (to within ``margin`` [m]); a disarmed pair's allowance is the crush of the
+    first impact plus the arming distance (the depth at which it is pressed into contact).
 
     Returns the largest closing speed ``-(v_A - v_B) . n`` [m/s] of those points (``-inf`` if
     none).  With ``floor`` finite, ``geo`` receives ``(x, y, nx, ny, u_n)`` of the piece pair
@@ -1332,6 +1333,8 @@ def _strike_scan(y, M, D, cs, p, mf, margin, floor, geo):
     """
     pr_body, pr_ptr, pp = M[26], M[27], M[28]
     allowance = D[6][p]
+    if D[5][p] == PS_DISARMED:  # the crush of the first impact keeps its slack (the press depth)
+        allowance += M[29][p, R_ARM]
     ia = pr_body[p, 0]
     ib = pr_body[p, 1]
     best = -math.inf
@@ -1512,7 +1515,8 @@ def handle_event(e, t, y, M, D, offsets, ev_kind, ev_idx, ev_val, ev_dir, sw, dy
         pref[p] = 0.0
         unpark_pair(M, D, p)
         n = _log(rec, n, LOG_CONTACT, p, 0, geo[5] if found else 0.0, 0.0)
-        return False, n
+        # slow at the middle of the touching edge, but one end may strike (a turning edge)
+        return strike_geometry(y, M, D, cs, p, W[7], geo[1:]), n
     if kind == EV_STRIKE:
         p = idx
         cs = W[5]
@@ -1534,7 +1538,10 @@ def handle_event(e, t, y, M, D, offsets, ev_kind, ev_idx, ev_val, ev_dir, sw, dy
         pref[p] = max(-pair_gap(y, M, cs, p), 0.0)  # the force starts from zero at this depth
         unpark_pair(M, D, p)
         n = _log(rec, n, LOG_PRESS, p, 0, pref[p], 0.0)
-        return False, n
+        # pressed there at the threshold or faster: a strike (the press and the strike of a
+        # disarmed pair meet at the same depth)
+        geo[0] = p
+        return strike_geometry(y, M, D, cs, p, W[7], geo[1:]), n
     return False, n
 
 

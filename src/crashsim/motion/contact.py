@@ -57,8 +57,11 @@ import numpy as np
 
 from ..errors import ScenarioError
 
-__all__ = ["ContactModel", "Obstacle", "CONTACT_KEYS", "convex_pieces", "polygon_is_simple"]
+__all__ = ["ContactModel", "Obstacle", "CONTACT_KEYS", "WEIGHT_DEPTH", "convex_pieces", "polygon_is_simple"]
 
+#: Deepest a contact may let the heaviest vehicle's weight press [m]: a stiffness below
+#: weight / WEIGHT_DEPTH lets bodies sink through each other (the scenario refuses it).
+WEIGHT_DEPTH = 0.1
 #: Thickness of the fixed barrier of an impact behind its face [m] (a pier or wall is solid).
 BARRIER_THICKNESS = 1.0
 #: Half length of a barrier face given without an extent [m] ("an endless line").

@@ -41,7 +41,8 @@ Mode ``D`` (the discrete state, changed only at events)::
 
 zone membership of every wheel, the closed articulation stops (hitch, locked angle, count in
 ``lk_n[0]``), the raised thresholds of stops that were left, the contact state of every pair
-(``PS_*``) with its depth allowance [m], and which vehicles are parked (at rest, frozen).
+(``PS_*``) with its allowance (``A_*`` columns: the depth allowance [m] and the crush circle of
+the first impact), and which vehicles are parked (at rest, frozen).
 
 Contact (between bodies of different vehicles, and between a body and a fixed obstacle)
 ------------------------------------------------------------------------------------------
@@ -61,6 +62,13 @@ Contact (between bodies of different vehicles, and between a body and a fixed ob
   contact: a penalty force at every manifold point, ``F_n = max(0, k e + c e')`` on the depth
   ``e`` beyond the allowance, with Coulomb friction ``mu_c F_n`` against the tangential
   slip, regularised like the tyres; left when the gap exceeds ``R_ARM``).
+* **Strikes.**  A pair in contact or disarmed carries the strike event (``EV_STRIKE``,
+  :func:`strike_speed`): the closing speed of its points pressed beyond the allowance (a
+  disarmed pair's: the crush plus ``R_ARM``) minus ``R_VTHR``.  It crosses zero where a point
+  arrives that fast (the value jumps; the root is the arrival) or a point in contact is driven
+  in that fast: an impact, as the touch of an armed pair at that speed is.  After any velocity
+  jump (an impulse, an articulation-stop impact) :func:`find_strike` looks for points left
+  striking.
 """
 
 from __future__ import annotations
@@ -148,6 +156,14 @@ R_K, R_C, R_MU, R_ARM, R_VTHR, R_RES = range(6)
 N_R = 6
 # pair states
 PS_DISARMED, PS_ARMED, PS_CONTACT = 0, 1, 2
+# pair allowance columns (D[6], one row per pair): the depth allowance [m], and the crush of the
+# first impact as a circle in body A's axes: centre x, y and radius [m] (radius 0: none)
+A_DEPTH, A_CX, A_CY, A_R = range(4)
+N_A = 4
+# Reach of the crush of the first impact beyond the extent of its overlap [m]: points of a
+# disarmed pair within it are the crush (pressing on is sustained contact, not a new impact);
+# points farther away meet the other body anew (a strike counts from the surface)
+CRUSH_REACH = 0.5
 
 # event kinds of a segment
 EV_REST, EV_ZONE, EV_STOP, EV_RELEASE, EV_GAP, EV_ARM, EV_PRESS, EV_STRIKE = range(8)
@@ -596,7 +612,9 @@ def pair_forces(y, M, D, cs, p, f, mf):
     ``cs`` holds the bodies' heading cosines and sines, ``mf`` (2, 3) is scratch for the
     manifold.  Returns the power of the forces on the bodies [W] (their work on the system:
     dissipation by the damper and the friction, and the spring's change of stored energy).
-    The bodies of parked vehicles count as still.
+    The bodies of parked vehicles count as still.  The depth allowance applies within the
+    pair's crush circle (the crush of the first impact); elsewhere the depth counts from the
+    surface, as for any other contact.
     """
     pr_body, pr_ptr, pp, pr_par, cfg = M[26], M[27], M[28], M[29], M[11]
     nb = M[0].shape[0]
@@ -606,7 +624,9 @@ def pair_forces(y, M, D, cs, p, f, mf):
     k = pr_par[p, R_K]
     c = pr_par[p, R_C]
     mu = pr_par[p, R_MU]
-    allowance = D[6][p]
+    crush = D[6][p, A_DEPTH]
+    radius = D[6][p, A_R]
+    least = 0.0 if radius > 0.0 else crush  # the smallest allowance of any point
     # a parked body does not move: its frozen velocity (<= v_stop) neither damps nor does work
     bveh, parked = M[19], D[7]
     still_a = parked[bveh[ia]] != 0
@@ -615,12 +635,20 @@ def pair_forces(y, M, D, cs, p, f, mf):
     for q in range(pr_ptr[p], pr_ptr[p + 1]):
         a = pp[q, 0]
         b = pp[q, 1]
-        if piece_gap(y, M, cs, a, b) >= -allowance:
+        if piece_gap(y, M, cs, a, b) >= -least:
             continue
         count, nx, ny = manifold(y, M, cs, a, b, mf, 0.0)
         for m in range(count):
             px = mf[m, 0]
             py = mf[m, 1]
+            allowance = crush
+            if radius > 0.0:
+                dx = px - y[ia]
+                dy = py - y[nb + ia]
+                lx = cs[0, ia] * dx + cs[1, ia] * dy - D[6][p, A_CX]
+                ly = -cs[1, ia] * dx + cs[0, ia] * dy - D[6][p, A_CY]
+                if lx * lx + ly * ly > radius * radius:
+                    allowance = 0.0
             depth = mf[m, 2] - allowance
             if depth <= 0.0:
                 continue
@@ -936,7 +964,7 @@ def event_value(e, y, M, ev_kind, ev_idx, ev_val, D, sw, dydt, W):
         return W[4][2 * nh + n] * ev_val[e]
     body_trig(y, nb, cs)
     if kind == EV_STRIKE:
-        return strike_speed(y, M, D, cs, ev_idx[e], W[7]) - M[29][ev_idx[e], R_VTHR]
+        return strike_speed(y, M, D, cs, ev_idx[e], W[7], True) - M[29][ev_idx[e], R_VTHR]
     g = pair_gap(y, M, cs, ev_idx[e])
     if kind == EV_GAP:
         return g
@@ -1251,7 +1279,7 @@ def build_events(M, D, offsets, ev_kind, ev_idx, ev_val, ev_dir):
         if pstate[p] == PS_DISARMED:
             ev_kind[n_ev] = EV_PRESS
             ev_idx[n_ev] = p
-            ev_val[n_ev] = pref[p] + pr_par[p, R_ARM]
+            ev_val[n_ev] = pref[p, A_DEPTH] + pr_par[p, R_ARM]
             ev_dir[n_ev] = 1.0
             n_ev += 1
         if pstate[p] != PS_ARMED:
@@ -1321,10 +1349,17 @@ def touch_geometry(y, M, p, cs, mf, geo):
 
 
 @njit(**_HOT)
-def _strike_scan(y, M, D, cs, p, mf, margin, floor, geo):
-    """Closing speeds of the manifold points of pair ``p`` pressed into each other beyond the
-    pair's allowance (to within ``margin`` [m]); a disarmed pair's allowance is the crush of the
-    first impact plus the arming distance (the depth at which it is pressed into contact).
+def _strike_scan(y, M, D, cs, p, mf, margin, floor, geo, crush):
+    """Closing speeds of the manifold points of pair ``p`` pressed into each other beyond their
+    allowance (to within ``margin`` [m]).
+
+    The allowance of a point: within the pair's crush circle (the crush of the first impact,
+    :data:`CRUSH_REACH`) the pair's depth allowance, and while the pair is still disarmed such a
+    point is left out altogether (pressing on into the crush is the first impact's crush going
+    on: a press into sustained contact, not a new impact); elsewhere, for a pair with a crush
+    circle, 0 (a point that meets the other body anew strikes from the surface); for any other
+    pair its depth allowance.  ``crush`` False leaves out the points within the circle in every
+    state (the audit of :func:`strike_speeds`).
 
     Returns the largest closing speed ``-(v_A - v_B) . n`` [m/s] of those points (``-inf`` if
     none).  With ``floor`` finite, ``geo`` receives ``(x, y, nx, ny, u_n)`` of the piece pair
@@ -1332,18 +1367,22 @@ def _strike_scan(y, M, D, cs, p, mf, margin, floor, geo):
     normal from B into A and the normal relative velocity at that mean point.
     """
     pr_body, pr_ptr, pp = M[26], M[27], M[28]
-    allowance = D[6][p]
-    if D[5][p] == PS_DISARMED:  # the crush of the first impact keeps its slack (the press depth)
-        allowance += M[29][p, R_ARM]
+    nb = M[0].shape[0]
     ia = pr_body[p, 0]
     ib = pr_body[p, 1]
+    depth_allowance = D[6][p, A_DEPTH]
+    radius = D[6][p, A_R]
+    disarmed = D[5][p] == PS_DISARMED
+    least = 0.0 if radius > 0.0 else depth_allowance  # the smallest allowance of any point
+    ca = cs[0, ia]
+    sa = cs[1, ia]
     best = -math.inf
     for q in range(pr_ptr[p], pr_ptr[p + 1]):
         a = pp[q, 0]
         b = pp[q, 1]
-        if piece_gap(y, M, cs, a, b) > margin - allowance:
+        if piece_gap(y, M, cs, a, b) > margin - least:
             continue
-        count, nx, ny = manifold(y, M, cs, a, b, mf, margin - allowance)
+        count, nx, ny = manifold(y, M, cs, a, b, mf, margin - least)
         fastest = -math.inf
         sx = 0.0
         sy = 0.0
@@ -1351,6 +1390,19 @@ def _strike_scan(y, M, D, cs, p, mf, margin, floor, geo):
         for m in range(count):
             px = mf[m, 0]
             py = mf[m, 1]
+            allowance = depth_allowance
+            if radius > 0.0:
+                dx = px - y[ia]
+                dy = py - y[nb + ia]
+                lx = ca * dx + sa * dy - D[6][p, A_CX]
+                ly = -sa * dx + ca * dy - D[6][p, A_CY]
+                if lx * lx + ly * ly <= radius * radius:
+                    if disarmed or not crush:
+                        continue
+                else:
+                    allowance = 0.0
+            if mf[m, 2] - allowance < -margin:
+                continue
             vax, vay = point_velocity(y, M, ia, px, py)
             vbx, vby = point_velocity(y, M, ib, px, py)
             closing = -((vax - vbx) * nx + (vay - vby) * ny)
@@ -1376,7 +1428,7 @@ def _strike_scan(y, M, D, cs, p, mf, margin, floor, geo):
 
 
 @njit(**_HOT)
-def strike_speed(y, M, D, cs, p, mf):
+def strike_speed(y, M, D, cs, p, mf, crush):
     """Largest closing speed [m/s] of the points of pair ``p`` pressed beyond its allowance
     (0 if none: a pair apart, or only in its crush allowance, does not strike).
 
@@ -1386,7 +1438,7 @@ def strike_speed(y, M, D, cs, p, mf):
     arrival), or when a point already in contact is driven in that fast.  Either is an impact.
     """
     # an infinite floor writes no geometry (mf[0] only stands in for the unused argument)
-    best = _strike_scan(y, M, D, cs, p, mf, 0.0, math.inf, mf[0])
+    best = _strike_scan(y, M, D, cs, p, mf, 0.0, math.inf, mf[0], crush)
     return best if best > 0.0 else 0.0
 
 
@@ -1403,7 +1455,7 @@ def strike_geometry(y, M, D, cs, p, mf, geo):
     thr = M[29][p, R_VTHR]
     floor = thr * (1.0 - 1e-6)
     geo[4] = 0.0
-    best = _strike_scan(y, M, D, cs, p, mf, 1e-3, floor, geo)
+    best = _strike_scan(y, M, D, cs, p, mf, 1e-3, floor, geo, True)
     return best >= floor and geo[4] < 0.0
 
 
@@ -1512,7 +1564,8 @@ def handle_event(e, t, y, M, D, offsets, ev_kind, ev_idx, ev_val, ev_dir, sw, dy
         if found and geo[5] < -pr_par[p, R_VTHR]:
             return True, n
         pstate[p] = PS_CONTACT
-        pref[p] = 0.0
+        for c in range(N_A):
+            pref[p, c] = 0.0
         unpark_pair(M, D, p)
         n = _log(rec, n, LOG_CONTACT, p, 0, geo[5] if found else 0.0, 0.0)
         # slow at the middle of the touching edge, but one end may strike (a turning edge)
@@ -1527,7 +1580,8 @@ def handle_event(e, t, y, M, D, offsets, ev_kind, ev_idx, ev_val, ev_dir, sw, dy
         p = idx
         was = pstate[p]
         pstate[p] = PS_ARMED
-        pref[p] = 0.0
+        for c in range(N_A):  # apart: the crush of the first impact is behind the pair
+            pref[p, c] = 0.0
         n = _log(rec, n, LOG_CONTACT_END if was == PS_CONTACT else LOG_ARMED, p, 0, 0.0, 0.0)
         return False, n
     if kind == EV_PRESS:
@@ -1535,13 +1589,12 @@ def handle_event(e, t, y, M, D, offsets, ev_kind, ev_idx, ev_val, ev_dir, sw, dy
         cs = W[5]
         body_trig(y, M[0].shape[0], cs)
         pstate[p] = PS_CONTACT
-        pref[p] = max(-pair_gap(y, M, cs, p), 0.0)  # the force starts from zero at this depth
+        pref[p, A_DEPTH] = max(-pair_gap(y, M, cs, p), 0.0)  # the force starts from zero at this depth
         unpark_pair(M, D, p)
-        n = _log(rec, n, LOG_PRESS, p, 0, pref[p], 0.0)
-        # pressed there at the threshold or faster: a strike (the press and the strike of a
-        # disarmed pair meet at the same depth)
-        geo[0] = p
-        return strike_geometry(y, M, D, cs, p, W[7], geo[1:]), n
+        n = _log(rec, n, LOG_PRESS, p, 0, pref[p, A_DEPTH], 0.0)
+        # (pressing on into the crush is the first impact's crush going on, however fast: a
+        # force; a point outside the crush strikes from the surface, by the strike event)
+        return False, n
     return False, n
 
 
@@ -1594,7 +1647,7 @@ def settle(y, M, D, new_memb, W, rec, n):
 def mode_arrays(nw, nz, nh, npairs, nv):
     """A fresh mode tuple ``D`` (Python helper; see the module docstring)."""
     return (np.zeros((nw, nz), np.bool_), np.zeros(max(nh, 1), np.int64), np.zeros(max(nh, 1)),
-            np.zeros(1, np.int64), np.zeros(max(nh, 1)), np.zeros(npairs, np.int64), np.zeros(npairs),
+            np.zeros(1, np.int64), np.zeros(max(nh, 1)), np.zeros(npairs, np.int64), np.zeros((npairs, N_A)),
             np.zeros(nv, np.int64))
 
 
@@ -1733,20 +1786,51 @@ def _wall_clock():
 @njit(**_JIT)
 def arming(y, M, D):
     """Initial contact states: a pair closer than its arming distance (the crush of the impact,
-    or bodies left touching) starts disarmed with its present depth as allowance; the others armed."""
-    pr_body, pr_par = M[26], M[29]
+    or bodies left touching) starts disarmed with its present depth as allowance and its crush
+    circle (in body A's axes: around the contact points of its deepest pieces, reaching
+    :data:`CRUSH_REACH` beyond them); the others armed."""
+    pr_body, pr_par, pr_ptr, pp = M[26], M[29], M[27], M[28]
     pstate, pref = D[5], D[6]
     W = make_work(M)
     cs = W[5]
-    body_trig(y, M[0].shape[0], cs)
+    mf = W[7]
+    nb = M[0].shape[0]
+    body_trig(y, nb, cs)
     for p in range(pr_body.shape[0]):
         g = pair_gap(y, M, cs, p)
+        for c in range(N_A):
+            pref[p, c] = 0.0
         if g < pr_par[p, R_ARM]:
             pstate[p] = PS_DISARMED
-            pref[p] = max(-g, 0.0)
+            pref[p, A_DEPTH] = max(-g, 0.0)
+            best = math.inf
+            qa = pp[pr_ptr[p], 0]
+            qb = pp[pr_ptr[p], 1]
+            for q in range(pr_ptr[p], pr_ptr[p + 1]):
+                gq = piece_gap(y, M, cs, pp[q, 0], pp[q, 1])
+                if gq < best:
+                    best = gq
+                    qa = pp[q, 0]
+                    qb = pp[q, 1]
+            count, _, _ = manifold(y, M, cs, qa, qb, mf, pr_par[p, R_ARM])
+            if count == 0:
+                continue
+            ia = pr_body[p, 0]
+            cx = 0.0
+            cy = 0.0
+            for m in range(count):
+                cx += mf[m, 0] / count
+                cy += mf[m, 1] / count
+            spread = 0.0
+            for m in range(count):
+                spread = max(spread, math.sqrt((mf[m, 0] - cx) ** 2 + (mf[m, 1] - cy) ** 2))
+            dx = cx - y[ia]
+            dy = cy - y[nb + ia]
+            pref[p, A_CX] = cs[0, ia] * dx + cs[1, ia] * dy
+            pref[p, A_CY] = -cs[1, ia] * dx + cs[0, ia] * dy
+            pref[p, A_R] = spread + pref[p, A_DEPTH] + CRUSH_REACH
         else:
             pstate[p] = PS_ARMED
-            pref[p] = 0.0
 
 
 @njit(**_JIT)
@@ -1854,7 +1938,7 @@ def run(t0, y0, M, D, offsets, stops, gl_x, gl_w, deadline, counters, quad):
     sg_lkj = np.zeros((scap, max(nh, 1)), np.int64)
     sg_lkth = np.zeros((scap, max(nh, 1)))
     sg_pstate = np.zeros((scap, npr), np.int64)
-    sg_pref = np.zeros((scap, npr))
+    sg_pref = np.zeros((scap, npr, N_A))
     sg_parked = np.zeros((scap, nv), np.int64)
     lcap = 16
     lg_t = np.zeros(lcap)
@@ -2038,7 +2122,7 @@ def run(t0, y0, M, D, offsets, stops, gl_x, gl_w, deadline, counters, quad):
                 sg_lkj = _grow2(sg_lkj, scap)
                 sg_lkth = _grow2(sg_lkth, scap)
                 sg_pstate = _grow2(sg_pstate, scap)
-                sg_pref = _grow2(sg_pref, scap)
+                sg_pref = _grow3(sg_pref, scap)
                 sg_parked = _grow2(sg_parked, scap)
             sg_t[n_seg, 0] = t_seg0
             sg_t[n_seg, 1] = t
@@ -2052,7 +2136,8 @@ def run(t0, y0, M, D, offsets, stops, gl_x, gl_w, deadline, counters, quad):
                 sg_lkth[n_seg, q] = lk_th[q]
             for p in range(npr):
                 sg_pstate[n_seg, p] = pstate[p]
-                sg_pref[n_seg, p] = pref[p]
+                for c in range(N_A):
+                    sg_pref[n_seg, p, c] = pref[p, c]
             for v in range(nv):
                 sg_parked[n_seg, v] = parked[v]
             n_seg += 1
@@ -2455,7 +2540,7 @@ def evaluate_samples(Y, seg_of, M, sg_phase, sg_memb, sg_nlk, sg_lkj, sg_lkth, s
             if st == PS_DISARMED:
                 continue
             g = pair_gap(yq, M, cs, q)
-            depth = -g - (D[6][q] if st == PS_CONTACT else 0.0)
+            depth = -g - (D[6][q, A_DEPTH] if st == PS_CONTACT else 0.0)
             pen[q] = max(pen[q], depth)
             if st == PS_CONTACT:  # the pair's force on A
                 for i in range(3 * nb):
@@ -2488,7 +2573,7 @@ def strike_speeds(Y, seg_of, M, sg_memb, sg_nlk, sg_lkj, sg_lkth, sg_pstate, sg_
         body_trig(y, nb, cs)
         for p in range(npr):
             if sg_pstate[s_, p] != PS_ARMED:
-                out[col, p] = strike_speed(y, M, D, cs, p, W[7])
+                out[col, p] = strike_speed(y, M, D, cs, p, W[7], False)
     return out
 
 

@@ -579,8 +579,8 @@ def _secondary_impact(model: SceneModel, t: float, y: np.ndarray, geo: np.ndarra
     for name, (vx0, vy0) in v_before.items():
         i = names.index(name)
         delta_v[name] = (float(y[L.vx][i] - vx0), float(y[L.vy][i] - vy0))
-    if D[5][p] == k.PS_DISARMED:  # struck beyond the crush's slack: the force starts from this depth, as a press
-        D[6][p] = max(D[6][p], -float(k.pair_geometry(y, model.M, p)[0]))
+    if D[5][p] == k.PS_DISARMED:  # struck outside the crush: the force starts from this depth, as a press
+        D[6][p, k.A_DEPTH] = max(D[6][p, k.A_DEPTH], -float(k.pair_geometry(y, model.M, p)[0]))
     D[5][p] = k.PS_CONTACT  # the allowance (the crush of the first impact, if any) is kept
     for v in involved:
         D[7][model.vehicles.index(v)] = 0

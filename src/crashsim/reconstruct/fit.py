@@ -58,6 +58,7 @@ import numpy as np
 
 
 from ..errors import ScenarioError, SolverError, UnreachableImpactError, failure_reason
+from ..outputs import check_workers
 from ..geometry import wrap_angle
 from .evidence import signed_distance_to_polyline
 from .overrides import ScenarioOverrides, default_engine, parse_value
@@ -991,7 +992,7 @@ def fit_scene(scenario_data: dict, fit_spec: FitSpec | dict | None = None, *, en
     # engine here once, so that the forked workers inherit it instead of each compiling it.
     problem.evaluate(problem.z_of([u.initial for u in spec.unknowns]))
 
-    workers = (os.cpu_count() or 1) if workers is None else max(1, int(workers))
+    workers = check_workers(workers) or (os.cpu_count() or 1)
     n_tasks = max(spec.starts, 1)
     use_pool = workers > 1 and (spec.starts > 1 or spec.screen > 1)
     pool = None

@@ -69,6 +69,7 @@ from typing import Any, Callable
 import numpy as np
 
 from ..errors import ScenarioError, failure_reason
+from ..outputs import check_workers
 
 __all__ = ["PosteriorSpec", "PosteriorProblem", "PosteriorResult", "run_posterior", "load_chain",
            "PERCENTILES", "MIN_KEPT_STEPS", "TAU_FACTOR"]
@@ -630,6 +631,14 @@ def _prior_dict(p: Prior) -> dict:
 # ---------------------------------------------------------------------------------------------
 
 def _percentiles(v: np.ndarray) -> dict:
+    """Percentiles, mean and sd of one unknown or derived quantity over the kept samples.
+
+    Linear statistics are right here, angles included: an unknown is sampled on its ``[fit]``
+    bounds, an interval as written and never wrapped (a heading bounded by [170 deg, 200 deg] has
+    samples from 170 to 200 deg), and no derived quantity is an angle. Wrapped angles (the rest
+    headings of Monte Carlo samples) are summarised on their circular arc instead
+    (:func:`crashsim.geometry.circular_percentiles`).
+    """
     v = v[np.isfinite(v)]
     if v.size == 0:
         return {}
@@ -873,7 +882,7 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
     if dask_address is not None:
         backend, nw = "dask", 0
     else:
-        nw = (os.cpu_count() or 1) if workers is None else max(1, int(workers))
+        nw = check_workers(workers) or (os.cpu_count() or 1)
         backend = "processes" if nw > 1 else "serial"
     payload = {"data": scenario_data, "fit_spec": fit_spec, "priors": priors, "engine": engine, "file": file,
                "time_limit": float(limit), "derived": derived, "hash": run_hash}

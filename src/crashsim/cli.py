@@ -390,8 +390,12 @@ def _check_outputs(args) -> None:
                 check_output_file(path, field=field, suffixes=figs, what="a figure")
     if c == "animate":
         from .animation import check_animation_path
+        from .units import Kind, parse
 
         check_output_file(check_animation_path(args.output, field="-o"), field="-o", what="the animation")
+        if not parse(args.dt, Kind.TIME, field="--dt") > 0:
+            raise ScenarioError(f"{args.dt!r} is not a positive time; allowed a time between frames > 0 s, "
+                                "e.g. \"0.05 s\"", field="--dt")
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 
@@ -10,7 +11,7 @@ from .units import Kind, format_value, to_unit
 
 __all__ = ["format_approach", "format_impact", "format_runout", "format_joint", "format_events", "format_evidence",
            "format_crush", "describe_event", "fmt", "table",
-           "closing_error_text"]
+           "closing_error_text", "message_in"]
 
 
 fmt = format_value  # an SI value in the display unit of a system (crashsim.units.format_value)
@@ -51,8 +52,9 @@ def _law_text(result) -> str:
     state = "sliding at separation" if result.sliding else "no sliding at separation"
     words = {"ratio": "given impulse ratio", "fraction": "impulse ratio as a share of mu_max",
              "no_slide": "no sliding at separation", "friction": "crush-surface friction"}.get(law, law)
+    said = "" if state == words else f"; {state}"  # law no_slide says it once
     return (f"impulse ratio mu = {result.mu:.4f}, mu_max = {result.mu_max:.4f}, mu / mu_max = {share} "
-            f"(law {law}: {words}; {state})")
+            f"(law {law}: {words}{said})")
 
 
 def format_impact(result, system: str = "SI") -> str:
@@ -91,8 +93,12 @@ def format_impact(result, system: str = "SI") -> str:
     for name, ke in result.kinetic_energy.items():
         if name not in result.energy_loss:
             continue
-        rows.append([name, fmt(ke['before'], 'energy', s), fmt(ke['after'], 'energy', s),
-                     f"{100 * result.energy_loss[name]:.1f} %"])
+        loss = result.energy_loss[name]
+        # a vehicle at rest before the impact has no energy to lose a share of: it gains what it takes
+        share = (f"{100 * loss:.1f} %" if math.isfinite(loss)
+                 else "n/a (at rest before)" if abs(ke['before']) <= 1e-12 * max(1.0, abs(ke['after']))
+                 else "n/a")
+        rows.append([name, fmt(ke['before'], 'energy', s), fmt(ke['after'], 'energy', s), share])
     lines += table(rows, "lrrr")
     lines.append(f"  condition number of the impulse equations: {result.condition_number:.3g}")
     for w in result.warnings:
@@ -106,7 +112,19 @@ def _status_text(r, system: str) -> str:
         v_stop = (r.options or {}).get("v_stop")
         below = f" (all bodies below v_stop = {fmt(v_stop, 'speed', system)})" if v_stop is not None else ""
         return f"at rest after {fmt(r.t_end, 'time', system)}{below}"
-    return f"{r.status} after {fmt(r.t_end, 'time', system)} ({r.message})"
+    return f"{r.status} after {fmt(r.t_end, 'time', system)} ({message_in(r.message, system)})"
+
+
+_SI_QUANTITY = re.compile(r"(?<![\w.])(-?\d+(?:\.\d+)?(?:e[+-]?\d+)?) (m/s|m|J|N s|N)(?![\w/^])")
+
+
+def message_in(text: str, system: str = "SI") -> str:
+    """A message written in SI (the run-out's stop reasons: ``"... 2.489 m/s > v_stop = 0.03 m/s"``)
+    with its speeds, lengths, energies, impulses and forces in the display units of ``system``."""
+    if system == "SI":
+        return text
+    kinds = {"m/s": "speed", "m": "length", "J": "energy", "N s": "impulse", "N": "force"}
+    return _SI_QUANTITY.sub(lambda m: fmt(float(m[1]), kinds[m[2]], system), text)
 
 
 def format_runout(runout: dict, system: str = "SI", *, joint: bool = False) -> str:
@@ -225,7 +243,7 @@ def describe_event(e, system: str = "SI") -> str:
         dv = ", ".join(f"{n} {fmt(v, 'speed', s)}" for n, v in d["delta_v_m_s"].items())
         return (f"{a} strikes {b} at {fmt(d['speed_m_s'], 'speed', s)}: normal impulse "
                 f"{fmt(d['normal_impulse_N_s'], 'impulse', s)}, delta-v {dv}, {fmt(e.energy, 'energy', s)} lost")
-    return e.detail
+    return message_in(e.detail, s)
 
 
 def format_events(events, system: str = "SI", title: str = "Run-out events") -> str:

@@ -207,7 +207,9 @@ class SceneResult:
 
                 text += "\n\n" + format_crush(self.evidence, system)
         if self.warnings:
-            text += "\n\nWarnings\n" + "\n".join(f"  - {w}" for w in self.warnings)
+            from ..report import message_in
+
+            text += "\n\nWarnings\n" + "\n".join(f"  - {message_in(w, system)}" for w in self.warnings)
         return text
 
     # ------------------------------------------------------------------ histories

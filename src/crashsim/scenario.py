@@ -1029,6 +1029,12 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
             near = difflib.get_close_matches(imp[k], allowed, n=1)
             hint = f"; did you mean {near[0]!r}?" if near else ""
             raise _err(f"unknown body {imp[k]!r}{hint} Bodies: {', '.join(map(repr, allowed))}", f"impact.{k}", file)
+    same = [v for v in vehicles if {imp["body1"], imp["body2"]} <= {b.name for b in v.bodies}]
+    if same:
+        raise _err(f"impact.body1 = {imp['body1']!r} and impact.body2 = {imp['body2']!r} are both bodies of vehicle "
+                   f"{same[0].name!r}; the impact is between two vehicles (or one and the [barrier]): give a body of "
+                   "another vehicle as impact.body2 (a vehicle's own bodies meet at their articulation stop, set by "
+                   "articulation_limit)", "impact.body2", file)
     if d["barrier"] is not None and d["barrier"]["name"] not in (imp["body1"], imp["body2"]):
         raise _err(f"the barrier {d['barrier']['name']!r} is neither impact.body1 ({imp['body1']!r}) nor impact.body2 "
                    f"({imp['body2']!r}); [barrier] is the rigid body of the impact (fixed obstacles met in the "

@@ -36,3 +36,50 @@ def test_us_report_gives_the_stop_reason_in_us_units():
     for ln in stops:
         assert "m/s" not in ln and "mph > v_stop = 0.06711 mph" in ln, ln
     assert "m/s > v_stop" in crashsim.run(SCENE, runout__t_max="1 s").report("SI")
+
+
+def test_run_changes_any_input_by_its_path():
+    scene = crashsim.run(SCENE, runout__engine="compiled", runout__level="rigid")
+    assert scene.scenario.runout.options.engine == "compiled" and scene.scenario.runout.level == "rigid"
+    moved = crashsim.run(SCENE, runout__level="impact", vehicles__B__position=["-9.6063 m", "-3.17 m"])
+    assert moved.scenario.states["car"].position[1] == pytest.approx(-3.17)
+    with pytest.raises(ScenarioError, match=r"runout\.engine") as exc:
+        crashsim.run(SCENE, runout__engine="fastest")
+    assert "only numbers" not in str(exc.value)
+
+
+def test_impact_between_two_bodies_of_one_vehicle(tmp_path, capsys):
+    from crashsim.cli import main
+
+    text = Path(SCENE).read_text().replace('body2 = "car"', 'body2 = "tractor"')
+    f = tmp_path / "one_vehicle.toml"
+    f.write_text(text)
+    assert main(["run", str(f)]) == 2
+    err = capsys.readouterr().err
+    assert str(f) in err and "impact.body2" in err and "both bodies of vehicle 'A'" in err
+    assert "got 1" not in err and "exactly 2" not in err
+
+
+def test_fit_unknown_path_error_names_the_file(tmp_path, capsys):
+    from crashsim.cli import main
+
+    fit = ROOT / "scenarios" / "fit" / "intersection_fit.toml"
+    f = tmp_path / "bad_fit.toml"
+    f.write_text(fit.read_text().replace('path = "vehicles.A.speed"', 'path = "vehicles.A.sped"', 1))
+    assert main(["fit", str(f), "--workers", "1"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"crashsim: input error: {f}: fit.unknowns[0].path: 'vehicles.A.sped'")
+    assert "did you mean 'speed'" in err
+
+
+def test_posterior_steps_range_is_the_real_minimum():
+    from crashsim.reconstruct.inverse_schema import MIN_KEPT_STEPS, MIN_STEPS_DEFAULT_BURN, POSTERIOR
+    from crashsim.reconstruct.posterior import PosteriorSpec
+
+    steps = next(f for f in POSTERIOR.fields if f.name == "steps")
+    assert steps.minimum == MIN_KEPT_STEPS and f"{MIN_STEPS_DEFAULT_BURN} with the default burn-in" in steps.description
+    PosteriorSpec(steps=MIN_STEPS_DEFAULT_BURN).check(1)  # the documented minimum works
+    with pytest.raises(ScenarioError, match=rf"allowed steps >= {MIN_STEPS_DEFAULT_BURN} "):
+        PosteriorSpec(steps=MIN_STEPS_DEFAULT_BURN - 1).check(1)
+    with pytest.raises(ScenarioError, match=rf"steps = 1 keeps 1 steps.*allowed steps >= {MIN_STEPS_DEFAULT_BURN} "):
+        PosteriorSpec(steps=1).check(1)

@@ -57,7 +57,7 @@ from typing import Any, Callable
 import numpy as np
 
 
-from ..errors import ScenarioError, SolverError, UnreachableImpactError, failure_reason
+from ..errors import ScenarioError, SolverError, UnreachableImpactError, failure_reason, in_file
 from ..outputs import check_workers
 from ..geometry import wrap_angle
 from .evidence import signed_distance_to_polyline
@@ -980,7 +980,8 @@ def fit_scene(scenario_data: dict, fit_spec: FitSpec | dict | None = None, *, en
         if "fit" not in scenario_data:
             raise ScenarioError("the scenario has no [fit] table naming the unknowns", field="fit", file=file)
         fit_spec = scenario_data["fit"]
-    spec = fit_spec if isinstance(fit_spec, FitSpec) else FitSpec.from_dict(fit_spec, scenario_data, file=file)
+    with in_file(file):
+        spec = fit_spec if isinstance(fit_spec, FitSpec) else FitSpec.from_dict(fit_spec, scenario_data, file=file)
     engine = default_engine() if engine is None else engine
     if sample_time_limit is None:
         from .montecarlo import DEFAULT_SAMPLE_TIME_LIMIT as sample_time_limit

@@ -132,12 +132,19 @@ UNCERTAINTY = Section("uncertainty", [
 ], subsections=[ArrayOf("inputs", INPUT, min_items=1, description="The uncertain inputs")],
    required=False, description="Monte Carlo propagation of input uncertainty through impact and run-out (crashsim mc)")
 
+#: Fewest steps per walker after the burn-in and thinning for which any diagnostic is computed.
+MIN_KEPT_STEPS = 50
+#: Fewest steps per walker with the default burn-in (a quarter of the steps) and no thinning.
+MIN_STEPS_DEFAULT_BURN = next(n for n in range(MIN_KEPT_STEPS, 4 * MIN_KEPT_STEPS) if n - n // 4 >= MIN_KEPT_STEPS)
+
 POSTERIOR = Section("posterior", [
     Field("walkers", "int", default=32, minimum=2, maximum=100000,
           description="Walkers of the ensemble sampler (emcee); at least twice the number of [fit] unknowns"),
-    Field("steps", "int", default=2000, minimum=1, maximum=10_000_000,
+    Field("steps", "int", default=2000, minimum=MIN_KEPT_STEPS, maximum=10_000_000,
           description="Steps of every walker (crashsim posterior --steps overrides it); a chain that is stopped "
-                      "and run again with more steps continues where it stopped"),
+                      "and run again with more steps continues where it stopped. At least burn + "
+                      f"{MIN_KEPT_STEPS} x thin ({MIN_STEPS_DEFAULT_BURN} with the default burn-in, "
+                      f"{MIN_KEPT_STEPS} with burn = 0): fewer leave no diagnostic"),
     Field("burn", "int", required=False, minimum=0, example="500",
           description="Steps of every walker discarded at the start (burn-in) before the summaries "
                       "(default: a quarter of the steps)"),

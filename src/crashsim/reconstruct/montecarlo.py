@@ -53,7 +53,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from ..errors import CrashsimError, ScenarioError, failure_reason
+from ..errors import CrashsimError, ScenarioError, failure_reason, in_file
 from ..outputs import check_workers
 from ..geometry import circular_mean, unwrap_about_mean
 from .overrides import ScenarioOverrides, default_engine, parse_value
@@ -928,7 +928,8 @@ def monte_carlo(scenario_data: dict, spec: UncertaintySpec | dict | None = None,
             raise ScenarioError("the scenario has no [uncertainty] table naming the uncertain inputs",
                                 field="uncertainty", file=file)
         spec = scenario_data["uncertainty"]
-    spec = spec if isinstance(spec, UncertaintySpec) else UncertaintySpec.from_dict(spec, file=file)
+    with in_file(file):
+        spec = spec if isinstance(spec, UncertaintySpec) else UncertaintySpec.from_dict(spec, file=file)
     seed = spec.seed if seed is None else int(seed)
     if seed != spec.seed:
         from dataclasses import replace

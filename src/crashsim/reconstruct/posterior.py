@@ -68,7 +68,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..errors import ScenarioError, failure_reason
+from ..errors import ScenarioError, failure_reason, in_file
 from ..outputs import check_workers
 
 __all__ = ["PosteriorSpec", "PosteriorProblem", "PosteriorResult", "run_posterior", "load_chain",
@@ -78,8 +78,7 @@ _log = logging.getLogger("crashsim")
 
 #: Percentiles reported for every unknown and derived quantity (the median, +-1 sigma and 95 % of a normal).
 PERCENTILES = (2.5, 16.0, 50.0, 84.0, 97.5)
-#: Fewest steps per walker after the burn-in and thinning for which any diagnostic is computed.
-MIN_KEPT_STEPS = 50
+from .inverse_schema import MIN_KEPT_STEPS  # noqa: E402 - fewest steps kept after burn-in and thinning
 #: The kept chain should be this many autocorrelation times long (emcee's documentation: "you
 #: should not trust an estimate of tau unless the chain is longer than about 50 tau").
 TAU_FACTOR = 50
@@ -134,12 +133,15 @@ class PosteriorSpec:
             raise ScenarioError(f"walkers = {self.walkers}: the ensemble sampler needs at least twice the number of "
                                 f"unknowns ({n_unknowns}), i.e. >= {2 * n_unknowns}", field="posterior.walkers",
                                 file=file)
-        if self.burn_steps >= self.steps:
+        if self.burn is not None and self.burn_steps >= self.steps:
             raise ScenarioError(f"burn = {self.burn_steps} discards every one of the {self.steps} steps; allowed "
                                 f"0 <= burn < steps", field="posterior.burn", file=file)
-        kept = (self.steps - self.burn_steps) // self.thin
+        kept = max(self.steps - self.burn_steps, 0) // self.thin
         if kept < MIN_KEPT_STEPS:
             need = self.burn_steps + MIN_KEPT_STEPS * self.thin
+            if self.burn is None:  # the default burn-in grows with the steps: a quarter of them
+                need = next(n for n in range(MIN_KEPT_STEPS * self.thin, 4 * MIN_KEPT_STEPS * self.thin + 4)
+                            if (n - n // 4) // self.thin >= MIN_KEPT_STEPS)
             raise ScenarioError(f"steps = {self.steps} keeps {kept} steps per walker after burn = {self.burn_steps} "
                                 f"and thin = {self.thin}: too few for any diagnostic (autocorrelation time, "
                                 f"effective sample size); allowed steps >= {need} (at least {MIN_KEPT_STEPS} kept)",
@@ -832,10 +834,9 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
     if not isinstance(spec, PosteriorSpec):
         spec = PosteriorSpec.from_dict(spec if spec is not None else scenario_data.get("posterior"), file=file)
     over = {k: v for k, v in (("steps", steps), ("seed", seed), ("start", start)) if v is not None}
-    if "steps" in over and int(over["steps"]) < 1:
-        raise ScenarioError(f"--steps = {over['steps']}; allowed >= 1", field="posterior.steps", file=file)
-    spec = replace(spec, **over)
-    fit_spec = FitSpec.from_dict(scenario_data["fit"], scenario_data, file=file)
+    spec = replace(spec, **over)  # --steps below the minimum: spec.check names the minimum for this burn-in
+    with in_file(file):
+        fit_spec = FitSpec.from_dict(scenario_data["fit"], scenario_data, file=file)
     spec.check(len(fit_spec.unknowns), file=file)
     engine = default_engine() if engine is None else engine
     limit = DEFAULT_SAMPLE_TIME_LIMIT if sample_time_limit is None else sample_time_limit

@@ -60,6 +60,22 @@ AXLE = Section("axle", [
     Field("dual", "bool", default=False, description="Dual tyres on each side (one contact per side, summed)"),
 ], description="One axle (each axle of a tandem group separately), for the run-out")
 
+#: Default of a body's ``drawbar`` [m]: how far its hitch points may lie outside its outline.
+#: Measured: 1.10 m for the tongue of a random trailer in a regression scene, 0.8 m for the
+#: car-trailer preset's coupling, 0.3 m for tow balls of the shipped scenes.
+DEFAULT_DRAWBAR = 1.5
+#: Default of a body's ``overhang`` [m]: how far its tyre contacts may lie beyond the outline's ends
+#: and beyond its sides. Lengthwise 2 m: a tractor of a reproducer scene (random, kept verbatim)
+#: has its rear drive axle 1.45 m behind its outline, and it must still load; sideways 0.15 m (half
+#: a tyre's width: the track is measured between tyre centres).
+DEFAULT_OVERHANG = (2.0, 0.15)
+#: Default of ``impact.overlap_tolerance`` [m]: how deep two vehicles' outlines may overlap at the
+#: impact: the impact's bodies along its normal (their crush), other pairs by the distance to clear
+#: each other. The shipped scenes overlap by up to 0.64 m, the reproducer scenes' impact pairs by up
+#: to 1.11 m; a regression scene (random, kept verbatim, it must still load) has a tractor 1.90 m
+#: into a trailer that is not in the impact. A car put crosswise on a trailer: 2.5 m.
+DEFAULT_OVERLAP = 2.0
+
 BODY = Section("body", [
     Field("preset", "str", required=False, example="tractor-3axle",
           description="Name of a parameter set of crashsim's vehicle library (crashsim presets); keys given here override it"),
@@ -93,6 +109,14 @@ BODY = Section("body", [
           description="Largest articulation before the bodies meet (jack-knife stop)"),
     Field("cg_height", Kind.LENGTH, required=False, minimum=0, exclusive_minimum=True, example="1.1 m",
           description="CG height above ground (only for the run-out's load transfer)"),
+    Field("drawbar", Kind.LENGTH, minimum=0, maximum=MAX_LENGTH, default=f"{DEFAULT_DRAWBAR} m",
+          description="How far this body's hitch points (rear_hitch, front_hitch) may lie outside its outline: a "
+                      "drawbar, an A-frame tongue, a ball mount (checked at load; the default covers car-trailer "
+                      "tongues and ball mounts)"),
+    Field("overhang", Kind.LENGTH, n=2, minimum=0, maximum=MAX_LENGTH,
+          default=[f"{DEFAULT_OVERHANG[0]} m", f"{DEFAULT_OVERHANG[1]} m"],
+          description="How far the tyre contacts may lie outside the outline: beyond its front or rear end, and "
+                      "beyond its sides (checked at load: axle x within the length, track within the width)"),
 ], subsections=[ArrayOf("axles", AXLE, required=False, description="Axles, front to rear (needed for a run-out)")],
    description="One rigid body of the vehicle, front to rear")
 
@@ -228,6 +252,10 @@ IMPACT = Section("impact", [
     Field("contact_tolerance", Kind.LENGTH, minimum=0, default="0.5 m",
           description="How far the contact point may lie outside either contacting body's outline (a check "
                       "of the geometry: the point must be in or near the crush zone of both bodies)"),
+    Field("overlap_tolerance", Kind.LENGTH, minimum=0, default=f"{DEFAULT_OVERLAP} m",
+          description="How deep the outlines of bodies of two vehicles may overlap at the impact: the impact's "
+                      "two bodies along its normal (their crush), any other pair by the distance one must move to "
+                      "clear the other; deeper is an error at load (a vehicle placed on top of another)"),
     Field("normal", Kind.ANGLE, example="90 deg",
           description="Direction of the crush-surface normal n, pointing from body2 into body1"),
     Field("normal_frame", "str", default="world", description="Frame of normal: \"world\" or a body name"),
@@ -853,6 +881,11 @@ def _build_vehicle(name: str, v: dict, file: str | None) -> tuple[Vehicle, dict[
                        f"{key}.front_hitch", file)
         if i == 0 and b["articulation"] != 0.0:
             raise _err("the first body has no front hitch to articulate about", f"{key}.articulation", file)
+        lim = b["articulation_limit"]
+        if i > 0 and lim is not None and abs(b["articulation"]) > lim:
+            raise _err(f"articulation = {math.degrees(b['articulation']):.6g} deg exceeds the jack-knife stop of body "
+                       f"{b['name']!r}; allowed [-{math.degrees(lim):.6g}, {math.degrees(lim):.6g}] deg "
+                       "(articulation_limit)", f"{key}.articulation", file)
         try:
             axles = tuple(Axle(a["x"], a["track"], a["dual"], a["name"]) for a in b["axles"])
             bodies.append(Body(b["name"], b["mass"], b["yaw_inertia"], b["length"], b["width"],
@@ -981,10 +1014,12 @@ def _units_any_case(data: dict) -> dict:
 def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scenario:
     """Validate a parsed scenario (as from TOML) and build the typed SI objects."""
     data = _units_any_case(data)
-    d = validate(_apply_presets(data, file), SCHEMA, file=file)
+    merged = _apply_presets(data, file)
+    d = validate(merged, SCHEMA, file=file)
     vehicles, states = [], {}
     for name, v in d["vehicles"].items():
         veh, st = _build_vehicle(name, v, file)
+        _check_vehicle_geometry(veh, v, merged["vehicles"][name], d["scenario"]["units"], file)
         for bn in st:
             if bn in states:
                 raise _err(f"body name {bn!r} is used twice; body names must be unique in the scene",
@@ -1106,6 +1141,7 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
                                 imp["body1"], imp["body2"], surface, tuple(constraints), tuple(external))
     except ScenarioError as exc:
         raise ScenarioError(str(exc), field=exc.field, file=file) from None
+    _check_overlap(problem, vehicles, states, imp["overlap_tolerance"], d["scenario"]["units"], file)  # the cause first
     _check_contact_point(problem, imp["contact_tolerance"], d["scenario"]["units"], file)
     if runout is not None:
         runout = _with_contact(runout, d, vehicles, problem, file)
@@ -1119,6 +1155,107 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
     meta = d["scenario"]
     return Scenario(file, meta["title"], meta["source"], meta["units"], tuple(vehicles), states, problem, runout,
                     evidence, d, map_lines, approaches)
+
+
+def _written(raw) -> str:
+    """A value as written in the file (``["-6.2 m", "0 m"]``)."""
+    from .units import toml_repr
+
+    return toml_repr(raw)
+
+
+def _check_vehicle_geometry(veh: Vehicle, v: dict, raw: dict, system: str, file: str | None) -> None:
+    """Hitch points within (or within ``drawbar`` of) both bodies they join; tyre contacts within
+    (or within ``overhang`` of) their body's outline. One error, naming the key as written, the
+    value as written in the file, how far it is off and the allowed range."""
+    from .motion.road import signed_distance
+    from .units import format_value
+
+    def L(x):
+        return format_value(x, Kind.LENGTH, system)
+
+    bodies = v["bodies"]
+    for i, body in enumerate(veh.bodies):
+        corners = body.outline()
+        if corners is None:
+            continue
+        b, rb = bodies[i], raw["bodies"][i]
+        key = f"vehicles.{veh.name}.bodies[{i}]"
+        size = f"outline {L(body.length)} x {L(body.width)}"
+        for which in ("rear_hitch", "front_hitch"):
+            if b[which] is None:
+                continue
+            out = max(0.0, -float(signed_distance(np.asarray(b[which], dtype=float)[None], corners)[0]))
+            if out > b["drawbar"] + 1e-9:
+                raise _err(f"{which} = {_written(rb[which])} lies {L(out)} outside the {size} of body "
+                           f"{body.name!r}; allowed: within the outline or at most drawbar = {L(b['drawbar'])} outside "
+                           f"it (a longer drawbar or tongue: set {key}.drawbar)", f"{key}.{which}", file)
+        cx, cy = body.outline_center
+        ahead, side = b["overhang"]
+        for k, ax in enumerate(body.axles):
+            front, rear = cx + body.length / 2 + ahead, cx - body.length / 2 - ahead
+            rax = rb["axles"][k] if isinstance(rb.get("axles"), list) and k < len(rb["axles"]) else {}
+            akey = f"{key}.axles[{k}]"
+            if not rear - 1e-9 <= ax.x <= front + 1e-9:
+                raise _err(f"x = {_written(rax.get('x', ax.x))} puts the axle outside the body: allowed "
+                           f"[{L(rear)}, {L(front)}] from the CG ({size} centred at {L(cx)}, plus overhang = "
+                           f"{L(ahead)} beyond its ends; set {key}.overhang for more)", f"{akey}.x", file)
+            half = body.width / 2 + side - abs(cy)  # tyre contacts at +-track/2 from the CG line
+            if ax.track / 2 > half + 1e-9:
+                raise _err(f"track = {_written(rax.get('track', ax.track))} is wider than body {body.name!r} "
+                           f"(width {L(body.width)}); allowed a track <= {L(2 * half)} (the width plus overhang = "
+                           f"{L(side)} on each side; set {key}.overhang for more)", f"{akey}.track", file)
+
+
+def _sat_depth(a: np.ndarray, b: np.ndarray) -> float:
+    """How far one convex polygon must move to clear the other (separating axes) [m]; 0 if apart."""
+    depth = math.inf
+    for poly in (a, b):
+        for i in range(len(poly)):
+            e = poly[(i + 1) % len(poly)] - poly[i]
+            n = np.array([-e[1], e[0]]) / math.hypot(e[0], e[1])
+            pa, pb = a @ n, b @ n
+            ov = min(pa.max(), pb.max()) - max(pa.min(), pb.min())
+            if ov <= 0:
+                return 0.0
+            depth = min(depth, ov)
+    return float(depth)
+
+
+def _check_overlap(problem: ImpactProblem, vehicles, states: dict, tolerance: float, system: str,
+                   file: str | None) -> None:
+    """Bodies of different vehicles may overlap at the impact by at most ``tolerance``: the impact's
+    two bodies measured along the impact normal (their crush), any other pair by the distance one
+    must move to clear the other (they are not in the impact: any overlap is a misplaced vehicle)."""
+    from .units import format_value
+
+    normal = np.asarray(problem.surface.normal, dtype=float)
+    pair = {problem.body1, problem.body2}
+    placed = []
+    for v in vehicles:
+        for b in v.bodies:
+            corners = b.outline()
+            if corners is None or b.is_fixed or b.name not in states:
+                continue
+            st = states[b.name]
+            placed.append((v.name, b.name, np.asarray(st.position) + rotate(corners, st.heading)))
+    for i, (va, ba, pa) in enumerate(placed):
+        for vb, bb, pb in placed[i + 1:]:
+            if va == vb or _sat_depth(pa, pb) == 0.0:
+                continue
+            crush = {ba, bb} == pair
+            if crush:
+                qa, qb = pa @ normal, pb @ normal
+                depth, how = min(qa.max(), qb.max()) - max(qa.min(), qb.min()), "along the impact normal"
+            else:
+                depth, how = _sat_depth(pa, pb), "(the distance one must move to clear the other)"
+            if depth > tolerance:
+                L = lambda x: format_value(x, Kind.LENGTH, system)  # noqa: E731
+                raise _err(f"at the impact the outlines of {ba!r} (vehicle {va!r}) and {bb!r} (vehicle {vb!r}) overlap "
+                           f"{L(depth)} deep {how}: one vehicle is placed on top of the other; allowed at most "
+                           f"impact.overlap_tolerance = {L(tolerance)} (the crush of the first impact); check the "
+                           f"positions and headings of vehicles.{va} and vehicles.{vb}", f"vehicles.{vb}.position",
+                           file)
 
 
 def _check_contact_point(problem: ImpactProblem, tolerance: float, system: str, file: str | None) -> None:

@@ -738,8 +738,22 @@ def _build_wheels(vehicle: Vehicle, v: dict, file: str | None, prefix: str | Non
             overrides[w["select"]] = WheelSetting(**merged)
         except ScenarioError as exc:
             raise _rewrap(exc, f"{prefix}.wheels[{i}]", file) from None
+    schedule = []
+    for k, c in enumerate(v["wheel_changes"]):  # each change alone first: an error names its key as written
+        key = f"{prefix}.wheel_changes[{k}]"
+        try:
+            change = ScheduledChange(c["at"], c["select"], _given(c))
+            WheelSettings(default, overrides, [change]).resolve(vehicle)
+        except ScenarioError as exc:
+            msg = str(exc)
+            if exc.field and msg.startswith(f"{exc.field}: "):
+                msg = msg[len(exc.field) + 2:]
+            word, _, rest = msg.partition(": ")
+            if rest and word in c:  # "steer: must lie in ...": that key of the change
+                raise _err(rest, f"{key}.{word}", file) from None
+            raise _err(f"select = {c['select']!r} at {c['at']:g} s: {msg}", f"{key}.select", file) from None
+        schedule.append(change)
     try:
-        schedule = [ScheduledChange(c["at"], c["select"], _given(c)) for c in v["wheel_changes"]]
         ws = WheelSettings(default, overrides, schedule)
         ws.resolve(vehicle)
     except ScenarioError as exc:
@@ -765,6 +779,14 @@ def _build_runout(r: dict, vehicles, raw_vehicles: dict, file: str | None, raw: 
         if fixed:
             raise _err(f"accuracy chooses {', '.join(fixed)} itself; remove them or remove accuracy",
                        f"runout.{fixed[0]}", file)
+    for i, z in enumerate(r["zones"]):
+        why = outline_problem(z["polygon"])
+        if why:
+            raw_zones = raw.get("zones") if isinstance(raw.get("zones"), list) else []
+            shown = raw_zones[i].get("polygon") if i < len(raw_zones) and isinstance(raw_zones[i], dict) else None
+            value = f"polygon = {_written(shown)} " if shown is not None and len(shown) <= 8 else ""
+            name = f"zone {z['name']!r}" if z["name"] else f"zone {i + 1}"
+            raise _err(f"{value}is not the outline of {name}: {why}", f"runout.zones[{i}].polygon", file)
     try:
         zones = tuple(FrictionZone(tuple(z["polygon"]), z["friction"], z["name"] or f"zone {i + 1}")
                       for i, z in enumerate(r["zones"]))
@@ -1155,6 +1177,34 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
     meta = d["scenario"]
     return Scenario(file, meta["title"], meta["source"], meta["units"], tuple(vehicles), states, problem, runout,
                     evidence, d, map_lines, approaches)
+
+
+def outline_problem(points) -> str | None:
+    """Why ``points`` (a closed outline, in order) is not a simple polygon, or None: fewer than 3
+    points, all on one line (no area), or edges crossing (a bow-tie: points not in order around it)."""
+    p = np.asarray(points, dtype=float)
+    n = len(p)
+    if n < 3:
+        return f"{n} point(s); an outline needs at least 3"
+
+    def cross(o, a, b):
+        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+    scale = max(float(np.ptp(p[:, 0])), float(np.ptp(p[:, 1])), 1e-300)
+    for i in range(n):
+        for j in range(i + 2, n):
+            if i == 0 and j == n - 1:
+                continue  # adjacent through the closing edge
+            a, b, c, d = p[i], p[(i + 1) % n], p[j], p[(j + 1) % n]
+            d1, d2, d3, d4 = cross(c, d, a), cross(c, d, b), cross(a, b, c), cross(a, b, d)
+            if d1 * d2 < 0 and d3 * d4 < 0:
+                return (f"its edges cross (points {i + 1}-{i + 2} and points {j + 1}-{(j + 1) % n + 1}): the outline "
+                        "intersects itself; list the points in order around the zone")
+    x, y = p[:, 0], p[:, 1]
+    area = 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
+    if area <= 1e-12 * scale * scale:
+        return "its points lie on one line: it has no area"
+    return None
 
 
 def _written(raw) -> str:

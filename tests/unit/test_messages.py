@@ -83,3 +83,41 @@ def test_posterior_steps_range_is_the_real_minimum():
         PosteriorSpec(steps=MIN_STEPS_DEFAULT_BURN - 1).check(1)
     with pytest.raises(ScenarioError, match=rf"steps = 1 keeps 1 steps.*allowed steps >= {MIN_STEPS_DEFAULT_BURN} "):
         PosteriorSpec(steps=1).check(1)
+
+
+SIDE = ROOT / "scenarios" / "scenes" / "car_trailer_side_impact.toml"
+
+
+def _load_error(tmp_path, text):
+    from crashsim.scenario import load_scenario
+
+    f = tmp_path / "scene.toml"
+    f.write_text(text)
+    with pytest.raises(ScenarioError) as exc:
+        load_scenario(f)
+    return str(exc.value), str(f)
+
+
+def test_wheel_change_errors_name_the_key_as_written(tmp_path):
+    extra = '\n[[vehicles.towing.wheel_changes]]\nat = "1 s"\nselect = "car/middle"\nstate = "locked"\n'
+    text = SIDE.read_text().replace("\n[vehicles.striking]", extra + "\n[vehicles.striking]")
+    msg, f = _load_error(tmp_path, text)
+    assert msg.startswith(f"{f}: vehicles.towing.wheel_changes[0].select: select = 'car/middle' at 1 s: no axle 'middle'")
+    assert "schedule[" not in msg and "wheels['" not in msg
+    extra = '\n[[vehicles.towing.wheel_changes]]\nat = "1 s"\nselect = "trailer"\nsteer = "100 deg"\n'
+    text = SIDE.read_text().replace("\n[vehicles.striking]", extra + "\n[vehicles.striking]")
+    msg, f = _load_error(tmp_path, text)
+    assert msg == f"{f}: vehicles.towing.wheel_changes[0].steer: must lie in [-90, 90] deg, got 100 deg"
+
+
+def test_a_bow_tie_zone_is_a_self_intersecting_outline(tmp_path):
+    zone = ('\n[[runout.zones]]\nname = "gravel"\nfriction = 0.5\n'
+            'polygon = [["0 m", "0 m"], ["10 m", "10 m"], ["10 m", "0 m"], ["0 m", "10 m"]]\n')
+    text = SIDE.read_text().replace("road_friction = 0.75\n", "road_friction = 0.75\n" + zone)
+    msg, f = _load_error(tmp_path, text)
+    assert msg.startswith(f'{f}: runout.zones[0].polygon: polygon = [["0 m", "0 m"], ["10 m", "10 m"]')
+    assert "zone 'gravel'" in msg and "intersects itself" in msg and "points 1-2 and points 3-4" in msg
+    assert "zero area" not in msg and "zones.zone" not in msg
+    flat = zone.replace('["10 m", "10 m"], ["10 m", "0 m"], ["0 m", "10 m"]', '["10 m", "0 m"], ["20 m", "0 m"]')
+    msg, _ = _load_error(tmp_path, SIDE.read_text().replace("road_friction = 0.75\n", "road_friction = 0.75\n" + flat))
+    assert "runout.zones[0].polygon" in msg and "on one line: it has no area" in msg

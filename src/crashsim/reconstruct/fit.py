@@ -59,6 +59,7 @@ import numpy as np
 
 from ..errors import ScenarioError, SolverError, UnreachableImpactError, failure_reason, in_file
 from ..outputs import check_workers
+from .inverse_schema import CORRELATION_WARNING
 from ..geometry import wrap_angle
 from .evidence import signed_distance_to_polyline
 from .overrides import ScenarioOverrides, default_engine, parse_value
@@ -136,6 +137,7 @@ class FitSpec:
     covariance: str = "absolute"
     sigma_from_tolerance: float | None = None
     mark_points: int = 10
+    correlation_warning: float = CORRELATION_WARNING
 
     @property
     def paths(self) -> tuple[str, ...]:
@@ -179,12 +181,13 @@ class FitSpec:
         return cls(tuple(unknowns), starts=d["starts"], screen=d["screen"], seed=d["seed"], method=d["method"],
                    max_evaluations=d["max_evaluations"], diff_step=d["diff_step"], confidence=d["confidence"],
                    covariance=d["covariance"], sigma_from_tolerance=d["sigma_from_tolerance"],
-                   mark_points=d["mark_points"])
+                   mark_points=d["mark_points"], correlation_warning=d["correlation_warning"])
 
     def to_dict(self) -> dict:
         return {"unknowns": [u.__dict__.copy() for u in self.unknowns],
                 **{k: getattr(self, k) for k in ("starts", "screen", "seed", "method", "max_evaluations", "diff_step",
-                                                 "confidence", "covariance", "sigma_from_tolerance", "mark_points")}}
+                                                 "confidence", "covariance", "sigma_from_tolerance", "mark_points",
+                                                 "correlation_warning")}}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -1133,6 +1136,13 @@ def _analyse(problem: FitProblem, spec: FitSpec, outcomes: list[dict], engine: s
         if not undetermined[j]:
             corr[j, j] = 1.0
 
+    for i in range(n):  # pairs the evidence fixes only together ([fit] correlation_warning)
+        for j in range(i + 1, n):
+            r = corr[i, j]
+            if np.isfinite(r) and abs(r) >= spec.correlation_warning:
+                warnings.append(f"{spec.unknowns[i].name} and {spec.unknowns[j].name} are correlated at {r:.4f} "
+                                f"(|r| >= correlation_warning = {spec.correlation_warning:g}): the evidence fixes only a "
+                                "combination of them, and each one's interval rests on the other's bounds")
     for j, u in enumerate(spec.unknowns):
         if undetermined[j]:
             continue

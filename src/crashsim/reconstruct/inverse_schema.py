@@ -73,6 +73,10 @@ UNKNOWN = Section("unknown", [
                       f"else the middle of the bounds), {_VALUE}"),
 ], description="One unknown of the fit: an input of this file and its bounds")
 
+#: Default ``[fit] correlation_warning``: |r| from which a pair of unknowns is reported as determined
+#: only together (0.99: the shipped fit scene's speeds and friction are at 0.97-0.999).
+CORRELATION_WARNING = 0.99
+
 FIT = Section("fit", [
     Field("starts", "int", default=4, minimum=1, maximum=1000,
           description="Local least-squares fits: the first from the initial values, the others from points "
@@ -90,6 +94,10 @@ FIT = Section("fit", [
                       "(above the run-out solver's noise at its default rtol 1e-8)"),
     Field("confidence", "float", default=0.95, minimum=0.5, maximum=0.9999,
           description="Confidence level of the reported intervals"),
+    Field("correlation_warning", "float", default=CORRELATION_WARNING, minimum=0.5, maximum=1.0,
+          description="Warn when two unknowns are correlated at least this strongly (|r|): the evidence then fixes "
+                      "only a combination of them (speed and road friction through v^2 / mu), and each one's "
+                      "interval rests on the other's bounds"),
     Field("covariance", choices=("absolute", "scaled"), default="absolute",
           description="absolute: the evidence sigmas are the measurement uncertainties, covariance (J^T W J)^-1; "
                       "scaled: multiplied by chi^2/dof (sigmas known only up to a common factor; Student t)"),

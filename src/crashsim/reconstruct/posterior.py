@@ -72,7 +72,7 @@ from ..errors import ScenarioError, failure_reason, in_file
 from ..outputs import check_workers
 
 __all__ = ["PosteriorSpec", "PosteriorProblem", "PosteriorResult", "run_posterior", "load_chain",
-           "PERCENTILES", "MIN_KEPT_STEPS", "TAU_FACTOR"]
+           "PERCENTILES", "MIN_KEPT_STEPS", "TAU_FACTOR", "settle_step"]
 
 _log = logging.getLogger("crashsim")
 
@@ -632,6 +632,27 @@ def _prior_dict(p: Prior) -> dict:
 # Summaries
 # ---------------------------------------------------------------------------------------------
 
+def settle_step(log_prob: np.ndarray, n_unknowns: int) -> int | None:
+    """The step from which the walkers' log-probability has settled, or None if it never does.
+
+    ``log_prob``: shape (steps, walkers). The level is the median over the second half of the
+    chain of the per-step median over the walkers; the chain has settled from the first step after
+    which that median never falls more than sqrt(k/2) below the level (k unknowns: one standard
+    deviation of the log-probability of a sample of a k-dimensional normal posterior, whose -2 log p
+    is chi^2 with k degrees of freedom). None if its last step is still below that.
+    """
+    lp = np.asarray(log_prob, dtype=float)
+    if lp.ndim != 2 or lp.shape[0] < 4:
+        return None
+    med = np.median(lp, axis=1)
+    level = float(np.median(med[lp.shape[0] // 2:]))
+    if not np.isfinite(level):
+        return None
+    below = np.nonzero(~(med >= level - math.sqrt(max(n_unknowns, 1) / 2)))[0]
+    first = int(below[-1]) + 1 if below.size else 0
+    return first if first < lp.shape[0] else None
+
+
 def _percentiles(v: np.ndarray) -> dict:
     """Percentiles, mean and sd of one unknown or derived quantity over the kept samples.
 
@@ -1007,6 +1028,12 @@ def _assemble(problem, spec, z, lp, blobs, acc, derived, x0, failures, evaluatio
     if np.isfinite(tmax) and burn < 2 * tmax:
         warnings.append(f"the burn-in ({burn} steps) is shorter than two autocorrelation times ({2 * tmax:.0f} steps): "
                         "the start may still show in the summaries")
+    settled = settle_step(lp, len(fs.unknowns))
+    if settled is not None and burn < settled:
+        warnings.append(f"the log-probability settles only at step {settled} (the walkers' median reaches its final "
+                        f"level within sqrt(k/2) = {math.sqrt(len(fs.unknowns) / 2):.2g}), after the burn-in of {burn} "
+                        f"steps: the summaries include samples still climbing from the start; set posterior.burn >= "
+                        f"{settled} (and steps accordingly)")
     am = float(np.mean(acceptance))
     if not ACCEPTANCE_RANGE[0] <= am <= ACCEPTANCE_RANGE[1]:
         warnings.append(f"mean acceptance fraction {am:.3f} is outside {ACCEPTANCE_RANGE[0]:g}-{ACCEPTANCE_RANGE[1]:g}: "

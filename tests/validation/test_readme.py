@@ -257,3 +257,39 @@ def test_posterior_section_comes_from_the_posterior_report():
     assert flo < 0.5 and fhi > 0.9 and 0.5 <= plo < phi <= 0.9  # the fit passes the bounds, the posterior not
     (flo, fhi), (plo, phi) = vals["impact.restitution"]
     assert flo - plo > 2 * abs(fhi - phi)  # the longer lower tail
+
+
+def test_reliability_section_numbers_are_the_code_s():
+    """Every number of the reliability section is a constant or default of the code, or a claim
+    checked here (the circular percentiles of a cloud from 191 to 231 deg)."""
+    import math
+
+    import numpy as np
+
+    from crashsim.geometry import circular_percentiles, wrap_angle
+    from crashsim.reconstruct.evidence import REST_MISFIT_SHARE
+    from crashsim.reconstruct.inverse_schema import CORRELATION_WARNING, MIN_KEPT_STEPS, MIN_STEPS_DEFAULT_BURN
+    from crashsim.scenario import DEFAULT_DRAWBAR, DEFAULT_OVERHANG, DEFAULT_OVERLAP, SCHEMA
+
+    section = _section("## Reliability")
+    impact = next(s for s in SCHEMA.subsections if s.name == "impact")
+    contact = next(f for f in impact.fields if f.name == "contact_tolerance").default
+    p5, p50 = np.degrees(circular_percentiles(wrap_angle(np.radians(np.linspace(191, 231, 41))), [5, 50]))
+    claims = {f"default {DEFAULT_DRAWBAR:g} m": "drawbar", f"default {DEFAULT_OVERHANG[0]:g} m lengthwise": "overhang",
+              f"{DEFAULT_OVERHANG[1]:g} m sideways": "overhang", f"default {DEFAULT_OVERLAP:g} m": "overlap",
+              f"({contact})": "contact_tolerance", f"more than {REST_MISFIT_SHARE:g} of": "misfit",
+              f"(default {CORRELATION_WARNING:g})": "correlation", f"burn + {MIN_KEPT_STEPS} x thin": "steps",
+              f"({MIN_STEPS_DEFAULT_BURN} with the default burn-in)": "steps", "below 1e-8 of the energy": "rtol",
+              f"p5 {round(p5):d} deg and p50 {round(p50):d} deg": "circular", "from 191 to 231 deg": "circular"}
+    flat = " ".join(section.split())
+    for text in claims:
+        assert text in flat, text
+    from crashsim.motion.options import RunoutOptions
+
+    assert RunoutOptions().rtol == 1e-8 and math.isclose(p5, -167.0) and math.isclose(p50, -149.0)
+    rest = flat
+    for text in claims:
+        rest = rest.replace(text, "")
+    # the numbers left are names, exit codes and examples: 2, 3, 45, 0.5 of the checks above, >= 1
+    left = {n for n in _numbers(re.sub(r"`[^`]*`", "", rest))}
+    assert left == {"3", "180"}, left  # exit code 3, +-180 deg

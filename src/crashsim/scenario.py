@@ -109,12 +109,12 @@ BODY = Section("body", [
           description="Largest articulation before the bodies meet (jack-knife stop)"),
     Field("cg_height", Kind.LENGTH, required=False, minimum=0, exclusive_minimum=True, example="1.1 m",
           description="CG height above ground (only for the run-out's load transfer)"),
-    Field("drawbar", Kind.LENGTH, minimum=0, maximum=MAX_LENGTH, default=f"{DEFAULT_DRAWBAR} m",
+    Field("drawbar", Kind.LENGTH, minimum=0, maximum=MAX_LENGTH, default=f"{DEFAULT_DRAWBAR:g} m",
           description="How far this body's hitch points (rear_hitch, front_hitch) may lie outside its outline: a "
                       "drawbar, an A-frame tongue, a ball mount (checked at load; the default covers car-trailer "
                       "tongues and ball mounts)"),
     Field("overhang", Kind.LENGTH, n=2, minimum=0, maximum=MAX_LENGTH,
-          default=[f"{DEFAULT_OVERHANG[0]} m", f"{DEFAULT_OVERHANG[1]} m"],
+          default=[f"{DEFAULT_OVERHANG[0]:g} m", f"{DEFAULT_OVERHANG[1]:g} m"],
           description="How far the tyre contacts may lie outside the outline: beyond its front or rear end, and "
                       "beyond its sides (checked at load: axle x within the length, track within the width)"),
 ], subsections=[ArrayOf("axles", AXLE, required=False, description="Axles, front to rear (needed for a run-out)")],
@@ -252,7 +252,7 @@ IMPACT = Section("impact", [
     Field("contact_tolerance", Kind.LENGTH, minimum=0, default="0.5 m",
           description="How far the contact point may lie outside either contacting body's outline (a check "
                       "of the geometry: the point must be in or near the crush zone of both bodies)"),
-    Field("overlap_tolerance", Kind.LENGTH, minimum=0, default=f"{DEFAULT_OVERLAP} m",
+    Field("overlap_tolerance", Kind.LENGTH, minimum=0, default=f"{DEFAULT_OVERLAP:g} m",
           description="How deep the outlines of bodies of two vehicles may overlap at the impact: the impact's "
                       "two bodies along its normal (their crush), any other pair by the distance one must move to "
                       "clear the other; deeper is an error at load (a vehicle placed on top of another)"),

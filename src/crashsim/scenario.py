@@ -1219,9 +1219,17 @@ def _check_vehicle_geometry(veh: Vehicle, v: dict, raw: dict, system: str, file:
     (or within ``overhang`` of) their body's outline. One error, naming the key as written, the
     value as written in the file, how far it is off and the allowed range."""
     from .motion.road import signed_distance
-    from .units import format_value
+    from .units import format_value, parse
 
-    def L(x):
+    def L(x, like=None):
+        """A length in the unit of ``like`` (a value as written in the file), else the file's system's."""
+        like = like[0] if isinstance(like, (list, tuple)) and like else like
+        if isinstance(like, str) and len(like.split(maxsplit=1)) == 2:
+            unit = like.split(maxsplit=1)[1]
+            try:
+                return f"{x / parse(f'1 {unit}', Kind.LENGTH, field='unit'):.4g} {unit}"
+            except ScenarioError:
+                pass
         return format_value(x, Kind.LENGTH, system)
 
     bodies = v["bodies"]
@@ -1231,14 +1239,15 @@ def _check_vehicle_geometry(veh: Vehicle, v: dict, raw: dict, system: str, file:
             continue
         b, rb = bodies[i], raw["bodies"][i]
         key = f"vehicles.{veh.name}.bodies[{i}]"
-        size = f"outline {L(body.length)} x {L(body.width)}"
+        size = f"outline {L(body.length, rb.get('length'))} x {L(body.width, rb.get('width'))}"
         for which in ("rear_hitch", "front_hitch"):
             if b[which] is None:
                 continue
             out = max(0.0, -float(signed_distance(np.asarray(b[which], dtype=float)[None], corners)[0]))
             if out > b["drawbar"] + 1e-9:
-                raise _err(f"{which} = {_written(rb[which])} lies {L(out)} outside the {size} of body "
-                           f"{body.name!r}; allowed: within the outline or at most drawbar = {L(b['drawbar'])} outside "
+                raise _err(f"{which} = {_written(rb[which])} lies {L(out, rb[which])} outside the {size} of body "
+                           f"{body.name!r}; allowed: within the outline or at most drawbar = "
+                           f"{L(b['drawbar'], rb.get('drawbar'))} outside "
                            f"it (a longer drawbar or tongue: set {key}.drawbar)", f"{key}.{which}", file)
         cx, cy = body.outline_center
         ahead, side = b["overhang"]
@@ -1247,14 +1256,17 @@ def _check_vehicle_geometry(veh: Vehicle, v: dict, raw: dict, system: str, file:
             rax = rb["axles"][k] if isinstance(rb.get("axles"), list) and k < len(rb["axles"]) else {}
             akey = f"{key}.axles[{k}]"
             if not rear - 1e-9 <= ax.x <= front + 1e-9:
+                lx = rax.get("x")
                 raise _err(f"x = {_written(rax.get('x', ax.x))} puts the axle outside the body: allowed "
-                           f"[{L(rear)}, {L(front)}] from the CG ({size} centred at {L(cx)}, plus overhang = "
-                           f"{L(ahead)} beyond its ends; set {key}.overhang for more)", f"{akey}.x", file)
+                           f"[{L(rear, lx)}, {L(front, lx)}] from the CG ({size} centred at {L(cx, lx)}, plus overhang "
+                           f"= {L(ahead, rb.get('overhang'))} beyond its ends; set {key}.overhang for more)", f"{akey}.x", file)
             half = body.width / 2 + side - abs(cy)  # tyre contacts at +-track/2 from the CG line
             if ax.track / 2 > half + 1e-9:
+                lt = rax.get("track")
                 raise _err(f"track = {_written(rax.get('track', ax.track))} is wider than body {body.name!r} "
-                           f"(width {L(body.width)}); allowed a track <= {L(2 * half)} (the width plus overhang = "
-                           f"{L(side)} on each side; set {key}.overhang for more)", f"{akey}.track", file)
+                           f"(width {L(body.width, lt)}); allowed a track <= {L(2 * half, lt)} (the width plus overhang "
+                           f"= {L(side, (rb.get('overhang') or [None, None])[1:])} on each side; set {key}.overhang for more)",
+                           f"{akey}.track", file)
 
 
 def _sat_depth(a: np.ndarray, b: np.ndarray) -> float:

@@ -37,7 +37,7 @@ def test_ball_hitch_12_ft_behind_the_rear_bumper(tmp_path, capsys):
     # car-midsize: rear bumper 2.25 m behind the CG; 12 ft = 3.658 m further back
     text = SIDE.read_text().replace('rear_hitch = ["-2.55 m", "0 m"]', 'rear_hitch = ["-19.38 ft", "0 ft"]')
     _refused(tmp_path, capsys, text, "vehicles.towing.bodies[0].rear_hitch:", 'rear_hitch = ["-19.38 ft", "0 ft"]',
-             "lies 3.657 m outside", f"drawbar = {DEFAULT_DRAWBAR:g} m")
+             "lies 12 ft outside", f"drawbar = {DEFAULT_DRAWBAR:g} m")  # in the unit written
 
 
 def test_a_declared_drawbar_allows_a_long_one(tmp_path):
@@ -52,7 +52,7 @@ def test_trailer_axle_60_ft_behind_the_cg_of_a_24_ft_trailer(tmp_path, capsys):
                                     'outline_center = ["0 ft", "0 ft"]\nfront_hitch = ["14 ft", "0 ft"]\n'
                                     'axles = [{ name = "axle", x = "-60 ft", track = "5.2 ft" }]')
     _refused(tmp_path, capsys, text, "vehicles.towing.bodies[1].axles[0].x:", 'x = "-60 ft"',
-             "allowed [-5.658 m, 5.658 m] from the CG", "overhang")
+             "allowed [-18.56 ft, 18.56 ft] from the CG", "overhang = 2 m")
 
 
 def test_12_ft_track_on_a_6_7_ft_wide_body(tmp_path, capsys):
@@ -61,7 +61,8 @@ def test_12_ft_track_on_a_6_7_ft_wide_body(tmp_path, capsys):
                                     'axles = [{ name = "front", x = "1.35 m", track = "12 ft" }, '
                                     '{ name = "rear", x = "-1.35 m", track = "1.55 m" }]')
     _refused(tmp_path, capsys, text, "vehicles.striking.bodies[0].axles[0].track:", 'track = "12 ft"',
-             "wider than body 'striker'", "allowed a track <= 2.342 m")
+             "wider than body 'striker' (width 6.7 ft)", "allowed a track <= 7.684 ft",
+             "overhang = 0.15 m on each side")
 
 
 def test_car_placed_on_top_of_the_trailer(tmp_path, capsys):

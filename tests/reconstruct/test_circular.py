@@ -76,6 +76,7 @@ def test_monte_carlo_percentiles_of_a_rest_heading(tmp_path):
     assert mc.percentiles["delta_v.car"]["p50"] == pytest.approx(5.2)  # other outputs: linear
     report = mc.report("SI")
     assert "-149" in report and "108.9" not in report
+    assert "rest headings: percentiles on the arc around their circular mean" in report
 
 
 def test_monte_carlo_histogram_of_a_rest_heading_is_one_cloud(tmp_path):

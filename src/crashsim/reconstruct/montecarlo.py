@@ -602,6 +602,9 @@ class MCResult:
             a = self.accepted_percentiles.get(key) if both else None
             if a is not None:
                 lines.append(f"  {'':<28}{'accepted':<10}" + "".join(f"{show(a[q], kind):>13}" for q in qs))
+        if any(self.kind_of(k) == "angle" for k in self.percentiles):
+            lines.append("  (rest headings: percentiles on the arc around their circular mean, so a cloud across "
+                         "+-180 deg is one cloud; a value may pass +-180 deg)")
         if self.pass_share:
             lines.append("")
             lines.append(f"Evidence over the samples: {self.evidence_headline()}")

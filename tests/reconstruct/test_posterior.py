@@ -316,7 +316,7 @@ def test_settle_step_of_a_climbing_log_probability():
     assert settle_step(rng.normal(0.0, 0.5, (steps, walkers)), 2) == 0  # settled from the start
 
 
-def test_a_burn_in_shorter_than_the_climb_warns():
+def test_a_burn_in_shorter_than_the_climb_warns(caplog):
     """Walkers started in a tight ball at 9.5 m/s climb to the posterior; with burn = 0 the
     summaries include the climb, and the result says from which step the chain has settled."""
     from crashsim.reconstruct.posterior import settle_step
@@ -326,5 +326,6 @@ def test_a_burn_in_shorter_than_the_climb_warns():
     assert s is not None and s > 0  # it does climb
     (w,) = [w for w in res.warnings if "log-probability settles only at step" in w]
     assert f"step {s} " in w and "after the burn-in of 0 steps" in w and f"posterior.burn >= {s}" in w
+    assert any(r.name == "crashsim" and f"settles at step {s}" in r.getMessage() for r in caplog.records)
     later = run_posterior(rebound(steps=s + 60, burn=s, init_scale=0.001), workers=1, progress=False, engine=ENGINE)
     assert not [w for w in later.warnings if "settles only" in w]

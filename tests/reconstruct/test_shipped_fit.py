@@ -30,7 +30,7 @@ def test_file_validates_with_the_wired_schema():
     assert len(sc.data["uncertainty"]["inputs"]) == 5
 
 
-def test_shipped_scene_speeds_come_back_from_its_evidence():
+def test_shipped_scene_speeds_come_back_from_its_evidence(caplog):
     raw = load_toml(FILE)
     spec = FitSpec.from_dict(raw["fit"], raw, file=str(FILE))
     res = fit_scene(raw, spec, engine=ENGINE, file=str(FILE))
@@ -49,6 +49,8 @@ def test_shipped_scene_speeds_come_back_from_its_evidence():
     named = {(a.name, b.name) for a in res.unknowns for b in res.unknowns
              if any(w.startswith(f"{a.name} and {b.name} are correlated at ") for w in res.warnings)}
     assert strong and named == strong
+    logged = [r.getMessage() for r in caplog.records if r.name == "crashsim" and "are correlated at" in r.getMessage()]
+    assert len(logged) == len(strong)
 
 
 def test_the_second_basin_is_a_worse_local_minimum():

@@ -1140,6 +1140,8 @@ def _analyse(problem: FitProblem, spec: FitSpec, outcomes: list[dict], engine: s
         for j in range(i + 1, n):
             r = corr[i, j]
             if np.isfinite(r) and abs(r) >= spec.correlation_warning:
+                _log.warning("fit: %s and %s are correlated at %.4f (correlation_warning %g)", spec.unknowns[i].name,
+                             spec.unknowns[j].name, r, spec.correlation_warning)
                 warnings.append(f"{spec.unknowns[i].name} and {spec.unknowns[j].name} are correlated at {r:.4f} "
                                 f"(|r| >= correlation_warning = {spec.correlation_warning:g}): the evidence fixes only a "
                                 "combination of them, and each one's interval rests on the other's bounds")

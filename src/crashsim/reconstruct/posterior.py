@@ -1030,6 +1030,7 @@ def _assemble(problem, spec, z, lp, blobs, acc, derived, x0, failures, evaluatio
                         "the start may still show in the summaries")
     settled = settle_step(lp, len(fs.unknowns))
     if settled is not None and burn < settled:
+        _log.warning("posterior: the log-probability settles at step %d, after the burn-in of %d steps", settled, burn)
         warnings.append(f"the log-probability settles only at step {settled} (the walkers' median reaches its final "
                         f"level within sqrt(k/2) = {math.sqrt(len(fs.unknowns) / 2):.2g}), after the burn-in of {burn} "
                         f"steps: the summaries include samples still climbing from the start; set posterior.burn >= "

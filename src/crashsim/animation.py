@@ -102,9 +102,11 @@ def frame_times(t_end: float, dt: float, *, field: str = "dt") -> np.ndarray:
 
     t_end = float(t_end)
     dt_min = t_end / (MAX_FRAMES - 1)
-    allowed = f"allowed dt > 0 s and >= {dt_min:.3g} s (at most {MAX_FRAMES} frames for {t_end:.4g} s)"
+    allowed = (f"allowed dt >= {dt_min:.3g} s (at most {MAX_FRAMES} frames for {t_end:.4g} s)" if dt_min > 0
+               else 'allowed a time > 0 s, e.g. "0.05 s"')
     if not (isinstance(dt, (int, float, np.floating)) and math.isfinite(dt) and dt > 0):
-        raise ScenarioError(f"time between frames {dt!r} s is not a positive time; {allowed}", field=field)
+        shown = f"{dt:g} s" if isinstance(dt, (int, float, np.floating)) else repr(dt)
+        raise ScenarioError(f"time between frames {shown} is not a positive time; {allowed}", field=field)
     from .reconstruct.scene import time_grid
 
     times = time_grid(t_end, dt)

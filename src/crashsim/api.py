@@ -45,21 +45,28 @@ def with_overrides(data: Mapping, overrides: Mapping[str, Any] | None = None, **
         ``"impact.point[0]"``) and the value written as in the file, with its unit
         (``"35 mph"``, ``0.1``).
     **kwargs
-        The same with ``__`` for each dot: ``vehicles__car__speed="35 mph"``.
+        The same with ``__`` for each dot: ``vehicles__car__speed="35 mph"``. Any value of the
+        file may be changed: a number with its unit, a choice (``runout__engine="compiled"``), a
+        flag, a whole vector (``vehicles__car__position=["1 m", "2 m"]``).
 
     Raises
     ------
     ScenarioError
         A path the schema does not have, or a value that cannot be read (naming the path).
     """
-    from .reconstruct.overrides import parse_value, resolve_path, set_value
+    from .reconstruct.overrides import parse_value, resolve_path, set_value, set_written
 
     items = dict(overrides or {})
     items.update({k.replace("__", "."): v for k, v in kwargs.items()})
     out = dict(data)
     for path, value in items.items():
-        target = resolve_path(path, field=path)
-        out = set_value(out, target, parse_value(value, target, field=path))
+        target = resolve_path(path, field=path, any_value=True)
+        f = target.field
+        one_number = (f.is_quantity or f.kind == "float") and not f.points and (f.n is None or target.component is not None)
+        if one_number:
+            out = set_value(out, target, parse_value(value, target, field=path))
+        else:  # a choice, a flag, a vector or points: as written, validated with the scenario
+            out = set_written(out, target, value)
     return out
 
 

@@ -125,7 +125,7 @@ def _cmd_mc(args) -> int:
 
 def _sampling_options(parser, engines, figures: str) -> None:
     """The options mc and posterior share: where they run, what they write, in which units."""
-    parser.add_argument("--workers", type=int, default=None, help="local processes (default: all cores)")
+    parser.add_argument("--workers", default=None, help="local processes, >= 1 or auto (default: all cores)")
     parser.add_argument("--dask", metavar="ADDRESS", help="run on an existing Dask cluster (scheduler address)")
     parser.add_argument("--plots", metavar="DIR", help=f"write {figures} into DIR")
     parser.add_argument("--json", action="store_true", help="print the summary as one JSON object (SI units)")
@@ -180,7 +180,7 @@ def _add_inverse_commands(sub):
     f.add_argument("--units", type=_units, default=None,
                    help="SI or US (any case): units of the report (default: the scenario's units)")
     f.add_argument("--engine", choices=engines, default=None, help="run-out engine (default: compiled if available)")
-    f.add_argument("--workers", type=int, default=None, help="processes for the starts (default: all cores)")
+    f.add_argument("--workers", default=None, help="processes for the starts, >= 1 or auto (default: all cores)")
     f.add_argument("--progress", action="store_true", help="progress bar over the starts on stderr")
     f.add_argument("--sample-time-limit", type=float, default=30.0, metavar="SECONDS",
                    help="wall-clock limit of one scene evaluation's run-out (default 30 s); a slower one is penalised")
@@ -358,10 +358,51 @@ def _first_compile(bar: bool = True) -> None:
         bar.refresh()
 
 
+def _figure_suffixes() -> tuple[str, ...]:
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    return tuple(sorted("." + k for k in FigureCanvasBase.get_supported_filetypes()))
+
+
+def _check_outputs(args) -> None:
+    """Every output path and worker count of the command, before any work (loading, compiling,
+    computing): a path that cannot be written is an input error (exit 2) now, not a traceback later."""
+    from .outputs import check_output_dir, check_output_file, check_workers
+
+    c = args.command
+    if hasattr(args, "workers"):
+        args.workers = check_workers(args.workers, field="--workers")
+    if c == "run" and args.csv:
+        check_output_dir(args.csv, field="--csv", what="the CSV files")
+    if c == "fit" and args.write_best is not None:
+        check_output_file(args.write_best, field="--write-best", make_parents=False, what="the best-fit scenario")
+    if c == "mc" and args.out:
+        check_output_file(args.out, field="--out", make_parents=False, what="the samples")
+    if c == "posterior" and args.chain:
+        check_output_file(args.chain, field="--chain", make_parents=False, what="the chain")
+    if c in ("mc", "posterior") and args.plots:
+        check_output_dir(args.plots, field="--plots", what="the figures")
+    if c == "plot":
+        figs = _figure_suffixes()
+        for field, path in (("-o", args.output), ("--histories", args.histories),
+                            ("--time-distance", args.time_distance)):
+            if path:
+                check_output_file(path, field=field, suffixes=figs, what="a figure")
+    if c == "animate":
+        from .animation import check_animation_path
+        from .units import Kind, parse
+
+        check_output_file(check_animation_path(args.output, field="-o"), field="-o", what="the animation")
+        if not parse(args.dt, Kind.TIME, field="--dt") > 0:
+            raise ScenarioError(f"{args.dt!r} is not a positive time; allowed a time between frames > 0 s, "
+                                "e.g. \"0.05 s\"", field="--dt")
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
+        _check_outputs(args)
         if args.command in _COMPUTING:
             _first_compile(bar=sys.stderr.isatty())
         return int(args.func(args))
@@ -371,6 +412,10 @@ def main(argv: list[str] | None = None) -> int:
     except SolverError as exc:
         sys.stderr.write(f"crashsim: solver error: {exc}\n")
         return 3
+    except OSError as exc:  # an output that became unwritable during the work (disk full, removed folder)
+        where = f" {exc.filename!r}" if exc.filename else ""
+        sys.stderr.write(f"crashsim: file error{where}: {exc.strerror or exc}\n")
+        return 2
     except CrashsimError as exc:  # pragma: no cover - every raised error is one of the above
         sys.stderr.write(f"crashsim: error: {exc}\n")
         return 3

@@ -5,8 +5,10 @@ Every error raised for bad input names the field, the value and what is allowed.
 
 from __future__ import annotations
 
+from contextlib import contextmanager
+
 __all__ = ["CrashsimError", "ScenarioError", "InadmissibleImpactError", "SolverError", "IllConditionedError",
-           "with_file", "failure_reason"]
+           "with_file", "in_file", "failure_reason"]
 
 
 class CrashsimError(Exception):
@@ -75,6 +77,15 @@ def with_file(exc: ScenarioError, file: str | None) -> ScenarioError:
     new.__dict__.update(exc.__dict__)
     ScenarioError.__init__(new, text, field=exc.field, file=file)
     return new
+
+
+@contextmanager
+def in_file(file: str | None):
+    """A :class:`ScenarioError` raised in the block names ``file`` (see :func:`with_file`)."""
+    try:
+        yield
+    except ScenarioError as exc:
+        raise with_file(exc, file) from None
 
 
 class SolverError(CrashsimError, RuntimeError):

@@ -18,7 +18,8 @@ import math
 
 import numpy as np
 
-__all__ = ["rotation", "rotate", "perp", "cross", "unit", "to_body", "to_world", "wrap_angle"]
+__all__ = ["rotation", "rotate", "perp", "cross", "unit", "to_body", "to_world", "wrap_angle",
+           "circular_mean", "unwrap_about_mean", "circular_percentiles"]
 
 
 def rotation(angle):
@@ -70,3 +71,42 @@ def wrap_angle(angle):
         return math.pi if a == -math.pi else a
     a = np.mod(np.asarray(angle, dtype=float) + np.pi, 2 * np.pi) - np.pi
     return np.where(a == -np.pi, np.pi, a)
+
+
+def circular_mean(angles) -> float:
+    """Circular mean of angles [rad], in (-pi, pi]: the direction of the sum of their unit vectors
+    (NaN if there are none or they cancel)."""
+    a = np.asarray(angles, dtype=float).ravel()
+    a = a[np.isfinite(a)]
+    if a.size == 0:
+        return float("nan")
+    s, c = float(np.sum(np.sin(a))), float(np.sum(np.cos(a)))
+    if math.hypot(s, c) <= 1e-12 * a.size:
+        return float("nan")
+    return wrap_angle(math.atan2(s, c))
+
+
+def unwrap_about_mean(angles) -> np.ndarray:
+    """Angles [rad] as one continuous arc around their circular mean.
+
+    Each angle is moved by whole turns into (mean - pi, mean + pi], the mean in (-pi, pi]; a cloud
+    across +-180 deg (179 and -179 deg) becomes 179 and 181 deg, not two clouds 358 deg apart. Linear
+    statistics of the result (percentiles, a histogram, a standard deviation) are then those of the
+    arc, and agree with the linear ones of a cloud that does not cross the wrap. NaN stays NaN; if
+    the angles have no mean direction (they cancel), they are returned wrapped to (-pi, pi].
+    """
+    a = np.asarray(angles, dtype=float)
+    m = circular_mean(a)
+    if not np.isfinite(m):
+        return wrap_angle(a)
+    return m + wrap_angle(a - m)
+
+
+def circular_percentiles(angles, q) -> np.ndarray:
+    """Percentiles ``q`` (0-100) of angles [rad] on their arc around the circular mean
+    (:func:`unwrap_about_mean`): for samples from 191 to 231 deg, p5 about -167 and p50 about
+    -149 deg (not the -139 and 109 deg of the wrapped numbers). Values may pass +-pi where the
+    cloud crosses it (p95 of 175..185 deg is about 184.5 deg), so that p5 <= p50 <= p95."""
+    a = np.asarray(angles, dtype=float).ravel()
+    a = a[np.isfinite(a)]
+    return np.percentile(unwrap_about_mean(a), q)

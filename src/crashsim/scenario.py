@@ -60,6 +60,22 @@ AXLE = Section("axle", [
     Field("dual", "bool", default=False, description="Dual tyres on each side (one contact per side, summed)"),
 ], description="One axle (each axle of a tandem group separately), for the run-out")
 
+#: Default of a body's ``drawbar`` [m]: how far its hitch points may lie outside its outline.
+#: Measured: 1.10 m for the tongue of a random trailer in a regression scene, 0.8 m for the
+#: car-trailer preset's coupling, 0.3 m for tow balls of the shipped scenes.
+DEFAULT_DRAWBAR = 1.5
+#: Default of a body's ``overhang`` [m]: how far its tyre contacts may lie beyond the outline's ends
+#: and beyond its sides. Lengthwise 2 m: a tractor of a reproducer scene (random, kept verbatim)
+#: has its rear drive axle 1.45 m behind its outline, and it must still load; sideways 0.15 m (half
+#: a tyre's width: the track is measured between tyre centres).
+DEFAULT_OVERHANG = (2.0, 0.15)
+#: Default of ``impact.overlap_tolerance`` [m]: how deep two vehicles' outlines may overlap at the
+#: impact: the impact's bodies along its normal (their crush), other pairs by the distance to clear
+#: each other. The shipped scenes overlap by up to 0.64 m, the reproducer scenes' impact pairs by up
+#: to 1.11 m; a regression scene (random, kept verbatim, it must still load) has a tractor 1.90 m
+#: into a trailer that is not in the impact. A car put crosswise on a trailer: 2.5 m.
+DEFAULT_OVERLAP = 2.0
+
 BODY = Section("body", [
     Field("preset", "str", required=False, example="tractor-3axle",
           description="Name of a parameter set of crashsim's vehicle library (crashsim presets); keys given here override it"),
@@ -93,6 +109,14 @@ BODY = Section("body", [
           description="Largest articulation before the bodies meet (jack-knife stop)"),
     Field("cg_height", Kind.LENGTH, required=False, minimum=0, exclusive_minimum=True, example="1.1 m",
           description="CG height above ground (only for the run-out's load transfer)"),
+    Field("drawbar", Kind.LENGTH, minimum=0, maximum=MAX_LENGTH, default=f"{DEFAULT_DRAWBAR:g} m",
+          description="How far this body's hitch points (rear_hitch, front_hitch) may lie outside its outline: a "
+                      "drawbar, an A-frame tongue, a ball mount (checked at load; the default covers car-trailer "
+                      "tongues and ball mounts)"),
+    Field("overhang", Kind.LENGTH, n=2, minimum=0, maximum=MAX_LENGTH,
+          default=[f"{DEFAULT_OVERHANG[0]:g} m", f"{DEFAULT_OVERHANG[1]:g} m"],
+          description="How far the tyre contacts may lie outside the outline: beyond its front or rear end, and "
+                      "beyond its sides (checked at load: axle x within the length, track within the width)"),
 ], subsections=[ArrayOf("axles", AXLE, required=False, description="Axles, front to rear (needed for a run-out)")],
    description="One rigid body of the vehicle, front to rear")
 
@@ -228,6 +252,10 @@ IMPACT = Section("impact", [
     Field("contact_tolerance", Kind.LENGTH, minimum=0, default="0.5 m",
           description="How far the contact point may lie outside either contacting body's outline (a check "
                       "of the geometry: the point must be in or near the crush zone of both bodies)"),
+    Field("overlap_tolerance", Kind.LENGTH, minimum=0, default=f"{DEFAULT_OVERLAP:g} m",
+          description="How deep the outlines of bodies of two vehicles may overlap at the impact: the impact's "
+                      "two bodies along its normal (their crush), any other pair by the distance one must move to "
+                      "clear the other; deeper is an error at load (a vehicle placed on top of another)"),
     Field("normal", Kind.ANGLE, example="90 deg",
           description="Direction of the crush-surface normal n, pointing from body2 into body1"),
     Field("normal_frame", "str", default="world", description="Frame of normal: \"world\" or a body name"),
@@ -710,8 +738,22 @@ def _build_wheels(vehicle: Vehicle, v: dict, file: str | None, prefix: str | Non
             overrides[w["select"]] = WheelSetting(**merged)
         except ScenarioError as exc:
             raise _rewrap(exc, f"{prefix}.wheels[{i}]", file) from None
+    schedule = []
+    for k, c in enumerate(v["wheel_changes"]):  # each change alone first: an error names its key as written
+        key = f"{prefix}.wheel_changes[{k}]"
+        try:
+            change = ScheduledChange(c["at"], c["select"], _given(c))
+            WheelSettings(default, overrides, [change]).resolve(vehicle)
+        except ScenarioError as exc:
+            msg = str(exc)
+            if exc.field and msg.startswith(f"{exc.field}: "):
+                msg = msg[len(exc.field) + 2:]
+            word, _, rest = msg.partition(": ")
+            if rest and word in c:  # "steer: must lie in ...": that key of the change
+                raise _err(rest, f"{key}.{word}", file) from None
+            raise _err(f"select = {c['select']!r} at {c['at']:g} s: {msg}", f"{key}.select", file) from None
+        schedule.append(change)
     try:
-        schedule = [ScheduledChange(c["at"], c["select"], _given(c)) for c in v["wheel_changes"]]
         ws = WheelSettings(default, overrides, schedule)
         ws.resolve(vehicle)
     except ScenarioError as exc:
@@ -737,6 +779,14 @@ def _build_runout(r: dict, vehicles, raw_vehicles: dict, file: str | None, raw: 
         if fixed:
             raise _err(f"accuracy chooses {', '.join(fixed)} itself; remove them or remove accuracy",
                        f"runout.{fixed[0]}", file)
+    for i, z in enumerate(r["zones"]):
+        why = outline_problem(z["polygon"])
+        if why:
+            raw_zones = raw.get("zones") if isinstance(raw.get("zones"), list) else []
+            shown = raw_zones[i].get("polygon") if i < len(raw_zones) and isinstance(raw_zones[i], dict) else None
+            value = f"polygon = {_written(shown)} " if shown is not None and len(shown) <= 8 else ""
+            name = f"zone {z['name']!r}" if z["name"] else f"zone {i + 1}"
+            raise _err(f"{value}is not the outline of {name}: {why}", f"runout.zones[{i}].polygon", file)
     try:
         zones = tuple(FrictionZone(tuple(z["polygon"]), z["friction"], z["name"] or f"zone {i + 1}")
                       for i, z in enumerate(r["zones"]))
@@ -875,6 +925,11 @@ def _build_vehicle(name: str, v: dict, file: str | None) -> tuple[Vehicle, dict[
                        f"{key}.front_hitch", file)
         if i == 0 and b["articulation"] != 0.0:
             raise _err("the first body has no front hitch to articulate about", f"{key}.articulation", file)
+        lim = b["articulation_limit"]
+        if i > 0 and lim is not None and abs(b["articulation"]) > lim:
+            raise _err(f"articulation = {math.degrees(b['articulation']):.6g} deg exceeds the jack-knife stop of body "
+                       f"{b['name']!r}; allowed [-{math.degrees(lim):.6g}, {math.degrees(lim):.6g}] deg "
+                       "(articulation_limit)", f"{key}.articulation", file)
         try:
             axles = tuple(Axle(a["x"], a["track"], a["dual"], a["name"]) for a in b["axles"])
             bodies.append(Body(b["name"], b["mass"], b["yaw_inertia"], b["length"], b["width"],
@@ -1003,10 +1058,12 @@ def _units_any_case(data: dict) -> dict:
 def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scenario:
     """Validate a parsed scenario (as from TOML) and build the typed SI objects."""
     data = _units_any_case(data)
-    d = validate(_apply_presets(data, file), SCHEMA, file=file)
+    merged = _apply_presets(data, file)
+    d = validate(merged, SCHEMA, file=file)
     vehicles, states = [], {}
     for name, v in d["vehicles"].items():
         veh, st = _build_vehicle(name, v, file)
+        _check_vehicle_geometry(veh, v, merged["vehicles"][name], d["scenario"]["units"], file)
         for bn in st:
             if bn in states:
                 raise _err(f"body name {bn!r} is used twice; body names must be unique in the scene",
@@ -1051,6 +1108,12 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
             near = difflib.get_close_matches(imp[k], allowed, n=1)
             hint = f"; did you mean {near[0]!r}?" if near else ""
             raise _err(f"unknown body {imp[k]!r}{hint} Bodies: {', '.join(map(repr, allowed))}", f"impact.{k}", file)
+    same = [v for v in vehicles if {imp["body1"], imp["body2"]} <= {b.name for b in v.bodies}]
+    if same:
+        raise _err(f"impact.body1 = {imp['body1']!r} and impact.body2 = {imp['body2']!r} are both bodies of vehicle "
+                   f"{same[0].name!r}; the impact is between two vehicles (or one and the [barrier]): give a body of "
+                   "another vehicle as impact.body2 (a vehicle's own bodies meet at their articulation stop, set by "
+                   "articulation_limit)", "impact.body2", file)
     if d["barrier"] is not None and d["barrier"]["name"] not in (imp["body1"], imp["body2"]):
         raise _err(f"the barrier {d['barrier']['name']!r} is neither impact.body1 ({imp['body1']!r}) nor impact.body2 "
                    f"({imp['body2']!r}); [barrier] is the rigid body of the impact (fixed obstacles met in the "
@@ -1122,6 +1185,7 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
                                 imp["body1"], imp["body2"], surface, tuple(constraints), tuple(external))
     except ScenarioError as exc:
         raise ScenarioError(str(exc), field=exc.field, file=file) from None
+    _check_overlap(problem, vehicles, states, imp["overlap_tolerance"], d["scenario"]["units"], file)  # the cause first
     _check_contact_point(problem, imp["contact_tolerance"], d["scenario"]["units"], file)
     if runout is not None:
         runout = _with_contact(runout, d, vehicles, problem, file)
@@ -1135,6 +1199,147 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
     meta = d["scenario"]
     return Scenario(file, meta["title"], meta["source"], meta["units"], tuple(vehicles), states, problem, runout,
                     evidence, d, map_lines, approaches)
+
+
+def outline_problem(points) -> str | None:
+    """Why ``points`` (a closed outline, in order) is not a simple polygon, or None: fewer than 3
+    points, all on one line (no area), or edges crossing (a bow-tie: points not in order around it)."""
+    p = np.asarray(points, dtype=float)
+    n = len(p)
+    if n < 3:
+        return f"{n} point(s); an outline needs at least 3"
+
+    def cross(o, a, b):
+        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+    scale = max(float(np.ptp(p[:, 0])), float(np.ptp(p[:, 1])), 1e-300)
+    for i in range(n):
+        for j in range(i + 2, n):
+            if i == 0 and j == n - 1:
+                continue  # adjacent through the closing edge
+            a, b, c, d = p[i], p[(i + 1) % n], p[j], p[(j + 1) % n]
+            d1, d2, d3, d4 = cross(c, d, a), cross(c, d, b), cross(a, b, c), cross(a, b, d)
+            if d1 * d2 < 0 and d3 * d4 < 0:
+                return (f"its edges cross (points {i + 1}-{i + 2} and points {j + 1}-{(j + 1) % n + 1}): the outline "
+                        "intersects itself; list the points in order around the zone")
+    x, y = p[:, 0], p[:, 1]
+    area = 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
+    if area <= 1e-12 * scale * scale:
+        return "its points lie on one line: it has no area"
+    return None
+
+
+def _written(raw) -> str:
+    """A value as written in the file (``["-6.2 m", "0 m"]``)."""
+    from .units import toml_repr
+
+    return toml_repr(raw)
+
+
+def _check_vehicle_geometry(veh: Vehicle, v: dict, raw: dict, system: str, file: str | None) -> None:
+    """Hitch points within (or within ``drawbar`` of) both bodies they join; tyre contacts within
+    (or within ``overhang`` of) their body's outline. One error, naming the key as written, the
+    value as written in the file, how far it is off and the allowed range."""
+    from .motion.road import signed_distance
+    from .units import format_value, parse
+
+    def L(x, like=None):
+        """A length in the unit of ``like`` (a value as written in the file), else the file's system's."""
+        like = like[0] if isinstance(like, (list, tuple)) and like else like
+        if isinstance(like, str) and len(like.split(maxsplit=1)) == 2:
+            unit = like.split(maxsplit=1)[1]
+            try:
+                return f"{x / parse(f'1 {unit}', Kind.LENGTH, field='unit'):.4g} {unit}"
+            except ScenarioError:
+                pass
+        return format_value(x, Kind.LENGTH, system)
+
+    bodies = v["bodies"]
+    for i, body in enumerate(veh.bodies):
+        corners = body.outline()
+        if corners is None:
+            continue
+        b, rb = bodies[i], raw["bodies"][i]
+        key = f"vehicles.{veh.name}.bodies[{i}]"
+        size = f"outline {L(body.length, rb.get('length'))} x {L(body.width, rb.get('width'))}"
+        for which in ("rear_hitch", "front_hitch"):
+            if b[which] is None:
+                continue
+            out = max(0.0, -float(signed_distance(np.asarray(b[which], dtype=float)[None], corners)[0]))
+            if out > b["drawbar"] + 1e-9:
+                raise _err(f"{which} = {_written(rb[which])} lies {L(out, rb[which])} outside the {size} of body "
+                           f"{body.name!r}; allowed: within the outline or at most drawbar = "
+                           f"{L(b['drawbar'], rb.get('drawbar'))} outside "
+                           f"it (a longer drawbar or tongue: set {key}.drawbar)", f"{key}.{which}", file)
+        cx, cy = body.outline_center
+        ahead, side = b["overhang"]
+        for k, ax in enumerate(body.axles):
+            front, rear = cx + body.length / 2 + ahead, cx - body.length / 2 - ahead
+            rax = rb["axles"][k] if isinstance(rb.get("axles"), list) and k < len(rb["axles"]) else {}
+            akey = f"{key}.axles[{k}]"
+            if not rear - 1e-9 <= ax.x <= front + 1e-9:
+                lx = rax.get("x")
+                raise _err(f"x = {_written(rax.get('x', ax.x))} puts the axle outside the body: allowed "
+                           f"[{L(rear, lx)}, {L(front, lx)}] from the CG ({size} centred at {L(cx, lx)}, plus overhang "
+                           f"= {L(ahead, rb.get('overhang'))} beyond its ends; set {key}.overhang for more)", f"{akey}.x", file)
+            half = body.width / 2 + side - abs(cy)  # tyre contacts at +-track/2 from the CG line
+            if ax.track / 2 > half + 1e-9:
+                lt = rax.get("track")
+                raise _err(f"track = {_written(rax.get('track', ax.track))} is wider than body {body.name!r} "
+                           f"(width {L(body.width, lt)}); allowed a track <= {L(2 * half, lt)} (the width plus overhang "
+                           f"= {L(side, (rb.get('overhang') or [None, None])[1:])} on each side; set {key}.overhang for more)",
+                           f"{akey}.track", file)
+
+
+def _sat_depth(a: np.ndarray, b: np.ndarray) -> float:
+    """How far one convex polygon must move to clear the other (separating axes) [m]; 0 if apart."""
+    depth = math.inf
+    for poly in (a, b):
+        for i in range(len(poly)):
+            e = poly[(i + 1) % len(poly)] - poly[i]
+            n = np.array([-e[1], e[0]]) / math.hypot(e[0], e[1])
+            pa, pb = a @ n, b @ n
+            ov = min(pa.max(), pb.max()) - max(pa.min(), pb.min())
+            if ov <= 0:
+                return 0.0
+            depth = min(depth, ov)
+    return float(depth)
+
+
+def _check_overlap(problem: ImpactProblem, vehicles, states: dict, tolerance: float, system: str,
+                   file: str | None) -> None:
+    """Bodies of different vehicles may overlap at the impact by at most ``tolerance``: the impact's
+    two bodies measured along the impact normal (their crush), any other pair by the distance one
+    must move to clear the other (they are not in the impact: any overlap is a misplaced vehicle)."""
+    from .units import format_value
+
+    normal = np.asarray(problem.surface.normal, dtype=float)
+    pair = {problem.body1, problem.body2}
+    placed = []
+    for v in vehicles:
+        for b in v.bodies:
+            corners = b.outline()
+            if corners is None or b.is_fixed or b.name not in states:
+                continue
+            st = states[b.name]
+            placed.append((v.name, b.name, np.asarray(st.position) + rotate(corners, st.heading)))
+    for i, (va, ba, pa) in enumerate(placed):
+        for vb, bb, pb in placed[i + 1:]:
+            if va == vb or _sat_depth(pa, pb) == 0.0:
+                continue
+            crush = {ba, bb} == pair
+            if crush:
+                qa, qb = pa @ normal, pb @ normal
+                depth, how = min(qa.max(), qb.max()) - max(qa.min(), qb.min()), "along the impact normal"
+            else:
+                depth, how = _sat_depth(pa, pb), "(the distance one must move to clear the other)"
+            if depth > tolerance:
+                L = lambda x: format_value(x, Kind.LENGTH, system)  # noqa: E731
+                raise _err(f"at the impact the outlines of {ba!r} (vehicle {va!r}) and {bb!r} (vehicle {vb!r}) overlap "
+                           f"{L(depth)} deep {how}: one vehicle is placed on top of the other; allowed at most "
+                           f"impact.overlap_tolerance = {L(tolerance)} (the crush of the first impact); check the "
+                           f"positions and headings of vehicles.{va} and vehicles.{vb}", f"vehicles.{vb}.position",
+                           file)
 
 
 def _check_contact_point(problem: ImpactProblem, tolerance: float, system: str, file: str | None) -> None:

@@ -280,6 +280,11 @@ def _dims_noun(unit: pint.Unit) -> str:
         return _SPECS[Kind.DIMENSIONLESS].noun
     if power == 0 and unit.dimensionality == registry().parse_units("1/s").dimensionality:
         return "a frequency (no angle unit)"
+    if power == 0:
+        for si, noun in (("W", "a power"), ("Pa", "a pressure"), ("m^2", "an area"), ("m^3", "a volume"),
+                         ("kg/m^3", "a density"), ("A", "an electric current"), ("K", "a temperature")):
+            if unit.dimensionality == registry().parse_units(si).dimensionality:
+                return noun
     angle = "" if not power else " * [angle]" if power == 1 else f" * [angle] ** {power:g}"
     dims = str(unit.dimensionality) + angle
     return f"of dimension {dims}"
@@ -298,7 +303,16 @@ def _si_factor(unit: str, kind: Kind) -> float:
     def fits(u: pint.Unit) -> bool:
         return u.dimensionality == si.dimensionality and _angle_power(u) == spec.angle_power
 
-    literal = _pint_unit(text)
+    try:
+        literal = _pint_unit(text)
+    except _Invalid:
+        literal = None
+    if literal is None or not fits(literal):  # "Mph", "DEG": a symbol whose case carries no meaning
+        same = [sp for sp in spec.spellings if sp in _CASELESS and sp.lower() == text.lower()]
+        if same:
+            literal = _pint_unit(_HYPHEN.sub("*", same[0]))
+    if literal is None:
+        literal = _pint_unit(text)  # raises: the unknown unit named
     if fits(literal):
         return float(ureg.Quantity(1.0, literal).to(si).magnitude)
     newton = ureg.parse_units("N")
@@ -308,7 +322,20 @@ def _si_factor(unit: str, kind: Kind) -> float:
         as_force = _pint_unit(_POUND.sub("lbf", text))
         if fits(as_force):
             return float(ureg.Quantity(1.0, as_force).to(si).magnitude)
-    raise _Invalid(f"is {_dims_noun(literal)}")
+    noun = _dims_noun(literal)
+    if re.fullmatch(r"[A-Za-z]+", unit.strip()) and _suggest(unit, spec):  # a typo that is another unit
+        # ("mhp": milli-horsepower): say how it was read
+        name = str(literal).replace("_", " ")
+        raise _Invalid(f"reads {unit.strip()!r} as {name}, {noun.removeprefix('of dimension ')}, not {spec.noun}")
+    raise _Invalid(f"is {noun}")
+
+
+#: Unit spellings whose case carries no meaning (accepted as "MPH", "Mph", "Deg"); SI symbols are
+#: not among them, since their case does ("mm" and "Mm", "t" and "T", "s" and "S").
+_CASELESS = frozenset({"mph", "kph", "fps", "ft/s", "deg", "degree", "rad", "radian", "rpm", "deg/s", "rad/s",
+                       "ft", "in", "yd", "mi", "lb", "lbs", "lbf", "kip", "slug", "lb-s^2/ft", "slug ft^2",
+                       "lbf ft s^2", "ft-lb-s^2", "lbf s", "lb-s", "lbf ft s", "ft-lb-s", "ft/s^2", "ft lbf", "ft-lb",
+                       "lbf/in", "lb/in", "lbf/in^2", "lb/in^2", "min"})
 
 
 def _suggest(unit: str, spec: _Spec) -> str:

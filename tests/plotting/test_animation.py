@@ -76,8 +76,11 @@ def test_frame_times_are_multiples_of_dt_and_end_exactly_at_the_end():
 
 @pytest.mark.parametrize("dt", [0.0, -0.1, float("nan"), float("inf")])
 def test_frame_times_refuse_a_non_positive_dt(dt):
-    with pytest.raises(ScenarioError, match=r"^dt: .*not a positive time.*allowed dt > 0"):
+    with pytest.raises(ScenarioError, match=r"^dt: .*not a positive time.*allowed dt >= 0.0015 s"):
         frame_times(3.0, dt)
+    with pytest.raises(ScenarioError) as exc:  # before the run-out's end is known: no "dt >= 0 s"
+        frame_times(0.0, dt)
+    assert str(exc.value).endswith('allowed a time > 0 s, e.g. "0.05 s"') and ">= 0 s" not in str(exc.value)
 
 
 def test_frame_times_refuse_too_many_frames_and_state_the_smallest_dt():
@@ -329,6 +332,7 @@ def test_cli_bad_dt_exits_2_naming_it(tmp_path, capsys, dt, message):
     assert code == 2
     err = capsys.readouterr().err
     assert "--dt: " in err and message in err
+    assert "and >= 0 s" not in err and len(err.strip().splitlines()) == 1
     assert not out.exists()
 
 

@@ -30,7 +30,7 @@ def test_file_validates_with_the_wired_schema():
     assert len(sc.data["uncertainty"]["inputs"]) == 5
 
 
-def test_shipped_scene_speeds_come_back_from_its_evidence():
+def test_shipped_scene_speeds_come_back_from_its_evidence(caplog):
     raw = load_toml(FILE)
     spec = FitSpec.from_dict(raw["fit"], raw, file=str(FILE))
     res = fit_scene(raw, spec, engine=ENGINE, file=str(FILE))
@@ -40,6 +40,17 @@ def test_shipped_scene_speeds_come_back_from_its_evidence():
         assert lo <= truth[u.path] <= hi, (u.path, lo, hi)
     assert res.n_agree >= 2 and not any("rank" in w for w in res.warnings)
     assert res.chi2 < res.dof  # the hypothetical evidence was made to agree with the scene
+    # speed and road friction trade off (v^2 / mu): every pair at |r| >= correlation_warning (0.99
+    # by default, so 0.997 warns) is named, no other pair is
+    assert spec.correlation_warning == 0.99
+    n = len(res.unknowns)
+    strong = {(res.unknowns[i].name, res.unknowns[j].name) for i in range(n) for j in range(i + 1, n)
+              if abs(res.correlation[i, j]) >= 0.99}
+    named = {(a.name, b.name) for a in res.unknowns for b in res.unknowns
+             if any(w.startswith(f"{a.name} and {b.name} are correlated at ") for w in res.warnings)}
+    assert strong and named == strong
+    logged = [r.getMessage() for r in caplog.records if r.name == "crashsim" and "are correlated at" in r.getMessage()]
+    assert len(logged) == len(strong)
 
 
 def test_the_second_basin_is_a_worse_local_minimum():

@@ -178,3 +178,22 @@ def test_the_cli_exits_2_with_the_message(tmp_path, capsys):
     assert main(["run", str(f)]) == 2
     err = capsys.readouterr().err
     assert f"{f}: evidence.rest[0].points: 1 measured point" in err
+
+
+def test_a_large_rigid_fit_misfit_warns(car):
+    """Two measured points 2.1 m further apart than the body's corners: the fit cannot place the
+    body on both; the scene warns (report and JSON), a consistent pair does not."""
+    from crashsim.reconstruct.evidence import REST_MISFIT_SHARE
+    from crashsim.reconstruct.scene import run_scene
+
+    good = _measured(car, ["front_left", "rear_right"], (-7.3, -0.7), -25.0)
+    scene = run_scene(scenario_from_dict(_with_points(good)))
+    assert not [w for w in scene.warnings if "misfit" in w]
+    bad = copy.deepcopy(good)
+    bad[1]["position"][0] = _m(float(bad[1]["position"][0].split()[0]) - 4.2)  # RMS misfit 2.1 m
+    scene = run_scene(scenario_from_dict(_with_points(bad)))
+    (w,) = [w for w in scene.warnings if "misfit" in w]
+    reg = scene.scenario.evidence.rest[0].registration
+    assert reg.rms > REST_MISFIT_SHARE * 0.5
+    assert w.startswith("rest of car: the measured points fit the body with an RMS misfit of ") and "doubtful" in w
+    assert w in scene.to_dict()["warnings"] and "RMS misfit" in scene.report().split("Warnings")[-1]

@@ -193,7 +193,7 @@ def test_error_names_the_file():
     [
         ("30 mph", Kind.MASS, '"30 mph" is a speed; expected a mass (kg, t, lb, slug (= lbf s^2/ft, '
                               'lb-s^2/ft); or a weight in N, kN, lbf, kip)'),
-        ("3 m^3", Kind.SPEED, '"3 m^3" is of dimension [length] ** 3; '
+        ("3 m^3", Kind.SPEED, '"3 m^3" is a volume; '
                               "expected a speed (m/s, km/h, mph, ft/s)"),
         ("75 %", Kind.ANGLE, '"75 %" is a plain number; expected an angle (deg, rad)'),
         ("10 Hz", Kind.ANGULAR_VELOCITY, '"10 Hz" is a frequency (no angle unit); '
@@ -223,10 +223,28 @@ def test_unknown_unit_is_named_with_a_suggestion():
 
 
 def test_misspelt_unit_read_as_another_unit_still_gets_a_suggestion():
-    # pint reads "mhp" as milli-horsepower: a power, not a typo it can see.
+    # pint reads "mhp" as milli-horsepower: a power, not a typo it can see; the message says so.
     message = str(error("30 mhp", Kind.SPEED))
-    assert '"30 mhp" is of dimension' in message
+    assert '"30 mhp" reads \'mhp\' as millihorsepower, a power, not a speed;' in message
+    assert "dimension" not in message
     assert message.endswith("expected a speed (m/s, km/h, mph, ft/s); did you mean 'mph'?")
+
+
+@pytest.mark.parametrize("text", ["45 mph", "45 MPH", "45 Mph", "45 mPh"])
+def test_units_whose_case_carries_no_meaning_are_read_in_any_case(text):
+    assert parse(text, Kind.SPEED, field="speed") == pytest.approx(45 * 0.44704, rel=1e-12)
+
+
+@pytest.mark.parametrize("text, kind, si", [("10 DEG", Kind.ANGLE, math.radians(10)), ("3 FT", Kind.LENGTH, 0.9144),
+                                            ("100 LBF", Kind.FORCE, 444.8221615260501)])
+def test_caseless_imperial_symbols(text, kind, si):
+    assert parse(text, kind, field="x") == pytest.approx(si, rel=1e-12)
+
+
+@pytest.mark.parametrize("text, kind", [("3 MM", Kind.LENGTH), ("5 S", Kind.TIME), ("9 T", Kind.MASS)])
+def test_si_symbols_keep_their_case(text, kind):
+    with pytest.raises(ScenarioError):  # Mm is a megametre, S a siemens, T a tesla: not guessed
+        parse(text, kind, field="x")
 
 
 @pytest.mark.parametrize(

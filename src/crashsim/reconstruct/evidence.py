@@ -42,6 +42,12 @@ __all__ = [
     "MARK_SPACING", "Registration", "register_points", "named_body_points", "CORNERS", "MIN_POINT_SPREAD",
 ]
 
+#: A rest position from measured points warns when the rigid fit's RMS misfit exceeds this share of
+#: the item's ``tolerance``: the points then disagree with the body's own geometry by more than the
+#: evidence is trusted to (a point mislabelled or mismeasured), and the derived CG and heading are
+#: doubtful.
+REST_MISFIT_SHARE = 0.5
+
 #: Spacing [m] to which measured marks are densified before their distance to a track is taken.
 MARK_SPACING = 0.1
 

@@ -57,7 +57,9 @@ from typing import Any, Callable
 import numpy as np
 
 
-from ..errors import ScenarioError, SolverError, UnreachableImpactError, failure_reason
+from ..errors import ScenarioError, SolverError, UnreachableImpactError, failure_reason, in_file
+from ..outputs import check_workers
+from .inverse_schema import CORRELATION_WARNING
 from ..geometry import wrap_angle
 from .evidence import signed_distance_to_polyline
 from .overrides import ScenarioOverrides, default_engine, parse_value
@@ -135,6 +137,7 @@ class FitSpec:
     covariance: str = "absolute"
     sigma_from_tolerance: float | None = None
     mark_points: int = 10
+    correlation_warning: float = CORRELATION_WARNING
 
     @property
     def paths(self) -> tuple[str, ...]:
@@ -178,12 +181,13 @@ class FitSpec:
         return cls(tuple(unknowns), starts=d["starts"], screen=d["screen"], seed=d["seed"], method=d["method"],
                    max_evaluations=d["max_evaluations"], diff_step=d["diff_step"], confidence=d["confidence"],
                    covariance=d["covariance"], sigma_from_tolerance=d["sigma_from_tolerance"],
-                   mark_points=d["mark_points"])
+                   mark_points=d["mark_points"], correlation_warning=d["correlation_warning"])
 
     def to_dict(self) -> dict:
         return {"unknowns": [u.__dict__.copy() for u in self.unknowns],
                 **{k: getattr(self, k) for k in ("starts", "screen", "seed", "method", "max_evaluations", "diff_step",
-                                                 "confidence", "covariance", "sigma_from_tolerance", "mark_points")}}
+                                                 "confidence", "covariance", "sigma_from_tolerance", "mark_points",
+                                                 "correlation_warning")}}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -979,7 +983,8 @@ def fit_scene(scenario_data: dict, fit_spec: FitSpec | dict | None = None, *, en
         if "fit" not in scenario_data:
             raise ScenarioError("the scenario has no [fit] table naming the unknowns", field="fit", file=file)
         fit_spec = scenario_data["fit"]
-    spec = fit_spec if isinstance(fit_spec, FitSpec) else FitSpec.from_dict(fit_spec, scenario_data, file=file)
+    with in_file(file):
+        spec = fit_spec if isinstance(fit_spec, FitSpec) else FitSpec.from_dict(fit_spec, scenario_data, file=file)
     engine = default_engine() if engine is None else engine
     if sample_time_limit is None:
         from .montecarlo import DEFAULT_SAMPLE_TIME_LIMIT as sample_time_limit
@@ -991,7 +996,7 @@ def fit_scene(scenario_data: dict, fit_spec: FitSpec | dict | None = None, *, en
     # engine here once, so that the forked workers inherit it instead of each compiling it.
     problem.evaluate(problem.z_of([u.initial for u in spec.unknowns]))
 
-    workers = (os.cpu_count() or 1) if workers is None else max(1, int(workers))
+    workers = check_workers(workers) or (os.cpu_count() or 1)
     n_tasks = max(spec.starts, 1)
     use_pool = workers > 1 and (spec.starts > 1 or spec.screen > 1)
     pool = None
@@ -1131,6 +1136,15 @@ def _analyse(problem: FitProblem, spec: FitSpec, outcomes: list[dict], engine: s
         if not undetermined[j]:
             corr[j, j] = 1.0
 
+    for i in range(n):  # pairs the evidence fixes only together ([fit] correlation_warning)
+        for j in range(i + 1, n):
+            r = corr[i, j]
+            if np.isfinite(r) and abs(r) >= spec.correlation_warning:
+                _log.warning("fit: %s and %s are correlated at %.4f (correlation_warning %g)", spec.unknowns[i].name,
+                             spec.unknowns[j].name, r, spec.correlation_warning)
+                warnings.append(f"{spec.unknowns[i].name} and {spec.unknowns[j].name} are correlated at {r:.4f} "
+                                f"(|r| >= correlation_warning = {spec.correlation_warning:g}): the evidence fixes only a "
+                                "combination of them, and each one's interval rests on the other's bounds")
     for j, u in enumerate(spec.unknowns):
         if undetermined[j]:
             continue

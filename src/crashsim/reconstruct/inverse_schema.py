@@ -73,6 +73,10 @@ UNKNOWN = Section("unknown", [
                       f"else the middle of the bounds), {_VALUE}"),
 ], description="One unknown of the fit: an input of this file and its bounds")
 
+#: Default ``[fit] correlation_warning``: |r| from which a pair of unknowns is reported as determined
+#: only together (0.99: the shipped fit scene's speeds and friction are at 0.97-0.999).
+CORRELATION_WARNING = 0.99
+
 FIT = Section("fit", [
     Field("starts", "int", default=4, minimum=1, maximum=1000,
           description="Local least-squares fits: the first from the initial values, the others from points "
@@ -90,6 +94,10 @@ FIT = Section("fit", [
                       "(above the run-out solver's noise at its default rtol 1e-8)"),
     Field("confidence", "float", default=0.95, minimum=0.5, maximum=0.9999,
           description="Confidence level of the reported intervals"),
+    Field("correlation_warning", "float", default=CORRELATION_WARNING, minimum=0.5, maximum=1.0,
+          description="Warn when two unknowns are correlated at least this strongly (|r|): the evidence then fixes "
+                      "only a combination of them (speed and road friction through v^2 / mu), and each one's "
+                      "interval rests on the other's bounds"),
     Field("covariance", choices=("absolute", "scaled"), default="absolute",
           description="absolute: the evidence sigmas are the measurement uncertainties, covariance (J^T W J)^-1; "
                       "scaled: multiplied by chi^2/dof (sigmas known only up to a common factor; Student t)"),
@@ -132,12 +140,19 @@ UNCERTAINTY = Section("uncertainty", [
 ], subsections=[ArrayOf("inputs", INPUT, min_items=1, description="The uncertain inputs")],
    required=False, description="Monte Carlo propagation of input uncertainty through impact and run-out (crashsim mc)")
 
+#: Fewest steps per walker after the burn-in and thinning for which any diagnostic is computed.
+MIN_KEPT_STEPS = 50
+#: Fewest steps per walker with the default burn-in (a quarter of the steps) and no thinning.
+MIN_STEPS_DEFAULT_BURN = next(n for n in range(MIN_KEPT_STEPS, 4 * MIN_KEPT_STEPS) if n - n // 4 >= MIN_KEPT_STEPS)
+
 POSTERIOR = Section("posterior", [
     Field("walkers", "int", default=32, minimum=2, maximum=100000,
           description="Walkers of the ensemble sampler (emcee); at least twice the number of [fit] unknowns"),
-    Field("steps", "int", default=2000, minimum=1, maximum=10_000_000,
+    Field("steps", "int", default=2000, minimum=MIN_KEPT_STEPS, maximum=10_000_000,
           description="Steps of every walker (crashsim posterior --steps overrides it); a chain that is stopped "
-                      "and run again with more steps continues where it stopped"),
+                      "and run again with more steps continues where it stopped. At least burn + "
+                      f"{MIN_KEPT_STEPS} x thin ({MIN_STEPS_DEFAULT_BURN} with the default burn-in, "
+                      f"{MIN_KEPT_STEPS} with burn = 0): fewer leave no diagnostic"),
     Field("burn", "int", required=False, minimum=0, example="500",
           description="Steps of every walker discarded at the start (burn-in) before the summaries "
                       "(default: a quarter of the steps)"),

@@ -142,7 +142,7 @@ def plot_histograms(mc, keys=None, axes=None, *, system: str | None = None, bins
     flat = np.asarray(axes).ravel()
     meets = np.asarray(mc.meets_all, dtype=bool) if mc.accept and len(mc.meets_all) == mc.n_done else None
     for ax, key in zip(flat, keys):
-        v = np.asarray(mc.outputs[key], dtype=float)
+        v = mc.values(key)  # an angle on its arc around the circular mean (as its percentiles)
         ok = np.isfinite(v)
         d, unit = _display(v[ok], mc.kind_of(key), sysname)
         ax.set_xlabel(f"{_label(key)} [{unit}]" if unit else _label(key))

@@ -53,7 +53,9 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from ..errors import CrashsimError, ScenarioError, failure_reason
+from ..errors import CrashsimError, ScenarioError, failure_reason, in_file
+from ..outputs import check_workers
+from ..geometry import circular_mean, unwrap_about_mean
 from .overrides import ScenarioOverrides, default_engine, parse_value
 
 __all__ = ["InputDistribution", "UncertaintySpec", "MCResult", "monte_carlo", "sample_inputs", "load_results",
@@ -527,6 +529,13 @@ class MCResult:
     def kind_of(key: str) -> str:
         return OUTPUT_KINDS.get(key.split(".", 1)[0], "dimensionless")
 
+    def values(self, key: str) -> np.ndarray:
+        """The samples of an output (SI; NaN where a sample failed), an angle (a rest heading) on
+        its arc around the circular mean (:func:`crashsim.geometry.unwrap_about_mean`), as its
+        percentiles are taken: a cloud across +-180 deg is one cloud, not two."""
+        v = np.asarray(self.outputs[key], dtype=float)
+        return unwrap_about_mean(v) if self.kind_of(key) == "angle" else v
+
     def to_dict(self) -> dict:
         fin = lambda v: float(v) if v is not None and np.isfinite(v) else None  # noqa: E731
         return {
@@ -593,6 +602,9 @@ class MCResult:
             a = self.accepted_percentiles.get(key) if both else None
             if a is not None:
                 lines.append(f"  {'':<28}{'accepted':<10}" + "".join(f"{show(a[q], kind):>13}" for q in qs))
+        if any(self.kind_of(k) == "angle" for k in self.percentiles):
+            lines.append("  (rest headings: percentiles on the arc around their circular mean, so a cloud across "
+                         "+-180 deg is one cloud; a value may pass +-180 deg)")
         if self.pass_share:
             lines.append("")
             lines.append(f"Evidence over the samples: {self.evidence_headline()}")
@@ -724,15 +736,24 @@ def _spearman(a: np.ndarray, b: np.ndarray) -> float | None:
     return float(np.corrcoef(ra, rb)[0, 1])
 
 
-def _percentiles(columns: dict, mask: np.ndarray, percentiles: Sequence[float]) -> dict:
-    """``{key: {"p5": ..., "mean": ..., "std": ...}}`` of each column over the samples in ``mask`` (finite values)."""
+def _percentiles(columns: dict, mask: np.ndarray, percentiles: Sequence[float], angles: Sequence[str] = ()) -> dict:
+    """``{key: {"p5": ..., "mean": ..., "std": ...}}`` of each column over the samples in ``mask`` (finite values).
+
+    The columns named in ``angles`` are wrapped angles (rest headings, in (-pi, pi]): their
+    statistics are those of the arc around their circular mean
+    (:func:`crashsim.geometry.unwrap_about_mean`): the mean is the circular mean, the percentiles
+    and the standard deviation those of the unwrapped values (a percentile may pass +-pi where the
+    cloud crosses it, so that p5 <= p50 <= p95).
+    """
     out = {}
     for key, v in columns.items():
         vv = v[mask & np.isfinite(v)]
         if vv.size == 0:
             continue
+        if key in angles:
+            vv = unwrap_about_mean(vv)
         p = {f"p{q:g}": float(np.percentile(vv, q)) for q in percentiles}
-        p["mean"] = float(np.mean(vv))
+        p["mean"] = circular_mean(vv) if key in angles else float(np.mean(vv))
         p["std"] = float(np.std(vv, ddof=1)) if vv.size > 1 else 0.0
         out[key] = p
     return out
@@ -765,7 +786,8 @@ def _assemble(spec, seed, n, rows: dict, n_resumed, elapsed, engine, backend, wo
             why = rows[i].get("reason") or rows[i]["error"].split(":", 1)[0]  # files written before reasons
             reasons[why] = reasons.get(why, 0) + 1
     good = np.array([not rows[i].get("error") for i in idx], dtype=bool)
-    pct = _percentiles(outputs, good, percentiles)
+    angles = [key for key in outputs if OUTPUT_KINDS.get(key.split(".", 1)[0]) == "angle"]  # wrapped: circular
+    pct = _percentiles(outputs, good, percentiles, angles)
     meets = good.copy() if checks else np.zeros(len(idx), dtype=bool)
     for _, ok in checks.values():
         meets &= ok
@@ -793,7 +815,7 @@ def _assemble(spec, seed, n, rows: dict, n_resumed, elapsed, engine, backend, wo
                     elapsed=float(elapsed), engine=engine, backend=backend, workers=int(workers),
                     out_path=None if out_path is None else str(out_path), nominal=nominal, failure_reasons=reasons,
                     meets_all=meets, accept=bool(accept),
-                    accepted_percentiles=_percentiles(outputs, meets, percentiles),
+                    accepted_percentiles=_percentiles(outputs, meets, percentiles, angles),
                     input_percentiles=_percentiles(inputs, good, percentiles),
                     accepted_input_percentiles=_percentiles(inputs, meets, percentiles))
 
@@ -909,7 +931,8 @@ def monte_carlo(scenario_data: dict, spec: UncertaintySpec | dict | None = None,
             raise ScenarioError("the scenario has no [uncertainty] table naming the uncertain inputs",
                                 field="uncertainty", file=file)
         spec = scenario_data["uncertainty"]
-    spec = spec if isinstance(spec, UncertaintySpec) else UncertaintySpec.from_dict(spec, file=file)
+    with in_file(file):
+        spec = spec if isinstance(spec, UncertaintySpec) else UncertaintySpec.from_dict(spec, file=file)
     seed = spec.seed if seed is None else int(seed)
     if seed != spec.seed:
         from dataclasses import replace
@@ -948,7 +971,7 @@ def monte_carlo(scenario_data: dict, spec: UncertaintySpec | dict | None = None,
     if dask_address is not None:
         backend, nw = "dask", 0
     else:
-        nw = (os.cpu_count() or 1) if workers is None else max(1, int(workers))
+        nw = check_workers(workers) or (os.cpu_count() or 1)
         backend = "processes" if nw > 1 and len(todo) > 1 else "serial"
     bar = None
     if progress is True:

@@ -95,7 +95,7 @@ def _close(word: str, options) -> str:
     return f"; did you mean {' or '.join(map(repr, near))}?" if near else ""
 
 
-def resolve_path(path: str, schema: Section | None = None, *, field: str = "path") -> Target:
+def resolve_path(path: str, schema: Section | None = None, *, field: str = "path", any_value: bool = False) -> Target:
     """Check ``path`` against the scenario schema and return its :class:`Target`.
 
     Parameters
@@ -106,6 +106,10 @@ def resolve_path(path: str, schema: Section | None = None, *, field: str = "path
         Root schema (default :data:`crashsim.scenario.SCHEMA`).
     field : str
         Where the path was written (``"fit.unknowns[0].path"``), for error messages.
+    any_value : bool
+        Any value of the file may be named (a choice, a flag, a whole vector or list of points:
+        :func:`crashsim.run` changes any input); else only one number (an unknown of a fit or
+        an uncertain input).
 
     Raises
     ------
@@ -146,6 +150,13 @@ def resolve_path(path: str, schema: Section | None = None, *, field: str = "path
             f = fields[name]
             if not last:
                 raise ScenarioError(f"{path!r}: {name!r} is a value, not a table", field=field)
+            if any_value and (index is None or (f.n is not None and not f.points)):
+                if index is not None and index >= f.n:
+                    raise ScenarioError(f"{path!r}: index {index} out of range; {name!r} has {f.n} components",
+                                        field=field)
+                if index is not None or f.n is not None or f.points or not (f.is_quantity or f.kind == "float"):
+                    steps.append((name, index))
+                    return Target(path.strip(), tuple(steps), f, index, tuple(entries))
             if not (f.is_quantity or f.kind == "float"):
                 raise ScenarioError(f"{path!r} is a {f.kind} value, not a number; only numbers (quantities or "
                                     "plain numbers) can be fitted or sampled", field=field)
@@ -275,6 +286,25 @@ def set_value(data: dict, target: Target, x: float, *, copy_path: bool = True, l
     node = _container(out, target, create=True, copy_path=copy_path)
     key, index = target.steps[-1]
     value = format_value(x, target, old)
+    if index is None:
+        node[key] = value
+    else:
+        vec = node.get(key)
+        if not isinstance(vec, (list, tuple)) or len(vec) != target.field.n:
+            raise ScenarioError(f"the scenario has no vector {target.path.rsplit('[', 1)[0]} of "
+                                f"{target.field.n} values to set component {index} of", field=target.path)
+        vec = list(vec)
+        vec[index] = value
+        node[key] = vec
+    return out
+
+
+def set_written(data: dict, target: Target, value: Any) -> dict:
+    """Write ``value`` as written in a file (``"compiled"``, ``["1 m", "2 m"]``, ``"35 mph"``) at
+    ``target`` into a copy of the raw dict ``data``; it is validated when the scenario is built."""
+    out = dict(data)
+    node = _container(out, target, create=True, copy_path=True)
+    key, index = target.steps[-1]
     if index is None:
         node[key] = value
     else:

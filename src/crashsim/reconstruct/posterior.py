@@ -68,17 +68,17 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..errors import ScenarioError, failure_reason
+from ..errors import ScenarioError, failure_reason, in_file
+from ..outputs import check_workers
 
 __all__ = ["PosteriorSpec", "PosteriorProblem", "PosteriorResult", "run_posterior", "load_chain",
-           "PERCENTILES", "MIN_KEPT_STEPS", "TAU_FACTOR"]
+           "PERCENTILES", "MIN_KEPT_STEPS", "TAU_FACTOR", "settle_step"]
 
 _log = logging.getLogger("crashsim")
 
 #: Percentiles reported for every unknown and derived quantity (the median, +-1 sigma and 95 % of a normal).
 PERCENTILES = (2.5, 16.0, 50.0, 84.0, 97.5)
-#: Fewest steps per walker after the burn-in and thinning for which any diagnostic is computed.
-MIN_KEPT_STEPS = 50
+from .inverse_schema import MIN_KEPT_STEPS  # noqa: E402 - fewest steps kept after burn-in and thinning
 #: The kept chain should be this many autocorrelation times long (emcee's documentation: "you
 #: should not trust an estimate of tau unless the chain is longer than about 50 tau").
 TAU_FACTOR = 50
@@ -133,12 +133,15 @@ class PosteriorSpec:
             raise ScenarioError(f"walkers = {self.walkers}: the ensemble sampler needs at least twice the number of "
                                 f"unknowns ({n_unknowns}), i.e. >= {2 * n_unknowns}", field="posterior.walkers",
                                 file=file)
-        if self.burn_steps >= self.steps:
+        if self.burn is not None and self.burn_steps >= self.steps:
             raise ScenarioError(f"burn = {self.burn_steps} discards every one of the {self.steps} steps; allowed "
                                 f"0 <= burn < steps", field="posterior.burn", file=file)
-        kept = (self.steps - self.burn_steps) // self.thin
+        kept = max(self.steps - self.burn_steps, 0) // self.thin
         if kept < MIN_KEPT_STEPS:
             need = self.burn_steps + MIN_KEPT_STEPS * self.thin
+            if self.burn is None:  # the default burn-in grows with the steps: a quarter of them
+                need = next(n for n in range(MIN_KEPT_STEPS * self.thin, 4 * MIN_KEPT_STEPS * self.thin + 4)
+                            if (n - n // 4) // self.thin >= MIN_KEPT_STEPS)
             raise ScenarioError(f"steps = {self.steps} keeps {kept} steps per walker after burn = {self.burn_steps} "
                                 f"and thin = {self.thin}: too few for any diagnostic (autocorrelation time, "
                                 f"effective sample size); allowed steps >= {need} (at least {MIN_KEPT_STEPS} kept)",
@@ -629,7 +632,36 @@ def _prior_dict(p: Prior) -> dict:
 # Summaries
 # ---------------------------------------------------------------------------------------------
 
+def settle_step(log_prob: np.ndarray, n_unknowns: int) -> int | None:
+    """The step from which the walkers' log-probability has settled, or None if it never does.
+
+    ``log_prob``: shape (steps, walkers). The level is the median over the second half of the
+    chain of the per-step median over the walkers; the chain has settled from the first step after
+    which that median never falls more than sqrt(k/2) below the level (k unknowns: one standard
+    deviation of the log-probability of a sample of a k-dimensional normal posterior, whose -2 log p
+    is chi^2 with k degrees of freedom). None if its last step is still below that.
+    """
+    lp = np.asarray(log_prob, dtype=float)
+    if lp.ndim != 2 or lp.shape[0] < 4:
+        return None
+    med = np.median(lp, axis=1)
+    level = float(np.median(med[lp.shape[0] // 2:]))
+    if not np.isfinite(level):
+        return None
+    below = np.nonzero(~(med >= level - math.sqrt(max(n_unknowns, 1) / 2)))[0]
+    first = int(below[-1]) + 1 if below.size else 0
+    return first if first < lp.shape[0] else None
+
+
 def _percentiles(v: np.ndarray) -> dict:
+    """Percentiles, mean and sd of one unknown or derived quantity over the kept samples.
+
+    Linear statistics are right here, angles included: an unknown is sampled on its ``[fit]``
+    bounds, an interval as written and never wrapped (a heading bounded by [170 deg, 200 deg] has
+    samples from 170 to 200 deg), and no derived quantity is an angle. Wrapped angles (the rest
+    headings of Monte Carlo samples) are summarised on their circular arc instead
+    (:func:`crashsim.geometry.circular_percentiles`).
+    """
     v = v[np.isfinite(v)]
     if v.size == 0:
         return {}
@@ -823,10 +855,9 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
     if not isinstance(spec, PosteriorSpec):
         spec = PosteriorSpec.from_dict(spec if spec is not None else scenario_data.get("posterior"), file=file)
     over = {k: v for k, v in (("steps", steps), ("seed", seed), ("start", start)) if v is not None}
-    if "steps" in over and int(over["steps"]) < 1:
-        raise ScenarioError(f"--steps = {over['steps']}; allowed >= 1", field="posterior.steps", file=file)
-    spec = replace(spec, **over)
-    fit_spec = FitSpec.from_dict(scenario_data["fit"], scenario_data, file=file)
+    spec = replace(spec, **over)  # --steps below the minimum: spec.check names the minimum for this burn-in
+    with in_file(file):
+        fit_spec = FitSpec.from_dict(scenario_data["fit"], scenario_data, file=file)
     spec.check(len(fit_spec.unknowns), file=file)
     engine = default_engine() if engine is None else engine
     limit = DEFAULT_SAMPLE_TIME_LIMIT if sample_time_limit is None else sample_time_limit
@@ -873,7 +904,7 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
     if dask_address is not None:
         backend, nw = "dask", 0
     else:
-        nw = (os.cpu_count() or 1) if workers is None else max(1, int(workers))
+        nw = check_workers(workers) or (os.cpu_count() or 1)
         backend = "processes" if nw > 1 else "serial"
     payload = {"data": scenario_data, "fit_spec": fit_spec, "priors": priors, "engine": engine, "file": file,
                "time_limit": float(limit), "derived": derived, "hash": run_hash}
@@ -997,6 +1028,13 @@ def _assemble(problem, spec, z, lp, blobs, acc, derived, x0, failures, evaluatio
     if np.isfinite(tmax) and burn < 2 * tmax:
         warnings.append(f"the burn-in ({burn} steps) is shorter than two autocorrelation times ({2 * tmax:.0f} steps): "
                         "the start may still show in the summaries")
+    settled = settle_step(lp, len(fs.unknowns))
+    if settled is not None and burn < settled:
+        _log.warning("posterior: the log-probability settles at step %d, after the burn-in of %d steps", settled, burn)
+        warnings.append(f"the log-probability settles only at step {settled} (the walkers' median reaches its final "
+                        f"level within sqrt(k/2) = {math.sqrt(len(fs.unknowns) / 2):.2g}), after the burn-in of {burn} "
+                        f"steps: the summaries include samples still climbing from the start; set posterior.burn >= "
+                        f"{settled} (and steps accordingly)")
     am = float(np.mean(acceptance))
     if not ACCEPTANCE_RANGE[0] <= am <= ACCEPTANCE_RANGE[1]:
         warnings.append(f"mean acceptance fraction {am:.3f} is outside {ACCEPTANCE_RANGE[0]:g}-{ACCEPTANCE_RANGE[1]:g}: "

@@ -8,7 +8,24 @@ from typing import Any
 
 from ..impact import ImpactResult, solve_impact
 
-__all__ = ["SceneResult", "run_scene"]
+__all__ = ["SceneResult", "run_scene", "rest_misfit_warnings"]
+
+
+def rest_misfit_warnings(evidence) -> list[str]:
+    """A warning for each rest item whose measured points fit the body with an RMS misfit above
+    :data:`~crashsim.reconstruct.evidence.REST_MISFIT_SHARE` of its tolerance (SI text)."""
+    from .evidence import REST_MISFIT_SHARE
+
+    out = []
+    for r in getattr(evidence, "rest", ()):
+        reg = r.registration
+        if reg is not None and reg.rms > REST_MISFIT_SHARE * r.tolerance:
+            worst = reg.labels[int(reg.misfit.argmax())]
+            out.append(f"{r.name or 'rest of ' + r.body}: the measured points fit the body with an RMS misfit of "
+                       f"{reg.rms:.4g} m, more than {REST_MISFIT_SHARE:g} x its tolerance {r.tolerance:.4g} m (largest "
+                       f"{float(max(reg.misfit)):.4g} m at {worst}): a point may be mislabelled or mismeasured, and "
+                       "the CG and heading derived from them are doubtful")
+    return out
 
 
 def _format_registrations(evidence, system: str) -> str:
@@ -207,7 +224,9 @@ class SceneResult:
 
                 text += "\n\n" + format_crush(self.evidence, system)
         if self.warnings:
-            text += "\n\nWarnings\n" + "\n".join(f"  - {w}" for w in self.warnings)
+            from ..report import message_in
+
+            text += "\n\nWarnings\n" + "\n".join(f"  - {message_in(w, system)}" for w in self.warnings)
         return text
 
     # ------------------------------------------------------------------ histories
@@ -477,6 +496,7 @@ def run_scene(scenario) -> SceneResult:
                                      approaches=scenario.approaches)
     warnings = [f"approach of {name}: {w}" for name, a in scenario.approaches.items() for w in a.warnings]
     warnings += [f"impact: {w}" for w in impact.warnings]
+    warnings += rest_misfit_warnings(scenario.evidence)
     if runout is not None:
         if joint is None:
             warnings += barrier_crossings(scenario, runout)

@@ -63,7 +63,7 @@ def _law_text(result) -> str:
                  "impulse: the contact slides throughout, friction against the initial slip)")
         return f"impulse ratio mu = {result.mu:.4f}; {bound} (law {law}: {words}{said})"
     return (f"impulse ratio mu = {result.mu:.4f}, mu_max = {result.mu_max:.4f}, mu / mu_max = {share} "
-            f"(law {law}: {words}{said})"
+            f"(law {law}: {words}{said})")
 
 
 def format_impact(result, system: str = "SI") -> str:

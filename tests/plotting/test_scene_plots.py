@@ -259,8 +259,10 @@ def test_histories_of_articulation_match_headings():
 
 def test_contact_force_panel_and_impact_lines():
     """The median-barrier slide: both bodies stay in sustained contact; the fourth panel draws
-    each pair's sampled force (its maximum is the report's peak force) and every panel marks
-    the trailer's side slap (#2) with a vertical line at its time."""
+    each pair's sampled force (the pair's force track; the report's peak force, read off the
+    solution at every integrator step, is at least its largest sample) and every panel marks
+    each later impact (#2 the trailer's side slap, then the re-strikes) with a vertical line at
+    its time."""
     scene = _scene(ROOT / "scenarios" / "scenes" / "median_barrier_slide.toml")
     fig = plot_histories(scene)
     assert len(fig.axes) == 4 and fig.axes[3].get_ylabel() == "contact force [N]"
@@ -268,11 +270,14 @@ def test_contact_force_panel_and_impact_lines():
     lines = {ln.get_label(): ln for ln in fig.axes[3].get_lines() if not ln.get_label().startswith("_")}
     assert lines.keys() == pairs.keys()
     for name, ln in lines.items():
-        assert max(ln.get_ydata()) == pytest.approx(pairs[name].peak_force)
-    (t2,) = [i.t for i in scene.joint.impacts]
+        np.testing.assert_array_equal(ln.get_ydata(), pairs[name].force)
+        assert max(ln.get_ydata()) <= pairs[name].peak_force * (1 + 1e-12)
+    times = [i.t for i in scene.joint.impacts]
+    assert len(times) >= 2
     for ax in fig.axes:
-        assert any(np.allclose(ln.get_xdata(), t2) for ln in ax.get_lines())
-    assert [t.get_text() for t in fig.axes[0].texts] == ["#2"]
+        for t in times:
+            assert any(np.allclose(ln.get_xdata(), t) for ln in ax.get_lines())
+    assert sorted(t.get_text() for t in fig.axes[0].texts) == sorted(f"#{n}" for n in range(2, len(times) + 2))
 
 
 def test_histories_need_a_runout():

@@ -47,7 +47,10 @@ def test_scene_json(path, capsys):
     for v in out["runout"]["vehicles"].values():
         assert v["status"] == "rest"
     assert out["evidence"]["all_passed"] is True
-    assert out["evidence"]["n_checks"] >= 3
+    # the worked examples carry hypothetical evidence of every kind; the barrier-test configuration
+    # carries only what such a test fixes (its impact point; its sequence and exit angle are
+    # checked by tests/validation/test_barrier_glance.py)
+    assert out["evidence"]["n_checks"] >= (1 if path.stem == "barrier_glance_15deg" else 3)
 
 
 @pytest.mark.parametrize("path", SCENES, ids=[p.stem for p in SCENES])
@@ -140,7 +143,9 @@ def test_trailer_swings_into_the_car_that_struck_it(capsys):
 
 def test_sliding_along_the_median_barrier(capsys):
     """Both bodies stay in sustained contact with the barrier for most of the run-out, the
-    contact takes work, and the trailer's side slap is a secondary impact."""
+    contact takes work, and the trailer's side slap is a secondary impact (the first of the later
+    ones; the tractor's body, pressed in again by the slap through the kingpin and by its own
+    turn, strikes too: every re-strike at 0.5 m/s or more is an impact)."""
     assert main(["run", str(ROOT / "scenarios" / "scenes" / "median_barrier_slide.toml"), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     pairs = {p["name"]: p for p in out["runout"]["pairs"]}
@@ -148,7 +153,10 @@ def test_sliding_along_the_median_barrier(capsys):
     for body in ("tractor", "trailer"):
         p = pairs[f"{body}|median"]
         assert p["contact_time"] > 0.5 * t_end and p["contact_work"] < 0
-    assert [(i["body1"], i["body2"]) for i in out["impacts"][1:]] == [("trailer", "median")]
+    later = [(i["body1"], i["body2"]) for i in out["impacts"][1:]]
+    assert later[0] == ("trailer", "median") and set(later) == {("trailer", "median"), ("tractor", "median")}
+    for p in pairs.values():
+        assert p["max_closing"] < 0.5  # nothing struck the barrier unrecorded
     assert out["runout"]["energy"]["contacts"] > 0
 
 

@@ -9,6 +9,7 @@ scene is planar). Any other type is counted and named in one warning, never drop
 
 from __future__ import annotations
 
+import math
 from collections import Counter
 
 import numpy as np
@@ -59,6 +60,39 @@ def _flatten(e, sagitta: float) -> np.ndarray:
     return _xy(e.flattening(sagitta))
 
 
+def _bulge_points(vertices, closed: bool, sagitta: float) -> np.ndarray:
+    """Vertices (x, y, bulge) of a polyline with its bulged segments as exact arcs: chord points on
+    the circle, chords within ``sagitta`` of it (bulge = tan(included angle / 4), DXF reference)."""
+    v = [(float(x), float(y), float(b or 0.0)) for x, y, b in vertices]
+    out = []
+    n = len(v)
+    for i in range(n if closed else n - 1):
+        x0, y0, b = v[i]
+        x1, y1, _ = v[(i + 1) % n]
+        out.append((x0, y0))
+        if b == 0.0:
+            continue
+        theta = 4.0 * math.atan(b)                  # included angle, signed (ccw positive)
+        chord = math.hypot(x1 - x0, y1 - y0)
+        if chord == 0.0:
+            continue
+        r = chord / (2.0 * math.sin(abs(theta) / 2.0))
+        # centre: from the chord midpoint along its left normal (ccw arc) by r cos(theta/2)
+        mx, my = (x0 + x1) / 2, (y0 + y1) / 2
+        nx, ny = -(y1 - y0) / chord, (x1 - x0) / chord
+        d = r * math.cos(abs(theta) / 2.0) * (1 if b > 0 else -1)  # < 0 past a half circle: centre beyond
+        cx, cy = mx + nx * d, my + ny * d
+        a0 = math.atan2(y0 - cy, x0 - cx)
+        step = 2.0 * math.acos(max(-1.0, 1.0 - sagitta / r)) if sagitta < r else math.pi / 2
+        k = max(2, int(math.ceil(abs(theta) / max(step, 1e-9))))
+        for j in range(1, k):
+            a = a0 + theta * j / k
+            out.append((cx + r * math.cos(a), cy + r * math.sin(a)))
+    if not closed:
+        out.append(v[-1][:2])
+    return np.asarray(out, dtype=float).reshape(-1, 2)
+
+
 def _entity_points(e, kind: str, sagitta: float):
     """(geometry, points (n, 2) in drawing units, closed, text) of a taken entity; None to skip."""
     if kind == "LINE":
@@ -70,6 +104,8 @@ def _entity_points(e, kind: str, sagitta: float):
         simple = tuple(e.dxf.extrusion) == (0.0, 0.0, 1.0) and e.dxf.elevation == 0
         if simple and not e.has_arc:
             return "line", np.asarray(e.get_points("xy"), dtype=float).reshape(-1, 2), closed, ""
+        if simple:
+            return "line", _bulge_points(e.get_points("xyb"), closed, sagitta), closed, ""
         from ezdxf import path as ezpath
 
         pts = _xy(ezpath.make_path(e).flattening(sagitta))
@@ -80,6 +116,10 @@ def _entity_points(e, kind: str, sagitta: float):
         if e.is_polygon_mesh or e.is_poly_face_mesh:
             return None
         closed = bool(e.is_closed)
+        if e.is_2d_polyline and any(v.dxf.bulge for v in e.vertices) and \
+                tuple(e.dxf.extrusion) == (0.0, 0.0, 1.0):
+            vs = [(v.dxf.location[0], v.dxf.location[1], v.dxf.bulge) for v in e.vertices]
+            return "line", _bulge_points(vs, closed, sagitta), closed, ""
         if e.is_2d_polyline and any(v.dxf.bulge for v in e.vertices):
             from ezdxf import path as ezpath
 

@@ -126,7 +126,7 @@ def read_points(path: str, units: str, columns: str = "PNEZD", *, join: str = "r
             if r == 0:
                 data.notes.append(f"row 1 is a header: {', '.join(c.strip() for c in row)}")
                 continue
-            raise ScenarioError(f"{path}: row {line}: coordinates {sx!r}, {sy!r} are not numbers (columns = "
+            raise ScenarioError(f"{path}: row {line}: easting or x {sx!r}, northing or y {sy!r} are not numbers (columns = "
                                 f"{columns!r})", field="survey.files.columns", file=file)
         if "." not in sx + sy and "e" not in (sx + sy).lower() and max(len(sx), len(sy)) > 9:
             no_point.append(f"{sx}, {sy}")
@@ -180,12 +180,12 @@ def read_points(path: str, units: str, columns: str = "PNEZD", *, join: str = "r
             order.append((code, s, closed))
 
     for i, (code, ctl) in enumerate(zip(codes, controls)):
+        if join == "run":  # a point of another code ends the run
+            for other in [c for c in open_strings if c != code]:
+                close(other, False)
         if not is_line(code):
             order.append((code, [i], None))
             continue
-        if join == "run":
-            for other in [c for c in open_strings if c != code]:
-                close(other, False)
         if ctl == "begin":
             close(code, False)
         open_strings.setdefault(code, []).append(i)

@@ -308,16 +308,9 @@ def _map_file(out: _Out, sd, entry: dict, raw_entry: dict, frame: SceneFrame, ke
                 item["sigma"] = rm["sigma"]
             out.data.setdefault("evidence", {})["impact_point"] = item
             out.record(src, e, kind, "evidence.impact_point")
-        # labels: a text names the nearest item it made on its layer
-        for t in texts:
-            cands = [(i2, it) for i2, (e2, it, _) in enumerate(made) if "name" in it and
-                     getattr(e2, "layer", None) == t.layer]
-            if cands:
-                tp = scene(t)[0]
-                best = min(cands, key=lambda c: float(np.min(np.hypot(*(np.asarray(
-                    [[float(v.split()[0]) for v in q] for q in _item_points(c[1])]) - tp).T))))
-                best[1]["name"] = t.text
-            out.record(src, t, "label", "", f"text {t.text!r}" + ("" if cands else ": no item of its layer to name"))
+        # labels: a text names the nearest item it made on its layer (nearest vertex, a k-d tree per layer)
+        if texts:
+            _name_by_labels(out, src, texts, made, scene)
         for e, item, where in made:
             target = out.append(where, item)
             if isinstance(e, _Group):
@@ -327,12 +320,25 @@ def _map_file(out: _Out, sd, entry: dict, raw_entry: dict, frame: SceneFrame, ke
                 out.record(src, e, kind, target)
 
 
-def _item_points(item: dict) -> list:
-    if "points" in item:
-        return [p["position"] if isinstance(p, dict) else p for p in item["points"]]
-    if "polygon" in item:
-        return item["polygon"]
-    return [item["position"]]
+def _name_by_labels(out: "_Out", src: str, texts, made: list, scene) -> None:
+    """Each TEXT/MTEXT names the item made from its layer whose nearest vertex is closest to it."""
+    from scipy.spatial import cKDTree
+
+    by_layer: dict = {}
+    for k, (e, item, _) in enumerate(made):
+        if "name" in item:
+            pts = np.vstack([scene(x) for x in e.members]) if isinstance(e, _Group) else scene(e)
+            by_layer.setdefault(e.layer, []).append((k, pts))
+    trees = {}
+    for layer, lst in by_layer.items():
+        idx = np.concatenate([np.full(len(p), k) for k, p in lst])
+        trees[layer] = (cKDTree(np.vstack([p for _, p in lst])), idx)
+    for t in texts:
+        tree = trees.get(t.layer)
+        if tree is not None:
+            _, j = tree[0].query(scene(t)[0])
+            made[int(tree[1][j])][1]["name"] = t.text
+        out.record(src, t, "label", "", f"text {t.text!r}" + ("" if tree else ": no item of its layer to name"))
 
 
 class _Group:

@@ -102,10 +102,12 @@ def _entity_points(e, kind: str, sagitta: float):
     if kind == "LWPOLYLINE":
         closed = bool(e.closed)
         simple = tuple(e.dxf.extrusion) == (0.0, 0.0, 1.0) and e.dxf.elevation == 0
-        if simple and not e.has_arc:
-            return "line", np.asarray(e.get_points("xy"), dtype=float).reshape(-1, 2), closed, ""
+        # the vertex array's values: x, y, start width, end width, bulge per vertex
+        v = np.asarray(e.lwpoints.values, dtype=float).reshape(-1, 5)
+        if simple and not v[:, 4].any():
+            return "line", v[:, :2].copy(), closed, ""
         if simple:
-            return "line", _bulge_points(e.get_points("xyb"), closed, sagitta), closed, ""
+            return "line", _bulge_points(v[:, [0, 1, 4]], closed, sagitta), closed, ""
         from ezdxf import path as ezpath
 
         pts = _xy(ezpath.make_path(e).flattening(sagitta))
@@ -203,7 +205,7 @@ def read_dxf(path: str, units: str | None = None, *, chord_tolerance: float = 0.
             skipped[kind if kind != "POLYLINE" else "POLYLINE (mesh)"] += 1
             return
         geom, pts, closed, text = got
-        if not np.all(np.isfinite(pts)) or len(pts) == 0:
+        if len(pts) == 0 or not math.isfinite(float(pts.sum())):
             skipped[f"{kind} (no finite coordinates)"] += 1
             return
         out.append(Entity(layer, ref, geom, pts * scale, closed, text, kind))

@@ -150,3 +150,25 @@ def test_posterior_section_comes_from_the_posterior_report():
     assert flo < 0.5 and fhi > 0.9 and 0.5 <= plo < phi <= 0.9  # the fit passes the bounds, the posterior not
     (flo, fhi), (plo, phi) = vals["impact.restitution"]
     assert flo - plo > 2 * abs(fhi - phi)  # the longer lower tail
+
+
+def test_survey_section_numbers_come_from_the_survey_benchmark():
+    text = (ROOT / "plots" / "survey_import.md").read_text()
+    para = _section("## Survey in")
+    speed = para[para.index("Speed (`benchmarks/survey_import.py`"):]
+    nums = [n for n in _numbers(re.sub(r"`[^`]*`", "", speed)) if n not in ("100,000",)]
+    assert len(nums) >= 4
+    for n in nums:
+        assert n in text, n
+    assert "100,000 entities" in text
+
+
+def test_cad_out_command_runs(tmp_path, capsys):
+    section = _section("## CAD out")
+    (cmd,) = [ln[2:] for ln in section.splitlines() if ln.startswith("$ crashsim export ")]
+    args = shlex.split(cmd)[1:]
+    out = tmp_path / "reconstruction.dxf"
+    args[args.index("--dxf") + 1] = str(out)
+    assert main(args) == 0
+    assert out.stat().st_size > 10_000
+    assert "CRASHSIM-T0.5-car" in out.read_text()

@@ -82,3 +82,24 @@ def test_unknown_crs_of_a_geojson_survey(tmp_path, capsys):
     assert main(["run", str(p)]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "survey.crs = 'EPSG:999999' is not a coordinate reference system" in err
+
+
+def test_underlay_that_does_not_fit_fails_at_load(tmp_path, capsys):
+    """Control points that a similarity cannot fit within the tolerance: the run stops before any
+    computation, naming the point and its residual; good ones are reported with their residuals."""
+    good = ('control = [{pixel = [0.0, 0.0], position = ["1454842.6 survey_foot", "538508.5 survey_foot"]}, '
+            '{pixel = [600.0, 0.0], position = ["1455142.6 survey_foot", "538508.5 survey_foot"]}, '
+            '{pixel = [0.0, 400.0], position = ["1454842.6 survey_foot", "538308.5 survey_foot"]}]')
+    bad = good.replace('"538308.5 survey_foot"', '"538318.5 survey_foot"')
+    edit = lambda c: (lambda t: t.replace('image = "files/ortho.png"         # its world file files/ortho.pgw is '
+                                          'found beside it', f'image = "files/ortho.png"\n{c}'))  # noqa: E731
+    err = _bad(tmp_path, capsys, edit(bad), "lies ")
+    assert "survey.underlay.control" in err and "from where the similarity fit puts it (tolerance 0.1 m" in err
+    shutil.rmtree(tmp_path / "files")
+    shutil.copytree(FILES, tmp_path / "files")
+    (tmp_path / "scene.toml").write_text(edit(good)(SCENE.read_text()))
+    from crashsim.scenario import load_scenario
+
+    rec = [r for r in load_scenario(tmp_path / "scene.toml").data["survey"]["imported"] if r["kind"] == "underlay"]
+    assert len(rec) == 1 and "similarity fit to 3 control points" in rec[0]["note"]
+    assert "control point residuals" in rec[0]["note"]

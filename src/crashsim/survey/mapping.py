@@ -392,6 +392,15 @@ def expand_survey(data: dict, file: str | None = None) -> dict:
         target = out.append(("evidence", "recorder"), item)
         out.records.append({"file": r["file"], "layer": "", "ref": f"{len(samples)} samples", "type": "CSV",
                             "kind": "recorder", "target": target, "note": "; ".join(notes)})
+    if s["underlay"]:  # placed now, so that a world file or control points that do not fit fail at load
+        from .underlay import georef_from_section
+
+        g = georef_from_section(s["underlay"], frame, file, file)
+        note = f"{g.how}; {g.pixel_size:.4g} m per pixel"
+        if len(g.residuals):
+            note += "; control point residuals " + ", ".join(f"{r:.3g} m" for r in g.residuals)
+        out.records.append({"file": s["underlay"]["image"], "layer": "", "ref": "", "type": "image",
+                            "kind": "underlay", "target": "", "note": note})
     out.data["survey"]["imported"] = out.records
     return out.data
 

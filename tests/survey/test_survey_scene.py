@@ -237,6 +237,7 @@ def test_unsupported_entities_warned_once_in_the_sources(pair, tmp_path, caplog)
     doc = ezdxf.readfile(tmp / "scene.dxf")
     for _ in range(3):
         doc.modelspace().add_3dface([(0, 0), (1, 0), (1, 1)], dxfattribs={"layer": "TIN"})
+    doc.modelspace().add_line((0, 0), (1, 1), dxfattribs={"layer": "TREES"})  # a layer the mapping leaves out
     doc.saveas(tmp_path / "with_tin.dxf")
     data = copy.deepcopy(surv)
     data["survey"]["files"][0]["file"] = str(tmp_path / "with_tin.dxf")
@@ -246,3 +247,4 @@ def test_unsupported_entities_warned_once_in_the_sources(pair, tmp_path, caplog)
     notes = [r["note"] for r in sc.data["survey"]["imported"] if r["kind"] == "note"]
     assert any("3 entities of types the importer does not take were left out: 3 3DFACE" in n for n in notes)
     assert sum("3DFACE" in r.getMessage() for r in caplog.records) == 1
+    assert "1 entities on layers or codes no map entry matches were not imported: TREES (1)" in notes

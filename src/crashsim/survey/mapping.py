@@ -182,6 +182,20 @@ _ALLOWED = {
 
 def _map_file(out: _Out, sd, entry: dict, raw_entry: dict, frame: SceneFrame, key: str, file: str | None,
               have_runout: bool) -> None:
+    taken = _map_entries(out, sd, entry, raw_entry, frame, key, file, have_runout)
+    left = {}
+    for e, t in zip(sd.entities, taken):
+        if not t:
+            left[e.layer] = left.get(e.layer, 0) + 1
+    if left:
+        shown = ", ".join(f"{lay or '(empty)'} ({n})" for lay, n in sorted(left.items()))
+        out.record(entry["file"], None, "note", "", f"{sum(left.values())} entities on layers or codes no map entry "
+                                                    f"matches were not imported: {shown}")
+
+
+def _map_entries(out: _Out, sd, entry: dict, raw_entry: dict, frame: SceneFrame, key: str, file: str | None,
+                 have_runout: bool) -> np.ndarray:
+    """Apply the file's map entries; returns which entities were taken."""
     from ..scenario import MAP_LINE_STYLES
 
     src = entry["file"]
@@ -318,6 +332,7 @@ def _map_file(out: _Out, sd, entry: dict, raw_entry: dict, frame: SceneFrame, ke
                     out.record(src, x, kind, target)
             else:
                 out.record(src, e, kind, target)
+    return taken
 
 
 def _name_by_labels(out: "_Out", src: str, texts, made: list, scene) -> None:
@@ -363,6 +378,10 @@ def expand_survey(data: dict, file: str | None = None) -> dict:
     if not isinstance(data, dict) or not isinstance(data.get("survey"), dict) or is_expanded(data):
         return data
     s = survey_section(data, file)
+    if s["units"] is not None:
+        from .frame import unit_scale
+
+        unit_scale(s["units"], field="survey.units", file=file)
     frame = survey_frame(s)
     out = _Out(copy.deepcopy(data))
     raw_files = data["survey"].get("files", [])

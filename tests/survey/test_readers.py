@@ -268,3 +268,46 @@ def test_bulged_segments_are_exact_arcs(tmp_path, bulge):
     np.testing.assert_allclose(pts[[0, -1]], [[0, 0], [4, 1]], atol=1e-12)
     half = np.hypot(*np.diff(pts, axis=0).T) / 2
     assert np.max(r - np.sqrt(r * r - half * half)) <= 0.001 + 1e-12
+
+
+def test_fast_path_gives_the_entities_ezdxf_gives(tmp_path):
+    """The fast reader of simple ASCII drawings against the full ezdxf reading, entity by entity
+    (coordinates equal to the last bit); a drawing with another type goes through ezdxf."""
+    import time
+
+    from crashsim.survey import dxf as m
+
+    rng = np.random.default_rng(3)
+    doc, msp = _doc(2)
+    base = np.array([1_455_000.0, 538_400.0])
+    for i in range(300):
+        p = base + rng.uniform(0, 300, 2)
+        msp.add_line(p, p + rng.normal(0, 3, 2), dxfattribs={"layer": f"L{i % 7}"})
+        msp.add_lwpolyline((p + np.cumsum(rng.normal(0, 1, (4, 2)), axis=0)).tolist(), close=bool(i % 2),
+                           dxfattribs={"layer": f"P{i % 3}"})
+        msp.add_point(p, dxfattribs={"layer": "PTS"})
+        msp.add_arc(p, 2.5, 10.0 + i % 150, 200.0, dxfattribs={"layer": "ARC"})
+        msp.add_circle(p, 0.3 + i / 1000, dxfattribs={"layer": "POLE"})
+        msp.add_text(f"t{i}", dxfattribs={"layer": "T", "insert": p})
+    doc.paperspace().add_line((0, 0), (1, 1))  # paper space: not part of the scene
+    path = tmp_path / "simple.dxf"
+    doc.saveas(path)
+    t0 = time.perf_counter()
+    fast = read_dxf(str(path))
+    t1 = time.perf_counter()
+    full = read_dxf(str(path), fast=False)
+    t2 = time.perf_counter()
+    assert len(fast.entities) == len(full.entities) == 1800
+    for a, b in zip(fast.entities, full.entities):
+        assert (a.layer, a.ref, a.geometry, a.closed, a.text, a.dxftype) == \
+            (b.layer, b.ref, b.geometry, b.closed, b.text, b.dxftype)
+        np.testing.assert_array_equal(a.points, b.points)
+    assert fast.unit == full.unit == "ft" and fast.notes == full.notes
+    assert t1 - t0 < t2 - t1  # the point of it
+    # the fast path declines what it does not read, and ezdxf reads it
+    msp.add_blockref("X", (0, 0)) if "X" in doc.blocks else (doc.blocks.new("X").add_point((0, 0)),
+                                                             msp.add_blockref("X", (0, 0)))
+    doc.saveas(path)
+    with pytest.raises(m._NotFast):
+        m._read_fast(str(path), 0.01, lambda h: ("ft", 0.3048))
+    assert len(read_dxf(str(path)).entities) == 1801

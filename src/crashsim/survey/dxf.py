@@ -145,8 +145,41 @@ def _entity_points(e, kind: str, sagitta: float):
     return None
 
 
+def _drawing_unit(path: str, insunits, units: str | None, file: str | None) -> tuple[str, float]:
+    """(unit, metres per unit) of a drawing from its $INSUNITS and the scene file's units."""
+    head = INSUNITS.get(int(insunits or 0))
+    if units is not None:
+        scale = unit_scale(units, field="survey.files.units", file=file)
+        if head is not None and not np.isclose(UNIT_METRES[head], scale, rtol=1e-12):
+            raise ScenarioError(f"{path}: units = {units!r}, but the drawing's header says $INSUNITS = "
+                                f"{insunits} ({head}); remove units or correct it",
+                                field="survey.files.units", file=file)
+        return units, scale
+    if head is not None:
+        return head, UNIT_METRES[head]
+    raise ScenarioError(f"{path}: the drawing does not state its units ($INSUNITS = "
+                        f"{'absent' if insunits is None else insunits}); give units = \"m\" (or \"ft\", \"us_ft\", "
+                        "\"mm\", ...) in its [[survey.files]] entry", field="survey.files.units", file=file)
+
+
+def _header_note(version, insunits, unit: str) -> str:
+    head = INSUNITS.get(int(insunits or 0))
+    return (f"$ACADVER {version}, $INSUNITS {'absent' if insunits is None else insunits} ({head or 'unitless'}), "
+            f"read as {unit}")
+
+
+def _read_dxf_fast(path: str, units: str | None, chord_tolerance: float, file: str | None) -> SurveyData:
+    def scale_of(header):
+        return _drawing_unit(path, header.get("$INSUNITS"), units, file)
+
+    header, unit, ents = _read_fast(path, chord_tolerance, scale_of)
+    data = SurveyData(path, "dxf", unit, ents)
+    data.notes.append(_header_note(header.get("$ACADVER", "?"), header.get("$INSUNITS"), unit))
+    return data
+
+
 def read_dxf(path: str, units: str | None = None, *, chord_tolerance: float = 0.01,
-             file: str | None = None) -> SurveyData:
+             file: str | None = None, fast: bool = True) -> SurveyData:
     """The entities of a DXF file, in metres.
 
     Parameters
@@ -160,31 +193,28 @@ def read_dxf(path: str, units: str | None = None, *, chord_tolerance: float = 0.
         Largest distance [m] of a chord from the arc, circle, ellipse or spline it replaces.
     file : str, optional
         The scene file, for error messages.
+    fast : bool
+        Read an ASCII drawing of only LINE, LWPOLYLINE (without bulges), POINT, TEXT, ARC and
+        CIRCLE in world coordinates without building an ezdxf document (the same entities,
+        several times faster); anything else, and ``fast=False``, goes through ezdxf.
 
     Raises
     ------
     ScenarioError
         An unreadable file, or drawing units missing or contradicting the header.
     """
+    if fast:
+        try:
+            return _read_dxf_fast(path, units, chord_tolerance, file)
+        except ScenarioError:
+            raise
+        except (_NotFast, ValueError, IndexError, KeyError):  # a type or quirk the fast path leaves to ezdxf
+            pass
     doc = _open(path)
-    head = header_unit(doc)
-    if units is not None:
-        scale = unit_scale(units, field="survey.files.units", file=file)
-        if head is not None and not np.isclose(UNIT_METRES[head], scale, rtol=1e-12):
-            raise ScenarioError(f"{path}: units = {units!r}, but the drawing's header says $INSUNITS = "
-                                f"{doc.header.get('$INSUNITS')} ({head}); remove units or correct it",
-                                field="survey.files.units", file=file)
-        unit = units
-    elif head is not None:
-        unit, scale = head, UNIT_METRES[head]
-    else:
-        raise ScenarioError(f"{path}: the drawing does not state its units ($INSUNITS = "
-                            f"{doc.header.get('$INSUNITS', 'absent')}); give units = \"m\" (or \"ft\", \"us_ft\", "
-                            "\"mm\", ...) in its [[survey.files]] entry", field="survey.files.units", file=file)
+    unit, scale = _drawing_unit(path, doc.header.get("$INSUNITS"), units, file)
     sagitta = chord_tolerance / scale
     data = SurveyData(path, "dxf", unit)
-    data.notes.append(f"$ACADVER {doc.dxfversion}, $INSUNITS {doc.header.get('$INSUNITS', 'absent')}"
-                      f" ({head or 'unitless'}), read as {unit}")
+    data.notes.append(_header_note(doc.dxfversion, doc.header.get("$INSUNITS"), unit))
     skipped: Counter = Counter()
     out = data.entities
 
@@ -214,3 +244,153 @@ def read_dxf(path: str, units: str | None = None, *, chord_tolerance: float = 0.
         take(e, e.dxf.layer, e.dxf.handle or "?")
     data.skipped = skipped
     return data
+
+
+# ------------------------------------------------------------------------------------------
+# Fast path: ASCII drawings whose model space holds only the simplest entities
+
+#: Entity types the fast path reads itself; a drawing with any other type in its ENTITIES
+#: section (INSERT, POLYLINE, MTEXT, SPLINE, ...) is read by ezdxf in full instead.
+_FAST_TYPES = frozenset({"LINE", "LWPOLYLINE", "POINT", "TEXT", "ARC", "CIRCLE"})
+
+
+class _NotFast(Exception):
+    """The drawing needs ezdxf (a type or a feature the fast path does not read)."""
+
+
+def _fast_tags(path: str):
+    """(header dict, list of entities as (type, [(code, value), ...])) of an ASCII DXF, or
+    raise _NotFast."""
+    with open(path, "rb") as fh:
+        head = fh.read(22)
+        if head.startswith(b"AutoCAD Binary DXF"):
+            raise _NotFast("binary")
+        raw = head + fh.read()
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        text = raw.decode("cp1252", errors="replace")
+    lines = text.splitlines()
+    n = len(lines)
+    i = 0
+    while i < n and lines[i].strip() == "999":  # comments before the first SECTION
+        i += 2
+    header: dict = {}
+    ents: list = []
+    section = None
+    cur = None
+    seen = False
+    while i + 1 < n:
+        code = lines[i].strip()
+        value = lines[i + 1]
+        i += 2
+        if code == "0":
+            value = value.strip()
+            if cur is not None:
+                ents.append(cur)
+                cur = None
+            if value == "SECTION":
+                seen = True
+                name = lines[i + 1].strip() if i + 1 < n else ""
+                section = name
+                i += 2
+                continue
+            if value in ("ENDSEC", "EOF"):
+                section = None
+                continue
+            if section == "ENTITIES":
+                if value not in _FAST_TYPES:
+                    raise _NotFast(value)
+                cur = (value, [])
+            continue
+        if section == "HEADER":
+            if code == "9":
+                var = value.strip()
+                if var in ("$INSUNITS", "$ACADVER"):
+                    header[var] = lines[i + 1].strip() if i + 1 < n else ""
+        elif cur is not None:
+            cur[1].append((int(code), value))
+    if cur is not None:
+        ents.append(cur)
+    if not seen:
+        raise _NotFast("no sections")
+    return header, ents
+
+
+def _fast_entity(kind: str, tags: list, sagitta: float):
+    """(layer, handle, geometry, points, closed, text) of one fast-path entity; None for a
+    paper-space one."""
+    layer, handle, text = "0", "?", ""
+    xs, ys = [], []
+    vals: dict = {}
+    closed = False
+    for code, v in tags:
+        if code == 8:
+            layer = v.strip()
+        elif code == 5:
+            handle = v.strip()
+        elif code == 67 and v.strip() == "1":
+            return None
+        elif code == 10:
+            xs.append(float(v))
+        elif code == 20:
+            ys.append(float(v))
+        elif code == 1 and kind == "TEXT":
+            text = v
+        elif code in (210, 220, 230):
+            vals[code] = float(v)
+        elif code == 42 and float(v) != 0.0:
+            raise _NotFast("bulge")
+        elif code == 70 and kind == "LWPOLYLINE":
+            closed = bool(int(v) & 1)
+        elif code == 38 and float(v) != 0.0:
+            raise _NotFast("elevation")
+        elif code in (11, 21, 40, 50, 51, 72, 73):
+            vals[code] = float(v) if code not in (72, 73) else int(v)
+    if vals.get(210, 0.0) != 0.0 or vals.get(220, 0.0) != 0.0 or vals.get(230, 1.0) != 1.0:
+        raise _NotFast("extrusion")
+    if kind == "TEXT" and (vals.get(72, 0) or vals.get(73, 0)):
+        raise _NotFast("aligned text")  # its place is the alignment point: ezdxf knows the rules
+    if kind == "LWPOLYLINE":
+        return layer, handle, "line", np.column_stack([xs, ys]), closed, ""
+    if kind == "LINE":
+        return layer, handle, "line", np.array([[xs[0], ys[0]], [vals[11], vals[21]]]), False, ""
+    if kind == "POINT":
+        return layer, handle, "point", np.array([[xs[0], ys[0]]]), False, ""
+    if kind == "TEXT":
+        return layer, handle, "text", np.array([[xs[0], ys[0]]]), False, text
+    # ARC and CIRCLE with ezdxf's own construction (the vertices its entities' flattening gives)
+    from ezdxf.math import ConstructionArc, Vec3, arc_segment_count
+
+    center, radius = (xs[0], ys[0]), abs(vals[40])
+    if kind == "CIRCLE":
+        if radius == 0.0:
+            raise _NotFast("zero radius")
+        count = arc_segment_count(radius, math.tau, sagitta)
+        c = Vec3(center)
+        pts = _xy([c + Vec3.from_deg_angle(a, radius) for a in np.linspace(0.0, 360.0, count + 1)])
+        return layer, handle, "line", pts[:-1] if np.allclose(pts[0], pts[-1]) else pts, True, ""
+    if math.isclose(vals.get(50, 0.0) % 360.0, vals.get(51, 360.0) % 360.0) or radius == 0.0:
+        raise _NotFast("degenerate arc")  # ezdxf's reading decides what it is
+    arc = ConstructionArc(center, radius, vals.get(50, 0.0), vals.get(51, 360.0))
+    return layer, handle, "line", _xy(arc.flattening(sagitta)), False, ""
+
+
+def _read_fast(path: str, sagitta_m: float, scale_of):
+    """The entities of an ASCII DXF of only LINE, LWPOLYLINE, POINT, TEXT, ARC and CIRCLE
+    (straight, flat, in world coordinates), read without building an ezdxf document: the
+    same entities :func:`read_dxf` gives through ezdxf (tests compare them). ``scale_of(header)``
+    returns (unit, metres per unit). Raises _NotFast for anything else."""
+    header, ents = _fast_tags(path)
+    unit, scale = scale_of(header)
+    sagitta = sagitta_m / scale
+    out = []
+    for kind, tags in ents:
+        got = _fast_entity(kind, tags, sagitta)
+        if got is None:
+            continue
+        layer, handle, geom, pts, closed, text = got
+        if len(pts) == 0 or not math.isfinite(float(pts.sum())):
+            raise _NotFast("non-finite")
+        out.append(Entity(layer, handle, geom, pts * scale, closed, text, kind))
+    return header, unit, out

@@ -119,7 +119,7 @@ def _m(x: float) -> str:
 
 
 def _pts(a) -> list:
-    return [[_m(x), _m(y)] for x, y in np.asarray(a, dtype=float)]
+    return [[f"{x!r} m", f"{y!r} m"] for x, y in np.asarray(a, dtype=float).tolist()]
 
 
 def _polygon(center, diameter: float, n: int) -> np.ndarray:
@@ -231,9 +231,16 @@ def _map_entries(out: _Out, sd, entry: dict, raw_entry: dict, frame: SceneFrame,
                 out.record(src, e, "ignore", "")
             continue
         made: list = []  # (entity, dict item, where)
+        # the scene-frame points of every entity of this entry, transformed at once
+        if ents:
+            sizes = np.cumsum([len(e.points) for e in ents])[:-1]
+            moved = dict(zip(map(id, ents), np.split(frame.to_scene(np.vstack([e.points for e in ents])), sizes)))
+        else:
+            moved = {}
 
         def scene(e):
-            return frame.to_scene(e.points)
+            got = moved.get(id(e))
+            return got if got is not None else frame.to_scene(e.points)
 
         for e in (shapes if kind not in ("rest", "impact_point") else []):
             p = scene(e)

@@ -7,7 +7,9 @@ Writes plots/survey_import.md and plots/survey_import.csv. Run from the reposito
    40,000 LINE, 40,000 LWPOLYLINE of 5 vertices, 10,000 POINT, 5,000 ARC, 5,000 TEXT, in metres
    on State Plane-sized coordinates. Timed: ``read_dxf`` (ezdxf parse + entity extraction) and
    ``expand_survey`` (read + every layer mapped to map lines, as a scene file would), the median
-   of 3 runs each, the cache of read files cleared before each.
+   of 3 runs each, the cache of read files cleared before each; once each, the same drawing read
+   through ezdxf's document (``fast=False``) and the whole scenario load (verge_run_off with the
+   85,000 map lines, validated and built).
 2. The shipped survey scene's figure (``plot_scene`` + PNG at 150 dpi, run-out computed once
    beforehand) with and without its underlay, median of 5 runs each; the target is at most 1.5x.
 """
@@ -92,8 +94,24 @@ def main() -> int:
             assert len(out["map"]["lines"]) == 40_000 + 40_000 + 5_000
 
         t_expand = timed(expand, 3)
-    rows.append(("read_dxf, 100k entities", statistics.median(t_read), min(t_read)))
+        t_ezdxf = timed(lambda: read_dxf(str(path), fast=False), 1)
+        from crashsim.scenario import scenario_from_dict
+        from crashsim.schema import load_toml
+
+        scene_data = load_toml(ROOT / "scenarios" / "scenes" / "verge_run_off.toml")
+        scene_data["survey"] = data["survey"]
+
+        def load():
+            mapping._CACHE.clear()
+            sc = scenario_from_dict(scene_data)
+            assert len(sc.map_lines) == 85_000 + len(load_toml(ROOT / "scenarios" / "scenes" /
+                                                               "verge_run_off.toml")["map"]["lines"])
+
+        t_load = timed(load, 1)
+    rows.append(("read_dxf, 100k entities (fast path)", statistics.median(t_read), min(t_read)))
+    rows.append(("read_dxf through ezdxf's document (fast=False), 1 run", t_ezdxf[0], t_ezdxf[0]))
     rows.append(("expand_survey (read + map every layer)", statistics.median(t_expand), min(t_expand)))
+    rows.append(("scenario load: expand + validate + build 85k map lines, 1 run", t_load[0], t_load[0]))
 
     import matplotlib
 
@@ -147,8 +165,10 @@ def main() -> int:
         "|---|---|---|",
     ] + [f"| {r[0]} | {r[1]:.3f} | {r[2]:.3f} |" for r in rows] + [
         "",
-        f"* Import of 100k entities in a few seconds: {'MET' if statistics.median(t_expand) < 10 else 'MISSED'} "
-        f"({statistics.median(t_expand):.2f} s median, read and mapped).",
+        f"* Import of 100k entities in a few seconds (taken here as under 10 s on this shared 2-CPU machine): "
+        f"{'MET' if statistics.median(t_expand) < 10 else 'MISSED'} ({statistics.median(t_expand):.2f} s median, "
+        f"read and mapped; the whole scenario load with every entity made a map line and validated "
+        f"{t_load[0]:.2f} s).",
         f"* Underlay at most 1.5x the figure's time: {'MET' if ratio <= 1.5 else 'MISSED'} ({ratio:.2f}x).",
         "",
     ]

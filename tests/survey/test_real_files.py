@@ -208,3 +208,13 @@ def test_sgo_incident_table_is_not_a_recorder_series():
             "steering": None, "yaw_rate": None, "time_unit": "s", "speed_unit": "mph", "on": "on", "time_offset": 0.0}
     with pytest.raises(ScenarioError, match=r"has no column 'Time \(s\)'; nearest: .*Columns: 'Report ID'"):
         read_recorder(str(DATA / "edr" / "nhtsa_sgo_2021-01_incident_reports_ADS.csv"), spec)
+
+
+def test_survey_command_on_a_lonlat_geojson_picks_its_utm_zone(capsys):
+    from crashsim.cli import main
+
+    path = DATA / "geojson" / "osm2streets_perth_stretched_lights.geojson"
+    assert main(["survey", str(path), "--layer-property", "type"]) == 0
+    out = capsys.readouterr().out
+    assert "UTM zone 50S (EPSG:32750)" in out  # Perth: 115.9 E, 32.0 S
+    assert "intersection  32 Polygon" in out and "road          39 Polygon" in out

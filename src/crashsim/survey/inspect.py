@@ -30,9 +30,41 @@ def read_any(path: str, *, units: str | None = None, columns: str = "PNEZD", crs
     if fmt == "geojson":
         from .geojson import read_geojson
 
-        return read_geojson(path, crs, layer_property=layer_property)
+        note = None
+        if crs is None:
+            crs, note = _utm_for(path)
+        data = read_geojson(path, crs, layer_property=layer_property)
+        if note:
+            data.notes.insert(0, note)
+        return data
     raise ScenarioError(f"{path}: cannot tell the format from the extension {Path(path).suffix!r}; allowed .dxf, "
                         ".csv, .txt, .asc, .pnezd, .geojson, .json", field="file")
+
+
+def _utm_for(path: str):
+    """(UTM zone CRS, note) for a lon/lat GeoJSON shown without --crs; (None, None) otherwise."""
+    import json
+
+    try:
+        doc = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None, None
+    if doc.get("crs"):
+        return None, None
+
+    def first(c):
+        while isinstance(c, list) and c and isinstance(c[0], list):
+            c = c[0]
+        return c
+
+    for f in doc.get("features") or []:
+        c = first((f.get("geometry") or {}).get("coordinates"))
+        if isinstance(c, list) and len(c) >= 2 and abs(c[0]) <= 180 and abs(c[1]) <= 90:
+            zone = int((c[0] + 180) // 6) % 60 + 1
+            epsg = (32600 if c[1] >= 0 else 32700) + zone
+            return f"EPSG:{epsg}", (f"longitude/latitude shown in UTM zone {zone}{'N' if c[1] >= 0 else 'S'} "
+                                    f"(EPSG:{epsg}); give --crs for another")
+    return None, None
 
 
 def summary(data) -> str:

@@ -248,3 +248,21 @@ def test_unsupported_entities_warned_once_in_the_sources(pair, tmp_path, caplog)
     assert any("3 entities of types the importer does not take were left out: 3 3DFACE" in n for n in notes)
     assert sum("3DFACE" in r.getMessage() for r in caplog.records) == 1
     assert "1 entities on layers or codes no map entry matches were not imported: TREES (1)" in notes
+
+
+def test_samples_from_an_unexpanded_file_read_it_once(pair, monkeypatch):
+    """fit, Monte Carlo and posterior build their samples through ScenarioOverrides: given the
+    file's contents before the survey is read (as a script may pass them), it reads the survey
+    once and every sample rebuilds from the items."""
+    from crashsim.reconstruct.overrides import ScenarioOverrides
+
+    _, surv, _ = pair
+    calls = []
+    real = mapping.read_survey_file
+    monkeypatch.setattr(mapping, "read_survey_file", lambda *a, **k: calls.append(1) or real(*a, **k))
+    mapping._CACHE.clear()
+    ov = ScenarioOverrides(surv, ["runout.road_friction"], fast=False)
+    for v in (0.6, 0.7, 0.8):
+        sc = ov.scenario((v,))
+        assert sc.runout.road.mu == pytest.approx(v)
+    assert len(calls) == 1

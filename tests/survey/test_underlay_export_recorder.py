@@ -115,10 +115,45 @@ def test_underlay_under_the_shipped_scene_figure():
     art = [a for a in ax.get_images() if a.get_gid() == "underlay"]
     assert len(art) == 1 and art[0].get_zorder() < min(p.get_zorder() for p in ax.patches)
     assert art[0].get_alpha() == 0.7
+    # clipped to the view and half its span around it (the animation widens the view later), as far
+    # as the image reaches
+    c0, c1, r1, r0 = art[0].get_extent()
+    corners = g.to_scene([[c0, r0], [c1, r0], [c1, r1], [c0, r1]])
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    k = 0.3048  # the figure is in feet
+    whole = g.to_scene([[0, 0], [image.shape[1], 0], [image.shape[1], image.shape[0]], [0, image.shape[0]]])
+    for lo_hi, axis in (((x0, x1), 0), ((y0, y1), 1)):
+        span = (lo_hi[1] - lo_hi[0]) * k
+        want_lo = max(lo_hi[0] * k - 0.4 * span, whole[:, axis].min() + 1.0)
+        want_hi = min(lo_hi[1] * k + 0.4 * span, whole[:, axis].max() - 1.0)
+        assert corners[:, axis].min() <= want_lo and corners[:, axis].max() >= want_hi
     import matplotlib.pyplot as plt
 
     plt.close(ax.figure)
     assert data  # the scenario's data were not changed by drawing
+
+
+def test_clip_draws_the_view_and_half_its_span_around_it():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from crashsim.survey.underlay import draw_underlay
+
+    g = Georef(np.array([[0.1, 0.0, 0.0], [0.0, -0.1, 100.0]]), "test")  # 0.1 m pixels, north up
+    image = np.zeros((1000, 1000, 3))
+    fig, ax = plt.subplots()
+    ax.set_xlim(40, 60)
+    ax.set_ylim(40, 50)
+    art = draw_underlay(ax, image, g, opacity=0.5, clip=True)
+    c0, c1, r1, r0 = art.get_extent()
+    # x 30..70 m and y 35..55 m, a pixel either side
+    assert (c0, c1) == (299, 701) and (r0, r1) == (449, 651)
+    assert ax.get_xlim() == (40, 60) and ax.get_ylim() == (40, 50)
+    whole = draw_underlay(ax, image, g, clip=False)
+    assert tuple(whole.get_extent()) == (0, 1000, 1000, 0)
+    plt.close(fig)
 
 
 # --------------------------------------------------------------------------- export

@@ -122,7 +122,8 @@ UNDERLAY = Section("underlay", [
     Field("tolerance", Kind.LENGTH, minimum=0, exclusive_minimum=True, default="0.1 m",
           description="Largest residual of a control point"),
     Field("opacity", "float", minimum=0, maximum=1, default=0.6, description="Opacity of the image"),
-    Field("clip", "bool", default=True, description="Draw only the part of the image in the view"),
+    Field("clip", "bool", default=True,
+          description="Draw only the part of the image in and around the view (half its span each side)"),
 ], subsections=[ArrayOf("control", CONTROL, required=False, description="Control points instead of a world file")],
     required=False, description="A scaled image drawn under the scene figures")
 

@@ -245,7 +245,8 @@ def draw_underlay(ax, image: np.ndarray, georef: Georef, *, scale: float = 1.0, 
                   clip: bool = True, zorder: float = -10.0):
     """Draw ``image`` under everything on ``ax`` (display length ``scale`` per metre), keeping the limits.
 
-    With ``clip`` only the pixels that fall in the current view (plus one pixel) are drawn.
+    With ``clip`` only the pixels that fall in the current view, widened by half its span on each
+    side (later widenings of the view stay covered), are drawn.
     """
     from matplotlib.transforms import Affine2D
 
@@ -253,7 +254,12 @@ def draw_underlay(ax, image: np.ndarray, georef: Georef, *, scale: float = 1.0, 
     rows, cols = image.shape[:2]
     r0, r1, c0, c1 = 0, rows, 0, cols
     if clip:
-        corners = np.array([[xlim[0], ylim[0]], [xlim[1], ylim[0]], [xlim[1], ylim[1]], [xlim[0], ylim[1]]]) / scale
+        # the view and half its span around it: the animation and the Monte Carlo rest clouds widen
+        # the scene figure's view after it is drawn
+        mx, my = 0.5 * abs(xlim[1] - xlim[0]), 0.5 * abs(ylim[1] - ylim[0])
+        x0, x1 = min(xlim) - mx, max(xlim) + mx
+        y0, y1 = min(ylim) - my, max(ylim) + my
+        corners = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]]) / scale
         pix = georef.to_pixels(corners)
         c0, c1 = (int(np.clip(math.floor(pix[:, 0].min()) - 1, 0, cols)),
                   int(np.clip(math.ceil(pix[:, 0].max()) + 1, 0, cols)))

@@ -39,13 +39,19 @@ def test_export_writes_dxf_and_geojson(capsys, tmp_path):
     assert code == 0 and "CRASHSIM-T0.5-car" in listing and "CRASHSIM-EVIDENCE-PASS" in listing
 
 
+def _error(capsys) -> str:
+    """stderr without the one-time kernel compile messages (a first run in a fresh installation)."""
+    lines = capsys.readouterr().err.strip().splitlines()
+    return "\n".join(ln for ln in lines if not ln.startswith("crashsim: compil"))
+
+
 def _bad(tmp_path, capsys, edit, match):
     shutil.copytree(FILES, tmp_path / "files")
     text = SCENE.read_text()
     p = tmp_path / "scene.toml"
     p.write_text(edit(text))
     code = main(["run", str(p)])
-    err = capsys.readouterr().err.strip()
+    err = _error(capsys)
     assert code == 2
     assert len(err.splitlines()) == 1, err
     assert err.startswith(f"crashsim: input error: {p}: survey.")
@@ -80,7 +86,7 @@ def test_unknown_crs_of_a_geojson_survey(tmp_path, capsys):
     p = tmp_path / "scene.toml"
     p.write_text(text)
     assert main(["run", str(p)]) == 2
-    err = capsys.readouterr().err.strip()
+    err = _error(capsys)
     assert len(err.splitlines()) == 1 and "survey.crs = 'EPSG:999999' is not a coordinate reference system" in err
 
 
@@ -103,3 +109,23 @@ def test_underlay_that_does_not_fit_fails_at_load(tmp_path, capsys):
     rec = [r for r in load_scenario(tmp_path / "scene.toml").data["survey"]["imported"] if r["kind"] == "underlay"]
     assert len(rec) == 1 and "similarity fit to 3 control points" in rec[0]["note"]
     assert "control point residuals" in rec[0]["note"]
+
+
+def test_expanded_file_written_elsewhere_keeps_its_underlay(tmp_path):
+    """What fit --write-best writes (the expanded file, sources included) loads and draws from
+    another folder: the items are in it and the underlay image is named by its absolute path."""
+    import tomli_w
+
+    from crashsim.scenario import load_scenario
+    from crashsim.survey.mapping import load_scene_data
+    from crashsim.survey.underlay import scene_underlay
+
+    data = load_scene_data(SCENE)
+    assert Path(data["survey"]["underlay"]["image"]).is_absolute()
+    out = tmp_path / "elsewhere" / "best.toml"
+    out.parent.mkdir()
+    out.write_text(tomli_w.dumps(data))
+    sc = load_scenario(out)
+    assert len(sc.evidence.rest) == 3 and len(sc.map_lines) == 13
+    image, g, _, _ = scene_underlay(sc)
+    assert image.shape[:2] == (490, 586) and g.how == "world file ortho.pgw"

@@ -422,6 +422,12 @@ def expand_survey(data: dict, file: str | None = None) -> dict:
         from .underlay import georef_from_section
 
         g = georef_from_section(s["underlay"], frame, file, file)
+        # the image and world file by absolute path in the expanded file: a best-fit file written
+        # elsewhere (fit --write-best) still finds them
+        u = out.data["survey"]["underlay"]
+        for k in ("image", "world_file"):
+            if u.get(k):
+                u[k] = _resolve(u[k], file)
         note = f"{g.how}; {g.pixel_size:.4g} m per pixel"
         if len(g.residuals):
             note += "; control point residuals " + ", ".join(f"{r:.3g} m" for r in g.residuals)

@@ -157,6 +157,9 @@ def _world_file_for(image: Path) -> Path | None:
 def georef_from_section(u: dict, frame: SceneFrame, base: str | None, file: str | None = None) -> Georef:
     """The :class:`Georef` of a validated ``[survey.underlay]`` section (no pixels read but a GeoTIFF's header)."""
     image = _path(u["image"], base)
+    if not image.is_file():
+        raise ScenarioError(f"underlay image {u['image']!r} not found (looked for {image})",
+                            field="survey.underlay.image", file=file)
     scale = unit_scale(u["units"], field="survey.underlay.units", file=file)
     if u["control"]:
         if u["world_file"] is not None:

@@ -129,3 +129,17 @@ def test_expanded_file_written_elsewhere_keeps_its_underlay(tmp_path):
     assert len(sc.evidence.rest) == 3 and len(sc.map_lines) == 13
     image, g, _, _ = scene_underlay(sc)
     assert image.shape[:2] == (490, 586) and g.how == "world file ortho.pgw"
+
+
+def test_export_of_a_scene_without_a_survey_is_in_its_own_metres(tmp_path, capsys):
+    from crashsim.scenario import load_scenario
+    from crashsim.survey.dxf import read_dxf
+
+    scene = ROOT / "scenarios" / "scenes" / "verge_run_off.toml"
+    assert main(["export", str(scene), "--dxf", str(tmp_path / "v.dxf")]) == 0
+    assert capsys.readouterr().out.strip().endswith("entities, m)")
+    d = read_dxf(str(tmp_path / "v.dxf"))
+    assert d.unit == "m"
+    impact = {e.layer: e for e in d.entities}["CRASHSIM-IMPACT-car"]
+    st = load_scenario(scene).states["car"]
+    assert impact.points.mean(axis=0) == pytest.approx(st.position, abs=0.5)  # the outline around its CG

@@ -68,7 +68,7 @@ def _cmd_run(args) -> int:
 def _cmd_fit(args) -> int:
     from .reconstruct.fit import fit_scene
     from .scenario import load_scenario
-    from .schema import load_toml
+    from .survey.mapping import load_scene_data
 
     if args.write_best is not None:  # before the fit, not after it
         from .reconstruct.fit import _same_file
@@ -78,7 +78,7 @@ def _cmd_fit(args) -> int:
                                 field="--write-best", file=args.file)
     scenario = load_scenario(args.file)  # the whole file validated first ([fit] and evidence sigmas included)
     system = _units(args.units or scenario.units)
-    result = fit_scene(load_toml(args.file), None, engine=args.engine, workers=args.workers,
+    result = fit_scene(load_scene_data(args.file), None, engine=args.engine, workers=args.workers,
                        progress=args.progress, file=args.file, sample_time_limit=args.sample_time_limit)
     if args.json:
         json.dump(_clean(result.to_dict()), sys.stdout, indent=2)
@@ -94,7 +94,7 @@ def _cmd_fit(args) -> int:
 def _cmd_mc(args) -> int:
     from .reconstruct.montecarlo import monte_carlo
     from .scenario import load_scenario
-    from .schema import load_toml
+    from .survey.mapping import load_scene_data
 
     scenario = load_scenario(args.file)
     system = _units(args.units or scenario.units)
@@ -102,7 +102,7 @@ def _cmd_mc(args) -> int:
         raise ScenarioError("--accept keeps the samples that meet all the evidence, but the scenario has no "
                             "[evidence] items", field="--accept", file=args.file)
     try:
-        result = monte_carlo(load_toml(args.file), None, args.samples, seed=args.seed, engine=args.engine,
+        result = monte_carlo(load_scene_data(args.file), None, args.samples, seed=args.seed, engine=args.engine,
                              workers=args.workers, dask_address=args.dask, out_path=args.out,
                              progress=not args.quiet, file=args.file, sample_time_limit=args.sample_time_limit,
                              accept=args.accept)
@@ -145,12 +145,12 @@ def _stopped(what: str, kept_in) -> int:
 def _cmd_posterior(args) -> int:
     from .reconstruct.posterior import run_posterior
     from .scenario import load_scenario
-    from .schema import load_toml
+    from .survey.mapping import load_scene_data
 
     scenario = load_scenario(args.file)  # the whole file validated first ([fit], [posterior], evidence sigmas)
     system = _units(args.units or scenario.units)
     try:
-        result = run_posterior(load_toml(args.file), None, steps=args.steps, seed=args.seed,
+        result = run_posterior(load_scene_data(args.file), None, steps=args.steps, seed=args.seed,
                                start="fit" if args.from_fit else None, engine=args.engine, workers=args.workers,
                                dask_address=args.dask, chain_path=args.chain, progress=not args.quiet,
                                file=args.file, sample_time_limit=args.sample_time_limit)
@@ -254,6 +254,38 @@ def _cmd_animate(args) -> int:
     return 0
 
 
+def _cmd_survey(args) -> int:
+    from .survey.inspect import preview, read_any, summary
+
+    data = read_any(args.file, units=args.units, columns=args.columns, crs=args.crs,
+                    layer_property=args.layer_property)
+    sys.stdout.write(summary(data) + "\n")
+    if args.output:
+        sys.stdout.write(f"wrote {preview(data, args.output)}\n")
+    return 0
+
+
+def _cmd_export(args) -> int:
+    from .reconstruct import run_scene
+    from .scenario import load_scenario
+    from .survey.export import export_frame, export_items, write_dxf, write_geojson
+    from .units import Kind, parse
+
+    if not (args.dxf or args.geojson):
+        raise ScenarioError("give --dxf OUT.dxf and/or --geojson OUT.geojson", field="export")
+    times = [parse(t.strip(), Kind.TIME, field="--times") for t in (args.times or "").split(",") if t.strip()]
+    scenario = load_scenario(args.file)
+    frame, unit = export_frame(scenario)
+    items = export_items(run_scene(scenario), times)
+    if args.dxf:
+        sys.stdout.write(f"wrote {write_dxf(items, args.dxf, frame, unit)} ({len(items)} entities, {unit})\n")
+    if args.geojson:
+        crs = (scenario.data.get("survey") or {}).get("crs")
+        sys.stdout.write(f"wrote {write_geojson(items, args.geojson, frame, unit, crs)} ({len(items)} features, "
+                         f"{unit})\n")
+    return 0
+
+
 def _cmd_schema(args) -> int:
     from .scenario import schema_document
 
@@ -316,6 +348,22 @@ def build_parser() -> argparse.ArgumentParser:
                     help="start at the impact (a scene with approaches starts at the earliest start of braking)")
     an.set_defaults(func=_cmd_animate)
 
+    sv = sub.add_parser("survey", help="list a survey file's layers or codes with entity counts and extents")
+    sv.add_argument("file", help="survey file: .dxf, point file (.csv, .txt, .asc, .pnezd) or .geojson")
+    sv.add_argument("-o", "--output", metavar="PREVIEW.png", help="also draw every entity, coloured by layer or code")
+    sv.add_argument("--units", default=None, help="unit of the coordinates (DXF: default $INSUNITS; points: m)")
+    sv.add_argument("--columns", default="PNEZD", help="point files: column letters (default PNEZD)")
+    sv.add_argument("--crs", default=None, help="GeoJSON: projected CRS to show it in (e.g. EPSG:32633)")
+    sv.add_argument("--layer-property", default="layer", help="GeoJSON: the property that names a feature's layer")
+    sv.set_defaults(func=_cmd_survey)
+
+    ex = sub.add_parser("export", help="write the reconstruction as CAD (DXF) or GeoJSON in the survey's frame")
+    ex.add_argument("file", help="scenario file (TOML)")
+    ex.add_argument("--dxf", metavar="OUT.dxf", help="DXF drawing, one layer per outline, path, track and evidence")
+    ex.add_argument("--geojson", metavar="OUT.geojson", help="the same as GeoJSON features with a layer property")
+    ex.add_argument("--times", metavar="TIMES", help='outlines also at these times after separation, e.g. "0.5 s, 1 s"')
+    ex.set_defaults(func=_cmd_export)
+
     s = sub.add_parser("schema", help="print the documented scenario-file schema")
     s.add_argument("--format", choices=("text", "markdown"), default="text")
     s.set_defaults(func=_cmd_schema)
@@ -326,7 +374,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 #: Commands that run the run-out kernels (and so may compile them on a first run).
-_COMPUTING = ("run", "fit", "mc", "posterior", "plot", "animate")
+_COMPUTING = ("run", "fit", "mc", "posterior", "plot", "animate", "export")
 
 
 def _first_compile(bar: bool = True) -> None:

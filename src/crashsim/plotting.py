@@ -733,9 +733,20 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     _fit_texts(S)
     if new:
         _layout_scene_figure(ax, leg if legend is True else None, below)
+    _draw_scene_underlay(S)
     xl = ax.get_xlim()
     _scale_bar(S, xl[1] - xl[0])
     return ax
+
+
+def _draw_scene_underlay(S: _Scene) -> None:
+    """The survey's orthophoto ([survey.underlay]) under everything, in the figure's units."""
+    from .survey.underlay import draw_underlay, scene_underlay
+
+    got = scene_underlay(S.sc)
+    if got is not None:
+        image, georef, opacity, clip = got
+        draw_underlay(S.ax, image, georef, scale=S.k, opacity=opacity, clip=clip)
 
 
 def _draw_track(S: _Scene, track, line, dark, gid: str | None = None) -> None:

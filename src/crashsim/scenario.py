@@ -28,6 +28,7 @@ from .motion.wheels import _select, enumerate_wheels
 from .impact import (CrushSurface, ExternalImpulse, ImpactProblem, TangentialLaw, VelocityConstraint,
                      tyre_friction_impulse)
 from .schema import ArrayOf, Field, Section, Table, document, load_toml, validate
+from .survey.schema import SURVEY
 from .units import Kind
 from .reconstruct.evidence import (DeltaVEvidence, Evidence, ImpactPointEvidence, MarkEvidence, RecorderEvidence,
                                    RestEvidence)
@@ -547,6 +548,7 @@ SCHEMA = Section("scenario file", subsections=[
     ArrayOf("obstacles", OBSTACLE, required=False, description="Fixed obstacles of the scene (run-out)"),
     MAP,
     EVIDENCE,
+    SURVEY,
 ], description="A crashsim scenario file (TOML)")
 
 # [fit], [uncertainty] and the evidence sigmas (crashsim fit / crashsim mc)
@@ -1056,7 +1058,14 @@ def _units_any_case(data: dict) -> dict:
 
 
 def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scenario:
-    """Validate a parsed scenario (as from TOML) and build the typed SI objects."""
+    """Validate a parsed scenario (as from TOML) and build the typed SI objects.
+
+    A ``[survey]`` section not yet read is read here (:func:`crashsim.survey.expand_survey`): its
+    items join the file's own tables before validation."""
+    if isinstance(data, dict) and "survey" in data:
+        from .survey.mapping import expand_survey
+
+        data = expand_survey(data, file)
     data = _units_any_case(data)
     merged = _apply_presets(data, file)
     d = validate(merged, SCHEMA, file=file)

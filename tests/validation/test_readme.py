@@ -303,3 +303,25 @@ def test_reliability_section_numbers_are_the_code_s():
         ledger = crashsim.run(f).energy_ledger()
         worst = max(worst, abs(ledger["closing_error"]) / ledger["before_impact"])
     assert worst <= 2e-8, worst  # "the shipped scenes close to 2e-8 at most" (1.04e-8 measured, -10..+10 % by round-off)
+
+
+def test_survey_section_numbers_come_from_the_survey_benchmark():
+    text = (ROOT / "plots" / "survey_import.md").read_text()
+    para = _section("## Survey in")
+    speed = para[para.index("Speed (`benchmarks/survey_import.py`"):]
+    nums = [n for n in _numbers(re.sub(r"`[^`]*`", "", speed)) if n not in ("100,000",)]
+    assert len(nums) >= 4
+    for n in nums:
+        assert n in text, n
+    assert "100,000 entities" in text
+
+
+def test_cad_out_command_runs(tmp_path, capsys):
+    section = _section("## CAD out")
+    (cmd,) = [ln[2:] for ln in section.splitlines() if ln.startswith("$ crashsim export ")]
+    args = shlex.split(cmd)[1:]
+    out = tmp_path / "reconstruction.dxf"
+    args[args.index("--dxf") + 1] = str(out)
+    assert main(args) == 0
+    assert out.stat().st_size > 10_000
+    assert "CRASHSIM-T0.5-car" in out.read_text()

@@ -405,6 +405,9 @@ class ScenarioOverrides:
         self._fast_base = None  # the first scenario built the full way (the base of the fast path)
         self.engine = engine
         self.max_wall_time = max_wall_time
+        from ..survey.mapping import expand_survey
+
+        data = expand_survey(data, file)  # a [survey] read here once: the samples rebuild from its items
         self.base = forward_data(data, file=file)
         self.targets = tuple(resolve_path(p, SCHEMA, field=f"{field_prefix}[{i}]" if len(paths) > 1 else field_prefix)
                              for i, p in enumerate(paths))

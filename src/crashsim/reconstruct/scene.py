@@ -174,6 +174,10 @@ class SceneResult:
         if self.scenario.runout is not None:
             out["runout_level"] = self.scenario.runout.level
         out["warnings"] = list(self.warnings)
+        from ..survey.report import survey_records
+
+        if survey_records(sc):
+            out["survey"] = survey_records(sc)
         return out
 
     def report(self, units: str | None = None, *, system: str | None = None) -> str:
@@ -223,6 +227,10 @@ class SceneResult:
                 from ..report import format_crush
 
                 text += "\n\n" + format_crush(self.evidence, system)
+        from ..survey.report import format_survey, survey_records
+
+        if survey_records(sc):
+            text += "\n\n" + format_survey(survey_records(sc))
         if self.warnings:
             from ..report import message_in
 

@@ -1,0 +1,445 @@
+"""From survey files to scene items: the ``[survey]`` section expanded into the file's own tables.
+
+:func:`expand_survey` reads each survey file once, maps its layers or codes to scene items and
+appends them to the raw scenario dict as a user would type them (``[[map.lines]]``,
+``[[obstacles]]``, ``[[runout.zones]]``, ``[[evidence.marks]]``, ``[[evidence.rest]]``,
+``[evidence.impact_point]``, ``[[evidence.recorder]]``), coordinates written in metres of the
+scene frame to full precision. The scenario is then validated and built by the one path of
+:func:`crashsim.scenario.scenario_from_dict`, so an imported item is the same typed object as
+a typed one and every check applies. ``survey.imported`` records the source of each item
+(file, layer or code, handle or point numbers, type) and marks the dict as expanded: fit,
+Monte Carlo and posterior samples rebuild from the expanded dict and never read the files again.
+"""
+
+from __future__ import annotations
+
+import copy
+import difflib
+import fnmatch
+import logging
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ScenarioError
+from ..schema import Section, validate
+from .frame import SceneFrame
+from .schema import SURVEY
+
+__all__ = ["expand_survey", "load_scene_data", "read_survey_file", "survey_frame", "survey_section",
+           "is_expanded"]
+
+_log = logging.getLogger("crashsim")
+_ROOT = Section("root", subsections=[SURVEY], description="survey only")
+_EXT = {".dxf": "dxf", ".csv": "points", ".txt": "points", ".asc": "points", ".pnezd": "points", ".xyz": "points",
+        ".geojson": "geojson", ".json": "geojson"}
+_CACHE: dict = {}
+_COLORS = {"gouge": "#8c564b", "debris": "#7f7f7f"}
+
+
+def survey_section(raw: dict, file: str | None) -> dict:
+    """The validated ``[survey]`` section (SI values) of a raw scenario dict."""
+    return validate({"survey": raw.get("survey")}, _ROOT, file=file)["survey"]
+
+
+def survey_frame(s: dict) -> SceneFrame:
+    """The scene frame of a validated ``[survey]`` section."""
+    return SceneFrame(tuple(s["origin"]), s["rotation"])
+
+
+def is_expanded(raw: dict) -> bool:
+    """Whether the survey of a raw scenario dict has been read (``survey.imported`` present)."""
+    s = raw.get("survey")
+    return not isinstance(s, dict) or "imported" in s
+
+
+def _resolve(name: str, file: str | None) -> str:
+    p = Path(name).expanduser()
+    if not p.is_absolute() and file is not None:
+        p = Path(file).resolve().parent / p
+    return str(p)
+
+
+def _format(entry: dict, path: str, key: str, file: str | None) -> str:
+    if entry["format"] is not None:
+        return entry["format"]
+    ext = Path(path).suffix.lower()
+    if ext not in _EXT:
+        raise ScenarioError(f"{entry['file']!r}: cannot tell the format from the extension {ext!r}; give format = "
+                            "\"dxf\", \"points\" or \"geojson\"", field=f"{key}.format", file=file)
+    return _EXT[ext]
+
+
+def read_survey_file(entry: dict, crs: str | None, *, key: str = "survey.files[0]", file: str | None = None):
+    """The :class:`~crashsim.survey.entities.SurveyData` of a validated ``[[survey.files]]`` entry
+    (memoised by path, modification time, size and reading options: read once per process)."""
+    path = _resolve(entry["file"], file)
+    if not os.path.isfile(path):
+        raise ScenarioError(f"survey file {entry['file']!r} not found (looked for {path})", field=f"{key}.file",
+                            file=file)
+    fmt = _format(entry, path, key, file)
+    st = os.stat(path)
+    brk = _resolve(entry["breaklines"], file) if entry.get("breaklines") else None
+    opts = (fmt, entry.get("units"), entry.get("columns"), entry.get("join"), brk, entry.get("crs"),
+            entry.get("layer_property"), entry.get("chord_tolerance"), crs)
+    ck = (path, st.st_mtime_ns, st.st_size, opts)
+    if ck in _CACHE:
+        return _CACHE[ck]
+    try:
+        if fmt == "dxf":
+            from .dxf import read_dxf
+
+            data = read_dxf(path, entry["units"], chord_tolerance=entry["chord_tolerance"], file=file)
+        elif fmt == "points":
+            from .points import read_points
+
+            if entry["units"] is None:
+                raise ScenarioError(f"{entry['file']!r}: a point file does not state its units; give units = \"m\" "
+                                    "(or \"ft\", \"us_ft\", ...)", field=f"{key}.units", file=file)
+            data = read_points(path, entry["units"], entry["columns"], join=entry["join"], breaklines=brk, file=file)
+        else:
+            from .geojson import read_geojson
+
+            data = read_geojson(path, crs, crs=entry["crs"], layer_property=entry["layer_property"], file=file)
+    except ScenarioError as exc:
+        if exc.field is None:
+            raise ScenarioError(str(exc).removeprefix(f"{file}: ") if file else str(exc), field=f"{key}.file",
+                                file=file) from None
+        raise
+    if len(_CACHE) > 32:
+        _CACHE.clear()
+    _CACHE[ck] = data
+    return data
+
+
+def _m(x: float) -> str:
+    return f"{float(x)!r} m"
+
+
+def _pts(a) -> list:
+    return [[f"{x!r} m", f"{y!r} m"] for x, y in np.asarray(a, dtype=float).tolist()]
+
+
+def _polygon(center, diameter: float, n: int) -> np.ndarray:
+    ang = (np.arange(n) + 0.5) * 2 * np.pi / n
+    r = diameter / 2 / (math.cos(math.pi / n) if n == 8 else math.sqrt(2))
+    return np.asarray(center, dtype=float) + r * np.column_stack([np.cos(ang), np.sin(ang)])
+
+
+def _label(m: dict, e) -> str:
+    return m["name"] or f"{e.layer} {e.ref}".strip()
+
+
+def _match(pattern: str, layer: str) -> bool:
+    return fnmatch.fnmatchcase(layer.upper(), pattern.upper())
+
+
+class _Out:
+    """The raw dict being extended, and the provenance records."""
+
+    def __init__(self, data: dict):
+        self.data = data
+        self.records: list[dict] = []
+
+    def append(self, where: tuple, item: dict) -> str:
+        node = self.data
+        for k in where[:-1]:
+            node = node.setdefault(k, {})
+        lst = node.setdefault(where[-1], [])
+        lst.append(item)
+        return f"{'.'.join(where)}[{len(lst) - 1}]"
+
+    def record(self, path: str, e, kind: str, target: str, note: str = "") -> None:
+        self.records.append({"file": path, "layer": "" if e is None else e.layer, "ref": "" if e is None else e.ref,
+                             "type": "" if e is None else e.dxftype, "kind": kind, "target": target, "note": note})
+
+
+def _need(m: dict, raw: dict, keys, mkey: str, file: str | None) -> None:
+    for k in keys:
+        if m.get(k) is None:
+            raise ScenarioError(f"kind = {m['kind']!r} needs {k}", field=f"{mkey}.{k}", file=file)
+    for k in raw:
+        if k not in _ALLOWED[m["kind"]]:
+            raise ScenarioError(f"{k} does not apply to kind = {m['kind']!r} (keys of this kind: "
+                                f"{', '.join(sorted(_ALLOWED[m['kind']]))})", field=f"{mkey}.{k}", file=file)
+
+
+_COMMON = {"match", "kind", "name"}
+_ALLOWED = {
+    "line": _COMMON | {"style", "color"},
+    "obstacle": _COMMON | {"thickness", "size"},
+    "zone": _COMMON | {"friction"},
+    "mark": _COMMON | {"wheel", "phase", "sliding_only", "tolerance", "sigma"},
+    "rest": _COMMON | {"body", "at", "tolerance", "heading_tolerance", "sigma", "heading_sigma"},
+    "impact_point": _COMMON | {"tolerance", "sigma"},
+    "gouge": _COMMON | {"color", "size"},
+    "debris": _COMMON | {"color", "size"},
+    "ignore": _COMMON,
+}
+
+
+def _map_file(out: _Out, sd, entry: dict, raw_entry: dict, frame: SceneFrame, key: str, file: str | None,
+              have_runout: bool) -> None:
+    taken = _map_entries(out, sd, entry, raw_entry, frame, key, file, have_runout)
+    left = {}
+    for e, t in zip(sd.entities, taken):
+        if not t:
+            left[e.layer] = left.get(e.layer, 0) + 1
+    if left:
+        shown = ", ".join(f"{lay or '(empty)'} ({n})" for lay, n in sorted(left.items()))
+        out.record(entry["file"], None, "note", "", f"{sum(left.values())} entities on layers or codes no map entry "
+                                                    f"matches were not imported: {shown}")
+
+
+def _map_entries(out: _Out, sd, entry: dict, raw_entry: dict, frame: SceneFrame, key: str, file: str | None,
+                 have_runout: bool) -> np.ndarray:
+    """Apply the file's map entries; returns which entities were taken."""
+    from ..scenario import MAP_LINE_STYLES
+
+    src = entry["file"]
+    layers = sorted({e.layer for e in sd.entities})
+    taken = np.zeros(len(sd.entities), dtype=bool)
+    for i, (m, rm) in enumerate(zip(entry["map"], raw_entry["map"])):
+        mkey = f"{key}.map[{i}]"
+        _need(m, rm, {"line": ("style",), "zone": ("friction",), "mark": ("tolerance",),
+                      "rest": ("body", "tolerance"), "impact_point": ("tolerance",)}.get(m["kind"], ()), mkey, file)
+        if m["kind"] == "line" and m["style"] not in MAP_LINE_STYLES:
+            near = difflib.get_close_matches(m["style"], MAP_LINE_STYLES, n=1)
+            hint = f"; did you mean {near[0]!r}?" if near else ""
+            raise ScenarioError(f"style = {m['style']!r} is not a map line style{hint} Allowed: "
+                                f"{', '.join(MAP_LINE_STYLES)}", field=f"{mkey}.style", file=file)
+        idx = [j for j, e in enumerate(sd.entities) if not taken[j] and _match(m["match"], e.layer)]
+        if not idx:
+            matched = [lay for lay in layers if _match(m["match"], lay)]
+            if matched:  # its layers were taken by an earlier entry
+                raise ScenarioError(f"{src}: match = {m['match']!r}: every entity of {', '.join(map(repr, matched))} "
+                                    "is taken by an earlier map entry", field=f"{mkey}.match", file=file)
+            near = difflib.get_close_matches(m["match"], layers, n=1, cutoff=0.3)
+            hint = f"; nearest: {near[0]!r}" if near else ""
+            shown = ", ".join(map(repr, layers[:40])) + (f" and {len(layers) - 40} more" if len(layers) > 40 else "")
+            raise ScenarioError(f"{src} has no layer or code matching {m['match']!r}{hint}. It has: "
+                                f"{shown or 'none'}", field=f"{mkey}.match", file=file)
+        taken[idx] = True
+        ents = [sd.entities[j] for j in idx]
+        texts = [e for e in ents if e.geometry == "text"]
+        shapes = [e for e in ents if e.geometry != "text"]
+        kind = m["kind"]
+        if kind == "ignore":
+            for e in ents:
+                out.record(src, e, "ignore", "")
+            continue
+        made: list = []  # (entity, dict item, where)
+        # the scene-frame points of every entity of this entry, transformed at once
+        if ents:
+            sizes = np.cumsum([len(e.points) for e in ents])[:-1]
+            moved = dict(zip(map(id, ents), np.split(frame.to_scene(np.vstack([e.points for e in ents])), sizes)))
+        else:
+            moved = {}
+
+        def scene(e):
+            got = moved.get(id(e))
+            return got if got is not None else frame.to_scene(e.points)
+
+        for e in (shapes if kind not in ("rest", "impact_point") else []):
+            p = scene(e)
+            if kind == "line":
+                if e.geometry != "line":
+                    out.record(src, e, kind, "", "a point cannot be a map line: left out")
+                    continue
+                item = {"name": m["name"], "style": m["style"], "points": _pts(np.vstack([p, p[:1]]) if e.closed
+                                                                              else p)}
+                if rm.get("color") is not None:
+                    item["color"] = rm["color"]
+                made.append((e, item, ("map", "lines")))
+            elif kind == "obstacle":
+                if e.geometry == "point":
+                    item = {"name": _label(m, e), "points": _pts(_polygon(p[0], m["size"], 8)), "closed": True,
+                            "description": f"post of diameter {m['size']:g} m at a surveyed point"}
+                else:
+                    item = {"name": _label(m, e), "points": _pts(p), "closed": bool(e.closed and len(p) >= 3)}
+                    if rm.get("thickness") is not None:
+                        item["thickness"] = rm["thickness"]
+                made.append((e, item, ("obstacles",)))
+            elif kind == "zone":
+                closed = e.closed or (len(p) > 3 and np.allclose(p[0], p[-1], rtol=0, atol=1e-9))
+                if e.geometry != "line" or not closed:
+                    raise ScenarioError(f"{src}: {e.dxftype} {e.ref} on {e.layer!r} is not a closed outline; a friction "
+                                        "zone needs one (close the polyline)", field=f"{mkey}.match", file=file)
+                if not e.closed:
+                    p = p[:-1]
+                made.append((e, {"name": _label(m, e), "friction": rm["friction"], "polygon": _pts(p)},
+                             ("runout", "zones")))
+            elif kind == "mark":
+                if e.geometry != "line":
+                    raise ScenarioError(f"{src}: {e.dxftype} {e.ref} on {e.layer!r} is a point; a tyre mark is a "
+                                        "polyline", field=f"{mkey}.match", file=file)
+                item = {"name": _label(m, e), "points": _pts(np.vstack([p, p[:1]]) if e.closed else p)}
+                for k in ("wheel", "phase", "sliding_only", "tolerance", "sigma"):
+                    if rm.get(k) is not None:
+                        item[k] = rm[k]
+                made.append((e, item, ("evidence", "marks")))
+            else:  # gouge, debris: drawn only
+                drawn = (np.vstack([p, p[:1]]) if e.closed else p) if e.geometry == "line" else \
+                    _polygon(p[0], m["size"] * math.sqrt(2), 4)
+                if e.geometry == "point":
+                    drawn = np.vstack([drawn, drawn[:1]])
+                made.append((e, {"name": m["name"], "style": "other", "color": rm.get("color") or _COLORS[kind],
+                                 "points": _pts(drawn)}, ("map", "lines")))
+        if kind == "zone" and not have_runout:
+            raise ScenarioError("friction zones need a [runout] section (road_friction outside them)",
+                                field=f"{mkey}.kind", file=file)
+        if kind == "rest":
+            at = [a.strip() for a in (m["at"] or "").split(",") if a.strip()]
+            groups = [[e] for e in shapes if e.geometry == "line"]
+            pts_only = [e for e in shapes if e.geometry == "point"]
+            if pts_only:
+                groups.append(pts_only)
+            for g in groups:
+                p = np.vstack([scene(e) for e in g])
+                ref = ", ".join(e.ref for e in g)
+                item = {"name": m["name"] or f"{g[0].layer} {ref}", "body": m["body"], "tolerance": rm["tolerance"]}
+                if not at:
+                    if len(p) != 1:
+                        raise ScenarioError(f"{src}: {len(p)} points of {m['body']!r} on {g[0].layer!r} ({ref}); "
+                                            "give at = the named point each one is (e.g. \"front_left, "
+                                            "rear_left\"), or survey one point, the CG", field=f"{mkey}.at", file=file)
+                    item["position"] = _pts(p)[0]
+                else:
+                    if len(p) != len(at):
+                        raise ScenarioError(f"{src}: {len(p)} points on {g[0].layer!r} ({ref}) but at names "
+                                            f"{len(at)}: {', '.join(at)}", field=f"{mkey}.at", file=file)
+                    item["points"] = [{"at": a, "position": q} for a, q in zip(at, _pts(p))]
+                for k in ("heading_tolerance", "sigma", "heading_sigma"):
+                    if rm.get(k) is not None:
+                        item[k] = rm[k]
+                made.append((g[0] if len(g) == 1 else _Group(g), item, ("evidence", "rest")))
+        if kind == "impact_point":
+            if len(shapes) != 1:
+                raise ScenarioError(f"{src}: {len(shapes)} entities match {m['match']!r}; the point of impact is one "
+                                    "point (or one circle, whose centre is taken)", field=f"{mkey}.match", file=file)
+            e = shapes[0]
+            c = scene(e).mean(axis=0) if e.geometry == "line" else scene(e)[0]
+            if "impact_point" in out.data.get("evidence", {}):
+                raise ScenarioError("the scenario has an [evidence.impact_point] already", field=f"{mkey}.kind",
+                                    file=file)
+            item = {"position": [_m(c[0]), _m(c[1])], "tolerance": rm["tolerance"]}
+            if rm.get("sigma") is not None:
+                item["sigma"] = rm["sigma"]
+            out.data.setdefault("evidence", {})["impact_point"] = item
+            out.record(src, e, kind, "evidence.impact_point")
+        # labels: a text names the nearest item it made on its layer (nearest vertex, a k-d tree per layer)
+        if texts:
+            _name_by_labels(out, src, texts, made, scene)
+        for e, item, where in made:
+            target = out.append(where, item)
+            if isinstance(e, _Group):
+                for x in e.members:
+                    out.record(src, x, kind, target)
+            else:
+                out.record(src, e, kind, target)
+    return taken
+
+
+def _name_by_labels(out: "_Out", src: str, texts, made: list, scene) -> None:
+    """Each TEXT/MTEXT names the item made from its layer whose nearest vertex is closest to it."""
+    from scipy.spatial import cKDTree
+
+    by_layer: dict = {}
+    for k, (e, item, _) in enumerate(made):
+        if "name" in item:
+            pts = np.vstack([scene(x) for x in e.members]) if isinstance(e, _Group) else scene(e)
+            by_layer.setdefault(e.layer, []).append((k, pts))
+    trees = {}
+    for layer, lst in by_layer.items():
+        idx = np.concatenate([np.full(len(p), k) for k, p in lst])
+        trees[layer] = (cKDTree(np.vstack([p for _, p in lst])), idx)
+    for t in texts:
+        tree = trees.get(t.layer)
+        if tree is not None:
+            _, j = tree[0].query(scene(t)[0])
+            made[int(tree[1][j])][1]["name"] = t.text
+        out.record(src, t, "label", "", f"text {t.text!r}" + ("" if tree else ": no item of its layer to name"))
+
+
+class _Group:
+    def __init__(self, members):
+        self.members = members
+        self.layer = members[0].layer
+
+
+def expand_survey(data: dict, file: str | None = None) -> dict:
+    """The raw scenario dict with its survey read and mapped (a new dict; ``data`` is not changed).
+
+    Without a ``[survey]`` section, or with one already expanded (``survey.imported`` present),
+    ``data`` is returned as it is.
+
+    Raises
+    ------
+    ScenarioError
+        One line naming the file, the item and the value: a mapped layer or code the file lacks
+        (with the ones it has and the nearest), units that contradict the drawing's header, a
+        CSV without a mapped column, an unknown CRS, an unreadable file.
+    """
+    if not isinstance(data, dict) or not isinstance(data.get("survey"), dict) or is_expanded(data):
+        return data
+    s = survey_section(data, file)
+    if s["units"] is not None:
+        from .frame import unit_scale
+
+        unit_scale(s["units"], field="survey.units", file=file)
+    frame = survey_frame(s)
+    out = _Out(copy.deepcopy(data))
+    raw_files = data["survey"].get("files", [])
+    have_runout = isinstance(data.get("runout"), dict)
+    for i, entry in enumerate(s["files"]):
+        key = f"survey.files[{i}]"
+        sd = read_survey_file(entry, s["crs"], key=key, file=file)
+        _map_file(out, sd, entry, raw_files[i], frame, key, file, have_runout)
+        msgs = ([sd.skipped_warning()] if sd.skipped else []) + list(sd.notes)
+        for msg in msgs:
+            if msg:
+                out.record(entry["file"], None, "note", "", msg)
+        if sd.skipped:
+            _log.warning("%s", sd.skipped_warning())
+    raw_rec = data["survey"].get("recorders", [])
+    for i, r in enumerate(s["recorders"]):
+        key = f"survey.recorders[{i}]"
+        from .recorder import read_recorder
+
+        path = _resolve(r["file"], file)
+        samples, notes = read_recorder(path, r, key=key, file=file)
+        item = {"name": r["name"] or f"recorder {Path(r['file']).name}", "body": r["body"],
+                "tolerance": raw_rec[i]["tolerance"], "time_offset": raw_rec[i].get("time_offset", "0 s"),
+                "samples": [{"time": f"{t!r} s", "speed": f"{v!r} m/s", "brake": low} for t, v, low in samples]}
+        if raw_rec[i].get("sigma") is not None:
+            item["sigma"] = raw_rec[i]["sigma"]
+        target = out.append(("evidence", "recorder"), item)
+        out.records.append({"file": r["file"], "layer": "", "ref": f"{len(samples)} samples", "type": "CSV",
+                            "kind": "recorder", "target": target, "note": "; ".join(notes)})
+    if s["underlay"]:  # placed now, so that a world file or control points that do not fit fail at load
+        from .underlay import georef_from_section
+
+        g = georef_from_section(s["underlay"], frame, file, file)
+        # the image and world file by absolute path in the expanded file: a best-fit file written
+        # elsewhere (fit --write-best) still finds them
+        u = out.data["survey"]["underlay"]
+        for k in ("image", "world_file"):
+            if u.get(k):
+                u[k] = _resolve(u[k], file)
+        note = f"{g.how}; {g.pixel_size:.4g} m per pixel"
+        if len(g.residuals):
+            note += "; control point residuals " + ", ".join(f"{r:.3g} m" for r in g.residuals)
+        out.records.append({"file": s["underlay"]["image"], "layer": "", "ref": "", "type": "image",
+                            "kind": "underlay", "target": "", "note": note})
+    out.data["survey"]["imported"] = out.records
+    return out.data
+
+
+def load_scene_data(path: str | os.PathLike) -> dict:
+    """The raw scenario dict of a file (:func:`crashsim.schema.load_toml`) with its survey read
+    (:func:`expand_survey`): what fit, Monte Carlo and posterior take."""
+    from ..schema import load_toml
+
+    return expand_survey(load_toml(path), str(path))

@@ -4,7 +4,8 @@ plots/scene_<name>_time_distance.png and a close view without the approach,
 plots/scene_<name>_impact.png) with the project's own command, ``crashsim plot``.
 
 Run from the repository root: ``python benchmarks/scene_figures.py`` (every scene of
-scenarios/scenes/, among them verge_run_off: friction zone and road layout), or name some
+scenarios/scenes/, among them verge_run_off: friction zone and road layout, and of
+scenarios/survey/, drawn over its orthophoto), or name some
 scenes: ``python benchmarks/scene_figures.py verge_run_off``.
 """
 
@@ -21,7 +22,7 @@ ROOT = Path(__file__).resolve().parents[1]
 def main(names: list[str] | None = None) -> int:
     """Draw the scenes named (file stems in scenarios/scenes/; all of them if none); 0 on success,
     2 for an unknown name, else the first failing ``crashsim plot`` exit code."""
-    scenes = sorted((ROOT / "scenarios" / "scenes").glob("*.toml"))
+    scenes = sorted((ROOT / "scenarios" / "scenes").glob("*.toml")) + sorted((ROOT / "scenarios" / "survey").glob("*.toml"))
     if names:
         unknown = sorted(set(names) - {s.stem for s in scenes})
         if unknown:

@@ -2565,9 +2565,13 @@ def strike_speeds(Y, seg_of, M, sg_memb, sg_nlk, sg_lkj, sg_lkth, sg_pstate, sg_
     cs = W[5]
     nb = M[0].shape[0]
     y = np.zeros(Y.shape[0])
+    D = segment_mode(seg_of[0] if K else 0, sg_memb, sg_nlk, sg_lkj, sg_lkth, sg_pstate, sg_pref, sg_parked)
+    last = seg_of[0] if K else 0
     for col in range(K):
         s_ = seg_of[col]
-        D = segment_mode(s_, sg_memb, sg_nlk, sg_lkj, sg_lkth, sg_pstate, sg_pref, sg_parked)
+        if s_ != last:
+            D = segment_mode(s_, sg_memb, sg_nlk, sg_lkj, sg_lkth, sg_pstate, sg_pref, sg_parked)
+            last = s_
         for i in range(Y.shape[0]):
             y[i] = Y[i, col]
         body_trig(y, nb, cs)

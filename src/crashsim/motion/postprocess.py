@@ -564,7 +564,8 @@ def contact_summaries(model, integrator, table, arrays, y_end, t_end):
     of points pressed beyond the allowance (:func:`crashsim.motion._kernels.strike_speeds`) are
     evaluated on the dense solution at every step of the integrator in the segments with a
     pair in contact or disarmed (its start and quarter points), and the largest force is
-    refined by the parabola through the largest node and its neighbours: the summaries are
+    refined by the parabola through the largest node and its neighbours (in segments with a pair
+    disarmed but none in contact, which have no force, at the steps only): the summaries are
     those of the solution to about the solver tolerance, and the same whatever ``sample_dt``
     says.
     """
@@ -585,7 +586,10 @@ def contact_summaries(model, integrator, table, arrays, y_end, t_end):
             continue
         e = edges[(edges > t0) & (edges < t1)]
         knots = np.concatenate([[t0], e, [t1]])
-        fine = (knots[:-1, None] + np.diff(knots)[:, None] * _SUMMARY_POINTS).ravel()
+        # sustained contact: a force to find the peak of; a disarmed pair alone (no force): its
+        # closing speeds at the steps
+        points = _SUMMARY_POINTS if inside.any() else _SUMMARY_POINTS[:1]
+        fine = (knots[:-1, None] + np.diff(knots)[:, None] * points).ravel()
         T.append(np.append(fine, t1))
         G.append(np.full(fine.size + 1, g, dtype=np.int64))
     if not T:
@@ -595,8 +599,14 @@ def contact_summaries(model, integrator, table, arrays, y_end, t_end):
     G = np.concatenate(G + [np.array([len(table) - 1], dtype=np.int64)])
     Y = integrator.sample(T, G, y_end)[:, :-1]
     T, G = T[:-1], G[:-1]
-    out = k.evaluate_samples(np.ascontiguousarray(Y), G, model.M, *arrays)
-    CF, deepest = out[5], out[7]
+    # force and depth where a pair is in sustained contact (elsewhere no force acts)
+    pressed = np.nonzero((pstate[G] == k.PS_CONTACT).any(axis=1))[0]
+    if pressed.size:
+        out = k.evaluate_samples(np.ascontiguousarray(Y[:, pressed]), G[pressed], model.M, *arrays)
+        CF, deepest = np.zeros((T.size, npr)), out[7]
+        CF[pressed] = out[5]
+    else:
+        CF = np.zeros((T.size, npr))
     # closing speeds inside the segments: a segment's end is the instant of its event (an
     # impact's state before the impulse)
     ends = np.array([t1 for _, t1, _ in table])[G]

@@ -282,28 +282,19 @@ def set_value(data: dict, target: Target, x: float, *, copy_path: bool = True, l
     value is written in the unit of the value it replaces (SI where there is none).
     """
     old = get_value(data, target) if like else None
-    out = dict(data) if copy_path else data
-    node = _container(out, target, create=True, copy_path=copy_path)
-    key, index = target.steps[-1]
-    value = format_value(x, target, old)
-    if index is None:
-        node[key] = value
-    else:
-        vec = node.get(key)
-        if not isinstance(vec, (list, tuple)) or len(vec) != target.field.n:
-            raise ScenarioError(f"the scenario has no vector {target.path.rsplit('[', 1)[0]} of "
-                                f"{target.field.n} values to set component {index} of", field=target.path)
-        vec = list(vec)
-        vec[index] = value
-        node[key] = vec
-    return out
+    return _write(data, target, format_value(x, target, old), copy_path)
 
 
 def set_written(data: dict, target: Target, value: Any) -> dict:
     """Write ``value`` as written in a file (``"compiled"``, ``["1 m", "2 m"]``, ``"35 mph"``) at
     ``target`` into a copy of the raw dict ``data``; it is validated when the scenario is built."""
-    out = dict(data)
-    node = _container(out, target, create=True, copy_path=True)
+    return _write(data, target, value, True)
+
+
+def _write(data: dict, target: Target, value: Any, copy_path: bool) -> dict:
+    """Put ``value`` at ``target`` (a vector's component where the target names one)."""
+    out = dict(data) if copy_path else data
+    node = _container(out, target, create=True, copy_path=copy_path)
     key, index = target.steps[-1]
     if index is None:
         node[key] = value

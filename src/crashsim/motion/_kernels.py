@@ -1336,8 +1336,14 @@ def touch_geometry(y, M, p, cs, mf, geo):
     for m in range(count):
         px += mf[m, 0] / count
         py += mf[m, 1] / count
-    ia = pr_body[p, 0]
-    ib = pr_body[p, 1]
+    put_geometry(y, M, pr_body[p, 0], pr_body[p, 1], px, py, nx, ny, geo)
+    return True
+
+
+@njit(**_INLINE)
+def put_geometry(y, M, ia, ib, px, py, nx, ny, geo):
+    """``geo`` = (x, y, nx, ny, u_n) of a contact at (px, py) with normal n from B into A:
+    ``u_n = (v_A - v_B) . n`` of the material points there (< 0: approaching)."""
     vax, vay = point_velocity(y, M, ia, px, py)
     vbx, vby = point_velocity(y, M, ib, px, py)
     geo[0] = px
@@ -1345,7 +1351,6 @@ def touch_geometry(y, M, p, cs, mf, geo):
     geo[2] = nx
     geo[3] = ny
     geo[4] = (vax - vbx) * nx + (vay - vby) * ny
-    return True
 
 
 @njit(**_HOT)
@@ -1415,15 +1420,7 @@ def _strike_scan(y, M, D, cs, p, mf, margin, floor, geo, crush):
         if fastest > best:
             best = fastest
             if n_fast > 0:
-                px = sx / n_fast
-                py = sy / n_fast
-                vax, vay = point_velocity(y, M, ia, px, py)
-                vbx, vby = point_velocity(y, M, ib, px, py)
-                geo[0] = px
-                geo[1] = py
-                geo[2] = nx
-                geo[3] = ny
-                geo[4] = (vax - vbx) * nx + (vay - vby) * ny
+                put_geometry(y, M, ia, ib, sx / n_fast, sy / n_fast, nx, ny, geo)
     return best
 
 

@@ -1364,7 +1364,7 @@ def _strike_scan(y, M, D, cs, p, mf, margin, floor, geo, crush):
     on: a press into sustained contact, not a new impact); elsewhere, for a pair with a crush
     circle, 0 (a point that meets the other body anew strikes from the surface); for any other
     pair its depth allowance.  ``crush`` False leaves out the points within the circle in every
-    state (the audit of :func:`strike_speeds`).
+    state (the audit of :func:`contact_samples`).
 
     Returns the largest closing speed ``-(v_A - v_B) . n`` [m/s] of those points (``-inf`` if
     none).  With ``floor`` finite, ``geo`` receives ``(x, y, nx, ny, u_n)`` of the piece pair
@@ -2549,21 +2549,29 @@ def evaluate_samples(Y, seg_of, M, sg_phase, sg_memb, sg_nlk, sg_lkj, sg_lkth, s
 
 
 @njit(**_JIT)
-def strike_speeds(Y, seg_of, M, sg_memb, sg_nlk, sg_lkj, sg_lkth, sg_pstate, sg_pref, sg_parked):
-    """Closing speed [m/s] of the fastest point pressed beyond the allowance, per sample column
-    and pair (:func:`strike_speed`; 0 for a pair that is armed, i.e. apart): (K, npairs).
+def contact_samples(Y, seg_of, M, sg_memb, sg_nlk, sg_lkj, sg_lkth, sg_pstate, sg_pref, sg_parked):
+    """What the pairs do at sampled states ``Y`` (n, K) in segments ``seg_of`` (the geometry only:
+    no tyre forces, no multipliers).
 
-    While a pair is in contact or disarmed this stays below its impulse threshold except at
-    the instants of its impacts (a strike there is an impact): an audit of the rule."""
+    Returns ``(CF, pen, closing)``: the sustained-contact force magnitude on body A of every pair
+    (K, np) [N]; per pair the largest depth beyond its allowance while in contact, or the largest
+    overlap while armed [m]; and the closing speed [m/s] of the fastest point pressed beyond the
+    allowance outside the crush of the first impact (:func:`strike_speed`; 0 for an armed pair),
+    (K, np): while a pair is in contact or disarmed this stays below its impulse threshold
+    except at the instants of its impacts (a strike there is an impact), an audit of the rule.
+    """
     K = Y.shape[1]
     npr = M[26].shape[0]
-    out = np.zeros((K, npr))
+    nb = M[0].shape[0]
+    CF = np.zeros((K, npr))
+    closing = np.zeros((K, npr))
+    pen = np.zeros(npr)
     W = make_work(M)
     cs = W[5]
-    nb = M[0].shape[0]
+    f_scratch = np.zeros(3 * nb)
     y = np.zeros(Y.shape[0])
-    D = segment_mode(seg_of[0] if K else 0, sg_memb, sg_nlk, sg_lkj, sg_lkth, sg_pstate, sg_pref, sg_parked)
     last = seg_of[0] if K else 0
+    D = segment_mode(last, sg_memb, sg_nlk, sg_lkj, sg_lkth, sg_pstate, sg_pref, sg_parked)
     for col in range(K):
         s_ = seg_of[col]
         if s_ != last:
@@ -2572,10 +2580,21 @@ def strike_speeds(Y, seg_of, M, sg_memb, sg_nlk, sg_lkj, sg_lkth, sg_pstate, sg_
         for i in range(Y.shape[0]):
             y[i] = Y[i, col]
         body_trig(y, nb, cs)
-        for p in range(npr):
-            if sg_pstate[s_, p] != PS_ARMED:
-                out[col, p] = strike_speed(y, M, D, cs, p, W[7], False)
-    return out
+        for q in range(npr):
+            st = D[5][q]
+            if st != PS_ARMED:
+                closing[col, q] = strike_speed(y, M, D, cs, q, W[7], False)
+            if st == PS_DISARMED:
+                continue
+            depth = -pair_gap(y, M, cs, q) - (D[6][q, A_DEPTH] if st == PS_CONTACT else 0.0)
+            pen[q] = max(pen[q], depth)
+            if st == PS_CONTACT:  # the pair's force on A
+                for i in range(3 * nb):
+                    f_scratch[i] = 0.0
+                pair_forces(y, M, D, cs, q, f_scratch, W[7])
+                ia = M[26][q, 0]
+                CF[col, q] = math.sqrt(f_scratch[ia] ** 2 + f_scratch[nb + ia] ** 2)
+    return CF, pen, closing
 
 
 @njit(**_JIT)

@@ -561,7 +561,7 @@ def contact_summaries(model, integrator, table, arrays, y_end, t_end):
 
     The span is the time the pair spent in sustained contact, from the segments the events cut
     (so it is the span of the pair's own contact events).  Force, depth and the closing speed
-    of points pressed beyond the allowance (:func:`crashsim.motion._kernels.strike_speeds`) are
+    of points pressed beyond the allowance (:func:`crashsim.motion._kernels.contact_samples`) are
     evaluated on the dense solution at every step of the integrator in the segments with a
     pair in contact or disarmed (its start and quarter points), and the largest force is
     refined by the parabola through the largest node and its neighbours (in segments with a pair
@@ -599,27 +599,23 @@ def contact_summaries(model, integrator, table, arrays, y_end, t_end):
     G = np.concatenate(G + [np.array([len(table) - 1], dtype=np.int64)])
     Y = integrator.sample(T, G, y_end)[:, :-1]
     T, G = T[:-1], G[:-1]
-    # force and depth where a pair is in sustained contact (elsewhere no force acts)
-    pressed = np.nonzero((pstate[G] == k.PS_CONTACT).any(axis=1))[0]
-    if pressed.size:
-        out = k.evaluate_samples(np.ascontiguousarray(Y[:, pressed]), G[pressed], model.M, *arrays)
-        CF, deepest = np.zeros((T.size, npr)), out[7]
-        CF[pressed] = out[5]
-    else:
-        CF = np.zeros((T.size, npr))
+    CF, deepest, closing = k.contact_samples(np.ascontiguousarray(Y), G, model.M, *arrays[1:])
     # closing speeds inside the segments: a segment's end is the instant of its event (an
     # impact's state before the impulse)
     ends = np.array([t1 for _, t1, _ in table])[G]
-    closing = np.where((T < ends)[:, None], k.strike_speeds(np.ascontiguousarray(Y), G, model.M, *arrays[1:]),
-                       0.0).max(axis=0)
+    closing = np.where((T < ends)[:, None], closing, 0.0).max(axis=0)
     for p in range(npr):
         f = np.where(pstate[G, p] == k.PS_CONTACT, CF[:, p], 0.0)
         j = int(np.argmax(f))
         peak[p] = f[j]
         if 0 < j < len(f) - 1 and G[j - 1] == G[j] == G[j + 1] and T[j - 1] < T[j] < T[j + 1]:
-            a, b, c = np.polyfit(T[j - 1:j + 2] - T[j], f[j - 1:j + 2], 2)
-            if a < 0 and T[j - 1] - T[j] <= -b / (2 * a) <= T[j + 1] - T[j]:
-                peak[p] = max(f[j], c - b * b / (4 * a))
+            # the parabola through the largest node and its neighbours (times from the middle one)
+            x0, x2 = T[j - 1] - T[j], T[j + 1] - T[j]
+            d0, d2 = f[j - 1] - f[j], f[j + 1] - f[j]
+            det = x0 * x2 * (x0 - x2)
+            a, b = (d0 * x2 - d2 * x0) / det, (d2 * x0 * x0 - d0 * x2 * x2) / det
+            if a < 0 and x0 <= -b / (2 * a) <= x2:
+                peak[p] = max(f[j], f[j] - b * b / (4 * a))
     return span, peak, deepest, closing
 
 

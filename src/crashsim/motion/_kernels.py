@@ -1310,15 +1310,9 @@ def _left_stop_shift(y, M, j, offset, lim, shift):
 
 
 @njit(**_HOT)
-def touch_geometry(y, M, p, cs, mf, geo):
-    """Contact point, normal (from B into A) and normal relative velocity of pair ``p`` at a touch.
-
-    The piece pair of least gap gives the manifold (points within 1 mm of touching); the point
-    is the mean of its points (the middle of an edge-on contact).  ``geo`` receives
-    ``(x, y, nx, ny, u_n)``, ``u_n = (v_A - v_B) . n`` at the point (< 0: approaching).
-    Returns False if no manifold point was found (a touch at a vertex, numerically).
-    """
-    pr_body, pr_ptr, pp = M[26], M[27], M[28]
+def deepest_pieces(y, M, cs, p):
+    """The piece pair of pair ``p`` with the least gap: ``(gap, piece a, piece b)``."""
+    pr_ptr, pp = M[27], M[28]
     best = math.inf
     qa = pp[pr_ptr[p], 0]
     qb = pp[pr_ptr[p], 1]
@@ -1328,6 +1322,20 @@ def touch_geometry(y, M, p, cs, mf, geo):
             best = g
             qa = pp[q, 0]
             qb = pp[q, 1]
+    return best, qa, qb
+
+
+@njit(**_HOT)
+def touch_geometry(y, M, p, cs, mf, geo):
+    """Contact point, normal (from B into A) and normal relative velocity of pair ``p`` at a touch.
+
+    The piece pair of least gap gives the manifold (points within 1 mm of touching); the point
+    is the mean of its points (the middle of an edge-on contact).  ``geo`` receives
+    ``(x, y, nx, ny, u_n)``, ``u_n = (v_A - v_B) . n`` at the point (< 0: approaching).
+    Returns False if no manifold point was found (a touch at a vertex, numerically).
+    """
+    pr_body = M[26]
+    best, qa, qb = deepest_pieces(y, M, cs, p)
     count, nx, ny = manifold(y, M, cs, qa, qb, mf, max(1e-3, -best + 1e-3))
     if count == 0:
         return False
@@ -1786,7 +1794,7 @@ def arming(y, M, D):
     or bodies left touching) starts disarmed with its present depth as allowance and its crush
     circle (in body A's axes: around the contact points of its deepest pieces, reaching
     :data:`CRUSH_REACH` beyond them); the others armed."""
-    pr_body, pr_par, pr_ptr, pp = M[26], M[29], M[27], M[28]
+    pr_body, pr_par = M[26], M[29]
     pstate, pref = D[5], D[6]
     W = make_work(M)
     cs = W[5]
@@ -1800,15 +1808,7 @@ def arming(y, M, D):
         if g < pr_par[p, R_ARM]:
             pstate[p] = PS_DISARMED
             pref[p, A_DEPTH] = max(-g, 0.0)
-            best = math.inf
-            qa = pp[pr_ptr[p], 0]
-            qb = pp[pr_ptr[p], 1]
-            for q in range(pr_ptr[p], pr_ptr[p + 1]):
-                gq = piece_gap(y, M, cs, pp[q, 0], pp[q, 1])
-                if gq < best:
-                    best = gq
-                    qa = pp[q, 0]
-                    qb = pp[q, 1]
+            _, qa, qb = deepest_pieces(y, M, cs, p)
             count, _, _ = manifold(y, M, cs, qa, qb, mf, pr_par[p, R_ARM])
             if count == 0:
                 continue

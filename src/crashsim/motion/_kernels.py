@@ -604,6 +604,17 @@ def point_velocity(y, M, i, px, py):
     return y[3 * nb + i] - w * (py - y[nb + i]), y[4 * nb + i] + w * (px - y[i])
 
 
+@njit(**_INLINE)
+def in_crush(y, M, D, cs, p, ia, px, py):
+    """Whether the world point (px, py) lies in pair ``p``'s crush circle (body ``ia``'s axes)."""
+    nb = M[0].shape[0]
+    dx = px - y[ia]
+    dy = py - y[nb + ia]
+    lx = cs[0, ia] * dx + cs[1, ia] * dy - D[6][p, A_CX]
+    ly = -cs[1, ia] * dx + cs[0, ia] * dy - D[6][p, A_CY]
+    return lx * lx + ly * ly <= D[6][p, A_R] * D[6][p, A_R]
+
+
 @njit(**_HOT)
 def pair_forces(y, M, D, cs, p, f, mf):
     """Penalty forces of pair ``p`` (in contact) added to the world-frame body forces ``f`` (z order).
@@ -642,13 +653,8 @@ def pair_forces(y, M, D, cs, p, f, mf):
             px = mf[m, 0]
             py = mf[m, 1]
             allowance = crush
-            if radius > 0.0:
-                dx = px - y[ia]
-                dy = py - y[nb + ia]
-                lx = cs[0, ia] * dx + cs[1, ia] * dy - D[6][p, A_CX]
-                ly = -cs[1, ia] * dx + cs[0, ia] * dy - D[6][p, A_CY]
-                if lx * lx + ly * ly > radius * radius:
-                    allowance = 0.0
+            if radius > 0.0 and not in_crush(y, M, D, cs, p, ia, px, py):
+                allowance = 0.0
             depth = mf[m, 2] - allowance
             if depth <= 0.0:
                 continue
@@ -1380,15 +1386,12 @@ def _strike_scan(y, M, D, cs, p, mf, margin, floor, geo, crush):
     normal from B into A and the normal relative velocity at that mean point.
     """
     pr_body, pr_ptr, pp = M[26], M[27], M[28]
-    nb = M[0].shape[0]
     ia = pr_body[p, 0]
     ib = pr_body[p, 1]
     depth_allowance = D[6][p, A_DEPTH]
     radius = D[6][p, A_R]
     disarmed = D[5][p] == PS_DISARMED
     least = 0.0 if radius > 0.0 else depth_allowance  # the smallest allowance of any point
-    ca = cs[0, ia]
-    sa = cs[1, ia]
     best = -math.inf
     for q in range(pr_ptr[p], pr_ptr[p + 1]):
         a = pp[q, 0]
@@ -1405,11 +1408,7 @@ def _strike_scan(y, M, D, cs, p, mf, margin, floor, geo, crush):
             py = mf[m, 1]
             allowance = depth_allowance
             if radius > 0.0:
-                dx = px - y[ia]
-                dy = py - y[nb + ia]
-                lx = ca * dx + sa * dy - D[6][p, A_CX]
-                ly = -sa * dx + ca * dy - D[6][p, A_CY]
-                if lx * lx + ly * ly <= radius * radius:
+                if in_crush(y, M, D, cs, p, ia, px, py):
                     if disarmed or not crush:
                         continue
                 else:

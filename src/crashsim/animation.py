@@ -107,7 +107,7 @@ def frame_times(t_end: float, dt: float, *, field: str = "dt") -> np.ndarray:
     if not (isinstance(dt, (int, float, np.floating)) and math.isfinite(dt) and dt > 0):
         shown = f"{dt:g} s" if isinstance(dt, (int, float, np.floating)) else repr(dt)
         raise ScenarioError(f"time between frames {shown} is not a positive time; {allowed}", field=field)
-    from .reconstruct.scene import time_grid
+    from .scene.run import time_grid
 
     times = time_grid(t_end, dt)
     if len(times) > MAX_FRAMES:

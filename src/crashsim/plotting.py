@@ -466,7 +466,7 @@ def _draw_crush(S, sc) -> None:
     from matplotlib.patches import Patch, Polygon
 
     from .geometry import to_world
-    from .reconstruct.crush import profile_outline
+    from .evidence.crush import profile_outline
 
     drawn = False
     for it in sc.evidence.crush:

@@ -30,7 +30,7 @@ from .impact import (CrushSurface, ExternalImpulse, ImpactProblem, TangentialLaw
 from .schema import ArrayOf, Field, Section, Table, document, load_toml, validate
 from .survey.schema import SURVEY
 from .units import Kind
-from .reconstruct.evidence import (DeltaVEvidence, Evidence, ImpactPointEvidence, MarkEvidence, RecorderEvidence,
+from .evidence.checks import (DeltaVEvidence, Evidence, ImpactPointEvidence, MarkEvidence, RecorderEvidence,
                                    RestEvidence)
 from .vehicles import Axle, Body, BodyState, Hitch, Vehicle, chain_states
 
@@ -1380,7 +1380,7 @@ def _rest_registration(r: dict, body: Body, key: str, file: str | None):
     """The CG and heading of a rest item given by measured points of ``body`` (a rigid least-squares fit)."""
     import difflib
 
-    from .reconstruct.evidence import CORNERS, named_body_points, register_points
+    from .evidence.checks import CORNERS, named_body_points, register_points
     from .units import format_value
 
     if r["position"] is not None:
@@ -1502,7 +1502,7 @@ def _build_crush(items: list, d: dict, vehicles, file: str | None) -> tuple:
     """The ``[[evidence.crush]]`` items as CrushEvidence (A and B from the body's preset where omitted)."""
     import difflib
 
-    from .reconstruct.crush import CrushEvidence, crush_groups
+    from .evidence.crush import CrushEvidence, crush_groups
     from .units import parse
 
     by_name = {b.name: b for v in vehicles for b in v.bodies}

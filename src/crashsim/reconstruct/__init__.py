@@ -1,6 +1,6 @@
 """Scenes from impact to rest, evidence residuals, fits and uncertainty."""
 
-from .scene import SceneResult, run_scene
+from ..scene import SceneResult, run_scene
 
 __all__ = ["SceneResult", "run_scene", "fit_scene", "FitResult", "monte_carlo", "MCResult", "run_posterior",
            "PosteriorResult"]

@@ -61,7 +61,7 @@ from ..errors import ScenarioError, SolverError, UnreachableImpactError, failure
 from ..outputs import check_workers
 from .inverse_schema import CORRELATION_WARNING
 from ..geometry import wrap_angle
-from .evidence import signed_distance_to_polyline
+from ..evidence.checks import signed_distance_to_polyline
 from .overrides import ScenarioOverrides, default_engine, parse_value
 
 __all__ = ["FitSpec", "Unknown", "FitProblem", "FitResult", "EvidenceResidual", "StartResult", "fit_scene",
@@ -223,7 +223,7 @@ def _resample(points: np.ndarray, k: int) -> np.ndarray:
 def _mark_distances(item: _Item, tracks: dict, k: int, pts: np.ndarray | None = None) -> tuple[np.ndarray, str | None]:
     """Signed distances of ``k`` points spread along the mark to the best-matching wheel's track, and
     that wheel (``pts``: the mark's ``_resample(points, k)``, if already computed)."""
-    from .evidence import _wheel_matches
+    from ..evidence.checks import _wheel_matches
 
     ev = item.mark
     pts = _resample(ev.points, k) if pts is None else pts
@@ -312,7 +312,7 @@ class EvidenceModel:
             items.append(_Item("recorder", x.name or f"recorder in {x.body}", "speed", s, src, n, float(n), i,
                                body=x.body, measured=x))
         if ev.crush:
-            from .crush import GROUP_TITLES, crush_groups
+            from ..evidence.crush import GROUP_TITLES, crush_groups
 
             for which, idx in crush_groups(ev.crush):
                 # the group's sigma: root sum of squares of its items' (independent measurements)
@@ -384,7 +384,7 @@ class EvidenceModel:
                 out.append(np.array([float(wrap_angle(b.rest_heading - it.measured))]))
                 det.append({"computed": float(wrap_angle(b.rest_heading))})
             elif it.kind == "recorder":
-                from .evidence import approach_of_body, recorder_residuals
+                from ..evidence.checks import approach_of_body, recorder_residuals
 
                 a = approach_of_body(approaches, it.body)
                 if a is None:
@@ -396,7 +396,7 @@ class EvidenceModel:
                     det.append({"computed": computed.tolist()})
             elif it.kind == "mark" and it.mark.phase == "approach":
                 if pre_tracks is None:
-                    from .evidence import approach_tracks
+                    from ..evidence.checks import approach_tracks
 
                     pre_tracks = approach_tracks(approaches)
                 d, key = _mark_distances(it, pre_tracks, self.mark_points, getattr(self, "_mark_points", {}).get(i))
@@ -504,7 +504,7 @@ class FitProblem:
 
     def scene(self, x):
         """Run the scene at unknowns ``x`` (SI)."""
-        from .scene import run_scene
+        from ..scene.run import run_scene
 
         return run_scene(self.overrides.scenario(x))
 

@@ -333,7 +333,7 @@ def scene_outputs(scene) -> dict[str, float]:
         out[f"energy_loss.{k}"] = float(v)
     joint = getattr(scene, "joint", None)
     if joint is not None:
-        from .evidence import body_impacts
+        from ..evidence.checks import body_impacts
 
         out["impacts.later"] = float(len(joint.impacts))
         for r in scene.runout.values():
@@ -362,7 +362,7 @@ class _Runner:
                                            field_prefix="uncertainty.inputs", max_wall_time=sample_time_limit)
 
     def run(self, seed: int, i: int) -> dict:
-        from .scene import run_scene
+        from ..scene.run import run_scene
 
         x = sample_inputs(self.spec, seed, i)
         row: dict[str, Any] = {"i": int(i), "x": [float(v) for v in x]}
@@ -823,7 +823,7 @@ def _assemble(spec, seed, n, rows: dict, n_resumed, elapsed, engine, backend, wo
 def _swings(data, spec: UncertaintySpec, engine, file, q=(0.05, 0.95)) -> tuple[dict, Any]:
     """One-at-a-time swings of the contact bodies' delta-v (impact only) and the median scene."""
     from ..impact import solve_impact
-    from .scene import run_scene
+    from ..scene.run import run_scene
 
     ov = ScenarioOverrides(data, spec.paths, engine=engine, file=file, cache=1, field_prefix="uncertainty.inputs")
     med = np.array([d.median for d in spec.inputs])

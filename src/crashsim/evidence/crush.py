@@ -147,7 +147,7 @@ def crush_checks(items, impact, secondary=()) -> list:
     ``computed`` (the model's loss compared) and ``measured`` (the crush energy compared),
     ``complete`` and ``missing`` (movable bodies in contact without a crush item), ``warnings``.
     """
-    from .evidence import Check
+    from .checks import Check
 
     checks = []
     for which, idx in crush_groups(items):

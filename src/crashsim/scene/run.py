@@ -14,7 +14,7 @@ __all__ = ["SceneResult", "run_scene", "rest_misfit_warnings"]
 def rest_misfit_warnings(evidence) -> list[str]:
     """A warning for each rest item whose measured points fit the body with an RMS misfit above
     :data:`~crashsim.reconstruct.evidence.REST_MISFIT_SHARE` of its tolerance (SI text)."""
-    from .evidence import REST_MISFIT_SHARE
+    from ..evidence.checks import REST_MISFIT_SHARE
 
     out = []
     for r in getattr(evidence, "rest", ()):
@@ -497,7 +497,7 @@ def run_scene(scenario) -> SceneResult:
             runout, accuracy = _separate_runouts(movable, initial, spec)
     evidence = None
     if not scenario.evidence.empty:
-        from .evidence import evaluate_evidence
+        from ..evidence.checks import evaluate_evidence
 
         evidence = evaluate_evidence(scenario.evidence, impact, runout, scenario.impact.surface.point,
                                      secondary=joint.impacts if joint is not None else (),

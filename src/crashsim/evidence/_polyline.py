@@ -25,7 +25,7 @@ def _kernel():
     if _KERNEL is None:
         import math
 
-        from ..motion.jitcache import configure
+        from .._jit import configure
 
         configure()
         from numba import njit

@@ -66,14 +66,33 @@ def configure() -> Path:
     return path
 
 
+def kernel_sources() -> list[Path]:
+    """The source files the compiled kernels are built from, in a fixed order.
+
+    The run-out's kernels (``motion/kernels/*.py`` if that package exists, else
+    ``motion/_kernels.py``), the tyre laws and options they inline (``motion/tyres.py``,
+    ``motion/options.py``), and the impact solver's kernel (``impact/_kernel.py``, or the
+    ``impact/kernel*.py`` / ``impact/kernels/*.py`` that succeed it).
+    """
+    here = Path(__file__).parent
+    motion, impact = here / "motion", here / "impact"
+    if (motion / "kernels").is_dir():
+        runout = sorted((motion / "kernels").rglob("*.py"))
+    else:
+        runout = [motion / "_kernels.py"]
+    impact_kernels = [impact / "_kernel.py"] if (impact / "_kernel.py").exists() else []
+    impact_kernels += sorted(impact.glob("kernel*.py"))
+    if (impact / "kernels").is_dir():
+        impact_kernels += sorted((impact / "kernels").rglob("*.py"))
+    return runout + [motion / "tyres.py", motion / "options.py"] + impact_kernels
+
+
 def _digest() -> str:
     """Hash of the kernel sources and the numba version (the cache's validity)."""
     import numba
 
     h = hashlib.sha256(numba.__version__.encode())
-    here = Path(__file__).parent
-    # the sources the kernels compile in: the run-out's, and the impact solver's (impact/_kernel.py)
-    for path in (here / "_kernels.py", here / "tyres.py", here / "options.py", here.parent / "impact" / "_kernel.py"):
+    for path in kernel_sources():
         h.update(path.read_bytes())
     return h.hexdigest()[:16]
 
@@ -97,7 +116,7 @@ COMPILE_STEPS = ("kernel module", "scene model", "SciPy engine (right-hand side,
 
 def _tiny_scene():
     """Two small vehicles that meet again (contact, stops, zones): every kernel is used."""
-    from ..scenario import scenario_from_dict
+    from .scenario import scenario_from_dict
 
     axles = [{"x": "1.2 m", "track": "1.5 m"}, {"x": "-1.2 m", "track": "1.5 m"}]
     body = {"mass": "1200 kg", "yaw_inertia": "1800 kg m^2", "length": "4 m", "width": "1.8 m", "axles": axles}
@@ -132,11 +151,11 @@ def compile_kernels(progress: Callable[[int, str], None] | None = None) -> Path:
             progress(i, COMPILE_STEPS[i])
 
     step(0)
-    from . import _kernels  # noqa: F401  (defining the kernels)
+    from .motion import _kernels  # noqa: F401  (defining the kernels)
 
     step(1)
     scenario = _tiny_scene()
-    from ..reconstruct import run_scene
+    from .reconstruct import run_scene
 
     step(2)
     spec = scenario.runout

@@ -1,4 +1,4 @@
-"""Where the compiled kernels are cached, and their one-time compile.
+"""Where the compiled kernels are cached (the numba set-up; no pipeline here).
 
 The kernels of :mod:`crashsim.motion._kernels` (the run-out) and :mod:`crashsim.impact._kernel`
 (the impact solver) are compiled by numba on first use (about a minute or two on one core) and
@@ -12,7 +12,8 @@ so an installation into a read-only or non-editable location keeps it too:
 
 Below it the numba version and the source path keep installations apart. :func:`ready`
 tells whether the kernels of these sources have been compiled here (a marker written by
-:func:`compile_kernels`), so an application can say "compiling once" before it happens.
+:func:`crashsim.warmup.compile_kernels`), so an application can say "compiling once" before it
+happens. The warm-up itself runs the whole pipeline and so lives at the top, in :mod:`crashsim.warmup`.
 """
 
 from __future__ import annotations
@@ -21,9 +22,8 @@ import hashlib
 import os
 import sys
 from pathlib import Path
-from typing import Callable
 
-__all__ = ["cache_dir", "configure", "ready", "compile_kernels", "COMPILE_STEPS"]
+__all__ = ["cache_dir", "numba_dir", "configure", "kernel_sources", "digest", "marker", "ready"]
 
 
 def cache_dir() -> Path:
@@ -41,7 +41,8 @@ def cache_dir() -> Path:
     return base / "crashsim"
 
 
-def _numba_dir() -> Path:
+def numba_dir() -> Path:
+    """The numba cache below :func:`cache_dir`, one per numba version."""
     import numba
 
     return cache_dir() / f"numba-{numba.__version__}"
@@ -57,7 +58,7 @@ def configure() -> Path:
 
     if os.environ.get("NUMBA_CACHE_DIR"):
         return Path(config.CACHE_DIR)
-    path = _numba_dir()
+    path = numba_dir()
     try:
         path.mkdir(parents=True, exist_ok=True)
     except OSError:  # pragma: no cover - read-only home
@@ -87,7 +88,7 @@ def kernel_sources() -> list[Path]:
     return runout + [motion / "tyres.py", motion / "options.py"] + impact_kernels
 
 
-def _digest() -> str:
+def digest() -> str:
     """Hash of the kernel sources and the numba version (the cache's validity)."""
     import numba
 
@@ -97,77 +98,14 @@ def _digest() -> str:
     return h.hexdigest()[:16]
 
 
-def _marker() -> Path:
-    return _numba_dir() / f"ready-{_digest()}"
+def marker() -> Path:
+    """The file whose presence says the kernels of these sources were compiled here (:func:`ready`)."""
+    return numba_dir() / f"ready-{digest()}"
 
 
 def ready() -> bool:
     """True if the kernels of these sources were compiled and cached here already."""
     try:
-        return _marker().exists()
+        return marker().exists()
     except OSError:  # pragma: no cover
         return False
-
-
-#: What :func:`compile_kernels` compiles, in order (labels for a progress display).
-COMPILE_STEPS = ("kernel module", "scene model", "SciPy engine (right-hand side, events, results)",
-                 "compiled engine (integrator)")
-
-
-def _tiny_scene():
-    """Two small vehicles that meet again (contact, stops, zones): every kernel is used."""
-    from .scenario import scenario_from_dict
-
-    axles = [{"x": "1.2 m", "track": "1.5 m"}, {"x": "-1.2 m", "track": "1.5 m"}]
-    body = {"mass": "1200 kg", "yaw_inertia": "1800 kg m^2", "length": "4 m", "width": "1.8 m", "axles": axles}
-    data = {
-        "scenario": {"title": "compile"},
-        "vehicles": {
-            "A": {"speed": "10 m/s", "heading": "0 deg", "position": ["0 m", "0 m"],
-                  "bodies": [{**body, "name": "a", "rear_hitch": ["-2.2 m", "0 m"]},
-                             {**body, "name": "a2", "front_hitch": ["2.2 m", "0 m"], "articulation_limit": "60 deg"}],
-                  "tyres": {"state": "braked", "brake": 0.3, "cornering_coefficient": 8.6, "rolling_resistance": 0.012}},
-            "B": {"speed": "0 m/s", "heading": "90 deg", "position": ["2.9 m", "0 m"], "bodies": [{**body, "name": "b"}],
-                  "tyres": {"state": "locked"}},
-        },
-        "impact": {"body1": "a", "body2": "b", "point": ["2 m", "0 m"], "normal": "180 deg",
-                   "restitution": 0.1, "tangential": "no_slide"},
-        "runout": {"road_friction": 0.7, "t_max": "5 s",
-                   "zones": [{"friction": 0.4, "polygon": [["5 m", "-5 m"], ["9 m", "-5 m"], ["9 m", "5 m"]]}]},
-    }
-    return scenario_from_dict(data)
-
-
-def compile_kernels(progress: Callable[[int, str], None] | None = None) -> Path:
-    """Compile (or load from the cache) every kernel, then mark the cache ready.
-
-    ``progress(i, label)`` is called before each of :data:`COMPILE_STEPS`. Returns the
-    cache directory.
-    """
-    from dataclasses import replace
-
-    def step(i):
-        if progress is not None:
-            progress(i, COMPILE_STEPS[i])
-
-    step(0)
-    from .motion import _kernels  # noqa: F401  (defining the kernels)
-
-    step(1)
-    scenario = _tiny_scene()
-    from .reconstruct import run_scene
-
-    step(2)
-    spec = scenario.runout
-    run_scene(replace(scenario, runout=replace(spec, options=replace(spec.options, engine="scipy"))))
-    step(3)
-    run_scene(replace(scenario, runout=replace(spec, options=replace(spec.options, engine="compiled"))))
-    marker = _marker()
-    try:
-        marker.parent.mkdir(parents=True, exist_ok=True)
-        for old in marker.parent.glob("ready-*"):
-            old.unlink()
-        marker.touch()
-    except OSError:  # pragma: no cover - read-only cache
-        pass
-    return marker.parent

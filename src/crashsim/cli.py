@@ -380,7 +380,8 @@ _COMPUTING = ("run", "fit", "mc", "posterior", "plot", "animate", "export")
 def _first_compile(bar: bool = True) -> None:
     """Compile the run-out kernels once, saying so on stderr with a progress bar (a line per step
     without ``bar``); the first run after installing or upgrading, later runs load them from the cache."""
-    from ._jit import COMPILE_STEPS, cache_dir, compile_kernels, ready
+    from ._jit import cache_dir, ready
+    from .warmup import COMPILE_STEPS, compile_kernels
 
     if ready():
         return

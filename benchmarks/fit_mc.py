@@ -46,7 +46,7 @@ PLOTS = ROOT / "plots"
 def _wire_schema():
     """The inverse sections in the scenario schema (a no-op once crashsim.scenario wires them itself)."""
     import crashsim.scenario as sm
-    from crashsim.reconstruct.inverse_schema import with_inverse_sections
+    from crashsim.inverse_schema import with_inverse_sections
 
     sm.SCHEMA = with_inverse_sections(sm.SCHEMA)
 

@@ -552,7 +552,7 @@ SCHEMA = Section("scenario file", subsections=[
 ], description="A crashsim scenario file (TOML)")
 
 # [fit], [uncertainty] and the evidence sigmas (crashsim fit / crashsim mc)
-from .reconstruct.inverse_schema import with_inverse_sections  # noqa: E402
+from .inverse_schema import with_inverse_sections  # noqa: E402
 
 SCHEMA = with_inverse_sections(SCHEMA)
 

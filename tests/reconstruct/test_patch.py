@@ -63,7 +63,7 @@ SHIPPED_PATHS = ["vehicles.A.speed", "vehicles.B.speed", "impact.restitution", "
 @pytest.fixture(scope="module")
 def shipped():
     import crashsim.scenario as sm
-    from crashsim.reconstruct.inverse_schema import with_inverse_sections
+    from crashsim.inverse_schema import with_inverse_sections
 
     saved = sm.SCHEMA
     sm.SCHEMA = with_inverse_sections(saved)

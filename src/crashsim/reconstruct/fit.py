@@ -59,7 +59,7 @@ import numpy as np
 
 from ..errors import ScenarioError, SolverError, UnreachableImpactError, failure_reason, in_file
 from ..outputs import check_workers
-from .inverse_schema import CORRELATION_WARNING
+from ..inverse_schema import CORRELATION_WARNING
 from ..geometry import wrap_angle
 from ..evidence.checks import signed_distance_to_polyline
 from .overrides import ScenarioOverrides, default_engine, parse_value
@@ -149,7 +149,7 @@ class FitSpec:
 
         ``data`` (the raw scenario) supplies the default start values (the file's values).
         """
-        from .inverse_schema import validate_fit
+        from ..inverse_schema import validate_fit
         from .overrides import get_value, resolve_path, forward_data
 
         d = validate_fit(raw, file=file)

@@ -183,7 +183,7 @@ class UncertaintySpec:
     @classmethod
     def from_dict(cls, raw: dict, *, file: str | None = None) -> "UncertaintySpec":
         """Validate a raw [uncertainty] table (values with units) and convert it to SI."""
-        from .inverse_schema import DISTRIBUTIONS, validate_uncertainty
+        from ..inverse_schema import DISTRIBUTIONS, validate_uncertainty
         from .overrides import resolve_path
 
         d = validate_uncertainty(raw, file=file)

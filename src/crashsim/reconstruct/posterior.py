@@ -78,7 +78,7 @@ _log = logging.getLogger("crashsim")
 
 #: Percentiles reported for every unknown and derived quantity (the median, +-1 sigma and 95 % of a normal).
 PERCENTILES = (2.5, 16.0, 50.0, 84.0, 97.5)
-from .inverse_schema import MIN_KEPT_STEPS  # noqa: E402 - fewest steps kept after burn-in and thinning
+from ..inverse_schema import MIN_KEPT_STEPS  # noqa: E402 - fewest steps kept after burn-in and thinning
 #: The kept chain should be this many autocorrelation times long (emcee's documentation: "you
 #: should not trust an estimate of tau unless the chain is longer than about 50 tau").
 TAU_FACTOR = 50
@@ -118,7 +118,7 @@ class PosteriorSpec:
 
     @classmethod
     def from_dict(cls, raw: dict | None, *, file: str | None = None) -> "PosteriorSpec":
-        from .inverse_schema import validate_posterior
+        from ..inverse_schema import validate_posterior
 
         d = validate_posterior(raw or {}, file=file)
         return cls(**{k: d[k] for k in ("walkers", "steps", "burn", "thin", "seed", "prior", "start", "init_scale",

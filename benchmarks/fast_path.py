@@ -75,7 +75,7 @@ from crashsim.motion import (  # noqa: E402
     simulate_runout,
 )
 from crashsim import warmup  # noqa: E402
-from crashsim.reconstruct.scene import separation_states  # noqa: E402
+from crashsim.scene.run import separation_states  # noqa: E402
 from crashsim.scenario import load_scenario  # noqa: E402
 from crashsim.vehicles import Axle, Body, BodyState, Vehicle  # noqa: E402
 

@@ -13,7 +13,6 @@ from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from .errors import ScenarioError
 from .evidence.crush import profile_outline
@@ -1249,6 +1248,8 @@ class _LabelPlacer:
     bar), and then keeps clearest of what is drawn."""
 
     def __init__(self, S: SceneDrawing, roi: _Roi, lo, hi):
+        from scipy.spatial import cKDTree
+
         self.S, self.roi = S, roi
         self.lo, self.hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
         fig, ax = S.ax.figure, S.ax

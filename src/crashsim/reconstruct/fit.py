@@ -61,9 +61,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
-from scipy import stats
 from scipy.optimize import least_squares
-from scipy.stats import qmc
 
 from .._version import __version__
 from ..errors import ScenarioError, SolverError, UnreachableImpactError, failure_reason, in_file
@@ -897,6 +895,8 @@ def _worker_cost(z):
 
 
 def _start_points(spec: FitSpec, problem: FitProblem, pool, workers) -> list[np.ndarray]:
+    from scipy.stats import qmc
+
     n = len(spec.unknowns)
     first = problem.z_of([u.initial for u in spec.unknowns])
     if spec.starts == 1:
@@ -1034,6 +1034,8 @@ def _replace_timing(result: FitResult, evaluations: int, elapsed: float, failure
 
 
 def _analyse(problem: FitProblem, spec: FitSpec, outcomes: list[dict], engine: str) -> FitResult:
+    from scipy import stats
+
     n = len(spec.unknowns)
     costs = np.array([o["cost"] for o in outcomes])
     best_k = int(np.argmin(costs))

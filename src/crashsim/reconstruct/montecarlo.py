@@ -54,8 +54,6 @@ from pathlib import Path
 from typing import Any, Callable, Sequence
 
 import numpy as np
-from scipy import stats
-from scipy.stats import rankdata
 
 from ..errors import CrashsimError, ScenarioError, failure_reason, in_file
 from ..evidence.checks import body_impacts
@@ -121,6 +119,8 @@ class InputDistribution:
 
     def ppf(self, q: float) -> float:
         """Quantile ``q`` in (0, 1) (for the one-at-a-time swings of the tornado chart)."""
+        from scipy import stats
+
         if self.distribution == "uniform":
             return self.lower + q * (self.upper - self.lower)
         if self.distribution == "triangular":
@@ -246,6 +246,8 @@ def _fit_to_range(distribution: str, vals: dict, target, key: str, raw: dict, fi
     notes it), and refused otherwise: never does a sample fall outside and get dropped.
     Returns ``(values, note)``.
     """
+    from scipy import stats
+
     f = target.field
     lo_ok = -math.inf if f.minimum is None else float(f.minimum)
     hi_ok = math.inf if f.maximum is None else float(f.maximum)
@@ -720,6 +722,8 @@ def _spec_from_header(header: dict) -> UncertaintySpec:
 # ---------------------------------------------------------------------------------------------
 
 def _spearman(a: np.ndarray, b: np.ndarray) -> float | None:
+    from scipy.stats import rankdata
+
     ok = np.isfinite(a) & np.isfinite(b)
     if ok.sum() < 3 or np.ptp(a[ok]) == 0 or np.ptp(b[ok]) == 0:
         return None

@@ -22,7 +22,6 @@ import os
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from ..errors import ScenarioError
 from ..schema import Section, load_toml, validate
@@ -342,6 +341,8 @@ def _map_entries(out: _Out, sd, entry: dict, raw_entry: dict, frame: SceneFrame,
 
 def _name_by_labels(out: "_Out", src: str, texts, made: list, scene) -> None:
     """Each TEXT/MTEXT names the item made from its layer whose nearest vertex is closest to it."""
+    from scipy.spatial import cKDTree
+
     by_layer: dict = {}
     for k, (e, item, _) in enumerate(made):
         if "name" in item:

@@ -1,7 +1,7 @@
 """The fit and Monte Carlo chain gives the same numbers on its fast path as on the full one.
 
 The fast path (:mod:`crashsim.reconstruct.patch` scenarios, the reused scene model of
-:mod:`crashsim.reconstruct.models`, the per-coordinate polyline distances of the evidence
+:mod:`crashsim.scene.models`, the per-coordinate polyline distances of the evidence
 checks) is compared with the full path (``crashsim.reconstruct.overrides.FAST = False``: every
 scenario validated and built from the file dict, every scene model built again) on the shipped
 fit scene: fit residuals and Monte Carlo sample records must agree exactly.
@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 
 import crashsim.reconstruct.overrides as overrides
-from crashsim.reconstruct import models
-from crashsim.reconstruct.evidence import _nearest_on_polyline
+from crashsim.scene import models
+from crashsim.evidence.checks import _nearest_on_polyline
 from crashsim.reconstruct.fit import FitProblem, FitSpec
 from crashsim.reconstruct.montecarlo import monte_carlo
 from crashsim.schema import load_toml
@@ -91,7 +91,7 @@ def _reference_nearest(points, polyline):
 def test_polyline_distance_bit_for_bit(seed, compiled, monkeypatch):
     """Random tracks (with repeated vertices: zero-length segments) and points on, near and far off them:
     the array form and the compiled loop both give the reference's bits."""
-    import crashsim.reconstruct.evidence as evidence
+    import crashsim.evidence.checks as evidence
 
     monkeypatch.setattr(evidence, "_COMPILED_FROM", 0 if compiled else 10**12)
     rng = np.random.default_rng(seed)
@@ -103,7 +103,7 @@ def test_polyline_distance_bit_for_bit(seed, compiled, monkeypatch):
     for got, ref in zip(_nearest_on_polyline(on_grid, grid), _reference_nearest(on_grid, grid)):
         assert np.array_equal(got, ref)
     if compiled:
-        from crashsim.reconstruct._polyline import nearest_on_polyline
+        from crashsim.evidence._polyline import nearest_on_polyline
 
         assert nearest_on_polyline(pts, line) is not None  # numba is there: the loop is what is tested
     d_new, s_new = _nearest_on_polyline(pts, line)

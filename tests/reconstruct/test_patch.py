@@ -18,7 +18,7 @@ import pytest
 from crashsim.errors import ScenarioError
 from crashsim.reconstruct.overrides import ScenarioOverrides
 from crashsim.reconstruct.patch import patch_kind
-from crashsim.reconstruct.scene import run_scene
+from crashsim.scene.run import run_scene
 from crashsim.schema import load_toml
 
 from scenes import ENGINE, car_car, car_trailer
@@ -63,7 +63,7 @@ SHIPPED_PATHS = ["vehicles.A.speed", "vehicles.B.speed", "impact.restitution", "
 @pytest.fixture(scope="module")
 def shipped():
     import crashsim.scenario as sm
-    from crashsim.reconstruct.inverse_schema import with_inverse_sections
+    from crashsim.inverse_schema import with_inverse_sections
 
     saved = sm.SCHEMA
     sm.SCHEMA = with_inverse_sections(saved)
@@ -212,11 +212,11 @@ def replace_approaches(sc):
 
 
 def test_scene_model_on_another_road_equals_a_new_model():
-    """SceneModel.with_road (the cached model of reconstruct.models with another road friction) holds the
+    """SceneModel.with_road (the cached model of crashsim.scene.models with another road friction) holds the
     arrays of a model built from scratch on that road; another zone set is refused."""
     from crashsim.motion.model import SceneModel
     from crashsim.motion.road import Road
-    from crashsim.reconstruct import models
+    from crashsim.scene import models
 
     data = load_toml(ROOT / "scenarios" / "scenes" / "verge_run_off.toml")
     sc = ScenarioOverrides(data, ["runout.road_friction"], engine=ENGINE).scenario([0.75])

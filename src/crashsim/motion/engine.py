@@ -31,14 +31,19 @@ from dataclasses import dataclass, field
 from typing import Mapping
 
 import numpy as np
+from scipy.integrate import BDF, DOP853, LSODA, RK45, Radau
+from scipy.optimize import brentq
 
 from ..errors import InadmissibleImpactError, ScenarioError, SolverError
+from ..impact import CrushSurface, ImpactProblem, TangentialLaw, solve_impact
 from ..vehicles import Body, BodyState, Vehicle
+from .dynamics import make_hitch_consistent
+from .fast import CompiledSolution
 from .model import SceneModel, kernels
 from .options import MAX_STILL_SEGMENTS
+from .postprocess import GL_NODES, GL_WEIGHTS, assemble_scene, mode_snapshot, segment_arrays, split_track
 from .result import (BodyHistory, BodyRunout, HitchHistory, PairSummary, RunoutEvent, RunoutResult, SceneRunout,
                      SecondaryImpact, limit_message)
-from .postprocess import _GL_NODES, _GL_WEIGHTS, split_track
 
 __all__ = ["run_model", "STATUS_OF_CODE"]
 
@@ -89,8 +94,6 @@ class _ScipyIntegrator(_Integrator):
     """Segments integrated by SciPy's ODE solvers, stepped from Python (one step at a time)."""
 
     def __init__(self, model: SceneModel):
-        from scipy.integrate import BDF, DOP853, LSODA, RK45, Radau
-
         super().__init__(model)
         self.solver_cls = {"LSODA": LSODA, "RK45": RK45, "DOP853": DOP853, "Radau": Radau, "BDF": BDF}[model.options.method]
         self.segments: list[dict] = []
@@ -116,7 +119,7 @@ class _ScipyIntegrator(_Integrator):
             ev_kind, ev_idx, ev_val, ev_dir = k.segment_events(M, D, offsets)
             g_old, r_old = k.event_values(y, M, phase, D, ev_kind, ev_idx, ev_val)
             resolution = k.event_resolutions(M, ev_kind, ev_idx)
-            snapshot = _snapshot(phase, D)
+            snapshot = mode_snapshot(phase, D)
             # pairs in contact: their work is integrated with the state (module rhs_work)
             n = y.size
             n_work = len(model.pairs) if bool(np.any(D[5] == k.PS_CONTACT)) else 0
@@ -238,7 +241,7 @@ class _CompiledIntegrator(_Integrator):
         k = kernels()
         model = self.model
         stops = np.array(model.segment_stops, dtype=float)
-        out = k.run(float(t), np.ascontiguousarray(y, dtype=float), model.M, D, offsets, stops, _GL_NODES, _GL_WEIGHTS,
+        out = k.run(float(t), np.ascontiguousarray(y, dtype=float), model.M, D, offsets, stops, GL_NODES, GL_WEIGHTS,
                     float(deadline), counters, quad)
         status, t_end, y_end = int(out[0]), float(out[1]), np.array(out[2])
         self.parts.append(out[3:17])
@@ -279,8 +282,6 @@ class _CompiledIntegrator(_Integrator):
         return np.zeros(0) if st is None else np.unique(np.concatenate([st[0], st[0] + st[1]]))
 
     def solution(self, y_end, t_end):
-        from .fast import CompiledSolution
-
         st, _, _ = self._joined()
         if st is None:
             n = y_end.size
@@ -290,24 +291,6 @@ class _CompiledIntegrator(_Integrator):
     @property
     def method(self):
         return f"compiled/{self.model.options.scheme}"
-
-
-def _snapshot(phase, D):
-    memb, lk_j, lk_th, lk_n, _, pstate, pref, parked = D
-    return (int(phase), memb.copy(), int(lk_n[0]), lk_j.copy(), lk_th.copy(), pstate.copy(), pref.copy(), parked.copy())
-
-
-def _segment_arrays(table, model):
-    """Stacked mode arrays of the segments (``sg_phase, sg_memb, ...``) for the kernels' post-processing."""
-    k = kernels()
-    if not table:
-        D = model.fresh_mode()
-        table = [(0.0, 0.0, _snapshot(0, D))]
-    modes = [m for _, _, m in table]
-    return (np.array([m[0] for m in modes], dtype=np.int64), np.stack([m[1] for m in modes]),
-            np.array([m[2] for m in modes], dtype=np.int64), np.stack([m[3] for m in modes]),
-            np.stack([m[4] for m in modes]), np.stack([m[5] for m in modes]).astype(np.int64),
-            np.stack([m[6] for m in modes]), np.stack([m[7] for m in modes]).astype(np.int64))
 
 
 def _segment_dense(seg):
@@ -358,8 +341,6 @@ class _PiecewiseSolution:
 def _first_root(k, M, phase, D, t, t_new, dense, g_old, g_new, r_old, r_new, ev_kind, ev_idx, ev_val, ev_dir,
                 resolution):
     """The SciPy engine's :func:`crashsim.motion._kernels.first_root`: the same rule, SciPy's brentq."""
-    from scipy.optimize import brentq
-
     h = t_new - t
     t_first, fired = math.inf, -1
     eps4 = 4 * np.finfo(float).eps
@@ -413,16 +394,16 @@ def _add_quadrature(k, M, seg, quad, work=None):
         half = 0.5 * (b - a)
         if half <= 0:
             continue
-        tq = 0.5 * (a + b) + half * _GL_NODES
+        tq = 0.5 * (a + b) + half * GL_NODES
         nodes.append(np.asarray(dense(tq)).reshape(-1, tq.size))
-        weights.append(half * _GL_WEIGHTS)
+        weights.append(half * GL_WEIGHTS)
     if not nodes:
         if work is not None:
             quad[quad.size - work.size:] += work
         return
     Yq = np.ascontiguousarray(np.concatenate(nodes, axis=1))
     wq = np.concatenate(weights)
-    arrays = _segment_arrays([(seg["t0"], seg["t1"], seg["mode"])], None)
+    arrays = segment_arrays([(seg["t0"], seg["t1"], seg["mode"])], None)
     part = k.quad_sums(Yq, wq, np.zeros(wq.size, dtype=np.int64), M, *arrays)
     if work is not None:
         part[part.size - work.size:] = work
@@ -525,9 +506,6 @@ def _secondary_impact(model: SceneModel, t: float, y: np.ndarray, geo: np.ndarra
     returned impact event).  The impact's delta-v includes that stop reaction (the velocity
     change of the instant); its energy loss is the crush impulse's alone.
     """
-    from ..impact import CrushSurface, ImpactProblem, TangentialLaw, solve_impact
-    from .dynamics import make_hitch_consistent
-
     p = int(geo[0])
     pair = model.pairs[p]
     names = model.layout.bodies
@@ -688,7 +666,6 @@ def run_model(model: SceneModel, initial: Mapping[str, BodyState]) -> SceneRunou
     log.append(RunoutEvent(t, status, message, data={"v_stop_m_s": o.v_stop} if status == "rest" else {}))
     if status != "rest":
         _log.warning("run-out did not reach rest (%s): %s", status, message)
-    from .postprocess import assemble_scene
 
     return assemble_scene(model, integrator, status=status, message=message, t_end=t, y_initial=y_initial, y_end=y,
                           quad=quad, events=log, impacts=impacts, nfev=int(counters[2]), mode=D)

@@ -15,25 +15,20 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Callable, Sequence
 
 import numpy as np
 
 from .dynamics import RunoutModel, SegmentParams, hitch_rows
-from .result import (
-    BodyHistory,
-    BodyRunout,
-    HitchHistory,
-    RunoutEvent,
-    RunoutResult,
-    TrackSegment,
-    WheelTrack,
-)
+from .layout import StateLayout
+from .model import kernels
+from .result import (BodyHistory, BodyRunout, HitchHistory, PairSummary, RunoutEvent, RunoutResult,
+                     SceneRunout, TrackSegment, WheelTrack)
 
 __all__ = ["assemble_result", "build_result", "gauss_legendre_chunks", "split_track"]
 
-_GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(5)
+GL_NODES, GL_WEIGHTS = np.polynomial.legendre.leggauss(5)
 _log = logging.getLogger("crashsim")
 
 #: Distance from every zone edge [m] beyond which a membership disagreement at a sample is a missed crossing.
@@ -58,8 +53,8 @@ def gauss_legendre_chunks(ts: np.ndarray, sol: Callable, seg: SegmentParams):
     """
     a, b = ts[:-1], ts[1:]
     half = 0.5 * (b - a)
-    nodes = (0.5 * (a + b))[:, None] + half[:, None] * _GL_NODES[None, :]
-    weights = half[:, None] * _GL_WEIGHTS[None, :]
+    nodes = (0.5 * (a + b))[:, None] + half[:, None] * GL_NODES[None, :]
+    weights = half[:, None] * GL_WEIGHTS[None, :]
     nodes, weights = nodes.ravel(), weights.ravel()
     return seg, weights, np.asarray(sol(nodes)).reshape(-1, nodes.size)
 
@@ -438,8 +433,6 @@ def _vehicle_statics(model) -> dict:
     :class:`_VehicleView`; built once per model (a model reused across runs keeps them)."""
     static = model.__dict__.get("_vehicle_statics")
     if static is None:
-        from .layout import StateLayout
-
         o = model.options
         opts = o.to_dict()
         static = {}
@@ -454,19 +447,34 @@ def _vehicle_statics(model) -> dict:
     return static
 
 
+def mode_snapshot(phase, D):
+    """A copy of the mode arrays ``D`` of one segment with its phase: a row of the segment table."""
+    memb, lk_j, lk_th, lk_n, _, pstate, pref, parked = D
+    return (int(phase), memb.copy(), int(lk_n[0]), lk_j.copy(), lk_th.copy(), pstate.copy(), pref.copy(), parked.copy())
+
+
+def segment_arrays(table, model):
+    """Stacked mode arrays of the segments (``sg_phase, sg_memb, ...``) for the kernels' post-processing."""
+    k = kernels()
+    if not table:
+        D = model.fresh_mode()
+        table = [(0.0, 0.0, mode_snapshot(0, D))]
+    modes = [m for _, _, m in table]
+    return (np.array([m[0] for m in modes], dtype=np.int64), np.stack([m[1] for m in modes]),
+            np.array([m[2] for m in modes], dtype=np.int64), np.stack([m[3] for m in modes]),
+            np.stack([m[4] for m in modes]), np.stack([m[5] for m in modes]).astype(np.int64),
+            np.stack([m[6] for m in modes]), np.stack([m[7] for m in modes]).astype(np.int64))
+
+
 def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_end, quad, events, impacts, nfev, mode):
     """The :class:`~crashsim.motion.result.SceneRunout` of a run (per vehicle, impacts, pairs, ledger)."""
-    from .engine import _segment_arrays, _snapshot
-    from .model import kernels
-    from .result import PairSummary, SceneRunout
-
     k = kernels()
     o = model.options
     M = model.M
     table = integrator.segment_table()
     T, seg_of = _sample_times(table, o.sample_dt, t_end)
     Y = integrator.sample(T, seg_of, y_end)
-    arrays = _segment_arrays(table if table else [(t_end, t_end, _snapshot(0, mode))], model)
+    arrays = segment_arrays(table if table else [(t_end, t_end, mode_snapshot(0, mode))], model)
     P, SL, LD, LAMH, STOPM, CF, max_gap, pen = k.evaluate_samples(np.ascontiguousarray(Y), seg_of, M, *arrays)
     sol = integrator.solution(y_end, t_end)
     events[:] = event_places(model, sol, events)
@@ -569,8 +577,6 @@ def contact_summaries(model, integrator, table, arrays, y_end, t_end):
     those of the solution to about the solver tolerance, and the same whatever ``sample_dt``
     says.
     """
-    from .model import kernels
-
     k = kernels()
     npr = len(model.pairs)
     span, peak, deepest, closing = np.zeros(npr), np.zeros(npr), np.zeros(npr), np.zeros(npr)
@@ -627,10 +633,6 @@ def event_places(model, sol, events) -> list:
     contact point of the pair's manifold (none once they part); a vehicle at rest: its first
     body's CG.  States come from the run's dense solution at the event's time.
     """
-    from dataclasses import replace
-
-    from .model import kernels
-
     L = model.layout
     want = [i for i, e in enumerate(events) if e.place is None and
             (any(key in e.data for key in ("wheel", "hitch", "pair")) or e.kind == "vehicle_rest")]

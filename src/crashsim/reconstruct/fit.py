@@ -47,22 +47,37 @@ Warnings
 
 from __future__ import annotations
 
+import copy
+import datetime
 import logging
 import math
+import multiprocessing as mp
 import os
+import sys
 import time
-from dataclasses import dataclass, field
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field, replace
+from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
+from scipy.optimize import least_squares
 
-
+from .._version import __version__
 from ..errors import ScenarioError, SolverError, UnreachableImpactError, failure_reason, in_file
-from ..outputs import check_workers
-from .inverse_schema import CORRELATION_WARNING
+from ..evidence.checks import (approach_of_body, approach_tracks, recorder_residuals,
+                               signed_distance_to_polyline, wheel_matches)
+from ..evidence.crush import GROUP_TITLES, crush_groups
 from ..geometry import wrap_angle
-from .evidence import signed_distance_to_polyline
-from .overrides import ScenarioOverrides, default_engine, parse_value
+from ..inverse_schema import CORRELATION_WARNING, validate_fit
+from ..outputs import check_workers
+from ..report import fmt, table
+from ..scene.run import run_scene
+from ..schema import in_range, interval_text
+from ..units import resolve_system
+from .montecarlo import DEFAULT_SAMPLE_TIME_LIMIT
+from .overrides import (ScenarioOverrides, default_engine, forward_data, get_value, parse_value, resolve_path,
+                        set_value)
 
 __all__ = ["FitSpec", "Unknown", "FitProblem", "FitResult", "EvidenceResidual", "StartResult", "fit_scene",
            "RANK_TOL", "PENALTY"]
@@ -111,12 +126,10 @@ class Unknown:
 
 def _check_bounds_allowed(target, lo: float, hi: float, raw: dict, key: str, file: str | None) -> None:
     """The bounds of an unknown must lie in the allowed range of its input (every evaluation is then valid)."""
-    from ..schema import _in_range, _interval
-
     for which, x in (("lower", lo), ("upper", hi)):
-        if not _in_range(x, target.field):
+        if not in_range(x, target.field):
             raise ScenarioError(f"{which} = {raw[which]!r} lies outside the allowed range of {target.path}, "
-                                f"{_interval(target.field)}", field=f"{key}.{which}", file=file)
+                                f"{interval_text(target.field)}", field=f"{key}.{which}", file=file)
 
 
 @dataclass(frozen=True)
@@ -149,9 +162,6 @@ class FitSpec:
 
         ``data`` (the raw scenario) supplies the default start values (the file's values).
         """
-        from .inverse_schema import validate_fit
-        from .overrides import get_value, resolve_path, forward_data
-
         d = validate_fit(raw, file=file)
         base = forward_data(data, file=file) if data is not None else None
         unknowns = []
@@ -223,14 +233,12 @@ def _resample(points: np.ndarray, k: int) -> np.ndarray:
 def _mark_distances(item: _Item, tracks: dict, k: int, pts: np.ndarray | None = None) -> tuple[np.ndarray, str | None]:
     """Signed distances of ``k`` points spread along the mark to the best-matching wheel's track, and
     that wheel (``pts``: the mark's ``_resample(points, k)``, if already computed)."""
-    from .evidence import _wheel_matches
-
     ev = item.mark
     pts = _resample(ev.points, k) if pts is None else pts
     best = None
     for sliding in ((True, False) if ev.sliding_only else (False,)):
         for key, tr in tracks.items():
-            if not _wheel_matches(tr, ev.wheel):
+            if not wheel_matches(tr, ev.wheel):
                 continue
             pieces = [s.points for s in tr.segments if (s.kind == "sliding" or not sliding) and len(s.points)]
             if not pieces:
@@ -312,8 +320,6 @@ class EvidenceModel:
             items.append(_Item("recorder", x.name or f"recorder in {x.body}", "speed", s, src, n, float(n), i,
                                body=x.body, measured=x))
         if ev.crush:
-            from .crush import GROUP_TITLES, crush_groups
-
             for which, idx in crush_groups(ev.crush):
                 # the group's sigma: root sum of squares of its items' (independent measurements)
                 parts, srcs = [], set()
@@ -342,7 +348,7 @@ class EvidenceModel:
     def checks(self, scene) -> list:
         """The evidence check (verdict against the tolerance) of each item, in item order.
 
-        Matched by kind and order (:func:`~crashsim.reconstruct.evidence.evaluate_evidence`
+        Matched by kind and order (:func:`~crashsim.evidence.checks.evaluate_evidence`
         checks the items kind by kind in file order), so equal names do not mix them up.
         """
         by_kind: dict[str, list] = {}
@@ -384,8 +390,6 @@ class EvidenceModel:
                 out.append(np.array([float(wrap_angle(b.rest_heading - it.measured))]))
                 det.append({"computed": float(wrap_angle(b.rest_heading))})
             elif it.kind == "recorder":
-                from .evidence import approach_of_body, recorder_residuals
-
                 a = approach_of_body(approaches, it.body)
                 if a is None:
                     out.append(np.full(it.size, np.nan))
@@ -396,8 +400,6 @@ class EvidenceModel:
                     det.append({"computed": computed.tolist()})
             elif it.kind == "mark" and it.mark.phase == "approach":
                 if pre_tracks is None:
-                    from .evidence import approach_tracks
-
                     pre_tracks = approach_tracks(approaches)
                 d, key = _mark_distances(it, pre_tracks, self.mark_points, getattr(self, "_mark_points", {}).get(i))
                 out.append(d)
@@ -433,7 +435,7 @@ class EvidenceModel:
 # The problem: unknowns (scaled to [0, 1]) -> weighted residuals
 # ---------------------------------------------------------------------------------------------
 
-class _NotAtRest(Exception):
+class NotAtRest(Exception):
     """A scene evaluation whose run-out a limit ended (a failed evaluation of the fit)."""
 
     def __init__(self, status: str, message: str):
@@ -504,8 +506,6 @@ class FitProblem:
 
     def scene(self, x):
         """Run the scene at unknowns ``x`` (SI)."""
-        from .scene import run_scene
-
         return run_scene(self.overrides.scenario(x))
 
     def evaluate(self, z) -> tuple[np.ndarray, Any]:
@@ -520,10 +520,10 @@ class FitProblem:
             scene = self.scene(self.x_of(z))
             if not scene.at_rest:  # a limit ended the run-out: its positions are not rest positions
                 bad = next(r_ for r_ in scene.runout.values() if not r_.success)
-                raise _NotAtRest(bad.status, f"the run-out of {bad.vehicle!r} did not reach rest: {bad.message}")
+                raise NotAtRest(bad.status, f"the run-out of {bad.vehicle!r} did not reach rest: {bad.message}")
             r = self.evidence.weighted(scene)
             out = (r, scene)
-        except _NotAtRest as exc:
+        except NotAtRest as exc:
             self._fail(f"run-out: {exc.status}", exc)
             out = (np.full(self.evidence.size, PENALTY), exc)
         except (ScenarioError, SolverError) as exc:
@@ -567,8 +567,6 @@ class FitProblem:
 
     def local_fit(self, z0) -> dict:
         """One bounded least-squares fit from ``z0``; a plain dict (crosses process boundaries)."""
-        from scipy.optimize import least_squares
-
         n0 = self.nfev
         z0 = np.clip(np.asarray(z0, float), 1e-9, 1 - 1e-9)
         res = least_squares(self.residual, z0, jac=lambda z: self.jacobian(z), bounds=(0.0, 1.0),
@@ -734,10 +732,6 @@ class FitResult:
         ValueError
             If this result does not hold its input (built by hand, not by :func:`fit_scene`).
         """
-        import copy
-
-        from .overrides import resolve_path, set_value
-
         if self.source_data is None:
             raise ValueError("this FitResult does not hold the scenario it was fitted to (made by fit_scene, it does)")
         data = copy.deepcopy({k: v for k, v in self.source_data.items() if k != "fit"})
@@ -768,12 +762,10 @@ class FitResult:
         ScenarioError
             If ``path`` is the file the fit was read from.
         """
-        from pathlib import Path
-
         import tomli_w
 
         path = Path(path)
-        if self.file is not None and _same_file(path, Path(self.file)):
+        if self.file is not None and same_file(path, Path(self.file)):
             raise ScenarioError(f"{str(path)!r} is the input file; the best fit is written to another file",
                                 field="--write-best", file=self.file)
         data = self.best_scenario_dict()
@@ -789,9 +781,6 @@ class FitResult:
     def report(self, system: str | None = None) -> str:
         """Readable report: best values with intervals, correlations, residuals, warnings
         (``system``: SI or US, any case; default the scenario's units)."""
-        from ..report import fmt, table
-        from ..units import resolve_system
-
         sc = self.scene.scenario if self.scene is not None else None
         system = resolve_system(system, sc.units if sc is not None else "SI")
         lines = [f"crashsim fit: {sc.title}" if sc is not None else "crashsim fit"]
@@ -848,7 +837,7 @@ class FitResult:
         return "\n".join(lines)
 
 
-def _same_file(a, b) -> bool:
+def same_file(a, b) -> bool:
     """Whether two paths name the same file (existing or not)."""
     try:
         if a.exists() and b.exists():
@@ -860,13 +849,6 @@ def _same_file(a, b) -> bool:
 
 def _best_header(res: FitResult, data: dict) -> str:
     """The comment block at the top of a best-fit scenario file (display units of the scenario)."""
-    import datetime
-
-    from .. import __version__
-    from ..report import fmt
-
-    from ..units import resolve_system
-
     system = resolve_system((data.get("scenario") or {}).get("units"), "SI")
     when = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     pct = f"{100 * res.confidence:g} %"
@@ -935,7 +917,6 @@ def _progress(progress, total):
             from tqdm import tqdm
         except ImportError:  # pragma: no cover - tqdm is a dependency
             return None
-        import sys
 
         return tqdm(total=total, desc="fit starts", unit="start", file=sys.stderr)
     return None
@@ -987,7 +968,7 @@ def fit_scene(scenario_data: dict, fit_spec: FitSpec | dict | None = None, *, en
         spec = fit_spec if isinstance(fit_spec, FitSpec) else FitSpec.from_dict(fit_spec, scenario_data, file=file)
     engine = default_engine() if engine is None else engine
     if sample_time_limit is None:
-        from .montecarlo import DEFAULT_SAMPLE_TIME_LIMIT as sample_time_limit
+        sample_time_limit = DEFAULT_SAMPLE_TIME_LIMIT
     if not (sample_time_limit > 0):
         raise ScenarioError(f"the sample time limit must be > 0 s, got {sample_time_limit!r}", field="sample_time_limit")
     problem = FitProblem(scenario_data, spec, engine=engine, file=file, sample_time_limit=sample_time_limit)
@@ -1005,9 +986,6 @@ def fit_scene(scenario_data: dict, fit_spec: FitSpec | dict | None = None, *, en
     evaluations = 0
     try:
         if use_pool:
-            import multiprocessing as mp
-            from concurrent.futures import ProcessPoolExecutor
-
             ctx = mp.get_context("fork") if "fork" in mp.get_all_start_methods() else None
             pool = ProcessPoolExecutor(max_workers=min(workers, max(n_tasks, spec.screen)), mp_context=ctx,
                                        initializer=_worker_init,
@@ -1039,7 +1017,6 @@ def fit_scene(scenario_data: dict, fit_spec: FitSpec | dict | None = None, *, en
     result = _analyse(problem, spec, outcomes, engine)
     evaluations += problem.nfev - n_before
     result = _replace_timing(result, evaluations, time.perf_counter() - t0, problem.failures)
-    from dataclasses import replace
 
     return replace(result, source_data=scenario_data, file=file)
 
@@ -1053,8 +1030,6 @@ def _merge_reasons(tallies) -> dict[str, int]:
 
 
 def _replace_timing(result: FitResult, evaluations: int, elapsed: float, failures: int) -> FitResult:
-    from dataclasses import replace
-
     return replace(result, evaluations=evaluations, elapsed=elapsed, failures=sum(result.failure_reasons.values()))
 
 

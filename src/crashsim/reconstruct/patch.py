@@ -36,7 +36,7 @@ way, which gives the same scenario or the same error as before.
 
 The objects a sample does not change keep their identity (the vehicles, the wheel settings,
 the contact model, the obstacles, the run-out options), which lets the run-out reuse its
-compiled scene model (:mod:`crashsim.reconstruct.scene`).
+compiled scene model (:mod:`crashsim.scene.run`).
 """
 
 from __future__ import annotations
@@ -45,6 +45,11 @@ from dataclasses import replace
 from typing import Sequence
 
 from ..errors import ScenarioError
+from ..impact.model import ImpactProblem
+from ..motion.road import Road
+from ..scenario import check_contact_point, frame_point, frame_xform, vehicle_states
+from ..schema import in_range
+from .values import format_value, parse_value
 
 __all__ = ["patch_kind", "patch_scenario"]
 
@@ -80,8 +85,6 @@ def patch_kind(target, data: dict) -> str | None:
 
 def _si(x: float, target) -> float:
     """``x`` written as a file value and read back: the SI float the full build would see."""
-    from .overrides import format_value, parse_value
-
     return parse_value(format_value(x, target), target, field=target.path)
 
 
@@ -117,11 +120,6 @@ def patch_scenario(base, targets: Sequence, values: Sequence[float], file: str |
     -------
     Scenario or None
     """
-    from ..impact.model import ImpactProblem
-    from ..motion.road import Road
-    from ..schema import _in_range
-    from ..scenario import _check_contact_point, _frame_xform, _point, _vehicle_states
-
     d = base.data
     kinds = []
     for t, x in zip(targets, values):
@@ -132,7 +130,7 @@ def patch_scenario(base, targets: Sequence, values: Sequence[float], file: str |
     try:
         for t, x in zip(targets, values):
             x = _si(float(x), t)
-            if not (x == x and abs(x) != float("inf")) or not _in_range(x, t.field):
+            if not (x == x and abs(x) != float("inf")) or not in_range(x, t.field):
                 return None
             d = _set(d, t, x)
         states = base.states
@@ -141,7 +139,7 @@ def patch_scenario(base, targets: Sequence, values: Sequence[float], file: str |
             states = dict(states)
             for veh in base.vehicles:
                 if veh.name in speeds:
-                    states.update(_vehicle_states(veh, d["vehicles"][veh.name]))
+                    states.update(vehicle_states(veh, d["vehicles"][veh.name]))
         problem = base.impact
         imp = d["impact"]
         surface_changes = {}
@@ -150,17 +148,17 @@ def patch_scenario(base, targets: Sequence, values: Sequence[float], file: str |
         if "law" in kinds:
             surface_changes["tangential"] = replace(problem.surface.tangential, value=imp[_LAW_KEY[imp["tangential"]]])
         if "normal" in kinds:
-            _, nang = _frame_xform(imp["normal_frame"], states, "impact.normal_frame", file)
+            _, nang = frame_xform(imp["normal_frame"], states, "impact.normal_frame", file)
             surface_changes["normal_angle"] = imp["normal"] + nang
         if "point" in kinds:
-            surface_changes["point"] = _point(imp["point"], imp["point_frame"], states, "impact.point_frame", file)
+            surface_changes["point"] = frame_point(imp["point"], imp["point_frame"], states, "impact.point_frame", file)
         if speeds or surface_changes:
             surface = replace(problem.surface, **surface_changes) if surface_changes else problem.surface
             problem = ImpactProblem(problem.vehicles, {b.name: states[b.name] for v in problem.vehicles
                                                        for b in v.bodies},
                                     problem.body1, problem.body2, surface, problem.constraints, problem.external)
         if "point" in kinds:
-            _check_contact_point(problem, imp["contact_tolerance"], d["scenario"]["units"], file)
+            check_contact_point(problem, imp["contact_tolerance"], d["scenario"]["units"], file)
         runout = base.runout
         if "road_friction" in kinds:
             runout = replace(runout, road=Road(d["runout"]["road_friction"], runout.road.zones))

@@ -639,8 +639,11 @@ def check_scene_hitches(model: SceneModel, y: np.ndarray) -> None:
                                     field=f"initial[{rear!r}].heading")
 
 
-def run_model(model: SceneModel, initial: Mapping[str, BodyState]) -> SceneRunout:
-    """Integrate the scene from separation to rest (or a limit); see the module docstring."""
+def run_model(model: SceneModel, initial: Mapping[str, BodyState], *, lean=None) -> SceneRunout:
+    """Integrate the scene from separation to rest (or a limit); see the module docstring.
+
+    ``lean``: None for the full result, or a predicate on wheel specs for the lean result of a
+    fit or Monte Carlo sample (:func:`crashsim.motion.postprocess.assemble_scene`)."""
     k = kernels()
     o = model.options
     M = model.M
@@ -691,7 +694,7 @@ def run_model(model: SceneModel, initial: Mapping[str, BodyState]) -> SceneRunou
     from .postprocess import assemble_scene
 
     return assemble_scene(model, integrator, status=status, message=message, t_end=t, y_initial=y_initial, y_end=y,
-                          quad=quad, events=log, impacts=impacts, nfev=int(counters[2]), mode=D)
+                          quad=quad, events=log, impacts=impacts, nfev=int(counters[2]), mode=D, lean=lean)
 
 
 def _message(code, o, t, y, k, M, log, integrator) -> str:

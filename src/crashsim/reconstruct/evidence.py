@@ -418,7 +418,10 @@ def signed_distance_to_polyline(points, polyline) -> np.ndarray:
     return side * dist
 
 
-def _wheel_matches(track, selector: str | None) -> bool:
+def wheel_matches(track, selector: str | None) -> bool:
+    """True if the wheel ``track`` (a WheelTrack or a wheel spec: ``body``, ``axle_index``,
+    ``axle_name``, ``side``) is one a mark's ``wheel`` selector (``"body/axle/side"``, parts
+    optional; None or ``"*"``: any wheel) names."""
     if selector in (None, "*"):
         return True
     parts = selector.split("/")
@@ -429,6 +432,9 @@ def _wheel_matches(track, selector: str | None) -> bool:
     if len(parts) >= 3 and parts[2] != track.side:
         return False
     return True
+
+
+_wheel_matches = wheel_matches
 
 
 def _bbox_lower_bound(pts: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> float:

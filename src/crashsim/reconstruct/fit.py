@@ -502,11 +502,22 @@ class FitProblem:
     def z_of(self, x) -> np.ndarray:
         return (np.asarray(x, float) - self.lower) / self.span
 
-    def scene(self, x):
-        """Run the scene at unknowns ``x`` (SI)."""
+    #: Evaluations run the lean scene (:func:`~crashsim.reconstruct.scene.run_scene` ``lean=True``:
+    #: the same residuals, without what no evidence reads); the best point's scene is run in full.
+    lean = True
+
+    def scene(self, x, *, lean: bool | None = None):
+        """Run the scene at unknowns ``x`` (SI); ``lean`` default :attr:`lean`."""
         from .scene import run_scene
 
-        return run_scene(self.overrides.scenario(x))
+        return run_scene(self.overrides.scenario(x), lean=self.lean if lean is None else lean)
+
+    def full_scene(self, z):
+        """The full SceneResult at scaled point ``z`` (for reports and figures), or the error that stops it."""
+        try:
+            return self.scene(self.x_of(np.asarray(z, float)), lean=False)
+        except (ScenarioError, SolverError) as exc:
+            return exc
 
     def evaluate(self, z) -> tuple[np.ndarray, Any]:
         """(weighted residuals, SceneResult or the error) at scaled point ``z``."""
@@ -1072,6 +1083,8 @@ def _analyse(problem: FitProblem, spec: FitSpec, outcomes: list[dict], engine: s
     message = outcomes[best_k]["message"]
     if isinstance(scene, Exception):
         raise SolverError(f"the scene cannot be evaluated at the best point found: {scene}")
+    if problem.lean:  # the evaluations' scenes are lean: the reported one in full (the same numbers)
+        scene = problem.full_scene(zb)
 
     # Weighted Jacobian in the scaled unknowns z (central differences); covariance converted to SI below.
     Jz = problem.jacobian(zb, central=True)

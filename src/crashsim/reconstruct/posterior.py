@@ -981,7 +981,7 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
         evaluations += pool.evaluations
     nominal = None
     try:
-        nominal = problem.fit.evaluate(z0)[1]
+        nominal = problem.fit.full_scene(z0)
     except Exception:  # pragma: no cover - evaluated above already
         nominal = None
     return _assemble(problem, spec, np.array(z_all), np.array(lp_all), np.array(bl_all), np.array(acc_all), derived,

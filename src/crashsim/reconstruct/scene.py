@@ -458,13 +458,19 @@ def separation_states(scenario, impact: ImpactResult) -> dict:
 CONTACT_LEVELS = ("articulated", "load_transfer")
 
 
-def run_scene(scenario) -> SceneResult:
+def run_scene(scenario, *, lean: bool = False) -> SceneResult:
     """Solve a loaded scenario: the impact, then the run-out of the whole scene if asked for.
 
     At the ``articulated`` and ``load_transfer`` levels every vehicle runs out together, with
     contact between them and with the scene's obstacles (the barrier of the impact among
     them): later impacts are solved by the impulse solver (:func:`crashsim.motion.simulate_scene`).
     The ``energy`` and ``rigid`` levels run each vehicle alone, without contact.
+
+    ``lean``: the result a fit, Monte Carlo or posterior sample reads (its records, residuals
+    and evidence checks), with the same numbers: the joint run-out keeps only the tracks of
+    the wheels a run-out tyre mark of the evidence can match, no hitch histories, no pair
+    summaries, no event places (:func:`crashsim.motion.postprocess.assemble_scene`).  Reports,
+    figures and ``to_dict`` need the full result (the default).
 
     Raises
     ------
@@ -491,7 +497,7 @@ def run_scene(scenario) -> SceneResult:
         for veh in movable:
             initial.update(make_hitch_consistent(veh, {b.name: states[b.name] for b in veh.bodies}))
         if spec.level in CONTACT_LEVELS:
-            joint, accuracy = _joint_runout(movable, initial, spec)
+            joint, accuracy = _joint_runout(movable, initial, spec, _track_filter(scenario) if lean else None)
             runout = dict(joint.vehicles)
         else:
             runout, accuracy = _separate_runouts(movable, initial, spec)
@@ -518,15 +524,24 @@ def run_scene(scenario) -> SceneResult:
                        accuracy=accuracy, joint=joint)
 
 
-def _joint_runout(movable, initial, spec):
-    """Every vehicle together, with contact (and to an accuracy target if the scenario asks)."""
+def _track_filter(scenario):
+    """The wheels whose tracks a lean run keeps: those a run-out tyre mark of the evidence can match."""
+    from .evidence import wheel_matches
+
+    selectors = tuple(m.wheel for m in scenario.evidence.marks if m.phase == "runout")
+    return lambda spec: any(wheel_matches(spec, s) for s in selectors)
+
+
+def _joint_runout(movable, initial, spec, lean=None):
+    """Every vehicle together, with contact (and to an accuracy target if the scenario asks);
+    ``lean``: None, or the wheel filter of a lean result."""
     kwargs = dict(contact=spec.contact, pair_contact=spec.pair_contact, obstacles=spec.obstacles)
     if spec.accuracy is None:
         from ..motion.engine import run_model
         from .models import scene_model
 
         # the same as simulate_scene(...), with the scene model reused across fit/MC samples
-        return run_model(scene_model(movable, spec), initial), None
+        return run_model(scene_model(movable, spec), initial, lean=lean), None
     from ..motion.accuracy import scene_to_accuracy
 
     joint, report = scene_to_accuracy(movable, initial, spec.wheels, spec.road, spec.accuracy, spec.accuracy_heading,

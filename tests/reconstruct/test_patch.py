@@ -238,3 +238,93 @@ def test_scene_model_on_another_road_equals_a_new_model():
     assert models.scene_model(movable, spec) is m1  # cached
     m2 = models.scene_model(movable, dataclasses.replace(spec, road=road))
     assert m2 is not m1 and m2.road is road and all(np.array_equal(a, b) for a, b in zip(m2.M, fresh.M))
+
+
+def _law(data, law, key, value):
+    out = dict(data)
+    out["impact"] = {k: v for k, v in data["impact"].items() if k not in ("mu", "mu_fraction", "friction")}
+    out["impact"].update(tangential=law, **{key: value})
+    return out
+
+
+#: Every path kind the variant patches, on a scene that has it: (scene, path, values around the file's).
+EVERY_PATH = [
+    (car_car, "vehicles.A.speed", [9.0, 12.5]),
+    (car_car, "vehicles.B.speed", [8.0, 11.0]),
+    (car_trailer, "vehicles.striking.speed", [10.5, 12.0]),
+    (car_trailer, "vehicles.towing.speed", [0.0, 3.0]),
+    (car_car, "impact.restitution", [0.0, 0.35]),
+    (car_trailer, "impact.restitution", [0.02, 1.0]),
+    (car_car, "impact.friction", [0.0, 0.8]),
+    (lambda: _law(car_car(), "ratio", "mu", -0.2), "impact.mu", [-0.05, -0.4]),
+    (lambda: _law(car_car(), "fraction", "mu_fraction", 0.8), "impact.mu_fraction", [0.0, 1.0]),
+    (car_car, "impact.normal", [1.5, 1.62]),
+    (car_trailer, "impact.normal", [1.45, 1.7]),
+    (car_car, "impact.point[0]", [-0.5, -0.3]),
+    (car_car, "impact.point[1]", [-0.95, -0.85]),
+    (car_trailer, "impact.point[0]", [-0.7, -0.2]),
+    (car_trailer, "impact.point[1]", [-0.95, -0.8]),
+    (car_car, "runout.road_friction", [0.4, 0.9]),
+    (car_trailer, "runout.road_friction", [0.55, 1.1]),
+]
+
+
+@pytest.mark.parametrize("scene, path, values", EVERY_PATH, ids=[f"{s.__name__}:{p}" for s, p, _ in EVERY_PATH])
+def test_every_path_through_the_variant(scene, path, values):
+    """Each patchable path alone and beside a speed: the variant's scenario is the full build's, value for
+    value, and its scene is the full build's, number for number."""
+    from crashsim.reconstruct.variants import ScenarioVariant
+
+    data = scene()
+    speed = next(f"vehicles.{n}.speed" for n in data["vehicles"] if f"vehicles.{n}.speed" != path)
+    for paths in ([path], [path, speed]):
+        fast, full = _pair(data, paths)
+        x0 = [fast.base_value(i) for i in range(len(paths))]
+        fast.scenario(x0)
+        variant = fast._variant
+        assert isinstance(variant, ScenarioVariant) and variant.patchable, paths
+        for v in values:
+            x = [v, *x0[1:]]
+            a, b = variant.scenario(x), full.scenario(x)
+            assert a is not None and a.vehicles is fast._fast_base.vehicles
+            same(a, b)
+        a, b = variant.scenario([values[-1], *x0[1:]]), full.scenario([values[-1], *x0[1:]])
+        assert json.dumps(run_scene(a).to_dict(), sort_keys=True) == json.dumps(run_scene(b).to_dict(), sort_keys=True)
+
+
+@pytest.mark.parametrize("scene, path, bad", [
+    (car_car, "impact.restitution", [1.01, -1e-9, math.inf]),
+    (car_car, "vehicles.A.speed", [-1.0, math.nan]),
+    (car_car, "runout.road_friction", [0.0, 2.5]),
+    (car_car, "impact.friction", [-0.1]),
+    (car_car, "impact.point[1]", [-4.0, 3.0]),
+])
+def test_the_variant_leaves_what_it_cannot_vouch_for_to_the_full_build(scene, path, bad):
+    """Out of its field's range, not finite, or a contact point off the outlines: the variant gives None, and
+    ScenarioOverrides raises the full build's error, text for text."""
+    data = scene()
+    fast, full = _pair(data, [path])
+    fast.scenario([fast.base_value(0)])
+    for x in bad:
+        assert fast._variant.scenario([x]) is None
+        with pytest.raises(ScenarioError) as e_fast:
+            fast.scenario([x])
+        with pytest.raises(ScenarioError) as e_full:
+            full.scenario([x])
+        assert str(e_fast.value) == str(e_full.value)
+
+
+@pytest.mark.parametrize("path", ["vehicles.A.speed", "impact.restitution", "impact.point[0]", "impact.normal",
+                                  "runout.road_friction", "impact.friction"])
+def test_the_file_text_round_trip_is_the_identity(path):
+    """The full build sees a sampled SI value as file text and back (``parse_value(format_value(x))``): for
+    the SI units that is exactly x, so the variant, which uses x as given, builds the same floats."""
+    from crashsim.reconstruct.overrides import format_value, parse_value, resolve_path
+
+    t = resolve_path(path)
+    rng = np.random.default_rng(3)
+    xs = np.concatenate([rng.normal(size=2000) * 10.0 ** rng.integers(-9, 9, size=2000), rng.uniform(-8, 8, 2000),
+                         [0.0, -0.0, 5e-324, 1.7976931348623157e308, 0.1, 1 / 3]])
+    for x in xs.tolist():
+        y = parse_value(format_value(x, t), t, field=path)
+        assert y == x and math.copysign(1.0, y) == math.copysign(1.0, x), (path, x, y)

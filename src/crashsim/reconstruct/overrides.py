@@ -394,6 +394,7 @@ class ScenarioOverrides:
         self.file = file
         self.fast = FAST if fast is None else bool(fast)
         self._fast_base = None  # the first scenario built the full way (the base of the fast path)
+        self._variant = None  # ScenarioVariant of the base and the paths, when they can be patched
         self.engine = engine
         self.max_wall_time = max_wall_time
         from ..survey.mapping import expand_survey
@@ -455,10 +456,8 @@ class ScenarioOverrides:
             self._cache.move_to_end(key)
             return hit
         sc = None
-        if self._fast_base is not None:
-            from .patch import patch_scenario
-
-            sc = patch_scenario(self._fast_base, self.targets, key, self.file)
+        if self._variant is not None:
+            sc = self._variant.scenario(key)
         if sc is None:
             sc = scenario_from_dict(self.data(key), file=self.file)
             if sc.runout is not None and (self.engine is not None or self.max_wall_time is not None):
@@ -467,7 +466,12 @@ class ScenarioOverrides:
                     options = replace(options, max_wall_time=float(self.max_wall_time))
                 sc = replace(sc, runout=replace(sc.runout, options=options))
             if self.fast and self._fast_base is None:
+                from .variants import ScenarioVariant
+
                 self._fast_base = sc
+                self._variant = ScenarioVariant(sc, self.targets, self.file)
+                if not self._variant.patchable:
+                    self._variant = None
         self._cache[key] = sc
         while len(self._cache) > self._cache_size:
             self._cache.popitem(last=False)

@@ -28,11 +28,12 @@ its speed sets the approach, which the full build simulates), nor the road frict
 vehicle has one (the approach runs on the run-out's road by default); the impact's coefficients,
 normal and point do not reach an approach (it ends at the impact positions) and are patched.
 
-Each value is first written as the file would write it and read back
-(``parse_value(format_value(x))``), so it is the SI float the full build would see, and
-checked against its field's allowed range.  Anything else (another path, a value out of
-range, an error in a constructor) returns None and the caller builds the scenario the full
-way, which gives the same scenario or the same error as before.
+Each value is taken as the SI float it is (the full build's file-text round trip,
+``parse_value(format_value(x))``, is the identity for SI units) and checked against its
+field's allowed range (:class:`~crashsim.reconstruct.variants.ScenarioVariant` applies the
+values; this module says which objects a path reaches).  Anything else (another path, a value
+out of range, an error in a constructor) returns None and the caller builds the scenario the
+full way, which gives the same scenario or the same error as before.
 
 The objects a sample does not change keep their identity (the vehicles, the wheel settings,
 the contact model, the obstacles, the run-out options), which lets the run-out reuse its
@@ -41,15 +42,12 @@ compiled scene model (:mod:`crashsim.reconstruct.scene`).
 
 from __future__ import annotations
 
-from dataclasses import replace
 from typing import Sequence
 
-from ..errors import ScenarioError
-
-__all__ = ["patch_kind", "patch_scenario"]
+__all__ = ["patch_kind", "patch_scenario", "set_validated", "LAW_KEY"]
 
 #: The tangential-law key that carries the law's value, by law.
-_LAW_KEY = {"ratio": "mu", "fraction": "mu_fraction", "friction": "friction"}
+LAW_KEY = {"ratio": "mu", "fraction": "mu_fraction", "friction": "friction"}
 
 
 def patch_kind(target, data: dict) -> str | None:
@@ -71,21 +69,14 @@ def patch_kind(target, data: dict) -> str | None:
     key = keys[1]
     if key == "restitution":
         return "restitution"
-    if key in _LAW_KEY.values():
-        return "law" if _LAW_KEY.get(data["impact"]["tangential"]) == key else None
+    if key in LAW_KEY.values():
+        return "law" if LAW_KEY.get(data["impact"]["tangential"]) == key else None
     if key in ("normal", "point") and data.get("barrier") is None:
         return key if (key == "normal") == (index is None) else None
     return None
 
 
-def _si(x: float, target) -> float:
-    """``x`` written as a file value and read back: the SI float the full build would see."""
-    from .overrides import format_value, parse_value
-
-    return parse_value(format_value(x, target), target, field=target.path)
-
-
-def _set(d: dict, target, x: float) -> dict:
+def set_validated(d: dict, target, x: float) -> dict:
     """A copy of the validated dict ``d`` with ``x`` at ``target`` (only the dicts along the path copied)."""
     out = dict(d)
     node = out
@@ -105,6 +96,9 @@ def _set(d: dict, target, x: float) -> dict:
 def patch_scenario(base, targets: Sequence, values: Sequence[float], file: str | None = None):
     """``base`` with ``values`` (SI, one per target) at ``targets``, or None if the full build is needed.
 
+    One sample of a :class:`~crashsim.reconstruct.variants.ScenarioVariant` (which prepares
+    what the samples share once: build it once where many samples follow).
+
     Parameters
     ----------
     base : Scenario
@@ -117,53 +111,6 @@ def patch_scenario(base, targets: Sequence, values: Sequence[float], file: str |
     -------
     Scenario or None
     """
-    from ..impact.model import ImpactProblem
-    from ..motion.road import Road
-    from ..schema import _in_range
-    from ..scenario import _check_contact_point, _frame_xform, _point, _vehicle_states
+    from .variants import ScenarioVariant
 
-    d = base.data
-    kinds = []
-    for t, x in zip(targets, values):
-        kind = patch_kind(t, d)
-        if kind is None:
-            return None
-        kinds.append(kind)
-    try:
-        for t, x in zip(targets, values):
-            x = _si(float(x), t)
-            if not (x == x and abs(x) != float("inf")) or not _in_range(x, t.field):
-                return None
-            d = _set(d, t, x)
-        states = base.states
-        speeds = {t.steps[1][0] for t, k in zip(targets, kinds) if k == "speed"}
-        if speeds:
-            states = dict(states)
-            for veh in base.vehicles:
-                if veh.name in speeds:
-                    states.update(_vehicle_states(veh, d["vehicles"][veh.name]))
-        problem = base.impact
-        imp = d["impact"]
-        surface_changes = {}
-        if "restitution" in kinds:
-            surface_changes["restitution"] = imp["restitution"]
-        if "law" in kinds:
-            surface_changes["tangential"] = replace(problem.surface.tangential, value=imp[_LAW_KEY[imp["tangential"]]])
-        if "normal" in kinds:
-            _, nang = _frame_xform(imp["normal_frame"], states, "impact.normal_frame", file)
-            surface_changes["normal_angle"] = imp["normal"] + nang
-        if "point" in kinds:
-            surface_changes["point"] = _point(imp["point"], imp["point_frame"], states, "impact.point_frame", file)
-        if speeds or surface_changes:
-            surface = replace(problem.surface, **surface_changes) if surface_changes else problem.surface
-            problem = ImpactProblem(problem.vehicles, {b.name: states[b.name] for v in problem.vehicles
-                                                       for b in v.bodies},
-                                    problem.body1, problem.body2, surface, problem.constraints, problem.external)
-        if "point" in kinds:
-            _check_contact_point(problem, imp["contact_tolerance"], d["scenario"]["units"], file)
-        runout = base.runout
-        if "road_friction" in kinds:
-            runout = replace(runout, road=Road(d["runout"]["road_friction"], runout.road.zones))
-    except ScenarioError:
-        return None
-    return replace(base, states=states, impact=problem, runout=runout, data=d)
+    return ScenarioVariant(base, targets, file).scenario(values)

@@ -663,6 +663,13 @@ class Scenario:
     approaches: dict = field(default_factory=dict)
 
     @property
+    def file_data(self) -> dict | None:
+        """The file contents (raw, as from TOML) this scenario was built from by
+        :func:`scenario_from_dict`, or None (a scenario made another way, e.g. by
+        :func:`dataclasses.replace`): what fit, Monte Carlo and posterior samples vary."""
+        return self.__dict__.get("_file_data")
+
+    @property
     def barrier_extent(self) -> tuple[float, float] | None:
         """(from, to) along the crush tangent [m] of a barrier face; None without a barrier,
         (-inf, inf) for an endless one."""
@@ -1062,6 +1069,7 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
 
     A ``[survey]`` section not yet read is read here (:func:`crashsim.survey.expand_survey`): its
     items join the file's own tables before validation."""
+    source = data
     if isinstance(data, dict) and "survey" in data:
         from .survey.mapping import expand_survey
 
@@ -1206,8 +1214,10 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
         evidence = dataclasses.replace(evidence, crush=_build_crush(d["evidence"]["crush"], d, vehicles, file))
     map_lines = _build_map_lines(d["map"], file)
     meta = d["scenario"]
-    return Scenario(file, meta["title"], meta["source"], meta["units"], tuple(vehicles), states, problem, runout,
-                    evidence, d, map_lines, approaches)
+    out = Scenario(file, meta["title"], meta["source"], meta["units"], tuple(vehicles), states, problem, runout,
+                   evidence, d, map_lines, approaches)
+    object.__setattr__(out, "_file_data", source)  # the file contents it was built from (Scenario.file_data)
+    return out
 
 
 def outline_problem(points) -> str | None:

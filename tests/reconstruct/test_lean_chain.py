@@ -149,3 +149,26 @@ def test_lean_scene_gives_the_full_numbers(raw):
                 assert tr.path_length == r.wheels[key].path_length
         assert any(lean.runout[v].wheels for v in lean.runout)  # the mark's wheels are kept
         assert sum(len(r.wheels) for r in lean.runout.values()) < sum(len(r.wheels) for r in full.runout.values())
+
+
+def test_the_inverse_api_takes_a_scenario(raw, monkeypatch):
+    """crashsim.fit / monte_carlo accept a Scenario (its file_data varied, not its file read again), also
+    one built in memory with no file; the same numbers as from the file's path."""
+    import crashsim
+    import crashsim.scenario as sm
+    from crashsim.reconstruct.inverse_schema import with_inverse_sections
+    from crashsim.reconstruct.overrides import file_contents
+
+    monkeypatch.setattr(sm, "SCHEMA", with_inverse_sections(sm.SCHEMA))
+    sc = sm.scenario_from_dict(raw)  # no file behind it
+    assert sc.path is None and sc.file_data is raw
+    assert file_contents(sc) == (raw, None)
+    import dataclasses
+
+    with pytest.raises(crashsim.errors.ScenarioError):
+        file_contents(dataclasses.replace(sc))  # made another way: no file contents to vary
+    a = crashsim.monte_carlo(sc, samples=3, workers=1, engine=ENGINE)
+    b = crashsim.monte_carlo(crashsim.load(FILE), samples=3, workers=1, engine=ENGINE)
+    assert np.array_equal(a.inputs, b.inputs) and a.outputs.keys() == b.outputs.keys()
+    for k in a.outputs:
+        assert np.array_equal(a.outputs[k], b.outputs[k], equal_nan=True), k

@@ -62,7 +62,7 @@ from ..outputs import check_workers
 from .inverse_schema import CORRELATION_WARNING
 from ..geometry import wrap_angle
 from .evidence import signed_distance_to_polyline
-from .overrides import ScenarioOverrides, default_engine, parse_value
+from .overrides import ScenarioOverrides, default_engine, file_contents, parse_value
 
 __all__ = ["FitSpec", "Unknown", "FitProblem", "FitResult", "EvidenceResidual", "StartResult", "fit_scene",
            "RANK_TOL", "PENALTY"]
@@ -989,6 +989,7 @@ def fit_scene(scenario_data: dict, fit_spec: FitSpec | dict | None = None, *, en
     ScenarioError
         Invalid [fit] table, path, bounds, or evidence without sigma.
     """
+    scenario_data, file = file_contents(scenario_data, file)
     t0 = time.perf_counter()
     if fit_spec is None:
         if "fit" not in scenario_data:

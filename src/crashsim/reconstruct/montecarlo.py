@@ -56,7 +56,7 @@ import numpy as np
 from ..errors import CrashsimError, ScenarioError, failure_reason, in_file
 from ..outputs import check_workers
 from ..geometry import circular_mean, unwrap_about_mean
-from .overrides import ScenarioOverrides, default_engine, parse_value
+from .overrides import ScenarioOverrides, default_engine, file_contents, parse_value
 
 __all__ = ["InputDistribution", "UncertaintySpec", "MCResult", "monte_carlo", "sample_inputs", "load_results",
            "DEFAULT_PERCENTILES", "DEFAULT_SAMPLE_TIME_LIMIT"]
@@ -925,6 +925,7 @@ def monte_carlo(scenario_data: dict, spec: UncertaintySpec | dict | None = None,
     ScenarioError
         Invalid [uncertainty] table or paths, or a results file of another run.
     """
+    scenario_data, file = file_contents(scenario_data, file)
     t0 = time.perf_counter()
     if spec is None:
         if "uncertainty" not in scenario_data:

@@ -38,14 +38,14 @@ import math
 import re
 from collections import OrderedDict
 from dataclasses import dataclass
-from typing import Any, Sequence
+from typing import Any, Mapping, Sequence
 
 from ..errors import ScenarioError
 from ..schema import ArrayOf, Field, Section, Table
 from ..units import Kind, parse, si_unit, write_like
 
 __all__ = ["Target", "resolve_path", "parse_value", "format_value", "set_value", "get_value",
-           "ScenarioOverrides", "INVERSE_SECTIONS"]
+           "ScenarioOverrides", "INVERSE_SECTIONS", "file_contents"]
 
 #: Top-level sections of a file that belong to the inverse side and not to the forward model;
 #: they are removed before the forward scenario is built.
@@ -340,6 +340,23 @@ def _engine_options(options, engine: str | None):
         raise ScenarioError(f"run-out engine {engine!r} is not available in this crashsim "
                             "(RunoutOptions has no engine field); use engine='scipy'", field="engine")
     return options
+
+
+def file_contents(source, file: str | None = None) -> tuple[dict, str | None]:
+    """The raw file contents a fit, Monte Carlo or posterior run varies, and the file name.
+
+    ``source``: the file's contents (a dict, as from TOML), or a
+    :class:`~crashsim.scenario.Scenario` built from them (its
+    :attr:`~crashsim.scenario.Scenario.file_data`; the file name its ``path`` unless ``file``
+    is given).
+    """
+    if isinstance(source, Mapping):
+        return source, file
+    data = getattr(source, "file_data", None)
+    if data is None:
+        raise ScenarioError(f"cannot vary the inputs of {type(source).__name__}: give the file's contents (a dict) "
+                            "or a Scenario built from them (crashsim.load, scenario_from_dict)", field="scenario")
+    return data, getattr(source, "path", None) if file is None else file
 
 
 def default_engine() -> str:

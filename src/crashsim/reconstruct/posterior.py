@@ -846,7 +846,9 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
 
     from .fit import FitSpec, fit_scene
     from .montecarlo import DEFAULT_SAMPLE_TIME_LIMIT
-    from .overrides import default_engine
+    from .overrides import default_engine, file_contents
+
+    scenario_data, file = file_contents(scenario_data, file)
 
     t0 = time.perf_counter()
     if "fit" not in scenario_data:

@@ -84,6 +84,12 @@ class _Integrator:
         self.nlu = 0
         self.message = ""
 
+    def segment_data(self, mode):
+        """``(bounds, arrays)``: ``(t0, t1, _)`` of every segment, and their stacked mode arrays
+        (:func:`_segment_arrays`; with no segment, those of ``mode``, the run's mode at its end)."""
+        table = self.segment_table()
+        return table, _segment_arrays(table if table else [(0.0, 0.0, _snapshot(0, mode))], self.model)
+
 
 class _ScipyIntegrator(_Integrator):
     """Segments integrated by SciPy's ODE solvers, stepped from Python (one step at a time)."""
@@ -266,6 +272,18 @@ class _CompiledIntegrator(_Integrator):
         return [(float(sg_t[i, 0]), float(sg_t[i, 1]),
                  (int(phase[i]), memb[i], int(nlk[i]), lkj[i], lkth[i], pstate[i], pref[i], parked[i]))
                 for i in range(len(sg_t))]
+
+    def segment_data(self, mode):
+        """As :meth:`_Integrator.segment_data`, from the joined segment arrays (the same arrays as
+        stacking :meth:`segment_table`'s modes, without the per-segment tuples)."""
+        _, _, sg = self._joined()
+        if sg is None or not len(sg[0]):  # no segment (at rest from the start): the mode's arrays
+            return super().segment_data(mode)
+        sg_t, _, phase, memb, nlk, lkj, lkth, pstate, pref, parked = sg
+        bounds = list(zip(sg_t[:, 0].tolist(), sg_t[:, 1].tolist(), [None] * len(sg_t)))
+        i64 = np.int64
+        return bounds, (phase.astype(i64), memb.copy(), nlk.astype(i64), lkj.copy(), lkth.copy(), pstate.astype(i64),
+                        pref.copy(), parked.astype(i64))
 
     def sample(self, T, seg_of, y_end):
         st, sg_s, _ = self._joined()

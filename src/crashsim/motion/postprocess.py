@@ -476,17 +476,15 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
     wheels' tracks, the hitch histories (``hitches`` empty, ``max_hitch_gap`` NaN) and the pair
     summaries (``pairs`` empty).  Every value it has is the full result's, bit for bit.
     """
-    from .engine import _segment_arrays, _snapshot
     from .model import kernels
     from .result import PairSummary, SceneRunout
 
     k = kernels()
     o = model.options
     M = model.M
-    table = integrator.segment_table()
+    table, arrays = integrator.segment_data(mode)  # (t0, t1, _) per segment; their mode arrays
     T, seg_of = _sample_times(table, o.sample_dt, t_end)
     Y = integrator.sample(T, seg_of, y_end)
-    arrays = _segment_arrays(table if table else [(t_end, t_end, _snapshot(0, mode))], model)
     P, SL, LD, LAMH, STOPM, CF, max_gap, pen = k.evaluate_samples(np.ascontiguousarray(Y), seg_of, M, *arrays)
     sol = integrator.solution(y_end, t_end)
     if lean is None:

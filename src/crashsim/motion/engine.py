@@ -256,6 +256,11 @@ class _CompiledIntegrator(_Integrator):
     def _joined(self):
         if getattr(self, "_cache", None) is not None and self._cache[0] == len(self.parts):
             return self._cache[1]
+        if len(self.parts) == 1:  # one run of the kernel (no later impact): its arrays as they are
+            p = self.parts[0]
+            joined = ([p[i] for i in range(4)], p[5], [p[i] for i in range(4, 14)])
+            self._cache = (1, joined)
+            return joined
         st = [np.concatenate([p[i] for p in self.parts]) for i in range(4)] if self.parts else None
         offs = np.cumsum([0] + [len(p[0]) for p in self.parts[:-1]]) if self.parts else []
         sg_s = np.concatenate([p[5] + off for p, off in zip(self.parts, offs)]) if self.parts else np.zeros((0, 2), np.int64)

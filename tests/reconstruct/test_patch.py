@@ -185,25 +185,65 @@ def test_shipped_scenes_with_a_barrier_or_zones(name, paths):
 
 
 def test_a_scene_with_an_approach():
-    """The impact's coefficients are patched (the approach ends at the impact positions, unchanged); the
-    speed of a vehicle with an approach and the road friction are not (the approach depends on them)."""
-    data = load_toml(ROOT / "scenarios" / "scenes" / "truck_brakes_into_car.toml")
+    """The approach runs in the scene run: a sample's scenario carries the approach's inputs, and the speed at
+    braking, the road friction (the approach runs on the run-out's road) and the impact's coefficients are
+    patched into them (the approach ends at the impact positions, unchanged); the run simulates the approach.
+    The same scenario and scene as the full build, and at the file's values the scene of the loaded file."""
+    import crashsim
+
+    path = ROOT / "scenarios" / "scenes" / "truck_brakes_into_car.toml"
+    data = load_toml(path)
     with_approach = [n for n, v in data["vehicles"].items() if "approach" in v]
-    assert with_approach
-    fast, full = _pair(data, ["impact.restitution"])
-    x0 = fast.base_value(0)
-    fast.scenario([x0])
-    assert fast._fast_base.approaches
-    for x in (0.5 * x0 + 0.01, x0 + 0.02):
-        a, b = fast.scenario([x]), full.scenario([x])
-        assert a.vehicles is fast._fast_base.vehicles and a.approaches is fast._fast_base.approaches  # patched
-        same(replace_approaches(a), replace_approaches(b))
+    assert with_approach == ["truck"]
+    paths = ["vehicles.truck.approach.speed", "runout.road_friction", "impact.restitution",
+             "vehicles.truck.approach.reaction_time"]
+    fast, full = _pair(data, paths)
+    x0 = [fast.base_value(i) for i in range(len(paths))]
+    base = fast.scenario(x0)
+    assert base.approach_inputs and not base.approaches  # not simulated at load
+    assert fast._variant is not None and fast._variant.patchable
+    sc = crashsim.load(path)  # the approach simulated at load (the file's options), the run-out as fast's
+    sc = dataclasses.replace(sc, path=None, runout=dataclasses.replace(sc.runout, options=base.runout.options))
+    assert sc.approaches and sc.approach_inputs == base.approach_inputs
+    loaded = run_scene(sc)
+    ran = run_scene(base)
+    assert ran.scenario.approaches and ran.scenario.approaches_simulated
+    assert json.dumps(ran.to_dict(), sort_keys=True) == json.dumps(loaded.to_dict(), sort_keys=True)
+    for x in ([x0[0] * 1.03, x0[1], x0[2], x0[3]], [x0[0], 0.65, x0[2] + 0.02, x0[3] + 0.3],
+              [x0[0] * 0.98, 0.72, x0[2], 0.0]):
+        a, b = fast.scenario(x), full.scenario(x)
+        assert a.vehicles is fast._fast_base.vehicles  # patched
+        same(a, b)
         assert json.dumps(run_scene(a).to_dict(), sort_keys=True) == json.dumps(run_scene(b).to_dict(), sort_keys=True)
     from crashsim.reconstruct.overrides import resolve_path
 
     d = fast._fast_base.data
-    assert patch_kind(resolve_path(f"vehicles.{with_approach[0]}.speed"), d) is None
-    assert patch_kind(resolve_path("runout.road_friction"), d) is None
+    # the file gives the speed at braking: the speed at impact follows from the approach (both given: an error)
+    assert patch_kind(resolve_path("vehicles.truck.speed"), d) is None
+    assert patch_kind(resolve_path("vehicles.truck.approach.speed"), d) == "approach_speed"
+    assert patch_kind(resolve_path("runout.road_friction"), d) == "road_friction"
+    assert patch_kind(resolve_path("vehicles.truck.approach.reaction_time"), d) == "approach_reaction_time"
+    assert patch_kind(resolve_path("vehicles.truck.approach.distance"), d) is None
+
+
+def test_an_approach_from_its_speed_at_impact():
+    """A file that gives the speed at impact (the approach solves the speed at braking): that speed is patched
+    into the approach's inputs and the placeholder states; the same scenario and scene as the full build."""
+    data = load_toml(ROOT / "scenarios" / "scenes" / "truck_brakes_into_car.toml")
+    data["vehicles"]["truck"] = dict(data["vehicles"]["truck"], speed="40 mph")
+    data["vehicles"]["truck"]["approach"] = {k: v for k, v in data["vehicles"]["truck"]["approach"].items()
+                                             if k != "speed"}
+    fast, full = _pair(data, ["vehicles.truck.speed"])
+    x0 = fast.base_value(0)
+    fast.scenario([x0])
+    assert fast._variant is not None and fast._variant.kinds == ("approach_impact_speed",)
+    for x in (x0 * 0.95, x0 * 1.05):
+        a, b = fast.scenario([x]), full.scenario([x])
+        assert a.vehicles is fast._fast_base.vehicles
+        same(a, b)
+        ra, rb = run_scene(a), run_scene(b)
+        assert ra.scenario.approaches["truck"].speed_solved
+        assert json.dumps(ra.to_dict(), sort_keys=True) == json.dumps(rb.to_dict(), sort_keys=True)
 
 
 def replace_approaches(sc):

@@ -23,10 +23,13 @@ path                                  objects rebuilt
 ``runout.road_friction``              the road of the run-out
 ====================================  ===============================================================
 
-A vehicle's speed is not patched when the vehicle has an approach (``[vehicles.<name>.approach]``:
-its speed sets the approach, which the full build simulates), nor the road friction when any
-vehicle has one (the approach runs on the run-out's road by default); the impact's coefficients,
-normal and point do not reach an approach (it ends at the impact positions) and are patched.
+A vehicle with an approach (``[vehicles.<name>.approach]``) is simulated in the scene run
+(:func:`crashsim.reconstruct.scene.simulate_approaches`), from the inputs the scenario carries:
+its speed at impact (``vehicles.<name>.speed``), at the start of braking
+(``vehicles.<name>.approach.speed``) or its reaction time changes only those inputs, and the road friction also the
+road of every approach that runs on the run-out's road; the run re-runs the approach.  The
+impact's coefficients, normal and point do not reach an approach (it ends at the impact
+positions).
 
 Each value is taken as the SI float it is (the full build's file-text round trip,
 ``parse_value(format_value(x))``, is the identity for SI units) and checked against its
@@ -44,10 +47,14 @@ from __future__ import annotations
 
 from typing import Sequence
 
-__all__ = ["patch_kind", "patch_scenario", "set_validated", "LAW_KEY"]
+__all__ = ["patch_kind", "patch_scenario", "set_validated", "LAW_KEY", "APPROACH_KEYS"]
 
 #: The tangential-law key that carries the law's value, by law.
 LAW_KEY = {"ratio": "mu", "fraction": "mu_fraction", "friction": "friction"}
+
+#: The keys of ``[vehicles.<name>.approach]`` a sample may change in the approach's spec (its field
+#: of the same name), by their patch kind.
+APPROACH_KEYS = {"speed": "approach_speed", "reaction_time": "approach_reaction_time"}
 
 
 def patch_kind(target, data: dict) -> str | None:
@@ -57,13 +64,23 @@ def patch_kind(target, data: dict) -> str | None:
     keys = tuple(k for k, _ in target.steps)
     index = target.steps[-1][1]
     vehicles = data.get("vehicles") or {}
-    approach = {n: (v or {}).get("approach") is not None for n, v in vehicles.items()}
     if len(keys) == 3 and keys[0] == "vehicles" and keys[2] == "speed":
-        # a vehicle with an approach: its speed changes the approach (simulated in the full build)
-        return "speed" if keys[1] in vehicles and not approach[keys[1]] else None
+        if keys[1] not in vehicles:
+            return None
+        a = vehicles[keys[1]].get("approach")
+        if a is None:
+            return "speed"
+        # with an approach: the speed at impact its simulation starts from (in the run); none when the
+        # approach gives the speed at braking (both given: the full build's error)
+        return "approach_impact_speed" if a.get("speed") is None else None
+    if len(keys) == 4 and keys[0] == "vehicles" and keys[2] == "approach" and keys[3] in APPROACH_KEYS:
+        v = vehicles.get(keys[1])
+        if v is None or v.get("approach") is None:
+            return None
+        # the speed at braking with the speed at impact given too: the full build's error
+        return APPROACH_KEYS[keys[3]] if keys[3] != "speed" or v["speed"] is None else None
     if keys == ("runout", "road_friction"):
-        # an approach runs on the run-out's road by default: the full build
-        return "road_friction" if data.get("runout") is not None and not any(approach.values()) else None
+        return "road_friction" if data.get("runout") is not None else None
     if len(keys) != 2 or keys[0] != "impact":
         return None
     key = keys[1]

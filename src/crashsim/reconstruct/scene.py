@@ -8,7 +8,7 @@ from typing import Any
 
 from ..impact import ImpactResult, solve_impact
 
-__all__ = ["SceneResult", "run_scene", "rest_misfit_warnings"]
+__all__ = ["SceneResult", "run_scene", "rest_misfit_warnings", "simulate_approaches"]
 
 
 def rest_misfit_warnings(evidence) -> list[str]:
@@ -454,6 +454,58 @@ def separation_states(scenario, impact: ImpactResult) -> dict:
     return out
 
 
+def simulate_approaches(scenario):
+    """The scenario with its vehicles' approaches simulated (itself if there are none, or they are).
+
+    Each approach runs from the start of braking to the vehicle's impact configuration
+    (:func:`crashsim.motion.approach.simulate_approach`); its velocity and yaw rates at the end
+    become the vehicle's states at impact (hitch-consistent, the file's articulations), in
+    ``states`` and in the impact problem.
+
+    Raises
+    ------
+    ScenarioError
+        (naming the file) An approach that does not reach the impact, or a speed that cannot be solved.
+    """
+    if scenario.approaches_simulated:
+        return scenario
+    from dataclasses import replace
+
+    from ..errors import ScenarioError, with_file
+    from ..impact.model import ImpactProblem
+    from ..motion.approach import simulate_approach
+    from ..vehicles import chain_states
+
+    states = dict(scenario.states)
+    approaches = {}
+    d = scenario.data
+    for veh in scenario.vehicles:
+        a = scenario.approach_inputs.get(veh.name)
+        if a is None:
+            continue
+        try:
+            res = simulate_approach(veh, a.spec, {b.name: states[b.name] for b in veh.bodies}, a.road, a.options,
+                                    speed_at_impact=a.speed_at_impact)
+        except ScenarioError as exc:
+            raise with_file(exc, scenario.path) from None
+        approaches[veh.name] = res
+        v = d["vehicles"][veh.name]
+        end = res.impact_states
+        states.update(chain_states(veh, v["position"], v["heading"], end[veh.bodies[0].name].velocity,
+                                   [end[b.name].yaw_rate for b in veh.bodies],
+                                   [b["articulation"] for b in v["bodies"][1:]]))
+    p = scenario.impact
+    try:
+        problem = ImpactProblem(p.vehicles, {b.name: states[b.name] for v in p.vehicles for b in v.bodies}, p.body1,
+                                p.body2, p.surface, p.constraints, p.external)
+    except ScenarioError as exc:
+        raise ScenarioError(str(exc), field=exc.field, file=scenario.path) from None
+    out = replace(scenario, states=states, impact=problem, approaches=approaches)
+    if scenario.file_data is not None:
+        object.__setattr__(out, "_file_data", scenario.file_data)
+    return out
+
+
 #: Fidelity levels whose run-out models contact between vehicles and with obstacles.
 CONTACT_LEVELS = ("articulated", "load_transfer")
 
@@ -480,6 +532,7 @@ def run_scene(scenario, *, lean: bool = False) -> SceneResult:
     """
     from ..errors import ScenarioError, with_file
 
+    scenario = simulate_approaches(scenario)  # a vehicle's approach before the impact (unless already run)
     try:
         impact = solve_impact(scenario.impact)
     except ScenarioError as exc:

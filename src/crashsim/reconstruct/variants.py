@@ -15,6 +15,10 @@ compares them for every path kind).  The values are used as given: the file-text
 the full build sees (``"13.41 m/s"`` written with ``repr`` and read back) is the identity for
 the SI units (a factor of exactly 1; tested for every kind), so dropping it changes no digit.
 
+A vehicle's approach is simulated in the scene run (the scenarios here are built with
+``approaches=False``): a sample that changes an approach's speed, or the road friction it runs
+on, changes its inputs (``Scenario.approach_inputs``) and the run re-runs only that approach.
+
 What it cannot vouch for it leaves to the full build (``scenario`` returns None): a path it
 cannot patch (see :mod:`crashsim.reconstruct.patch`), a value out of its field's range, a
 contact point outside the bodies' outlines, an error in a constructor.  The full build then
@@ -79,6 +83,9 @@ class ScenarioVariant:
         self.file = file
         d = base.data
         self.kinds = tuple(patch_kind(t, d) for t in self.targets)
+        if base.approaches and any((k or "").startswith("approach_") or
+                                   (k == "road_friction" and base.approach_inputs) for k in self.kinds):
+            self.kinds = (None,)  # approaches already simulated (a loaded scenario): the full build
         self.patchable = None not in self.kinds
         if not self.patchable:
             return
@@ -89,7 +96,14 @@ class ScenarioVariant:
         self._vehicle_states = _vehicle_states
         kinds = set(self.kinds)
         self._speeds = tuple(v for v in base.vehicles
-                             if any(k == "speed" and t.steps[1][0] == v.name for t, k in zip(self.targets, self.kinds)))
+                             if any(k in ("speed", "approach_impact_speed") and t.steps[1][0] == v.name
+                                    for t, k in zip(self.targets, self.kinds)))
+        # the approaches whose inputs a sample changes: (vehicle name, what), in target order
+        self._approach = tuple((t.steps[1][0], t.steps[-1][0], k) for t, k in zip(self.targets, self.kinds)
+                               if (k or "").startswith("approach_"))
+        # with the road friction: the approaches that run on the run-out's road
+        self._on_runout_road = tuple(n for n in base.approach_inputs
+                                     if (d["vehicles"][n]["approach"] or {}).get("road_friction") is None)
         imp = d["impact"]
         problem = base.impact
         # the frames of the point and the normal: bodies' positions and headings, which no
@@ -156,8 +170,21 @@ class ScenarioVariant:
                 if any(max(0.0, -float(distance(p)[0])) > tol for distance in self._outlines):
                     return None
             runout = base.runout
+            inputs = base.approach_inputs
             if "road_friction" in kinds:
                 runout = replace(runout, road=Road(d["runout"]["road_friction"], runout.road.zones))
+                if self._on_runout_road:
+                    inputs = dict(inputs)
+                    for n in self._on_runout_road:
+                        inputs[n] = replace(inputs[n], road=runout.road)
+            if self._approach:
+                inputs = dict(inputs)
+                for n, key, k in self._approach:
+                    a = inputs[n]
+                    if k == "approach_impact_speed":
+                        inputs[n] = replace(a, speed_at_impact=d["vehicles"][n]["speed"])
+                    else:  # a field of the approach's spec (APPROACH_KEYS), validated by its constructor
+                        inputs[n] = replace(a, spec=replace(a.spec, **{key: d["vehicles"][n]["approach"][key]}))
         except ScenarioError:
             return None
-        return replace(base, states=states, impact=problem, runout=runout, data=d)
+        return replace(base, states=states, impact=problem, runout=runout, data=d, approach_inputs=inputs)

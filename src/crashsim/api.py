@@ -26,16 +26,28 @@ __all__ = ["load", "run", "fit", "monte_carlo", "posterior", "with_overrides"]
 
 
 def _raw(source) -> tuple[dict, str | None]:
-    """The file contents (raw TOML dict) and the file name of a path, a Scenario or a dict."""
+    """The file contents (raw TOML dict) and the file name of a path, a Scenario or a dict.
+
+    A Scenario gives the contents it was built from (:attr:`crashsim.scenario.Scenario.file_data`,
+    not read again), else those of its file."""
     if isinstance(source, (str, Path)):
         return load_toml(source), str(source)
     if isinstance(source, Mapping):
         return dict(source), None
+    data = getattr(source, "file_data", None)
+    if data is not None:
+        return data, getattr(source, "path", None)
     path = getattr(source, "path", None)
     if path is None:
         raise ScenarioError(f"cannot read scenario inputs from {type(source).__name__}: give a file path, a dict of "
                             "the file's contents, or a Scenario loaded from a file", field="scenario")
     return load_toml(path), str(path)
+
+
+def _validated(source, data: dict, file: str | None) -> None:
+    """The whole file validated first, as the CLI does (a Scenario built from ``data`` already was)."""
+    if not (isinstance(source, Scenario) and source.file_data is data):
+        scenario_from_dict(data, file=file)
 
 
 def with_overrides(data: Mapping, overrides: Mapping[str, Any] | None = None, **kwargs) -> dict:
@@ -114,7 +126,7 @@ def fit(scenario, **options):
     ``progress``, ``sample_time_limit``). Returns a :class:`~crashsim.reconstruct.fit.FitResult`.
     """
     data, file = _raw(scenario)
-    scenario_from_dict(data, file=file)  # the whole file validated first, as the CLI does
+    _validated(scenario, data, file)
     return fit_scene(data, None, file=file, **options)
 
 
@@ -126,7 +138,7 @@ def monte_carlo(scenario, samples: int | None = None, **options):
     :class:`~crashsim.reconstruct.montecarlo.MCResult`.
     """
     data, file = _raw(scenario)
-    scenario_from_dict(data, file=file)
+    _validated(scenario, data, file)
     options.setdefault("progress", False)
     return _mc(data, None, samples, file=file, **options)
 
@@ -139,6 +151,6 @@ def posterior(scenario, **options):
     Returns a :class:`~crashsim.reconstruct.posterior.PosteriorResult`.
     """
     data, file = _raw(scenario)
-    scenario_from_dict(data, file=file)
+    _validated(scenario, data, file)
     options.setdefault("progress", False)
     return run_posterior(data, None, file=file, **options)

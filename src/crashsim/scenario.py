@@ -560,6 +560,7 @@ from .motion.approach import ApproachSpec, simulate_approach
 from .motion.loads import STANDARD_GRAVITY
 from .motion.road import signed_distance
 from .plotting import is_color
+from .scene.run import simulate_approaches
 from .survey.mapping import expand_survey
 
 SCHEMA = with_inverse_sections(SCHEMA)
@@ -652,7 +653,12 @@ class Scenario:
         The road layout of ``[[map.lines]]`` (drawing only; empty without a ``[map]``).
     approaches : dict of ApproachResult
         By vehicle name: the simulated approach of each vehicle with ``[vehicles.<name>.approach]``
-        (its velocity and yaw rates at impact are in ``states``).
+        (its velocity and yaw rates at impact are in ``states``); empty until the approaches are
+        simulated (:func:`crashsim.reconstruct.scene.simulate_approaches`: by :func:`scenario_from_dict` unless asked not to,
+        else by the scene run).
+    approach_inputs : dict of ApproachInput
+        By vehicle name: what each vehicle's approach needs (its spec, road and options, the
+        speed at impact if the file gives it), built and checked at load.
     """
 
     path: str | None
@@ -667,6 +673,19 @@ class Scenario:
     data: dict = field(repr=False)
     map_lines: tuple[MapLine, ...] = ()
     approaches: dict = field(default_factory=dict)
+    approach_inputs: dict = field(default_factory=dict)
+
+    @property
+    def approaches_simulated(self) -> bool:
+        """True when every vehicle's approach has been simulated (its states at impact are final)."""
+        return len(self.approaches) == len(self.approach_inputs)
+
+    @property
+    def file_data(self) -> dict | None:
+        """The file contents (raw, as from TOML) this scenario was built from by
+        :func:`scenario_from_dict`, or None (a scenario made another way, e.g. by
+        :func:`dataclasses.replace`): what fit, Monte Carlo and posterior samples vary."""
+        return self.__dict__.get("_file_data")
 
     @property
     def barrier_extent(self) -> tuple[float, float] | None:
@@ -957,8 +976,29 @@ def vehicle_states(veh: Vehicle, v: dict) -> dict[str, BodyState]:
                         [b["yaw_rate"] for b in raw], [b["articulation"] for b in raw[1:]])
 
 
-def _build_approach(veh: Vehicle, v: dict, runout: "RunoutSpec | None", states: dict, file: str | None):
-    """Simulate the approach of ``veh`` (``v["approach"]``) to its impact configuration in ``states``."""
+@dataclass(frozen=True)
+class ApproachInput:
+    """What a vehicle's approach needs, built and checked at load (SI).
+
+    Attributes
+    ----------
+    spec : ApproachSpec
+    road : Road
+        The approach's road (the run-out's unless ``approach.road_friction`` is given).
+    options : RunoutOptions
+    speed_at_impact : float or None
+        The file's speed at impact (``vehicles.<name>.speed``); None when the approach gives
+        the speed at the start of braking.
+    """
+
+    spec: Any
+    road: Road
+    options: RunoutOptions
+    speed_at_impact: float | None
+
+
+def _approach_input(veh: Vehicle, v: dict, runout: "RunoutSpec | None", file: str | None) -> ApproachInput:
+    """What the approach of ``veh`` (``v["approach"]``) needs, checked (its simulation comes later)."""
     a = v["approach"]
     key = f"vehicles.{veh.name}.approach"
     if a["speed"] is not None and v["speed"] is not None:
@@ -981,10 +1021,9 @@ def _build_approach(veh: Vehicle, v: dict, runout: "RunoutSpec | None", states: 
         spec = ApproachSpec(wheels, a["speed"], a["distance"], a["time"],
                             None if a["start_position"] is None else tuple(a["start_position"]), a["start_heading"],
                             a["reaction_time"], a["tolerance"], key)
-        return simulate_approach(veh, spec, {b.name: states[b.name] for b in veh.bodies}, road, options,
-                                 speed_at_impact=v["speed"])
     except ScenarioError as exc:
         raise with_file(exc, file) from None
+    return ApproachInput(spec, road, options, v["speed"])
 
 
 def frame_xform(frame: str, states: dict, key: str, file: str | None):
@@ -1047,11 +1086,20 @@ def _units_any_case(data: dict) -> dict:
     return data
 
 
-def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scenario:
+def scenario_from_dict(data: dict[str, Any], *, file: str | None = None, approaches: bool = True) -> Scenario:
     """Validate a parsed scenario (as from TOML) and build the typed SI objects.
 
     A ``[survey]`` section not yet read is read here (:func:`crashsim.survey.expand_survey`): its
-    items join the file's own tables before validation."""
+    items join the file's own tables before validation.
+
+    ``approaches``: simulate the vehicles' approaches (:func:`crashsim.reconstruct.scene.simulate_approaches`,
+    the default);
+    False leaves them to the scene run (:func:`crashsim.reconstruct.run_scene` simulates them
+    before the impact): the scenario then carries their inputs (``approach_inputs``), and the
+    states at impact of a vehicle with an approach are those of its file speed (0 if none) until
+    then.  Fit, Monte Carlo and posterior samples build their scenarios so, and a sample that
+    changes an approach re-runs only that approach."""
+    source = data
     if isinstance(data, dict) and "survey" in data:
         data = expand_survey(data, file)
     data = _units_any_case(data)
@@ -1078,17 +1126,11 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
     if d["runout"] is not None:
         raw_runout = data.get("runout") if isinstance(data.get("runout"), dict) else {}
         runout = _build_runout(d["runout"], vehicles, d["vehicles"], file, raw_runout)
-    approaches = {}
+    approach_inputs = {}
     for veh in vehicles:
         v = d["vehicles"][veh.name]
-        if v["approach"] is None:
-            continue
-        res = _build_approach(veh, v, runout, states, file)
-        approaches[veh.name] = res
-        end = res.impact_states
-        states.update(chain_states(veh, v["position"], v["heading"], end[veh.bodies[0].name].velocity,
-                                   [end[b.name].yaw_rate for b in veh.bodies],
-                                   [b["articulation"] for b in v["bodies"][1:]]))
+        if v["approach"] is not None:
+            approach_inputs[veh.name] = _approach_input(veh, v, runout, file)
     imp = d["impact"]
     if d["barrier"] is not None:
         bname = d["barrier"]["name"]
@@ -1190,8 +1232,12 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
         evidence = dataclasses.replace(evidence, crush=_build_crush(d["evidence"]["crush"], d, vehicles, file))
     map_lines = _build_map_lines(d["map"], file)
     meta = d["scenario"]
-    return Scenario(file, meta["title"], meta["source"], meta["units"], tuple(vehicles), states, problem, runout,
-                    evidence, d, map_lines, approaches)
+    out = Scenario(file, meta["title"], meta["source"], meta["units"], tuple(vehicles), states, problem, runout,
+                   evidence, d, map_lines, {}, approach_inputs)
+    object.__setattr__(out, "_file_data", source)  # the file contents it was built from (Scenario.file_data)
+    if not approaches:
+        return out
+    return simulate_approaches(out)
 
 
 def outline_problem(points) -> str | None:

@@ -386,8 +386,9 @@ def signed_distance_to_polyline(points, polyline) -> np.ndarray:
 
 
 def wheel_matches(track, selector: str | None) -> bool:
-    """Whether a wheel track matches a mark's wheel selector ``"body[/axle[/side]]"`` (axle by index or
-    name; ``None`` or ``"*"`` matches every wheel)."""
+    """True if the wheel ``track`` (a WheelTrack or a wheel spec: ``body``, ``axle_index``,
+    ``axle_name``, ``side``) is one a mark's ``wheel`` selector (``"body/axle/side"``, parts
+    optional; None or ``"*"``: any wheel) names."""
     if selector in (None, "*"):
         return True
     parts = selector.split("/")

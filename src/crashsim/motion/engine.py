@@ -89,6 +89,12 @@ class _Integrator:
         self.nlu = 0
         self.message = ""
 
+    def segment_data(self, mode):
+        """``(bounds, arrays)``: ``(t0, t1, _)`` of every segment, and their stacked mode arrays
+        (:func:`~crashsim.motion.postprocess.segment_arrays`; with no segment, those of ``mode``, the run's mode at its end)."""
+        table = self.segment_table()
+        return table, segment_arrays(table if table else [(0.0, 0.0, mode_snapshot(0, mode))], self.model)
+
 
 class _ScipyIntegrator(_Integrator):
     """Segments integrated by SciPy's ODE solvers, stepped from Python (one step at a time)."""
@@ -253,6 +259,11 @@ class _CompiledIntegrator(_Integrator):
     def _joined(self):
         if getattr(self, "_cache", None) is not None and self._cache[0] == len(self.parts):
             return self._cache[1]
+        if len(self.parts) == 1:  # one run of the kernel (no later impact): its arrays as they are
+            p = self.parts[0]
+            joined = ([p[i] for i in range(4)], p[5], [p[i] for i in range(4, 14)])
+            self._cache = (1, joined)
+            return joined
         st = [np.concatenate([p[i] for p in self.parts]) for i in range(4)] if self.parts else None
         offs = np.cumsum([0] + [len(p[0]) for p in self.parts[:-1]]) if self.parts else []
         sg_s = np.concatenate([p[5] + off for p, off in zip(self.parts, offs)]) if self.parts else np.zeros((0, 2), np.int64)
@@ -269,6 +280,18 @@ class _CompiledIntegrator(_Integrator):
         return [(float(sg_t[i, 0]), float(sg_t[i, 1]),
                  (int(phase[i]), memb[i], int(nlk[i]), lkj[i], lkth[i], pstate[i], pref[i], parked[i]))
                 for i in range(len(sg_t))]
+
+    def segment_data(self, mode):
+        """As :meth:`_Integrator.segment_data`, from the joined segment arrays (the same arrays as
+        stacking :meth:`segment_table`'s modes, without the per-segment tuples)."""
+        _, _, sg = self._joined()
+        if sg is None or not len(sg[0]):  # no segment (at rest from the start): the mode's arrays
+            return super().segment_data(mode)
+        sg_t, _, phase, memb, nlk, lkj, lkth, pstate, pref, parked = sg
+        bounds = list(zip(sg_t[:, 0].tolist(), sg_t[:, 1].tolist(), [None] * len(sg_t)))
+        i64 = np.int64
+        return bounds, (phase.astype(i64), memb.copy(), nlk.astype(i64), lkj.copy(), lkth.copy(), pstate.astype(i64),
+                        pref.copy(), parked.astype(i64))
 
     def sample(self, T, seg_of, y_end):
         st, sg_s, _ = self._joined()
@@ -617,8 +640,11 @@ def check_scene_hitches(model: SceneModel, y: np.ndarray) -> None:
                                     field=f"initial[{rear!r}].heading")
 
 
-def run_model(model: SceneModel, initial: Mapping[str, BodyState]) -> SceneRunout:
-    """Integrate the scene from separation to rest (or a limit); see the module docstring."""
+def run_model(model: SceneModel, initial: Mapping[str, BodyState], *, lean=None) -> SceneRunout:
+    """Integrate the scene from separation to rest (or a limit); see the module docstring.
+
+    ``lean``: None for the full result, or a predicate on wheel specs for the lean result of a
+    fit or Monte Carlo sample (:func:`crashsim.motion.postprocess.assemble_scene`)."""
     k = kernels()
     o = model.options
     M = model.M
@@ -668,7 +694,7 @@ def run_model(model: SceneModel, initial: Mapping[str, BodyState]) -> SceneRunou
         _log.warning("run-out did not reach rest (%s): %s", status, message)
 
     return assemble_scene(model, integrator, status=status, message=message, t_end=t, y_initial=y_initial, y_end=y,
-                          quad=quad, events=log, impacts=impacts, nfev=int(counters[2]), mode=D)
+                          quad=quad, events=log, impacts=impacts, nfev=int(counters[2]), mode=D, lean=lean)
 
 
 def _message(code, o, t, y, k, M, log, integrator) -> str:

@@ -64,7 +64,7 @@ from ..outputs import check_workers
 from ..report import fmt
 from ..scene.run import run_scene
 from ..schema import interval_text
-from .overrides import INVERSE_SECTIONS, ScenarioOverrides, default_engine, parse_value, resolve_path
+from .overrides import INVERSE_SECTIONS, ScenarioOverrides, default_engine, file_contents, parse_value, resolve_path
 
 __all__ = ["InputDistribution", "UncertaintySpec", "MCResult", "monte_carlo", "sample_inputs", "load_results",
            "DEFAULT_PERCENTILES", "DEFAULT_SAMPLE_TIME_LIMIT"]
@@ -366,7 +366,7 @@ class _Runner:
         x = sample_inputs(self.spec, seed, i)
         row: dict[str, Any] = {"i": int(i), "x": [float(v) for v in x]}
         try:
-            scene = run_scene(self.overrides.scenario(x))
+            scene = run_scene(self.overrides.scenario(x), lean=True)  # what the record reads, the same numbers
         except CrashsimError as exc:
             row["error"] = f"{type(exc).__name__}: {exc}"
             row["reason"] = failure_reason(exc)
@@ -918,6 +918,7 @@ def monte_carlo(scenario_data: dict, spec: UncertaintySpec | dict | None = None,
     ScenarioError
         Invalid [uncertainty] table or paths, or a results file of another run.
     """
+    scenario_data, file = file_contents(scenario_data, file)
     t0 = time.perf_counter()
     if spec is None:
         if "uncertainty" not in scenario_data:

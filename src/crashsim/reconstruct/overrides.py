@@ -39,7 +39,7 @@ import math
 import re
 from collections import OrderedDict
 from dataclasses import dataclass, replace
-from typing import Any, Sequence
+from typing import Any, Mapping, Sequence
 
 from ..errors import ScenarioError
 from ..motion import RunoutOptions
@@ -47,11 +47,11 @@ from ..scenario import SCHEMA, apply_presets, scenario_from_dict
 from ..schema import ArrayOf, Field, Section, Table
 from ..survey.mapping import expand_survey
 from ..units import Kind
-from .patch import patch_scenario
 from .values import format_value, parse_value
+from .variants import ScenarioVariant
 
 __all__ = ["Target", "resolve_path", "parse_value", "format_value", "set_value", "get_value",
-           "ScenarioOverrides", "INVERSE_SECTIONS"]
+           "ScenarioOverrides", "INVERSE_SECTIONS", "file_contents"]
 
 #: Top-level sections of a file that belong to the inverse side and not to the forward model;
 #: they are removed before the forward scenario is built.
@@ -318,6 +318,23 @@ def _engine_options(options, engine: str | None):
     return options
 
 
+def file_contents(source, file: str | None = None) -> tuple[dict, str | None]:
+    """The raw file contents a fit, Monte Carlo or posterior run varies, and the file name.
+
+    ``source``: the file's contents (a dict, as from TOML), or a
+    :class:`~crashsim.scenario.Scenario` built from them (its
+    :attr:`~crashsim.scenario.Scenario.file_data`; the file name its ``path`` unless ``file``
+    is given).
+    """
+    if isinstance(source, Mapping):
+        return source, file
+    data = getattr(source, "file_data", None)
+    if data is None:
+        raise ScenarioError(f"cannot vary the inputs of {type(source).__name__}: give the file's contents (a dict) "
+                            "or a Scenario built from them (crashsim.load, scenario_from_dict)", field="scenario")
+    return data, getattr(source, "path", None) if file is None else file
+
+
 def default_engine() -> str:
     """``"compiled"`` when the run-out has the compiled engine, else ``"scipy"``."""
     if "engine" not in RunoutOptions.__dataclass_fields__:
@@ -364,6 +381,7 @@ class ScenarioOverrides:
         self.file = file
         self.fast = FAST if fast is None else bool(fast)
         self._fast_base = None  # the first scenario built the full way (the base of the fast path)
+        self._variant = None  # ScenarioVariant of the base and the paths, when they can be patched
         self.engine = engine
         self.max_wall_time = max_wall_time
 
@@ -420,10 +438,10 @@ class ScenarioOverrides:
             self._cache.move_to_end(key)
             return hit
         sc = None
-        if self._fast_base is not None:
-            sc = patch_scenario(self._fast_base, self.targets, key, self.file)
+        if self._variant is not None:
+            sc = self._variant.scenario(key)
         if sc is None:
-            sc = scenario_from_dict(self.data(key), file=self.file)
+            sc = scenario_from_dict(self.data(key), file=self.file, approaches=False)  # approaches: in the run
             if sc.runout is not None and (self.engine is not None or self.max_wall_time is not None):
                 options = _engine_options(sc.runout.options, self.engine)
                 if self.max_wall_time is not None:
@@ -431,6 +449,9 @@ class ScenarioOverrides:
                 sc = replace(sc, runout=replace(sc.runout, options=options))
             if self.fast and self._fast_base is None:
                 self._fast_base = sc
+                self._variant = ScenarioVariant(sc, self.targets, self.file)
+                if not self._variant.patchable:
+                    self._variant = None
         self._cache[key] = sc
         while len(self._cache) > self._cache_size:
             self._cache.popitem(last=False)

@@ -86,7 +86,7 @@ from ..report import fmt, table
 from ..units import resolve_system
 from .fit import FitProblem, FitSpec, NotAtRest, fit_scene
 from .montecarlo import DEFAULT_SAMPLE_TIME_LIMIT, MCResult, UncertaintySpec, scene_outputs
-from .overrides import INVERSE_SECTIONS, default_engine
+from .overrides import INVERSE_SECTIONS, default_engine, file_contents
 #: The kept chain should be this many autocorrelation times long (emcee's documentation: "you
 #: should not trust an estimate of tau unless the chain is longer than about 50 tau").
 TAU_FACTOR = 50
@@ -828,6 +828,8 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
     """
     import emcee
 
+    scenario_data, file = file_contents(scenario_data, file)
+
     t0 = time.perf_counter()
     if "fit" not in scenario_data:
         raise ScenarioError("the posterior is over the unknowns of the [fit] table (with their bounds), but the "
@@ -961,7 +963,7 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
         evaluations += pool.evaluations
     nominal = None
     try:
-        nominal = problem.fit.evaluate(z0)[1]
+        nominal = problem.fit.full_scene(z0)
     except Exception:  # pragma: no cover - evaluated above already
         nominal = None
     return _assemble(problem, spec, np.array(z_all), np.array(lp_all), np.array(bl_all), np.array(acc_all), derived,

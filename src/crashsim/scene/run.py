@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import csv
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -11,10 +11,12 @@ import numpy as np
 
 from ..animation import animate_scene
 from ..errors import ScenarioError, with_file
-from ..evidence.checks import REST_MISFIT_SHARE, evaluate_evidence
+from ..evidence.checks import REST_MISFIT_SHARE, evaluate_evidence, wheel_matches
 from ..impact import ImpactResult, solve_impact
+from ..impact.model import ImpactProblem
 from ..motion import make_hitch_consistent
 from ..motion.accuracy import scene_to_accuracy, simulate_to_accuracy
+from ..motion.approach import simulate_approach
 from ..motion.engine import run_model
 from ..motion.levels import simulate_level
 from ..motion.result import time_grid
@@ -23,10 +25,10 @@ from ..report import (format_approach, format_crush, format_events, format_evide
                       format_joint, format_runout, message_in)
 from ..survey.report import format_survey, survey_records
 from ..units import Kind, format_value, resolve_system, to_unit
-from ..vehicles import BodyState
+from ..vehicles import BodyState, chain_states
 from .models import scene_model
 
-__all__ = ["SceneResult", "run_scene", "rest_misfit_warnings"]
+__all__ = ["SceneResult", "run_scene", "rest_misfit_warnings", "simulate_approaches"]
 
 
 def rest_misfit_warnings(evidence) -> list[str]:
@@ -419,11 +421,56 @@ def separation_states(scenario, impact: ImpactResult) -> dict:
     return out
 
 
+def simulate_approaches(scenario):
+    """The scenario with its vehicles' approaches simulated (itself if there are none, or they are).
+
+    Each approach runs from the start of braking to the vehicle's impact configuration
+    (:func:`crashsim.motion.approach.simulate_approach`); its velocity and yaw rates at the end
+    become the vehicle's states at impact (hitch-consistent, the file's articulations), in
+    ``states`` and in the impact problem.
+
+    Raises
+    ------
+    ScenarioError
+        (naming the file) An approach that does not reach the impact, or a speed that cannot be solved.
+    """
+    if scenario.approaches_simulated:
+        return scenario
+    states = dict(scenario.states)
+    approaches = {}
+    d = scenario.data
+    for veh in scenario.vehicles:
+        a = scenario.approach_inputs.get(veh.name)
+        if a is None:
+            continue
+        try:
+            res = simulate_approach(veh, a.spec, {b.name: states[b.name] for b in veh.bodies}, a.road, a.options,
+                                    speed_at_impact=a.speed_at_impact)
+        except ScenarioError as exc:
+            raise with_file(exc, scenario.path) from None
+        approaches[veh.name] = res
+        v = d["vehicles"][veh.name]
+        end = res.impact_states
+        states.update(chain_states(veh, v["position"], v["heading"], end[veh.bodies[0].name].velocity,
+                                   [end[b.name].yaw_rate for b in veh.bodies],
+                                   [b["articulation"] for b in v["bodies"][1:]]))
+    p = scenario.impact
+    try:
+        problem = ImpactProblem(p.vehicles, {b.name: states[b.name] for v in p.vehicles for b in v.bodies}, p.body1,
+                                p.body2, p.surface, p.constraints, p.external)
+    except ScenarioError as exc:
+        raise ScenarioError(str(exc), field=exc.field, file=scenario.path) from None
+    out = replace(scenario, states=states, impact=problem, approaches=approaches)
+    if scenario.file_data is not None:
+        object.__setattr__(out, "_file_data", scenario.file_data)
+    return out
+
+
 #: Fidelity levels whose run-out models contact between vehicles and with obstacles.
 CONTACT_LEVELS = ("articulated", "load_transfer")
 
 
-def run_scene(scenario) -> SceneResult:
+def run_scene(scenario, *, lean: bool = False) -> SceneResult:
     """Solve a loaded scenario: the impact, then the run-out of the whole scene if asked for.
 
     At the ``articulated`` and ``load_transfer`` levels every vehicle runs out together, with
@@ -431,12 +478,19 @@ def run_scene(scenario) -> SceneResult:
     them): later impacts are solved by the impulse solver (:func:`crashsim.motion.simulate_scene`).
     The ``energy`` and ``rigid`` levels run each vehicle alone, without contact.
 
+    ``lean``: the result a fit, Monte Carlo or posterior sample reads (its records, residuals
+    and evidence checks), with the same numbers: the joint run-out keeps only the tracks of
+    the wheels a run-out tyre mark of the evidence can match, no hitch histories, no pair
+    summaries, no event places (:func:`crashsim.motion.postprocess.assemble_scene`).  Reports,
+    figures and ``to_dict`` need the full result (the default).
+
     Raises
     ------
     ScenarioError
         (naming the scenario file) The impact cannot be solved as given: the bodies are not
         approaching, or the coefficients are inadmissible for this geometry.
     """
+    scenario = simulate_approaches(scenario)  # a vehicle's approach before the impact (unless already run)
     try:
         impact = solve_impact(scenario.impact)
     except ScenarioError as exc:
@@ -452,7 +506,7 @@ def run_scene(scenario) -> SceneResult:
         for veh in movable:
             initial.update(make_hitch_consistent(veh, {b.name: states[b.name] for b in veh.bodies}))
         if spec.level in CONTACT_LEVELS:
-            joint, accuracy = _joint_runout(movable, initial, spec)
+            joint, accuracy = _joint_runout(movable, initial, spec, _track_filter(scenario) if lean else None)
             runout = dict(joint.vehicles)
         else:
             runout, accuracy = _separate_runouts(movable, initial, spec)
@@ -477,12 +531,19 @@ def run_scene(scenario) -> SceneResult:
                        accuracy=accuracy, joint=joint)
 
 
-def _joint_runout(movable, initial, spec):
-    """Every vehicle together, with contact (and to an accuracy target if the scenario asks)."""
+def _track_filter(scenario):
+    """The wheels whose tracks a lean run keeps: those a run-out tyre mark of the evidence can match."""
+    selectors = tuple(m.wheel for m in scenario.evidence.marks if m.phase == "runout")
+    return lambda spec: any(wheel_matches(spec, s) for s in selectors)
+
+
+def _joint_runout(movable, initial, spec, lean=None):
+    """Every vehicle together, with contact (and to an accuracy target if the scenario asks);
+    ``lean``: None, or the wheel filter of a lean result."""
     kwargs = dict(contact=spec.contact, pair_contact=spec.pair_contact, obstacles=spec.obstacles)
     if spec.accuracy is None:
         # the same as simulate_scene(...), with the scene model reused across fit/MC samples
-        return run_model(scene_model(movable, spec), initial), None
+        return run_model(scene_model(movable, spec), initial, lean=lean), None
 
     joint, report = scene_to_accuracy(movable, initial, spec.wheels, spec.road, spec.accuracy, spec.accuracy_heading,
                                       spec.options, level=spec.level, **kwargs)

@@ -56,7 +56,7 @@ sys.path.insert(0, str(ROOT / "src"))
 from crashsim import (Body, BodyState, CrushSurface, Hitch, ImpactBatch, ImpactProblem,  # noqa: E402
                       TangentialLaw, Vehicle, chain_states, solve_impact)
 from crashsim.geometry import rotate  # noqa: E402
-from crashsim.impact import _kernel, core  # noqa: E402
+from crashsim.impact import kernel as _kernel, core  # noqa: E402
 from crashsim.impact import solve as _solve  # noqa: E402
 from crashsim.impact.result import ImpactResult, _body_impacts  # noqa: E402
 from crashsim.scenario import load_scenario  # noqa: E402

@@ -90,13 +90,13 @@ def impulse_work(S: ImpactStructure, A: ImpactArrays, out: dict) -> dict[str, np
         ``normal``, ``tangential``, ``moment`` (crush surface), ``hitches``, ``constraints``,
         ``external``; their sum equals ``KE_after - KE_before`` of the batch item.
 
-    The formula is coded once, in :func:`crashsim.impact._kernel.impulse_work_item` (compiled;
+    The formula is coded once, in :func:`crashsim.impact.kernel.impulse_work_item` (compiled;
     the single solve calls it inside its kernel).
     """
-    from . import _kernel
+    from . import kernel
 
     fixed, b1, b2, _, hitches, cb, xb = _kernel_structure(S)
-    W = _kernel.work_batch(fixed, b1, b2, hitches, cb, xb, _c(A.position), _c(A.heading), _c(A.velocity),
+    W = kernel.work_batch(fixed, b1, b2, hitches, cb, xb, _c(A.position), _c(A.heading), _c(A.velocity),
                            _c(A.yaw_rate), _c(A.hitch_front_point), _c(A.hitch_rear_point), _c(A.point),
                            _c(A.normal_angle), _c(A.tangent_sign), _c(A.constraint_point),
                            _c(A.constraint_direction), _c(A.external_point), _c(A.external_impulse),
@@ -111,19 +111,19 @@ def admissibility(S: ImpactStructure, A: ImpactArrays, out: dict, work: dict | N
     -------
     (ok, reason) : ndarray of bool, ndarray of int, shape (B,)
         ``reason`` indexes :data:`REASONS` (0 where admissible; the first rule broken otherwise).
-    The rules are coded once, in :func:`crashsim.impact._kernel.reason_item` (compiled; the
+    The rules are coded once, in :func:`crashsim.impact.kernel.reason_item` (compiled; the
     single solve calls it inside its kernel), with the allowances of this module.
     """
-    from . import _kernel
+    from . import kernel
 
     work = impulse_work(S, A, out) if work is None else work
     W = np.ascontiguousarray(np.stack([np.broadcast_to(work[key], (A.size,)) for key in WORK_KEYS], axis=1),
                              dtype=float)
-    reason = _kernel.reason_batch(np.ascontiguousarray(out["ok"], dtype=bool), _c(out["impulses"]),
-                                  _kernel.LAW_CODES[S.tangential], _c(A.law_value), _c(out["mu_max"]),
+    reason = kernel.reason_batch(np.ascontiguousarray(out["ok"], dtype=bool), _c(out["impulses"]),
+                                  kernel.LAW_CODES[S.tangential], _c(A.law_value), _c(out["mu_max"]),
                                   _c(out["no_slide_normal"]), _c(out["approach_tangential"]),
                                   _c(out["separation_tangential"]), _c(out["ke_before"].sum(axis=1)), W,
-                                  _kernel.limits())
+                                  kernel.limits())
     return reason == 0, reason
 
 

@@ -38,7 +38,7 @@ visible, and a solution is only returned where it is below :data:`COND_LIMIT`.
 
 Three implementations of the same solve (:func:`solve_arrays` picks one):
 
-* compiled (:func:`solve_compiled`, :mod:`crashsim.impact._kernel`): the dense path's
+* compiled (:func:`solve_compiled`, :mod:`crashsim.impact.kernel`): the dense path's
   algorithm item by item in a numba kernel (compiled on first use, cached on disk); every call
   without ``condition=True``, and the single solve (:func:`solve_packed`);
 * dense (:func:`_solve_chunk`): the K x K systems formed and inverted as batched numpy arrays;
@@ -328,7 +328,7 @@ def solve_arrays(S: ImpactStructure, A: ImpactArrays, *, condition: bool = False
         :data:`REDUCED_CHUNK`: the same equations, laws, ``ok`` rule, keys and shapes, the
         numbers to about cond * eps; 2-4x faster than dense from a few hundred items on.
         ``"compiled"``: :func:`solve_compiled` (the dense path's algorithm item by item in a
-        numba kernel, :mod:`crashsim.impact._kernel`; compiled on first use, cached on disk):
+        numba kernel, :mod:`crashsim.impact.kernel`; compiled on first use, cached on disk):
         the same outputs, the numbers to about cond * eps. ``"auto"`` (default): compiled
         when ``condition`` is False, dense otherwise.
 
@@ -943,16 +943,16 @@ def _solve_chunk_reduced(S: ImpactStructure, A: ImpactArrays) -> dict[str, np.nd
 
 
 # --------------------------------------------------------------------------------------------
-# The compiled path: the dense path's algorithm item by item (crashsim.impact._kernel)
+# The compiled path: the dense path's algorithm item by item (crashsim.impact.kernel)
 # --------------------------------------------------------------------------------------------
 
 def _kernel_structure(S: ImpactStructure) -> tuple:
     """The structure as the kernels take it (int arrays), kept on S after the first call."""
     meta = S.__dict__.get("_kernel_meta")
     if meta is None:
-        from . import _kernel
+        from . import kernel
 
-        meta = (np.asarray(S.fixed, dtype=np.bool_), S.body1, S.body2, _kernel.LAW_CODES[S.tangential],
+        meta = (np.asarray(S.fixed, dtype=np.bool_), S.body1, S.body2, kernel.LAW_CODES[S.tangential],
                 np.asarray(S.hitches, dtype=np.int64).reshape(len(S.hitches), 2),
                 np.asarray(S.constraint_bodies, dtype=np.int64), np.asarray(S.external_bodies, dtype=np.int64))
         object.__setattr__(S, "_kernel_meta", meta)  # a cache, not a field: eq, hash, replace unaffected
@@ -968,7 +968,7 @@ def _c(a):
 
 def input_shapes(n: int, h: int, c: int, x: int) -> tuple:
     """(field, shape of one item) of :class:`ImpactArrays`, in field order: the layout of the
-    packed input vector of ``_kernel.solve_packed`` (field by field, each (B,) + shape)."""
+    packed input vector of ``kernel.solve_packed`` (field by field, each (B,) + shape)."""
     return (("mass", (n,)), ("yaw_inertia", (n,)), ("position", (n, 2)), ("heading", (n,)), ("velocity", (n, 2)),
             ("yaw_rate", (n,)), ("hitch_front_point", (h, 2)), ("hitch_rear_point", (h, 2)), ("point", (2,)),
             ("normal_angle", ()), ("tangent_sign", ()), ("restitution", ()), ("law_value", ()),
@@ -978,7 +978,7 @@ def input_shapes(n: int, h: int, c: int, x: int) -> tuple:
 
 def output_shapes(n: int, K: int, extras: bool) -> tuple:
     """(key, shape of one item) of the compiled kernels' output vector, in its order
-    (``_kernel._out_views``; flags stored as 0.0 / 1.0)."""
+    (``kernel._out_views``; flags stored as 0.0 / 1.0)."""
     return ((("velocity", (n, 2)), ("yaw_rate", (n,)), ("impulses", (K,)), ("mu", ()), ("mu_max", ()),
              ("sliding", ()), ("closing_velocity", ()), ("separation_normal", ()), ("separation_tangential", ()),
              ("ok", ()), ("approach_tangential", ()), ("no_slide_normal", ()), ("ke_before", (n,)), ("ke_after", (n,)),
@@ -1012,7 +1012,7 @@ def unpack(S: ImpactStructure, Y: np.ndarray, B: int, extras: bool = False):
 
 
 def solve_compiled(S: ImpactStructure, A: ImpactArrays, extras: bool = False):
-    """Solve a batch with the compiled kernel (:mod:`crashsim.impact._kernel`).
+    """Solve a batch with the compiled kernel (:mod:`crashsim.impact.kernel`).
 
     Returns ``(out, work, reason)``: ``out`` the dict of :func:`_solve_chunk` (without the SVD
     condition number); with ``extras`` also the work of each group of impulses (B, 6), in the
@@ -1020,12 +1020,12 @@ def solve_compiled(S: ImpactStructure, A: ImpactArrays, extras: bool = False):
     (else None, None).
     """
     global _LIMITS
-    from . import _kernel
+    from . import kernel
 
     if _LIMITS is None:
-        _LIMITS = _kernel.limits()
+        _LIMITS = kernel.limits()
     fixed, b1, b2, law, hitches, cb, xb = _kernel_structure(S)
-    Y = _kernel.solve_batch(
+    Y = kernel.solve_batch(
         fixed, b1, b2, law, hitches, cb, xb, _c(A.mass), _c(A.yaw_inertia), _c(A.position), _c(A.heading),
         _c(A.velocity), _c(A.yaw_rate), _c(A.hitch_front_point), _c(A.hitch_rear_point), _c(A.point),
         _c(A.normal_angle), _c(A.tangent_sign), _c(A.restitution), _c(A.law_value), _c(A.moment_restitution),
@@ -1055,10 +1055,10 @@ def solve_packed(S: ImpactStructure, X: np.ndarray) -> dict:
     admissibility code) as python floats and flat lists: the single solve's fast path.
     ``inputs(S, values)`` splits the input list the same way."""
     global _LIMITS
-    from . import _kernel
+    from . import kernel
 
     if _LIMITS is None:
-        _LIMITS = _kernel.limits()
+        _LIMITS = kernel.limits()
     meta = S.__dict__.get("_packed_meta")
     if meta is None:
         fixed, b1, b2, law, hitches, cb, xb = _kernel_structure(S)
@@ -1067,7 +1067,7 @@ def solve_packed(S: ImpactStructure, X: np.ndarray) -> dict:
         meta = (ints, fixed, hitches, cb, xb, flat_spec(output_shapes(S.n_bodies, S.n_unknowns, True)),
                 flat_spec(input_shapes(S.n_bodies, len(S.hitches), len(S.constraint_bodies), len(S.external_bodies))))
         object.__setattr__(S, "_packed_meta", meta)
-    Y = _kernel.solve_packed(meta[0], meta[1], meta[2], meta[3], meta[4], X, _LIMITS, True)
+    Y = kernel.solve_packed(meta[0], meta[1], meta[2], meta[3], meta[4], X, _LIMITS, True)
     return _flat_fields(meta[5], Y.tolist())
 
 

@@ -1,6 +1,6 @@
 """Where the compiled kernels are cached, and their one-time compile.
 
-The kernels of :mod:`crashsim.motion._kernels` (the run-out) and :mod:`crashsim.impact._kernel`
+The kernels of :mod:`crashsim.motion.kernels` (the run-out) and :mod:`crashsim.impact.kernel`
 (the impact solver) are compiled by numba on first use (about a minute or two on one core) and
 cached on disk. The cache lives in a user-writable directory,
 so an installation into a read-only or non-editable location keeps it too:
@@ -23,7 +23,7 @@ import sys
 from pathlib import Path
 from typing import Callable
 
-__all__ = ["cache_dir", "configure", "ready", "compile_kernels", "COMPILE_STEPS"]
+__all__ = ["cache_dir", "configure", "ready", "compile_kernels", "kernel_sources", "COMPILE_STEPS"]
 
 
 def cache_dir() -> Path:
@@ -66,14 +66,23 @@ def configure() -> Path:
     return path
 
 
+def kernel_sources(impact: bool = True) -> list[Path]:
+    """The source files the compiled kernels compile in, in a fixed order: every module of the
+    run-out kernel package (``motion/kernels/*.py``), the tyre law and the options they
+    compile in, and (``impact``) the impact solver's kernel."""
+    here = Path(__file__).parent
+    paths = sorted((here / "kernels").glob("*.py")) + [here / "tyres.py", here / "options.py"]
+    if impact:
+        paths.append(here.parent / "impact" / "kernel.py")
+    return paths
+
+
 def _digest() -> str:
     """Hash of the kernel sources and the numba version (the cache's validity)."""
     import numba
 
     h = hashlib.sha256(numba.__version__.encode())
-    here = Path(__file__).parent
-    # the sources the kernels compile in: the run-out's, and the impact solver's (impact/_kernel.py)
-    for path in (here / "_kernels.py", here / "tyres.py", here / "options.py", here.parent / "impact" / "_kernel.py"):
+    for path in kernel_sources():
         h.update(path.read_bytes())
     return h.hexdigest()[:16]
 
@@ -132,7 +141,7 @@ def compile_kernels(progress: Callable[[int, str], None] | None = None) -> Path:
             progress(i, COMPILE_STEPS[i])
 
     step(0)
-    from . import _kernels  # noqa: F401  (defining the kernels)
+    from . import kernels  # noqa: F401  (defining the kernels)
 
     step(1)
     scenario = _tiny_scene()

@@ -467,12 +467,12 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
     T, seg_of = _sample_times(table, o.sample_dt, t_end)
     Y = integrator.sample(T, seg_of, y_end)
     arrays = _segment_arrays(table if table else [(t_end, t_end, _snapshot(0, mode))], model)
-    P, SL, LD, LAMH, STOPM, CF, max_gap, pen = k.evaluate_samples(np.ascontiguousarray(Y), seg_of, M, *arrays)
+    P, SL, LD, LAMH, STOPM, CF, max_gap, pen = k.evaluate_samples(np.ascontiguousarray(Y), seg_of, M, arrays)
     sol = integrator.solution(y_end, t_end)
     events[:] = event_places(model, sol, events)
     missed = None
     if model.road.zones and table:
-        miss_t, miss_k = k.missed_zone(M, T, P, seg_of, arrays[1])
+        miss_t, miss_k = k.missed_zone(M, T, P, seg_of, arrays.memb)
         if miss_k >= 0:
             missed = (float(miss_t), int(miss_k))
     nb, nw = model.n_bodies, model.n_wheels
@@ -484,7 +484,7 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
         if e.kind == "vehicle_rest":
             rest_time[e.vehicles[0]] = e.t
     vehicles = {}
-    parked = mode[7]
+    parked = mode.parked
     for vi, v in enumerate(model.vehicles):
         at_rest = bool(parked[vi])
         t_v = rest_time.get(v.name, t_end) if at_rest else t_end
@@ -561,7 +561,7 @@ def contact_summaries(model, integrator, table, arrays, y_end, t_end):
 
     The span is the time the pair spent in sustained contact, from the segments the events cut
     (so it is the span of the pair's own contact events).  Force, depth and the closing speed
-    of points pressed beyond the allowance (:func:`crashsim.motion._kernels.contact_samples`) are
+    of points pressed beyond the allowance (:func:`crashsim.motion.kernels.contact_samples`) are
     evaluated on the dense solution at every step of the integrator in the segments with a
     pair in contact or disarmed (its start and quarter points), and the largest force is
     refined by the parabola through the largest node and its neighbours (in segments with a pair
@@ -576,7 +576,7 @@ def contact_summaries(model, integrator, table, arrays, y_end, t_end):
     span, peak, deepest, closing = np.zeros(npr), np.zeros(npr), np.zeros(npr), np.zeros(npr)
     if not npr or not table:
         return span, peak, deepest, closing
-    pstate = arrays[5]
+    pstate = arrays.pstate
     edges = integrator.step_edges()
     T, G = [], []
     for g, (t0, t1, _) in enumerate(table):
@@ -599,7 +599,7 @@ def contact_summaries(model, integrator, table, arrays, y_end, t_end):
     G = np.concatenate(G + [np.array([len(table) - 1], dtype=np.int64)])
     Y = integrator.sample(T, G, y_end)[:, :-1]
     T, G = T[:-1], G[:-1]
-    CF, deepest, closing = k.contact_samples(np.ascontiguousarray(Y), G, model.M, *arrays[1:])
+    CF, deepest, closing = k.contact_samples(np.ascontiguousarray(Y), G, model.M, arrays)
     # closing speeds inside the segments: a segment's end is the instant of its event (an
     # impact's state before the impulse)
     ends = np.array([t1 for _, t1, _ in table])[G]
@@ -653,7 +653,7 @@ def event_places(model, sol, events) -> list:
             place = at(spec.body_index, spec.position)
         elif "hitch" in e.data:
             j = [f"{a}-{b}" for a, b in model.hitch_names].index(e.data["hitch"])
-            place = at(int(model.M[20][j][0]), model.M[3][j, :2])
+            place = at(int(model.M.hitch_body[j][0]), model.M.hitch[j, :2])
         elif e.kind == "vehicle_rest" and e.vehicles and e.vehicles[0] in names:
             place = at(model.body_range[e.vehicles[0]][0], (0.0, 0.0))
         elif "pair" in e.data and e.kind != "contact_end":
@@ -677,8 +677,8 @@ def _vehicle_gap(model, Y, h0, h1) -> float:
     if h1 <= h0:
         return 0.0
     L = model.layout
-    hb = model.M[20]
-    hitch = model.M[3]
+    hb = model.M.hitch_body
+    hitch = model.M.hitch
     out = 0.0
     for j in range(h0, h1):
         f, r = hb[j]

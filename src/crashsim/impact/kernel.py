@@ -39,7 +39,7 @@ __all__ = ["solve_batch", "solve_packed", "work_batch", "reason_batch", "impulse
 
 _JIT = {"cache": True, "error_model": "numpy", "nogil": True}
 # Helpers that allocate nothing are compiled without NRT reference counting (as in
-# crashsim.motion._kernels): numba otherwise increfs/decrefs every array argument on every call.
+# crashsim.motion.kernels): numba otherwise increfs/decrefs every array argument on every call.
 _HOT = dict(_JIT, _nrt=False)
 _INLINE = dict(_HOT, inline="always")
 

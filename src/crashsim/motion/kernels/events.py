@@ -24,8 +24,10 @@ from .equations import contact_group, evaluate, group_rest_measure, kinetic_ener
 
 
 @njit(**HOT)
-def event_value(e, y, M, ev_kind, ev_idx, ev_val, D, sw, dydt, W):
-    """Value of event ``e`` of the segment at state ``y`` (module docstring for the kinds)."""
+def event_value(e, y, M, ev, D, sw, dydt, W):
+    """Value of event ``e`` of the segment's events ``ev`` (:class:`Events`) at state ``y``
+    (package docstring for the kinds)."""
+    ev_kind, ev_idx, ev_val = ev.kind, ev.idx, ev.val
     kind = ev_kind[e]
     if kind == EV_REST:
         return group_rest_measure(y, M, D, ev_idx[e]) - M.cfg[C_VSTOP]
@@ -66,14 +68,14 @@ def event_value(e, y, M, ev_kind, ev_idx, ev_val, D, sw, dydt, W):
 
 
 @njit(**HOT)
-def event_rate(e, y, M, ev_kind, ev_idx, W):
+def event_rate(e, y, M, ev, W):
     """Bound on ``|d(event value)/dt|`` of a distance-like event at ``y`` [m/s] (0 for the others).
 
     Zones: the fastest wheel; pairs: ``|v_A - v_B| + |w_A| R_A + |w_B| R_B`` with ``R`` the
     largest bounding-circle reach of each body's pieces.  A step along which the value could
     change sign twice (``min(|g_start|, |g_end|) < rate x step``) is searched on its dense output.
     """
-    kind = ev_kind[e]
+    kind = ev.kind[e]
     nb = M.body.shape[0]
     if kind == EV_ZONE:
         cs = W.trig
@@ -85,7 +87,7 @@ def event_rate(e, y, M, ev_kind, ev_idx, W):
         return v
     if kind == EV_GAP or kind == EV_ARM or kind == EV_PRESS:
         pr_body, pr_ptr, pp, pc_info = M.pair_body, M.pair_ptr, M.piece_pairs, M.piece_info
-        p = ev_idx[e]
+        p = ev.idx[e]
         ia = pr_body[p, 0]
         ib = pr_body[p, 1]
         ra = 0.0
@@ -108,13 +110,13 @@ def event_rate(e, y, M, ev_kind, ev_idx, W):
 
 
 @njit(**HOT)
-def event_resolution(e, M, ev_kind, ev_idx):
+def event_resolution(e, M, ev):
     """Finest feature [m] a distance-like event must not step over (0 for the others)."""
-    kind = ev_kind[e]
+    kind = ev.kind[e]
     if kind == EV_ZONE:
         return M.cfg[C_ZRES]
     if kind == EV_GAP or kind == EV_ARM or kind == EV_PRESS:
-        return M.pair_par[ev_idx[e], R_RES]
+        return M.pair_par[ev.idx[e], R_RES]
     return 0.0
 
 
@@ -134,13 +136,15 @@ def interpolate(t, t_old, h, y_old, Q, out):
 
 
 @njit(**HOT)
-def event_on_step(e, tq, t_old, h, y_old, Q, ytmp, M, ev_kind, ev_idx, ev_val, D, sw, dydt, W):
-    interpolate(tq, t_old, h, y_old, Q, ytmp)
-    return event_value(e, ytmp, M, ev_kind, ev_idx, ev_val, D, sw, dydt, W)
+def event_on_step(e, tq, step, M, ev, D, sw, dydt, W):
+    """Value of event ``e`` at time ``tq`` on the dense output of ``step`` (:class:`Step`; the
+    state goes to ``step.ytmp``)."""
+    interpolate(tq, step.t_old, step.h, step.y_old, step.Q, step.ytmp)
+    return event_value(e, step.ytmp, M, ev, D, sw, dydt, W)
 
 
 @njit(**HOT)
-def brent(e, ta, tb, fa, fb, t_old, h, y_old, Q, ytmp, M, ev_kind, ev_idx, ev_val, D, sw, dydt, W):
+def brent(e, ta, tb, fa, fb, step, M, ev, D, sw, dydt, W):
     """Root of event ``e`` on a step's dense output in [ta, tb], values fa, fb: Brent's method as scipy's brentq.
 
     Tolerances ``xtol = rtol = 4 eps`` as solve_ivp's event location.  If the values do not
@@ -201,7 +205,7 @@ def brent(e, ta, tb, fa, fb, t_old, h, y_old, Q, ytmp, M, ev_kind, ev_idx, ev_va
             xcur += scur
         else:
             xcur += delta if sbis > 0 else -delta
-        fcur = event_on_step(e, xcur, t_old, h, y_old, Q, ytmp, M, ev_kind, ev_idx, ev_val, D, sw, dydt, W)
+        fcur = event_on_step(e, xcur, step, M, ev, D, sw, dydt, W)
     return xcur
 
 
@@ -211,9 +215,10 @@ def crosses(g0, g1, direction):
 
 
 @njit(**HOT)
-def first_root(t, t_new, h, y_old, Q, ytmp, M, ev_kind, ev_idx, ev_val, ev_dir, n_ev, g_old, g_new, rate_old,
-               rate_new, D, sw, dydt, W):
-    """Earliest event of a step [t, t_new]: ``(root time, event)``, event -1 if none.
+def first_root(step, t_new, M, ev, n_ev, vals, D, sw, dydt, W):
+    """Earliest event of a step [t, t_new] (``step``: :class:`Step` from ``t``): ``(root time,
+    event)``, event -1 if none.  ``vals`` (:class:`EventValues`) holds the values and rate
+    bounds of the ``n_ev`` events at both ends of the step.
 
     An event fires where its value crosses zero in its direction.  For distance-like events
     (zones, contact gaps) a step long enough for the value to cross and cross back
@@ -223,15 +228,17 @@ def first_root(t, t_new, h, y_old, Q, ytmp, M, ev_kind, ev_idx, ev_val, ev_dir, 
     through a thin obstacle, by a step longer than the feature.  The root is located by
     Brent's method on the dense output.
     """
+    t = step.t_old
+    h = step.h
     t_first = math.inf
     fired = -1
     for e in range(n_ev):
-        a = g_old[e]
-        b = g_new[e]
-        d = ev_dir[e]
-        reach = max(rate_old[e], rate_new[e]) * 1.5 * h
+        a = vals.g_old[e]
+        b = vals.g_new[e]
+        d = ev.dir[e]
+        reach = max(vals.r_old[e], vals.r_new[e]) * 1.5 * h
         if reach > 0.0 and min(abs(a), abs(b)) < reach:
-            res = event_resolution(e, M, ev_kind, ev_idx)
+            res = event_resolution(e, M, ev)
             n_sub = min(MAX_SUBSAMPLES, max(1, int(math.ceil(reach / max(res, 1e-9)))))
         else:
             n_sub = 1
@@ -245,9 +252,9 @@ def first_root(t, t_new, h, y_old, Q, ytmp, M, ev_kind, ev_idx, ev_val, ev_dir, 
                 tb = t + (t_new - t) * k / n_sub
                 if tb >= t_first:
                     break
-                fb = event_on_step(e, tb, t, h, y_old, Q, ytmp, M, ev_kind, ev_idx, ev_val, D, sw, dydt, W)
+                fb = event_on_step(e, tb, step, M, ev, D, sw, dydt, W)
             if crosses(fa, fb, d):
-                root = brent(e, ta, tb, fa, fb, t, h, y_old, Q, ytmp, M, ev_kind, ev_idx, ev_val, D, sw, dydt, W)
+                root = brent(e, ta, tb, fa, fb, step, M, ev, D, sw, dydt, W)
                 if root < t_first:
                     t_first = root
                     fired = e
@@ -258,8 +265,9 @@ def first_root(t, t_new, h, y_old, Q, ytmp, M, ev_kind, ev_idx, ev_val, ev_dir, 
 
 
 @njit(**HOT)
-def build_events(M, D, offsets, ev_kind, ev_idx, ev_val, ev_dir):
-    """The events of a segment in mode ``D`` (filled in place); returns their number.
+def build_events(M, D, offsets, ev):
+    """The events of a segment in mode ``D`` (filled in place into ``ev``, :class:`Events`);
+    returns their number.
 
     Order: the rest of every moving vehicle, every zone, the stops of every hitch that has a
     limit and is not closed (each side), the release of every closed stop, then per pair the
@@ -269,6 +277,7 @@ def build_events(M, D, offsets, ev_kind, ev_idx, ev_val, ev_dir):
     """
     hitch, zone_mu, pr_par, pr_body = M.hitch, M.zone_mu, M.pair_par, M.pair_body
     lk_j, lk_th, nlk, shift, pstate, pref, parked = D.lk_j, D.lk_th, D.lk_n[0], D.shift, D.pstate, D.pref, D.parked
+    ev_kind, ev_idx, ev_val, ev_dir = ev.kind, ev.idx, ev.val, ev.dir
     n_ev = 0
     for v in range(parked.shape[0]):
         if parked[v] == 0:
@@ -350,7 +359,7 @@ def left_stop_shift(y, M, j, offset, lim, shift):
 
 
 @njit(**HOT)
-def handle_event(e, t, y, M, D, offsets, ev_kind, ev_idx, ev_val, ev_dir, sw, dydt, W, rec, geo):
+def handle_event(e, t, y, M, D, offsets, ev, sw, dydt, W, rec, geo):
     """Apply event ``e`` of the segment at state ``y`` (changed in place, with the mode ``D``).
 
     Log records go to ``rec`` (rows: kind, i, j, x, energy).  Returns ``(impact, n_records)``:
@@ -359,8 +368,8 @@ def handle_event(e, t, y, M, D, offsets, ev_kind, ev_idx, ev_val, ev_dir, sw, dy
     impact solver (Python) before the run goes on.  Rest and zone events change nothing here:
     :func:`settle` updates zone membership and parks other resting vehicles after every event.
     """
-    kind = ev_kind[e]
-    idx = ev_idx[e]
+    kind = ev.kind[e]
+    idx = ev.idx[e]
     hitch, pr_par = M.hitch, M.pair_par
     lk_j, lk_th, lk_n, shift, pstate, pref = D.lk_j, D.lk_th, D.lk_n, D.shift, D.pstate, D.pref
     nh = hitch.shape[0]
@@ -380,7 +389,7 @@ def handle_event(e, t, y, M, D, offsets, ev_kind, ev_idx, ev_val, ev_dir, sw, dy
     if kind == EV_STOP:
         # plastic impact at the stop, then close it unless the bodies separate
         j = idx
-        side = ev_dir[e]
+        side = ev.dir[e]
         lim = hitch[j, 4]
         nlk = lk_n[0]
         theta_lock = side * lim + offsets[j]

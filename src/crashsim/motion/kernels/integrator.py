@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections import namedtuple
 
 import numpy as np
 from numba import njit, objmode
@@ -16,8 +17,9 @@ from numba import njit, objmode
 from ..options import MAX_STILL_SEGMENTS
 from .jit import HOT, INLINE, JIT
 from .arrays import (C_ATOL, C_FIRST, C_MAXSTEP, C_RTOL, C_TMAX, I_LT, I_MAXEVAL, I_MAXSEG, I_ORDER, LOG_SCHEDULE,
-    MAX_FACTOR, MIN_FACTOR, N_A, N_S, SAFETY, ST_IMPACT, ST_MAX_EVAL, ST_MAX_SEGMENTS, ST_NONFINITE, ST_NO_PROGRESS,
-    ST_REST, ST_STEP_TOO_SMALL, ST_TIME_LIMIT, ST_WALL_TIME, WALL_CHECK_STEPS, make_work)
+                     MAX_FACTOR, MIN_FACTOR, N_A, N_S, SAFETY, ST_IMPACT, ST_MAX_EVAL, ST_MAX_SEGMENTS, ST_NONFINITE,
+                     ST_NO_PROGRESS, ST_REST, ST_STEP_TOO_SMALL, ST_TIME_LIMIT, ST_WALL_TIME, WALL_CHECK_STEPS,
+                     EventValues, Events, Step, make_work)
 from .geometry import membership
 from .equations import consistent_accelerations, evaluate, phase_at, quad_integrand, segment_params
 from .events import build_events, event_rate, event_value, first_root, handle_event, interpolate, log_record, settle
@@ -41,15 +43,17 @@ _evaluate_inline = njit(**INLINE)(getattr(evaluate, "py_func", evaluate))  # pla
 
 
 @njit(**HOT)
-def rk_step(y, h, K, y_new, ytmp, M, sw, D, W, tab_a, tab_b, gq):
+def rk_step(y, h, K, y_new, ytmp, M, sw, D, W, gq):
     """One explicit RK step from ``y`` (``K[0]`` = f(y)); stages in ``K``, FSAL ``K[ns]`` = f(y_new).
 
     ``gq[s]`` receives the path-integral integrands (:func:`quad_integrand`) at stage ``s``
     (``gq[0]`` must hold those at ``y``): ``h sum_s b_s gq[s]`` is then the RK solution of the
     quadrature ODE ``q' = g(y)``, as accurate as the step itself.
 
+    The scheme is the model's tableau (``M.tab_a``, ``M.tab_b``: solve_ivp's A and B).
     Returns the number of right-hand-side evaluations (``ns``) and whether all were finite.
     """
+    tab_a, tab_b = M.tab_a, M.tab_b
     ns = tab_b.shape[0]
     n = y.shape[0]
     finite = True
@@ -71,8 +75,16 @@ def rk_step(y, h, K, y_new, ytmp, M, sw, D, W, tab_a, tab_b, gq):
 
 
 @njit(**HOT)
-def initial_step(t0, y0, f0, t_bound, max_step, order, rtol, atol, ytmp, f1, M, sw, D, W):
-    """solve_ivp's ``select_initial_step`` (Hairer, Norsett & Wanner, II.4); one RHS evaluation."""
+def initial_step(t0, y0, f0, t_bound, ytmp, f1, M, sw, D, W):
+    """solve_ivp's ``select_initial_step`` (Hairer, Norsett & Wanner, II.4); one RHS evaluation.
+
+    The tolerances, the largest step and the scheme's order are the model's options
+    (``C_RTOL``, ``C_ATOL``, ``C_MAXSTEP``, ``I_ORDER``).
+    """
+    rtol = M.cfg[C_RTOL]
+    atol = M.cfg[C_ATOL]
+    max_step = M.cfg[C_MAXSTEP]
+    order = M.icfg[I_ORDER]
     n = y0.shape[0]
     interval = abs(t_bound - t0)
     if interval == 0.0:
@@ -144,6 +156,342 @@ def start(y, M, D, t):
         consistent_accelerations(y, M, sw, D, np.zeros(y.shape[0]), W)
 
 
+# ============================================================================= the segment loop, by stage
+#: What the segment loop works with during a run (allocated once by :func:`run_context`):
+#: segment wheel inputs ``sw`` (nw, N_S), RK stages ``K`` (ns + 1, n), path-integrand values
+#: at the stages ``gq`` (ns + 1, nq + nw) and scratch ``gtmp``, scratch states ``ytmp``,
+#: ``ytmp2``, the step's end ``y_new``, a derivative ``dydt``, the error estimate ``err``, new
+#: zone membership ``new_memb``, log records ``rec`` and impact geometry ``geo`` (6,), the work
+#: arrays ``W`` (:class:`Work`), the segment's events ``ev`` (:class:`Events`) and their values
+#: ``vals`` (:class:`EventValues`), Gauss-Legendre nodes and weights ``gl_x``, ``gl_w`` on
+#: [-1, 1], the path integrals ``quad`` (accumulated) and the wall-clock ``deadline``.
+RunContext = namedtuple("RunContext", ["sw", "K", "gq", "gtmp", "ytmp", "ytmp2", "y_new", "dydt", "err", "new_memb",
+                                       "rec", "geo", "W", "ev", "vals", "gl_x", "gl_w", "quad", "deadline"])
+#: The stored steps (growable): start time ``t`` [s], size ``h`` [s], start state ``y`` (n,)
+#: and dense-output matrix ``q`` (n, degree) of each.
+StepStore = namedtuple("StepStore", ["t", "h", "y", "q"])
+#: The stored segments (growable): start and end time ``t`` (2,) [s], first and end step ``s``
+#: (2,), and the segment's mode (the fields of :class:`Segments`).
+SegmentStore = namedtuple("SegmentStore", ["t", "s", "phase", "memb", "nlk", "lk_j", "lk_th", "pstate", "pref",
+                                           "parked"])
+#: The event log (growable): time [s] and record row (kind, i, j, x, energy) of each record.
+LogStore = namedtuple("LogStore", ["t", "rec"])
+
+
+@njit(**JIT)
+def run_context(M, D, n, gl_x, gl_w, quad, deadline):
+    """The arrays of the segment loop (:class:`RunContext`) for states of size ``n``."""
+    nb = M.body.shape[0]
+    nw = M.wheel.shape[0]
+    nh = M.hitch.shape[0]
+    nz = M.zone_mu.shape[0]
+    npr = M.pair_body.shape[0]
+    nv = D.parked.shape[0]
+    ns = M.tab_b.shape[0]
+    nq = nb + 3 * nw + npr  # integrated components (gq also carries the nw sliding flags)
+    n_ev_max = nv + nz + 3 * nh + 3 * npr + 1
+    ev = Events(np.zeros(n_ev_max, np.int64), np.zeros(n_ev_max, np.int64), np.zeros(n_ev_max), np.zeros(n_ev_max))
+    vals = EventValues(np.zeros(n_ev_max), np.zeros(n_ev_max), np.zeros(n_ev_max), np.zeros(n_ev_max))
+    return RunContext(np.zeros((nw, N_S)), np.zeros((ns + 1, n)), np.zeros((ns + 1, nq + nw)), np.zeros(nq + nw),
+                      np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros((nw, nz), np.bool_),
+                      np.zeros((nw * max(nz, 1) + nv + 8, 5)), np.zeros(6), make_work(M), ev, vals, gl_x, gl_w, quad,
+                      deadline)
+
+
+@njit(**JIT)
+def new_step_store(cap, n, deg):
+    return StepStore(np.zeros(cap), np.zeros(cap), np.zeros((cap, n)), np.zeros((cap, n, deg)))
+
+
+@njit(**JIT)
+def new_segment_store(cap, M, D):
+    nw = M.wheel.shape[0]
+    nh = M.hitch.shape[0]
+    nz = M.zone_mu.shape[0]
+    npr = M.pair_body.shape[0]
+    nv = D.parked.shape[0]
+    return SegmentStore(np.zeros((cap, 2)), np.zeros((cap, 2), np.int64), np.zeros(cap, np.int64),
+                        np.zeros((cap, nw, nz), np.bool_), np.zeros(cap, np.int64),
+                        np.zeros((cap, max(nh, 1)), np.int64), np.zeros((cap, max(nh, 1))),
+                        np.zeros((cap, npr), np.int64), np.zeros((cap, npr, N_A)), np.zeros((cap, nv), np.int64))
+
+
+@njit(**JIT)
+def run_limit(D, M, counters):
+    """Status that ends the run before a new segment (``ST_REST``: every vehicle parked; the
+    segment and no-progress bounds), or -1 to go on."""
+    parked = D.parked
+    all_parked = True
+    for v in range(parked.shape[0]):
+        if parked[v] == 0:
+            all_parked = False
+    if all_parked:
+        return ST_REST
+    if counters[0] >= M.icfg[I_MAXSEG]:
+        return ST_MAX_SEGMENTS
+    if counters[1] >= MAX_STILL_SEGMENTS:
+        return ST_NO_PROGRESS
+    return -1
+
+
+@njit(**JIT)
+def start_segment(t, y, M, D, offsets, stops, X):
+    """Start a segment at ``(t, y)``: its end ``t_stop`` (the next scheduled change, or t_max),
+    its wheel phase and inputs, its events and their values and rate bounds at ``y``.
+    Returns ``(t_stop, phase, n_ev)``."""
+    t_stop = M.cfg[C_TMAX]
+    for s_ in stops:
+        if s_ > t:
+            t_stop = s_
+            break
+    phase = phase_at(t, M.phase_times)
+    segment_params(phase, D.memb, M, X.sw)
+    n_ev = build_events(M, D, offsets, X.ev)
+    for e in range(n_ev):
+        X.vals.g_old[e] = event_value(e, y, M, X.ev, D, X.sw, X.dydt, X.W)
+        X.vals.r_old[e] = event_rate(e, y, M, X.ev, X.W)
+    return t_stop, phase, n_ev
+
+
+@njit(**JIT)
+def first_step(t, t_stop, y, M, D, X):
+    """The right-hand side and path integrands at the segment's start (``K[0]``, ``gq[0]``) and
+    the first step size: ``C_FIRST`` if set, else solve_ivp's initial step.  Returns
+    ``(h_abs, evaluations)``."""
+    evaluate(y, M, X.sw, D, X.K[0], X.W)
+    quad_integrand(y, M, D, X.W, X.gq[0])
+    if M.cfg[C_FIRST] > 0.0:
+        return min(M.cfg[C_FIRST], t_stop - t), 1
+    return initial_step(t, y, X.K[0], t_stop, X.ytmp, X.dydt, M, X.sw, D, X.W), 2
+
+
+@njit(**INLINE)
+def attempt_step(t, t_stop, h_abs, min_step, y, M, D, X, nfev):
+    """Steps from ``(t, y)`` until one is accepted (solve_ivp's RK error control, its constants
+    ``SAFETY``, ``MIN_FACTOR``, ``MAX_FACTOR``): the stages in ``K``, the end state in ``y_new``.
+
+    Returns ``(status, t_new, h, h_abs, nfev)``: status 0 accepted, else minus the failure
+    (``ST_STEP_TOO_SMALL``, ``ST_MAX_EVAL``, ``ST_NONFINITE``); ``h_abs`` the next step size.
+    """
+    K, tab_e = X.K, M.tab_e
+    rtol = M.cfg[C_RTOL]
+    atol = M.cfg[C_ATOL]
+    err_exp = -1.0 / (M.icfg[I_ORDER] + 1)
+    max_eval = M.icfg[I_MAXEVAL]
+    ns = M.tab_b.shape[0]
+    n = y.shape[0]
+    t_new = t
+    h = 0.0
+    rejected = False
+    while True:
+        if h_abs < min_step:
+            return -ST_STEP_TOO_SMALL, t_new, h, h_abs, nfev
+        if nfev >= max_eval:
+            return -ST_MAX_EVAL, t_new, h, h_abs, nfev
+        t_new = t + h_abs
+        if t_new - t_stop > 0:
+            t_new = t_stop
+        h = t_new - t
+        h_abs = abs(h)
+        k_ev, finite = rk_step(y, h, K, X.y_new, X.ytmp, M, X.sw, D, X.W, X.gq)
+        nfev += k_ev
+        if not finite:
+            return -ST_NONFINITE, t_new, h, h_abs, nfev
+        for i in range(n):
+            acc = 0.0
+            for s in range(ns + 1):
+                acc += tab_e[s] * K[s, i]
+            X.err[i] = h * acc
+        err_norm = rms_scaled(X.err, y, X.y_new, True, rtol, atol)
+        if err_norm < 1.0:
+            if err_norm == 0.0:
+                factor = MAX_FACTOR
+            else:
+                factor = min(MAX_FACTOR, SAFETY * err_norm**err_exp)
+            if rejected:
+                factor = min(1.0, factor)
+            h_abs *= factor
+            return 0, t_new, h, h_abs, nfev
+        h_abs *= max(MIN_FACTOR, SAFETY * err_norm**err_exp)
+        rejected = True
+
+
+@njit(**dict(JIT, inline="always"))  # allocates when the store grows
+def store_step(steps, n_steps, t, h, y, K, tab_p):
+    """Store an accepted step (start time, size, start state, dense output ``Q = K^T P``) as
+    step ``n_steps``; returns the store (a larger one when it was full)."""
+    if n_steps == steps.t.shape[0]:
+        cap = 2 * steps.t.shape[0]
+        steps = StepStore(grow1(steps.t, cap), grow1(steps.h, cap), grow2(steps.y, cap), grow3(steps.q, cap))
+    ns1 = K.shape[0]
+    deg = tab_p.shape[1]
+    steps.t[n_steps] = t
+    steps.h[n_steps] = h
+    for i in range(y.shape[0]):
+        steps.y[n_steps, i] = y[i]
+        for d in range(deg):
+            acc = 0.0
+            for s in range(ns1):
+                acc += K[s, i] * tab_p[s, d]
+            steps.q[n_steps, i, d] = acc
+    return steps
+
+
+@njit(**INLINE)
+def gauss_quadrature(mid, half, step, M, D, X):
+    """Path integrals over ``[mid - half, mid + half]`` by Gauss-Legendre on the dense output of
+    ``step`` (:class:`Step`), added to ``X.quad``."""
+    nq = M.body.shape[0] + 3 * M.wheel.shape[0] + M.pair_body.shape[0]
+    gl_x, gl_w, quad, gtmp = X.gl_x, X.gl_w, X.quad, X.gtmp
+    for q in range(gl_x.shape[0]):
+        interpolate(mid + half * gl_x[q], step.t_old, step.h, step.y_old, step.Q, step.ytmp)
+        evaluate(step.ytmp, M, X.sw, D, X.dydt, X.W)
+        quad_integrand(step.ytmp, M, D, X.W, gtmp)
+        for c in range(nq):
+            quad[c] += half * gl_w[q] * gtmp[c]
+
+
+@njit(**INLINE)
+def step_quadrature(step, M, D, X):
+    """Path integrals over an accepted step without event: the RK solution of ``q' = g(y)``
+    from the stage values, unless a sliding flag switches inside the step (a jump the stage
+    rule, with its negative weight, integrates badly): then Gauss-Legendre on the dense output."""
+    nw = M.wheel.shape[0]
+    nq = M.body.shape[0] + 3 * nw + M.pair_body.shape[0]
+    tab_b, gq, quad = M.tab_b, X.gq, X.quad
+    ns = tab_b.shape[0]
+    h = step.h
+    switch = False
+    for kk in range(nw):
+        f0 = gq[0, nq + kk]
+        for j in range(1, ns + 1):
+            if gq[j, nq + kk] != f0:
+                switch = True
+    if switch:
+        half = 0.5 * h
+        gauss_quadrature(step.t_old + half, half, step, M, D, X)
+    else:
+        for c in range(nq):
+            acc = 0.0
+            for j in range(ns):
+                acc += tab_b[j] * gq[j, c]
+            quad[c] += h * acc
+
+
+@njit(**INLINE)
+def advance(y, n_ev, X):
+    """Make the accepted step's end the next step's start: the state, the FSAL stage, the path
+    integrands and the event values."""
+    ns = X.K.shape[0] - 1
+    for c in range(X.gq.shape[1]):
+        X.gq[0, c] = X.gq[ns, c]
+    for i in range(y.shape[0]):
+        y[i] = X.y_new[i]
+        X.K[0, i] = X.K[ns, i]
+    for e in range(n_ev):
+        X.vals.g_old[e] = X.vals.g_new[e]
+        X.vals.r_old[e] = X.vals.r_new[e]
+
+
+@njit(**JIT)
+def integrate_segment(t, t_stop, y, M, D, n_ev, X, steps, n_steps, nfev):
+    """Integrate the segment from ``(t, y)`` to ``t_stop`` or its first event (solve_ivp's RK
+    driver; ``y`` is advanced in place).  Each accepted step is stored, searched for the
+    segment's events (:func:`first_root`) and its path integrals are added.
+
+    Returns ``(status, fired, t, steps, n_steps, nfev)``: status 0 reached ``t_stop``, 1 event
+    ``fired`` at ``t`` (the state there, the path integrals up to it), < 0 minus the failure.
+    """
+    max_step = M.cfg[C_MAXSTEP]
+    h_abs, k_ev = first_step(t, t_stop, y, M, D, X)
+    nfev += k_ev
+    while t < t_stop:
+        min_step = 10.0 * abs(np.nextafter(t, math.inf) - t)
+        if h_abs > max_step:
+            h_abs = max_step
+        elif h_abs < min_step:
+            h_abs = min_step
+        status, t_new, h, h_abs, nfev = attempt_step(t, t_stop, h_abs, min_step, y, M, D, X, nfev)
+        if status < 0:
+            return status, -1, t, steps, n_steps, nfev
+        if n_steps % WALL_CHECK_STEPS == 0 and wall_clock() > X.deadline:
+            return -ST_WALL_TIME, -1, t, steps, n_steps, nfev
+        steps = store_step(steps, n_steps, t, h, y, X.K, M.tab_p)
+        n_steps += 1
+        # ---- events on the step
+        for e in range(n_ev):
+            X.vals.g_new[e] = event_value(e, X.y_new, M, X.ev, D, X.sw, X.dydt, X.W)
+            X.vals.r_new[e] = event_rate(e, X.y_new, M, X.ev, X.W)
+        t_first, fired = first_root(Step(t, h, steps.y[n_steps - 1], steps.q[n_steps - 1], X.ytmp2), t_new, M, X.ev,
+                                    n_ev, X.vals, D, X.sw, X.dydt, X.W)
+        dense = Step(t, h, steps.y[n_steps - 1], steps.q[n_steps - 1], X.ytmp)
+        if fired >= 0:
+            # path integrals over [t, t_first] by Gauss-Legendre on the dense output
+            gauss_quadrature(0.5 * (t_first + t), 0.5 * (t_first - t), dense, M, D, X)
+            interpolate(t_first, t, h, dense.y_old, dense.Q, y)
+            return 1, fired, t_first, steps, n_steps, nfev
+        step_quadrature(dense, M, D, X)
+        t = t_new
+        advance(y, n_ev, X)
+    return 0, -1, t, steps, n_steps, nfev
+
+
+@njit(**JIT)
+def record_segment(segs, n_seg, t0, t1, steps0, steps1, phase, D):
+    """Store segment ``n_seg`` (its times, steps and its mode as it was during the segment);
+    returns the store (a larger one when it was full)."""
+    if n_seg == segs.t.shape[0]:
+        cap = 2 * segs.t.shape[0]
+        segs = SegmentStore(grow2(segs.t, cap), grow2(segs.s, cap), grow1(segs.phase, cap), grow3(segs.memb, cap),
+                            grow1(segs.nlk, cap), grow2(segs.lk_j, cap), grow2(segs.lk_th, cap),
+                            grow2(segs.pstate, cap), grow3(segs.pref, cap), grow2(segs.parked, cap))
+    segs.t[n_seg, 0] = t0
+    segs.t[n_seg, 1] = t1
+    segs.s[n_seg, 0] = steps0
+    segs.s[n_seg, 1] = steps1
+    segs.phase[n_seg] = phase
+    segs.memb[n_seg] = D.memb
+    segs.nlk[n_seg] = D.lk_n[0]
+    for q in range(D.lk_n[0]):
+        segs.lk_j[n_seg, q] = D.lk_j[q]
+        segs.lk_th[n_seg, q] = D.lk_th[q]
+    for p in range(D.pstate.shape[0]):
+        segs.pstate[n_seg, p] = D.pstate[p]
+        for c in range(N_A):
+            segs.pref[n_seg, p, c] = D.pref[p, c]
+    for v in range(D.parked.shape[0]):
+        segs.parked[n_seg, v] = D.parked[v]
+    return segs
+
+
+@njit(**JIT)
+def end_segment(status, fired, t, y, M, D, offsets, X):
+    """The event that ended the segment (status 1), or its scheduled change, then (unless an
+    impulse is needed) the new zone membership and parking (:func:`settle`).  Returns
+    ``(impact, n_records)``, the records in ``X.rec``."""
+    impact = False
+    if status == 1:
+        impact, n_rec = handle_event(fired, t, y, M, D, offsets, X.ev, X.sw, X.dydt, X.W, X.rec, X.geo)
+    else:
+        n_rec = log_record(X.rec, 0, LOG_SCHEDULE, 0, 0, 0.0, 0.0)
+    if not impact:
+        n_rec = settle(y, M, D, X.new_memb, X.W, X.rec, n_rec)
+    return impact, n_rec
+
+
+@njit(**JIT)
+def append_log(logs, lg_n, t, rec, n_rec):
+    """Append ``n_rec`` records of ``rec`` at time ``t`` to the log; returns the store."""
+    if lg_n + n_rec >= logs.t.shape[0]:
+        cap = 2 * logs.t.shape[0] + n_rec
+        logs = LogStore(grow1(logs.t, cap), grow2(logs.rec, cap))
+    for r in range(n_rec):
+        logs.t[lg_n + r] = t
+        for c in range(5):
+            logs.rec[lg_n + r, c] = rec[r, c]
+    return logs
+
+
 @njit(**JIT)
 def run(t0, y0, M, D, offsets, stops, gl_x, gl_w, deadline, counters, quad):
     """Integrate the scene from ``t0`` until rest, a limit, a failure, or a touch that needs an impulse.
@@ -179,267 +527,31 @@ def run(t0, y0, M, D, offsets, stops, gl_x, gl_w, deadline, counters, quad):
         mode), the event log (time, record rows of :func:`handle_event`) and, with status
         ``ST_IMPACT``, the touch ``geo`` = (pair, x, y, nx, ny, u_n).
     """
-    body, hitch, phase_t, zone_mu, cfg, icfg = M.body, M.hitch, M.phase_times, M.zone_mu, M.cfg, M.icfg
-    tab_a, tab_b, tab_e, tab_p = M.tab_a, M.tab_b, M.tab_e, M.tab_p
-    memb, lk_j, lk_th, lk_n, pstate, pref, parked = D.memb, D.lk_j, D.lk_th, D.lk_n, D.pstate, D.pref, D.parked
-    nb = body.shape[0]
-    nw = M.wheel.shape[0]
-    nh = hitch.shape[0]
-    nz = zone_mu.shape[0]
-    npr = M.pair_body.shape[0]
-    nv = parked.shape[0]
     n = y0.shape[0]
-    ns = tab_b.shape[0]
-    deg = tab_p.shape[1]
-    rtol = cfg[C_RTOL]
-    atol = cfg[C_ATOL]
-    max_step = cfg[C_MAXSTEP]
-    t_max = cfg[C_TMAX]
-    order = icfg[I_ORDER]
-    err_exp = -1.0 / (order + 1)
-    max_segments = icfg[I_MAXSEG]
-    max_eval = icfg[I_MAXEVAL]
-
-    W = make_work(M)
-    sw = np.zeros((nw, N_S))
-    K = np.zeros((ns + 1, n))
-    nq = nb + 3 * nw + npr  # integrated components (gq also carries the nw sliding flags)
-    gq = np.zeros((ns + 1, nq + nw))
-    gtmp = np.zeros(nq + nw)
-    ytmp = np.zeros(n)
-    ytmp2 = np.zeros(n)
-    y_new = np.zeros(n)
-    dydt = np.zeros(n)
-    err = np.zeros(n)
-    new_memb = np.zeros((nw, nz), np.bool_)
-    n_ev_max = nv + nz + 3 * nh + 3 * npr + 1
-    ev_kind = np.zeros(n_ev_max, np.int64)
-    ev_idx = np.zeros(n_ev_max, np.int64)
-    ev_val = np.zeros(n_ev_max)
-    ev_dir = np.zeros(n_ev_max)
-    g_old = np.zeros(n_ev_max)
-    g_new = np.zeros(n_ev_max)
-    r_old = np.zeros(n_ev_max)
-    r_new = np.zeros(n_ev_max)
-    rec = np.zeros((nw * max(nz, 1) + nv + 8, 5))
-    geo = np.zeros(6)
-
-    cap = 256
-    st_t = np.zeros(cap)
-    st_h = np.zeros(cap)
-    st_y = np.zeros((cap, n))
-    st_q = np.zeros((cap, n, deg))
-    scap = 16
-    sg_t = np.zeros((scap, 2))
-    sg_s = np.zeros((scap, 2), np.int64)
-    sg_phase = np.zeros(scap, np.int64)
-    sg_memb = np.zeros((scap, nw, nz), np.bool_)
-    sg_nlk = np.zeros(scap, np.int64)
-    sg_lkj = np.zeros((scap, max(nh, 1)), np.int64)
-    sg_lkth = np.zeros((scap, max(nh, 1)))
-    sg_pstate = np.zeros((scap, npr), np.int64)
-    sg_pref = np.zeros((scap, npr, N_A))
-    sg_parked = np.zeros((scap, nv), np.int64)
-    lcap = 16
-    lg_t = np.zeros(lcap)
-    lg_rec = np.zeros((lcap, 5))
-    lg_n = 0
+    t_max = M.cfg[C_TMAX]
+    X = run_context(M, D, n, gl_x, gl_w, quad, deadline)
+    steps = new_step_store(256, n, M.tab_p.shape[1])
+    segs = new_segment_store(16, M, D)
+    logs = LogStore(np.zeros(16), np.zeros((16, 5)))
     n_steps = 0
     n_seg = 0
+    lg_n = 0
     nfev = counters[2]
-
     t = t0
     y = y0.copy()
-    status = -1
-
     while True:
-        all_parked = True
-        for v in range(nv):
-            if parked[v] == 0:
-                all_parked = False
-        if all_parked:
-            status = ST_REST
-            break
-        if counters[0] >= max_segments:
-            status = ST_MAX_SEGMENTS
-            break
-        if counters[1] >= MAX_STILL_SEGMENTS:
-            status = ST_NO_PROGRESS
+        status = run_limit(D, M, counters)
+        if status >= 0:
             break
         counters[0] += 1
-        t_stop = t_max
-        for s_ in stops:
-            if s_ > t:
-                t_stop = s_
-                break
-        phase = phase_at(t, phase_t)
-        segment_params(phase, memb, M, sw)
-        n_ev = build_events(M, D, offsets, ev_kind, ev_idx, ev_val, ev_dir)
-        for e in range(n_ev):
-            g_old[e] = event_value(e, y, M, ev_kind, ev_idx, ev_val, D, sw, dydt, W)
-            r_old[e] = event_rate(e, y, M, ev_kind, ev_idx, W)
-
-        # ---- integrate the segment [t, t_stop] (solve_ivp's RK driver)
-        seg_first_step = n_steps
+        t_stop, phase, n_ev = start_segment(t, y, M, D, offsets, stops, X)
         t_seg0 = t
-        evaluate(y, M, sw, D, K[0], W)
-        quad_integrand(y, M, D, W, gq[0])
-        nfev += 1
-        if cfg[C_FIRST] > 0.0:
-            h_abs = min(cfg[C_FIRST], t_stop - t)
-        else:
-            h_abs = initial_step(t, y, K[0], t_stop, max_step, order, rtol, atol, ytmp, dydt, M, sw, D, W)
-            nfev += 1
-        fired = -1
-        seg_status = 0  # 0: reached t_stop, 1: event, <0: failure
-        while t < t_stop:
-            min_step = 10.0 * abs(np.nextafter(t, math.inf) - t)
-            if h_abs > max_step:
-                h_abs = max_step
-            elif h_abs < min_step:
-                h_abs = min_step
-            rejected = False
-            accepted = False
-            while not accepted:
-                if h_abs < min_step:
-                    seg_status = -ST_STEP_TOO_SMALL
-                    break
-                if nfev >= max_eval:
-                    seg_status = -ST_MAX_EVAL
-                    break
-                t_new = t + h_abs
-                if t_new - t_stop > 0:
-                    t_new = t_stop
-                h = t_new - t
-                h_abs = abs(h)
-                k_ev, finite = rk_step(y, h, K, y_new, ytmp, M, sw, D, W, tab_a, tab_b, gq)
-                nfev += k_ev
-                if not finite:
-                    seg_status = -ST_NONFINITE
-                    break
-                for i in range(n):
-                    acc = 0.0
-                    for s in range(ns + 1):
-                        acc += tab_e[s] * K[s, i]
-                    err[i] = h * acc
-                err_norm = rms_scaled(err, y, y_new, True, rtol, atol)
-                if err_norm < 1.0:
-                    if err_norm == 0.0:
-                        factor = MAX_FACTOR
-                    else:
-                        factor = min(MAX_FACTOR, SAFETY * err_norm**err_exp)
-                    if rejected:
-                        factor = min(1.0, factor)
-                    h_abs *= factor
-                    accepted = True
-                else:
-                    h_abs *= max(MIN_FACTOR, SAFETY * err_norm**err_exp)
-                    rejected = True
-            if seg_status < 0:
-                break
-            if n_steps % WALL_CHECK_STEPS == 0 and wall_clock() > deadline:
-                seg_status = -ST_WALL_TIME
-                break
-            # ---- store the step (start time, size, start state, dense output Q = K^T P)
-            if n_steps == st_t.shape[0]:
-                cap = 2 * st_t.shape[0]
-                st_t = grow1(st_t, cap)
-                st_h = grow1(st_h, cap)
-                st_y = grow2(st_y, cap)
-                st_q = grow3(st_q, cap)
-            st_t[n_steps] = t
-            st_h[n_steps] = h
-            for i in range(n):
-                st_y[n_steps, i] = y[i]
-                for d in range(deg):
-                    acc = 0.0
-                    for s in range(ns + 1):
-                        acc += K[s, i] * tab_p[s, d]
-                    st_q[n_steps, i, d] = acc
-            n_steps += 1
-            # ---- events on the step
-            for e in range(n_ev):
-                g_new[e] = event_value(e, y_new, M, ev_kind, ev_idx, ev_val, D, sw, dydt, W)
-                r_new[e] = event_rate(e, y_new, M, ev_kind, ev_idx, W)
-            t_first, fired = first_root(t, t_new, h, st_y[n_steps - 1], st_q[n_steps - 1], ytmp2, M, ev_kind, ev_idx,
-                                        ev_val, ev_dir, n_ev, g_old, g_new, r_old, r_new, D, sw, dydt, W)
-            if fired >= 0:
-                # path integrals over [t, t_first] by Gauss-Legendre on the dense output
-                half = 0.5 * (t_first - t)
-                mid = 0.5 * (t_first + t)
-                for q in range(gl_x.shape[0]):
-                    interpolate(mid + half * gl_x[q], t, h, st_y[n_steps - 1], st_q[n_steps - 1], ytmp)
-                    evaluate(ytmp, M, sw, D, dydt, W)
-                    quad_integrand(ytmp, M, D, W, gtmp)
-                    for c in range(nq):
-                        quad[c] += half * gl_w[q] * gtmp[c]
-                interpolate(t_first, t, h, st_y[n_steps - 1], st_q[n_steps - 1], y)
-                t = t_first
-                seg_status = 1
-                break
-            # path integrals over the step: the RK solution of q' = g(y) from the stage values,
-            # unless a sliding flag switches inside the step (a jump the stage rule, with its
-            # negative weight, integrates badly): then 5-point Gauss-Legendre on the dense output
-            switch = False
-            for kk in range(nw):
-                f0 = gq[0, nq + kk]
-                for j in range(1, ns + 1):
-                    if gq[j, nq + kk] != f0:
-                        switch = True
-            if switch:
-                half = 0.5 * h
-                mid = t + half
-                for q in range(gl_x.shape[0]):
-                    interpolate(mid + half * gl_x[q], t, h, st_y[n_steps - 1], st_q[n_steps - 1], ytmp)
-                    evaluate(ytmp, M, sw, D, dydt, W)
-                    quad_integrand(ytmp, M, D, W, gtmp)
-                    for c in range(nq):
-                        quad[c] += half * gl_w[q] * gtmp[c]
-            else:
-                for c in range(nq):
-                    acc = 0.0
-                    for j in range(ns):
-                        acc += tab_b[j] * gq[j, c]
-                    quad[c] += h * acc
-            for c in range(nq + nw):
-                gq[0, c] = gq[ns, c]
-            t = t_new
-            for i in range(n):
-                y[i] = y_new[i]
-                K[0, i] = K[ns, i]
-            for e in range(n_ev):
-                g_old[e] = g_new[e]
-                r_old[e] = r_new[e]
+        seg_first_step = n_steps
+        seg_status, fired, t, steps, n_steps, nfev = integrate_segment(t, t_stop, y, M, D, n_ev, X, steps, n_steps,
+                                                                       nfev)
         # ---- record the segment (its mode as it was during the segment)
         if t > t_seg0:
-            if n_seg == sg_t.shape[0]:
-                scap = 2 * sg_t.shape[0]
-                sg_t = grow2(sg_t, scap)
-                sg_s = grow2(sg_s, scap)
-                sg_phase = grow1(sg_phase, scap)
-                sg_memb = grow3(sg_memb, scap)
-                sg_nlk = grow1(sg_nlk, scap)
-                sg_lkj = grow2(sg_lkj, scap)
-                sg_lkth = grow2(sg_lkth, scap)
-                sg_pstate = grow2(sg_pstate, scap)
-                sg_pref = grow3(sg_pref, scap)
-                sg_parked = grow2(sg_parked, scap)
-            sg_t[n_seg, 0] = t_seg0
-            sg_t[n_seg, 1] = t
-            sg_s[n_seg, 0] = seg_first_step
-            sg_s[n_seg, 1] = n_steps
-            sg_phase[n_seg] = phase
-            sg_memb[n_seg] = memb
-            sg_nlk[n_seg] = lk_n[0]
-            for q in range(lk_n[0]):
-                sg_lkj[n_seg, q] = lk_j[q]
-                sg_lkth[n_seg, q] = lk_th[q]
-            for p in range(npr):
-                sg_pstate[n_seg, p] = pstate[p]
-                for c in range(N_A):
-                    sg_pref[n_seg, p, c] = pref[p, c]
-            for v in range(nv):
-                sg_parked[n_seg, v] = parked[v]
+            segs = record_segment(segs, n_seg, t_seg0, t, seg_first_step, n_steps, phase, D)
             n_seg += 1
             counters[1] = 0
         else:
@@ -448,32 +560,18 @@ def run(t0, y0, M, D, offsets, stops, gl_x, gl_w, deadline, counters, quad):
         if seg_status < 0:
             status = -seg_status
             break
+        if seg_status == 0 and t >= t_max:
+            status = ST_TIME_LIMIT
+            break
         # ---- the event, or the scheduled change, then the new zone membership and parking
-        n_rec = 0
-        impact = False
-        if seg_status == 1:
-            impact, n_rec = handle_event(fired, t, y, M, D, offsets, ev_kind, ev_idx, ev_val, ev_dir, sw, dydt, W,
-                                         rec, geo)
-        else:
-            if t >= t_max:
-                status = ST_TIME_LIMIT
-                break
-            n_rec = log_record(rec, 0, LOG_SCHEDULE, 0, 0, 0.0, 0.0)
-        if not impact:
-            n_rec = settle(y, M, D, new_memb, W, rec, n_rec)
-        if lg_n + n_rec >= lg_t.shape[0]:
-            lcap = 2 * lg_t.shape[0] + n_rec
-            lg_t = grow1(lg_t, lcap)
-            lg_rec = grow2(lg_rec, lcap)
-        for r in range(n_rec):
-            lg_t[lg_n] = t
-            for c in range(5):
-                lg_rec[lg_n, c] = rec[r, c]
-            lg_n += 1
+        impact, n_rec = end_segment(seg_status, fired, t, y, M, D, offsets, X)
+        logs = append_log(logs, lg_n, t, X.rec, n_rec)
+        lg_n += n_rec
         if impact:
             status = ST_IMPACT
             break
     counters[2] = nfev
-    return (status, t, y, st_t[:n_steps], st_h[:n_steps], st_y[:n_steps], st_q[:n_steps],
-            sg_t[:n_seg], sg_s[:n_seg], sg_phase[:n_seg], sg_memb[:n_seg], sg_nlk[:n_seg], sg_lkj[:n_seg],
-            sg_lkth[:n_seg], sg_pstate[:n_seg], sg_pref[:n_seg], sg_parked[:n_seg], lg_t[:lg_n], lg_rec[:lg_n], geo)
+    return (status, t, y, steps.t[:n_steps], steps.h[:n_steps], steps.y[:n_steps], steps.q[:n_steps],
+            segs.t[:n_seg], segs.s[:n_seg], segs.phase[:n_seg], segs.memb[:n_seg], segs.nlk[:n_seg],
+            segs.lk_j[:n_seg], segs.lk_th[:n_seg], segs.pstate[:n_seg], segs.pref[:n_seg], segs.parked[:n_seg],
+            logs.t[:lg_n], logs.rec[:lg_n], X.geo)

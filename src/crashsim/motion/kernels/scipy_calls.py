@@ -10,10 +10,9 @@ import numpy as np
 from numba import njit
 
 from .jit import JIT
-from .arrays import LOG_SCHEDULE, N_S, make_work
+from .arrays import LOG_SCHEDULE, N_S, Events, make_work
 from .equations import evaluate, segment_params
 from .events import build_events, event_rate, event_resolution, event_value, handle_event, log_record, settle
-
 
 @njit(**JIT)
 def rhs(y, M, phase, D):
@@ -68,7 +67,7 @@ def segment_events(M, D, offsets):
     ev_idx = np.zeros(n_max, np.int64)
     ev_val = np.zeros(n_max)
     ev_dir = np.zeros(n_max)
-    n_ev = build_events(M, D, offsets, ev_kind, ev_idx, ev_val, ev_dir)
+    n_ev = build_events(M, D, offsets, Events(ev_kind, ev_idx, ev_val, ev_dir))
     return ev_kind[:n_ev], ev_idx[:n_ev], ev_val[:n_ev], ev_dir[:n_ev]
 
 
@@ -80,19 +79,21 @@ def event_values(y, M, phase, D, ev_kind, ev_idx, ev_val):
     segment_params(phase, D.memb, M, sw)
     dydt = np.zeros(y.shape[0])
     n_ev = ev_kind.shape[0]
+    ev = Events(ev_kind, ev_idx, ev_val, ev_val)  # directions are not read
     g = np.zeros(n_ev)
     r = np.zeros(n_ev)
     for e in range(n_ev):
-        g[e] = event_value(e, y, M, ev_kind, ev_idx, ev_val, D, sw, dydt, W)
-        r[e] = event_rate(e, y, M, ev_kind, ev_idx, W)
+        g[e] = event_value(e, y, M, ev, D, sw, dydt, W)
+        r[e] = event_rate(e, y, M, ev, W)
     return g, r
 
 
 @njit(**JIT)
 def event_resolutions(M, ev_kind, ev_idx):
     out = np.zeros(ev_kind.shape[0])
+    ev = Events(ev_kind, ev_idx, out, out)  # kinds and indices only are read
     for e in range(ev_kind.shape[0]):
-        out[e] = event_resolution(e, M, ev_kind, ev_idx)
+        out[e] = event_resolution(e, M, ev)
     return out
 
 
@@ -102,7 +103,8 @@ def event_value_at(e, y, M, phase, D, ev_kind, ev_idx, ev_val):
     W = make_work(M)
     sw = np.zeros((M.wheel.shape[0], N_S))
     segment_params(phase, D.memb, M, sw)
-    return event_value(e, y, M, ev_kind, ev_idx, ev_val, D, sw, np.zeros(y.shape[0]), W)
+    ev = Events(ev_kind, ev_idx, ev_val, ev_val)  # directions are not read
+    return event_value(e, y, M, ev, D, sw, np.zeros(y.shape[0]), W)
 
 
 @njit(**JIT)
@@ -113,7 +115,7 @@ def apply_event(e, t, y, M, phase, D, offsets, ev_kind, ev_idx, ev_val, ev_dir):
     segment_params(phase, D.memb, M, sw)
     rec = np.zeros((M.wheel.shape[0] * max(M.zone_mu.shape[0], 1) + D.parked.shape[0] + 8, 5))
     geo = np.zeros(6)
-    impact, n = handle_event(e, t, y, M, D, offsets, ev_kind, ev_idx, ev_val, ev_dir, sw, np.zeros(y.shape[0]), W,
+    impact, n = handle_event(e, t, y, M, D, offsets, Events(ev_kind, ev_idx, ev_val, ev_dir), sw, np.zeros(y.shape[0]), W,
                              rec, geo)
     if not impact:
         n = settle(y, M, D, np.zeros((M.wheel.shape[0], M.zone_mu.shape[0]), np.bool_), W, rec, n)

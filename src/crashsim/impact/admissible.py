@@ -95,12 +95,8 @@ def impulse_work(S: ImpactStructure, A: ImpactArrays, out: dict) -> dict[str, np
     """
     from . import kernel
 
-    fixed, b1, b2, _, hitches, cb, xb = _kernel_structure(S)
-    W = kernel.work_batch(fixed, b1, b2, hitches, cb, xb, _c(A.position), _c(A.heading), _c(A.velocity),
-                           _c(A.yaw_rate), _c(A.hitch_front_point), _c(A.hitch_rear_point), _c(A.point),
-                           _c(A.normal_angle), _c(A.tangent_sign), _c(A.constraint_point),
-                           _c(A.constraint_direction), _c(A.external_point), _c(A.external_impulse),
-                           _c(out["velocity"]), _c(out["yaw_rate"]), _c(out["impulses"]))
+    W = kernel.work_batch(_kernel_structure(S), kernel.pack_items(A), _c(out["velocity"]), _c(out["yaw_rate"]),
+                          _c(out["impulses"]))
     return {key: W[:, j] for j, key in enumerate(WORK_KEYS)}
 
 

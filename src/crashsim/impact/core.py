@@ -947,14 +947,15 @@ def _solve_chunk_reduced(S: ImpactStructure, A: ImpactArrays) -> dict[str, np.nd
 # --------------------------------------------------------------------------------------------
 
 def _kernel_structure(S: ImpactStructure) -> tuple:
-    """The structure as the kernels take it (int arrays), kept on S after the first call."""
+    """The structure as the kernels take it (``kernel.Structure``), kept on S after the first call."""
     meta = S.__dict__.get("_kernel_meta")
     if meta is None:
         from . import kernel
 
-        meta = (np.asarray(S.fixed, dtype=np.bool_), S.body1, S.body2, kernel.LAW_CODES[S.tangential],
-                np.asarray(S.hitches, dtype=np.int64).reshape(len(S.hitches), 2),
-                np.asarray(S.constraint_bodies, dtype=np.int64), np.asarray(S.external_bodies, dtype=np.int64))
+        meta = kernel.Structure(np.asarray(S.fixed, dtype=np.bool_), S.body1, S.body2, kernel.LAW_CODES[S.tangential],
+                                np.asarray(S.hitches, dtype=np.int64).reshape(len(S.hitches), 2),
+                                np.asarray(S.constraint_bodies, dtype=np.int64),
+                                np.asarray(S.external_bodies, dtype=np.int64))
         object.__setattr__(S, "_kernel_meta", meta)  # a cache, not a field: eq, hash, replace unaffected
     return meta
 
@@ -1024,13 +1025,7 @@ def solve_compiled(S: ImpactStructure, A: ImpactArrays, extras: bool = False):
 
     if _LIMITS is None:
         _LIMITS = kernel.limits()
-    fixed, b1, b2, law, hitches, cb, xb = _kernel_structure(S)
-    Y = kernel.solve_batch(
-        fixed, b1, b2, law, hitches, cb, xb, _c(A.mass), _c(A.yaw_inertia), _c(A.position), _c(A.heading),
-        _c(A.velocity), _c(A.yaw_rate), _c(A.hitch_front_point), _c(A.hitch_rear_point), _c(A.point),
-        _c(A.normal_angle), _c(A.tangent_sign), _c(A.restitution), _c(A.law_value), _c(A.moment_restitution),
-        _c(A.constraint_point), _c(A.constraint_direction), _c(A.constraint_value), _c(A.external_point),
-        _c(A.external_impulse), _LIMITS, extras)
+    Y = kernel.solve_batch(_kernel_structure(S), kernel.pack_items(A), _LIMITS, extras)
     return unpack(S, Y, A.size, extras)
 
 

@@ -32,7 +32,10 @@ def in_crush(y, M, D, cs, p, ia, px, py):
 def pair_forces(y, M, D, cs, p, f, mf):
     """Penalty forces of pair ``p`` (in contact) added to the world-frame body forces ``f`` (z order).
 
-    A receives the force at each manifold point, B minus it; an obstacle receives nothing.
+    Sustained contact as the README states it ("Contact model"; package docstring, "States"):
+    at each manifold point ``F_n = max(0, k e + c e')`` on the depth ``e`` beyond the
+    allowance, with Coulomb friction ``mu_c F_n`` against the tangential slip, regularised
+    like the tyres (``v_t / sqrt(v_t^2 + eps^2)``).  A receives the force at each manifold point, B minus it; an obstacle receives nothing.
     ``cs`` holds the bodies' heading cosines and sines, ``mf`` (2, 3) is scratch for the
     manifold.  Returns the power of the forces on the bodies [W] (their work on the system:
     dissipation by the damper and the friction, and the spring's change of stored energy).

@@ -62,15 +62,19 @@ def phase_at(t, phase_t):
 def evaluate(y, M, sw, D, dydt, W):
     """Right-hand side ``dydt`` of state ``y`` for the segment inputs ``sw`` and mode ``D``.
 
-    Leaves in the work bundle ``W = (wk, f, G, A, lam, cs, pf, mf)``: per-wheel wheel-axes
-    velocity, force, sliding flag and load (``wk``), the world-frame force sums per body ``f``
-    (tyres and contacts, z order), the constraint multipliers ``lam`` (hitch forces on the
-    front body [N], then stop moments [N m]), the heading cosines/sines ``cs`` and the contact
-    powers ``pf``.  Returns the number of multipliers ``m``.
+    Leaves in the work bundle ``W`` (:class:`Work`): per-wheel wheel-axes velocity, force,
+    sliding flag and load (``wheel_out``), the world-frame force sums per body ``body_force``
+    (tyres and contacts, z order), the constraint multipliers ``multipliers`` (hitch forces on
+    the front body [N], then stop moments [N m]), the heading cosines/sines ``trig`` and the
+    contact powers ``pair_power``.  Returns the number of multipliers ``m``.
 
-    Tyre forces (the shared tyre kernel) and penalty contact forces, then the
-    Baumgarte-stabilised multiplier solve ``(G M^-1 G^T) lam = -(G M^-1 f + gamma +
-    2 zeta w0 g' + w0^2 g)``; the bodies of parked vehicles are frozen (zero derivative).
+    The run-out model of the README ("Run-out model": three planar degrees of freedom per
+    body, hitches as pins held by Lagrange multipliers with Baumgarte stabilisation):
+    ``M z'' = f + G^T lam`` with tyre forces (the shared tyre kernel) and penalty contact
+    forces in ``f``, and the multiplier solve ``(G M^-1 G^T) lam = -(G M^-1 f + gamma +
+    2 zeta w0 g' + w0^2 g)`` (:func:`constraint_rows`); with load transfer the body-axes
+    accelerations are filtered, ``a_f' = (a - a_f) / tau``.  The bodies of parked vehicles are
+    frozen (zero derivative).
     """
     body, hitch, minv, cfg, icfg, bveh = M.body, M.hitch, M.inv_mass, M.cfg, M.icfg, M.body_vehicle
     lk_j, lk_th, nlk, parked = D.lk_j, D.lk_th, D.lk_n[0], D.parked

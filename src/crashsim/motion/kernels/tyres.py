@@ -56,8 +56,12 @@ def _tyre_scalar(u, w, mu_load, demand, cornering_stiffness, locked, eps, fiala)
 def tyre_eval(y, M, sw, D, W):
     """Tyre forces of state ``y``: per-wheel results in ``W.wheel_out`` (``W_*`` columns), world-frame body sums in ``W.body_force``.
 
-    Also fills ``W.trig`` with the body heading cosines and sines.  Wheels of parked vehicles
-    produce no force (their bodies are frozen).
+    The tyre law of the README ("Run-out model"): rolling tyres on the Fiala (or linear)
+    lateral curve inside a friction circle with braking priority, locked ones sliding with
+    Coulomb friction against the contact-point velocity (:func:`crashsim.motion.tyres.tyre_kernel`),
+    each on its load: static, or with load transfer ``N = N_static + T a_f`` (``M.load_transfer``
+    on the filtered accelerations).  Also fills ``W.trig`` with the body heading cosines and
+    sines.  Wheels of parked vehicles produce no force (their bodies are frozen).
     """
     body, wheel, wbody, transfer, cfg, icfg, bveh = M.body, M.wheel, M.wheel_body, M.load_transfer, M.cfg, M.icfg, M.body_vehicle
     parked = D.parked

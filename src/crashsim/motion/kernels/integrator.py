@@ -15,7 +15,7 @@ import numpy as np
 from numba import njit, objmode
 
 from ..options import MAX_STILL_SEGMENTS
-from .jit import HOT, INLINE, JIT
+from .jit import HOT, INLINE, JIT, STAGE
 from .arrays import (C_ATOL, C_FIRST, C_MAXSTEP, C_RTOL, C_TMAX, I_LT, I_MAXEVAL, I_MAXSEG, I_ORDER, LOG_SCHEDULE,
                      MAX_FACTOR, MIN_FACTOR, N_A, N_S, SAFETY, ST_IMPACT, ST_MAX_EVAL, ST_MAX_SEGMENTS, ST_NONFINITE,
                      ST_NO_PROGRESS, ST_REST, ST_STEP_TOO_SMALL, ST_TIME_LIMIT, ST_WALL_TIME, WALL_CHECK_STEPS,
@@ -178,7 +178,7 @@ SegmentStore = namedtuple("SegmentStore", ["t", "s", "phase", "memb", "nlk", "lk
 LogStore = namedtuple("LogStore", ["t", "rec"])
 
 
-@njit(**JIT)
+@njit(**STAGE)
 def run_context(M, D, n, gl_x, gl_w, quad, deadline):
     """The arrays of the segment loop (:class:`RunContext`) for states of size ``n``."""
     nb = M.body.shape[0]
@@ -198,12 +198,12 @@ def run_context(M, D, n, gl_x, gl_w, quad, deadline):
                       deadline)
 
 
-@njit(**JIT)
+@njit(**STAGE)
 def new_step_store(cap, n, deg):
     return StepStore(np.zeros(cap), np.zeros(cap), np.zeros((cap, n)), np.zeros((cap, n, deg)))
 
 
-@njit(**JIT)
+@njit(**STAGE)
 def new_segment_store(cap, M, D):
     nw = M.wheel.shape[0]
     nh = M.hitch.shape[0]
@@ -216,7 +216,7 @@ def new_segment_store(cap, M, D):
                         np.zeros((cap, npr), np.int64), np.zeros((cap, npr, N_A)), np.zeros((cap, nv), np.int64))
 
 
-@njit(**JIT)
+@njit(**STAGE)
 def run_limit(D, M, counters):
     """Status that ends the run before a new segment (``ST_REST``: every vehicle parked; the
     segment and no-progress bounds), or -1 to go on."""
@@ -234,7 +234,7 @@ def run_limit(D, M, counters):
     return -1
 
 
-@njit(**JIT)
+@njit(**STAGE)
 def start_segment(t, y, M, D, offsets, stops, X):
     """Start a segment at ``(t, y)``: its end ``t_stop`` (the next scheduled change, or t_max),
     its wheel phase and inputs, its events and their values and rate bounds at ``y``.
@@ -253,7 +253,7 @@ def start_segment(t, y, M, D, offsets, stops, X):
     return t_stop, phase, n_ev
 
 
-@njit(**JIT)
+@njit(**STAGE)
 def first_step(t, t_stop, y, M, D, X):
     """The right-hand side and path integrands at the segment's start (``K[0]``, ``gq[0]``) and
     the first step size: ``C_FIRST`` if set, else solve_ivp's initial step.  Returns
@@ -265,7 +265,7 @@ def first_step(t, t_stop, y, M, D, X):
     return initial_step(t, y, X.K[0], t_stop, X.ytmp, X.dydt, M, X.sw, D, X.W), 2
 
 
-@njit(**INLINE)
+@njit(**STAGE)
 def attempt_step(t, t_stop, h_abs, min_step, y, M, D, X, nfev):
     """Steps from ``(t, y)`` until one is accepted (solve_ivp's RK error control, its constants
     ``SAFETY``, ``MIN_FACTOR``, ``MAX_FACTOR``): the stages in ``K``, the end state in ``y_new``.
@@ -316,7 +316,7 @@ def attempt_step(t, t_stop, h_abs, min_step, y, M, D, X, nfev):
         rejected = True
 
 
-@njit(**dict(JIT, inline="always"))  # allocates when the store grows
+@njit(**STAGE)
 def store_step(steps, n_steps, t, h, y, K, tab_p):
     """Store an accepted step (start time, size, start state, dense output ``Q = K^T P``) as
     step ``n_steps``; returns the store (a larger one when it was full)."""
@@ -337,7 +337,7 @@ def store_step(steps, n_steps, t, h, y, K, tab_p):
     return steps
 
 
-@njit(**INLINE)
+@njit(**STAGE)
 def gauss_quadrature(mid, half, step, M, D, X):
     """Path integrals over ``[mid - half, mid + half]`` by Gauss-Legendre on the dense output of
     ``step`` (:class:`Step`), added to ``X.quad``."""
@@ -351,7 +351,7 @@ def gauss_quadrature(mid, half, step, M, D, X):
             quad[c] += half * gl_w[q] * gtmp[c]
 
 
-@njit(**INLINE)
+@njit(**STAGE)
 def step_quadrature(step, M, D, X):
     """Path integrals over an accepted step without event: the RK solution of ``q' = g(y)``
     from the stage values, unless a sliding flag switches inside the step (a jump the stage
@@ -378,7 +378,7 @@ def step_quadrature(step, M, D, X):
             quad[c] += h * acc
 
 
-@njit(**INLINE)
+@njit(**STAGE)
 def advance(y, n_ev, X):
     """Make the accepted step's end the next step's start: the state, the FSAL stage, the path
     integrands and the event values."""
@@ -393,7 +393,7 @@ def advance(y, n_ev, X):
         X.vals.r_old[e] = X.vals.r_new[e]
 
 
-@njit(**JIT)
+@njit(**STAGE)
 def integrate_segment(t, t_stop, y, M, D, n_ev, X, steps, n_steps, nfev):
     """Integrate the segment from ``(t, y)`` to ``t_stop`` or its first event (solve_ivp's RK
     driver; ``y`` is advanced in place).  Each accepted step is stored, searched for the
@@ -436,7 +436,7 @@ def integrate_segment(t, t_stop, y, M, D, n_ev, X, steps, n_steps, nfev):
     return 0, -1, t, steps, n_steps, nfev
 
 
-@njit(**JIT)
+@njit(**STAGE)
 def record_segment(segs, n_seg, t0, t1, steps0, steps1, phase, D):
     """Store segment ``n_seg`` (its times, steps and its mode as it was during the segment);
     returns the store (a larger one when it was full)."""
@@ -464,7 +464,7 @@ def record_segment(segs, n_seg, t0, t1, steps0, steps1, phase, D):
     return segs
 
 
-@njit(**JIT)
+@njit(**STAGE)
 def end_segment(status, fired, t, y, M, D, offsets, X):
     """The event that ended the segment (status 1), or its scheduled change, then (unless an
     impulse is needed) the new zone membership and parking (:func:`settle`).  Returns
@@ -479,7 +479,7 @@ def end_segment(status, fired, t, y, M, D, offsets, X):
     return impact, n_rec
 
 
-@njit(**JIT)
+@njit(**STAGE)
 def append_log(logs, lg_n, t, rec, n_rec):
     """Append ``n_rec`` records of ``rec`` at time ``t`` to the log; returns the store."""
     if lg_n + n_rec >= logs.t.shape[0]:

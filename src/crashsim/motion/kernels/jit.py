@@ -22,3 +22,7 @@ HOT = dict(JIT, _nrt=False)
 #: Small helpers are inlined at numba-IR level: a call passes the model and work tuples as a
 #: few hundred scalar arguments, which cost ~20 % of a right-hand side evaluation.
 INLINE = dict(HOT, inline="always")
+#: Stages of a long kernel cut for reading (the segment loop), inlined into their one caller at
+#: numba-IR level: compiled apart, every stage would carry the code of the kernels it calls
+#: once more (numba links and optimizes a function's callees into it), which cost compile time.
+STAGE = dict(JIT, inline="always")

@@ -174,6 +174,8 @@ StepStore = namedtuple("StepStore", ["t", "h", "y", "q"])
 #: (2,), and the segment's mode (the fields of :class:`Segments`).
 SegmentStore = namedtuple("SegmentStore", ["t", "s", "phase", "memb", "nlk", "lk_j", "lk_th", "pstate", "pref",
                                            "parked"])
+#: Status of :func:`integrate_segment` when the step store is full (grow it and call again).
+STORE_FULL = 2
 #: The event log (growable): time [s] and record row (kind, i, j, x, energy) of each record.
 LogStore = namedtuple("LogStore", ["t", "rec"])
 
@@ -265,7 +267,7 @@ def first_step(t, t_stop, y, M, D, X):
     return initial_step(t, y, X.K[0], t_stop, X.ytmp, X.dydt, M, X.sw, D, X.W), 2
 
 
-@njit(**STAGE)
+@njit(**INLINE)
 def attempt_step(t, t_stop, h_abs, min_step, y, M, D, X, nfev):
     """Steps from ``(t, y)`` until one is accepted (solve_ivp's RK error control, its constants
     ``SAFETY``, ``MIN_FACTOR``, ``MAX_FACTOR``): the stages in ``K``, the end state in ``y_new``.
@@ -316,13 +318,10 @@ def attempt_step(t, t_stop, h_abs, min_step, y, M, D, X, nfev):
         rejected = True
 
 
-@njit(**STAGE)
+@njit(**INLINE)
 def store_step(steps, n_steps, t, h, y, K, tab_p):
     """Store an accepted step (start time, size, start state, dense output ``Q = K^T P``) as
-    step ``n_steps``; returns the store (a larger one when it was full)."""
-    if n_steps == steps.t.shape[0]:
-        cap = 2 * steps.t.shape[0]
-        steps = StepStore(grow1(steps.t, cap), grow1(steps.h, cap), grow2(steps.y, cap), grow3(steps.q, cap))
+    step ``n_steps`` (the store has room: :func:`integrate_segment` sees to it)."""
     ns1 = K.shape[0]
     deg = tab_p.shape[1]
     steps.t[n_steps] = t
@@ -334,10 +333,16 @@ def store_step(steps, n_steps, t, h, y, K, tab_p):
             for s in range(ns1):
                 acc += K[s, i] * tab_p[s, d]
             steps.q[n_steps, i, d] = acc
-    return steps
 
 
 @njit(**STAGE)
+def grow_steps(steps):
+    """The step store with twice the room."""
+    cap = 2 * steps.t.shape[0]
+    return StepStore(grow1(steps.t, cap), grow1(steps.h, cap), grow2(steps.y, cap), grow3(steps.q, cap))
+
+
+@njit(**INLINE)
 def gauss_quadrature(mid, half, step, M, D, X):
     """Path integrals over ``[mid - half, mid + half]`` by Gauss-Legendre on the dense output of
     ``step`` (:class:`Step`), added to ``X.quad``."""
@@ -351,7 +356,7 @@ def gauss_quadrature(mid, half, step, M, D, X):
             quad[c] += half * gl_w[q] * gtmp[c]
 
 
-@njit(**STAGE)
+@njit(**INLINE)
 def step_quadrature(step, M, D, X):
     """Path integrals over an accepted step without event: the RK solution of ``q' = g(y)``
     from the stage values, unless a sliding flag switches inside the step (a jump the stage
@@ -378,7 +383,7 @@ def step_quadrature(step, M, D, X):
             quad[c] += h * acc
 
 
-@njit(**STAGE)
+@njit(**INLINE)
 def advance(y, n_ev, X):
     """Make the accepted step's end the next step's start: the state, the FSAL stage, the path
     integrands and the event values."""
@@ -393,19 +398,23 @@ def advance(y, n_ev, X):
         X.vals.r_old[e] = X.vals.r_new[e]
 
 
-@njit(**STAGE)
-def integrate_segment(t, t_stop, y, M, D, n_ev, X, steps, n_steps, nfev):
-    """Integrate the segment from ``(t, y)`` to ``t_stop`` or its first event (solve_ivp's RK
-    driver; ``y`` is advanced in place).  Each accepted step is stored, searched for the
-    segment's events (:func:`first_root`) and its path integrals are added.
+@njit(**HOT)
+def integrate_segment(t, t_stop, h_abs, y, M, D, n_ev, X, steps, n_steps, nfev):
+    """Integrate the segment from ``(t, y)`` with the next step size ``h_abs`` to ``t_stop`` or
+    its first event (solve_ivp's RK driver; ``y`` is advanced in place).  Each accepted step is
+    stored, searched for the segment's events (:func:`first_root`) and its path integrals are
+    added.  Compiled without reference counting (the step loop would otherwise count references
+    to every array of the bundles it reads, at every access), so it allocates nothing: when
+    the step store is full it returns, the caller grows the store and calls again.
 
-    Returns ``(status, fired, t, steps, n_steps, nfev)``: status 0 reached ``t_stop``, 1 event
-    ``fired`` at ``t`` (the state there, the path integrals up to it), < 0 minus the failure.
+    Returns ``(status, fired, t, h_abs, n_steps, nfev)``: status 0 reached ``t_stop``, 1 event
+    ``fired`` at ``t`` (the state there, the path integrals up to it), ``STORE_FULL``, or < 0
+    minus the failure.
     """
     max_step = M.cfg[C_MAXSTEP]
-    h_abs, k_ev = first_step(t, t_stop, y, M, D, X)
-    nfev += k_ev
     while t < t_stop:
+        if n_steps == steps.t.shape[0]:
+            return STORE_FULL, -1, t, h_abs, n_steps, nfev
         min_step = 10.0 * abs(np.nextafter(t, math.inf) - t)
         if h_abs > max_step:
             h_abs = max_step
@@ -413,10 +422,10 @@ def integrate_segment(t, t_stop, y, M, D, n_ev, X, steps, n_steps, nfev):
             h_abs = min_step
         status, t_new, h, h_abs, nfev = attempt_step(t, t_stop, h_abs, min_step, y, M, D, X, nfev)
         if status < 0:
-            return status, -1, t, steps, n_steps, nfev
+            return status, -1, t, h_abs, n_steps, nfev
         if n_steps % WALL_CHECK_STEPS == 0 and wall_clock() > X.deadline:
-            return -ST_WALL_TIME, -1, t, steps, n_steps, nfev
-        steps = store_step(steps, n_steps, t, h, y, X.K, M.tab_p)
+            return -ST_WALL_TIME, -1, t, h_abs, n_steps, nfev
+        store_step(steps, n_steps, t, h, y, X.K, M.tab_p)
         n_steps += 1
         # ---- events on the step
         for e in range(n_ev):
@@ -429,11 +438,11 @@ def integrate_segment(t, t_stop, y, M, D, n_ev, X, steps, n_steps, nfev):
             # path integrals over [t, t_first] by Gauss-Legendre on the dense output
             gauss_quadrature(0.5 * (t_first + t), 0.5 * (t_first - t), dense, M, D, X)
             interpolate(t_first, t, h, dense.y_old, dense.Q, y)
-            return 1, fired, t_first, steps, n_steps, nfev
+            return 1, fired, t_first, h_abs, n_steps, nfev
         step_quadrature(dense, M, D, X)
         t = t_new
         advance(y, n_ev, X)
-    return 0, -1, t, steps, n_steps, nfev
+    return 0, -1, t, h_abs, n_steps, nfev
 
 
 @njit(**STAGE)
@@ -547,8 +556,14 @@ def run(t0, y0, M, D, offsets, stops, gl_x, gl_w, deadline, counters, quad):
         t_stop, phase, n_ev = start_segment(t, y, M, D, offsets, stops, X)
         t_seg0 = t
         seg_first_step = n_steps
-        seg_status, fired, t, steps, n_steps, nfev = integrate_segment(t, t_stop, y, M, D, n_ev, X, steps, n_steps,
-                                                                       nfev)
+        h_abs, k_ev = first_step(t, t_stop, y, M, D, X)
+        nfev += k_ev
+        while True:
+            seg_status, fired, t, h_abs, n_steps, nfev = integrate_segment(t, t_stop, h_abs, y, M, D, n_ev, X, steps,
+                                                                           n_steps, nfev)
+            if seg_status != STORE_FULL:
+                break
+            steps = grow_steps(steps)
         # ---- record the segment (its mode as it was during the segment)
         if t > t_seg0:
             segs = record_segment(segs, n_seg, t_seg0, t, seg_first_step, n_steps, phase, D)

@@ -3,7 +3,7 @@
 ``core.solve_arrays(method="reduced")`` solves by ``_solve_chunk_reduced`` (hitch and
 constraint impulses eliminated by a Cholesky factorisation, the 3 x 3 contact system by
 pivoted elimination); ``method="compiled"`` (the default without ``condition=True``) by the
-numba kernel of ``crashsim.impact._kernel`` (the dense algorithm item by item);
+numba kernel of ``crashsim.impact.kernel`` (the dense algorithm item by item);
 ``condition=True`` goes through ``_solve_chunk`` (equilibrated K x K inverses). All must return
 the same dict: keys, shapes, dtypes, the ``ok`` rule (finite and 1-norm condition of the
 equilibrated system < COND_LIMIT), NaN for not-ok items, mu_max NaN where the no-slide system
@@ -357,7 +357,7 @@ def _solve_all_laws(S, A, seed):
         dense = core.solve_arrays(S_l, A_l, method="dense")
         red = core.solve_arrays(S_l, A_l, method="reduced")
         check_agreement(S_l, A_l, dense, red, ns)
-        # the compiled kernel (crashsim.impact._kernel): the dense path's algorithm item by
+        # the compiled kernel (crashsim.impact.kernel): the dense path's algorithm item by
         # item, so the same tolerances and threshold rules
         comp = core.solve_arrays(S_l, A_l, method="compiled")
         check_agreement(S_l, A_l, dense, comp, ns)

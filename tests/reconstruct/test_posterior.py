@@ -284,7 +284,8 @@ def test_the_shipped_fit_scene_has_a_valid_posterior_table():
     raw = load_toml(Path(__file__).resolve().parents[2] / "scenarios" / "fit" / "intersection_fit.toml")
     spec = PosteriorSpec.from_dict(raw["posterior"])
     spec.check(len(raw["fit"]["unknowns"]))
-    assert spec.start == "fit" and spec.prior == "fit" and spec.move == "stretch"
+    assert spec.start == "fit" and spec.prior == "fit" and spec.move == "de"
+    assert spec.ess == 1000 and spec.tolerance == "evidence" and spec.steps > spec.burn_steps
 
 
 def test_logpdf_of_the_distributions():

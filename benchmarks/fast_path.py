@@ -74,8 +74,8 @@ from crashsim.motion import (  # noqa: E402
     make_hitch_consistent,
     simulate_runout,
 )
-from crashsim.motion import fast  # noqa: E402
-from crashsim.reconstruct.scene import separation_states  # noqa: E402
+from crashsim import warmup  # noqa: E402
+from crashsim.scene.run import separation_states  # noqa: E402
 from crashsim.scenario import load_scenario  # noqa: E402
 from crashsim.vehicles import Axle, Body, BodyState, Vehicle  # noqa: E402
 
@@ -173,7 +173,7 @@ def timed(fn, repeats: int):
 def compile_times(cold: bool) -> dict:
     """Cold compile and warm cache load of the kernels, each in a fresh interpreter."""
     code = (
-        "import time; t=time.perf_counter(); from crashsim.motion import fast; fast.compile_kernels(); "
+        "import time; t=time.perf_counter(); from crashsim import warmup; warmup.compile_runout(); "
         "print(time.perf_counter()-t)"
     )
     env = dict(os.environ, PYTHONPATH=str(ROOT / "src") + os.pathsep + os.environ.get("PYTHONPATH", ""))
@@ -202,8 +202,8 @@ def main(argv=None) -> int:
     rep_fast = 30 if args.quick else 200
 
     t0 = time.perf_counter()
-    first_call = fast.compile_kernels()
-    compile_info = {"this process, first call [s]": first_call, "from cache": fast.compile_report()["from_cache"]}
+    first_call = warmup.compile_runout()
+    compile_info = {"this process, first call [s]": first_call, "from cache": warmup.compile_report()["from_cache"]}
     print(f"kernels ready in {time.perf_counter() - t0:.2f} s (from cache: {compile_info['from cache']})", flush=True)
     compile_info.update(compile_times(cold=not args.quick))
     print(compile_info, flush=True)

@@ -46,7 +46,7 @@ PLOTS = ROOT / "plots"
 def _wire_schema():
     """The inverse sections in the scenario schema (a no-op once crashsim.scenario wires them itself)."""
     import crashsim.scenario as sm
-    from crashsim.reconstruct.inverse_schema import with_inverse_sections
+    from crashsim.inverse_schema import with_inverse_sections
 
     sm.SCHEMA = with_inverse_sections(sm.SCHEMA)
 
@@ -123,10 +123,10 @@ def _split(raw, spec, n: int, fast: bool) -> dict[str, float]:
     import crashsim.motion._kernels as kernels_mod
     import crashsim.motion.engine as engine_mod
     import crashsim.motion.postprocess as post_mod
-    import crashsim.reconstruct.evidence as evidence_mod
-    import crashsim.reconstruct.models as models_mod
+    import crashsim.evidence.checks as evidence_mod
+    import crashsim.scene.models as models_mod
     import crashsim.reconstruct.overrides as overrides_mod
-    import crashsim.reconstruct.scene as scene_mod
+    import crashsim.scene.run as scene_mod
     from crashsim.reconstruct.montecarlo import _Runner
 
     saved = overrides_mod.FAST
@@ -246,7 +246,7 @@ def main(argv=None) -> int:
     md += split_rows
     if "scipy" in engines:
         from crashsim.reconstruct.overrides import ScenarioOverrides
-        from crashsim.reconstruct.scene import run_scene
+        from crashsim.scene.run import run_scene
 
         sc = ScenarioOverrides(raw, ["vehicles.B.speed"], engine="scipy").scenario([13.41])
         run_scene(sc)

@@ -225,7 +225,7 @@ def single_times(name: str, repeats: int) -> dict:
 def raw_kernel(batch: ImpactBatch):
     """The kernel call alone (inputs prepared, no dict, no post-processing)."""
     S, A = batch.structure, batch.arrays
-    fixed, b1, b2, law, hitches, cb, xb = core._kernel_structure(S)
+    fixed, b1, b2, law, hitches, cb, xb = core.kernel_structure(S)
     args = (fixed, b1, b2, law, hitches, cb, xb, A.mass, A.yaw_inertia, A.position, A.heading, A.velocity,
             A.yaw_rate, A.hitch_front_point, A.hitch_rear_point, A.point, A.normal_angle, A.tangent_sign,
             A.restitution, A.law_value, A.moment_restitution, A.constraint_point, A.constraint_direction,

@@ -50,7 +50,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from crashsim import solve_impact  # noqa: E402
 from crashsim.motion import (ContactModel, RunoutOptions, make_hitch_consistent, simulate_runout,  # noqa: E402
                              simulate_scene)
-from crashsim.reconstruct.scene import separation_states  # noqa: E402
+from crashsim.scene.run import separation_states  # noqa: E402
 from crashsim.scenario import load_scenario  # noqa: E402
 
 

@@ -149,7 +149,7 @@ def post_impact_states(vehicles: list[Vehicle]) -> dict[str, BodyState]:
     -4.13 rad/s). The impact solver's hitch impulse makes them hitch-consistent already; the
     projection below changes them by round-off only.
     """
-    from crashsim.reconstruct.scene import separation_states
+    from crashsim.scene.run import separation_states
     from crashsim.scenario import load_scenario
 
     scenario = load_scenario(Path(__file__).resolve().parents[1] / "scenarios" / "paper" / "table6.toml")

@@ -69,7 +69,7 @@ from crashsim.impact import ExternalImpulse, solve_impact, tyre_friction_impulse
 from crashsim.motion import RunoutOptions, make_hitch_consistent, static_loads
 from crashsim.motion.accuracy import simulate_to_accuracy
 from crashsim.motion.levels import LEVELS, simulate_level
-from crashsim.reconstruct.scene import separation_states
+from crashsim.scene.run import separation_states
 from crashsim.scenario import load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]

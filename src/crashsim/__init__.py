@@ -28,14 +28,12 @@ Everything inside is SI; units are converted at the edges (:mod:`crashsim.units`
 
 import logging as _logging
 
+from ._version import __version__
+from .api import fit, load, monte_carlo, posterior, run
 from .errors import CrashsimError, IllConditionedError, ScenarioError, SolverError
-from .vehicles import Axle, Body, BodyState, Hitch, Vehicle, chain_states
 from .impact import (CrushSurface, ExternalImpulse, ImpactBatch, ImpactProblem, ImpactResult, TangentialLaw,
                      VelocityConstraint, solve_impact, tyre_friction_impulse)
-
-from .api import fit, load, monte_carlo, posterior, run
-
-__version__ = "0.1.0"
+from .vehicles import Axle, Body, BodyState, Hitch, Vehicle, chain_states
 
 # Library code never prints: warnings go to the "crashsim" logger, silent unless the
 # application configures logging (the standard library's advice for libraries).

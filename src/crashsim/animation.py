@@ -18,6 +18,12 @@ from pathlib import Path
 
 import numpy as np
 
+from .errors import ScenarioError
+from .geometry import to_world
+from .motion.result import time_grid
+from .plotting import SceneDrawing, Z_REST, Z_TEXT, figure_system, layout_scene_figure, plot_scene
+from .units import Kind, to_unit
+
 __all__ = ["animate_scene", "scene_animation", "SceneAnimation", "animation_formats", "check_animation_path",
            "frame_times", "MAX_FRAMES", "HOLD"]
 
@@ -61,8 +67,6 @@ def check_animation_path(path, *, field: str = "path") -> Path:
         For a suffix other than .gif/.mp4, or .mp4 where ffmpeg is not available; the message
         names the formats that can be written on this machine.
     """
-    from .errors import ScenarioError
-
     p = Path(path)
     allowed = animation_formats()
     suffix = p.suffix.lower()
@@ -98,8 +102,6 @@ def frame_times(t_end: float, dt: float, *, field: str = "dt") -> np.ndarray:
         If dt is not a positive finite time or gives more than :data:`MAX_FRAMES` frames; the
         message states the smallest dt allowed for this ``t_end``.
     """
-    from .errors import ScenarioError
-
     t_end = float(t_end)
     dt_min = t_end / (MAX_FRAMES - 1)
     allowed = (f"allowed dt >= {dt_min:.3g} s (at most {MAX_FRAMES} frames for {t_end:.4g} s)" if dt_min > 0
@@ -107,7 +109,6 @@ def frame_times(t_end: float, dt: float, *, field: str = "dt") -> np.ndarray:
     if not (isinstance(dt, (int, float, np.floating)) and math.isfinite(dt) and dt > 0):
         shown = f"{dt:g} s" if isinstance(dt, (int, float, np.floating)) else repr(dt)
         raise ScenarioError(f"time between frames {shown} is not a positive time; {allowed}", field=field)
-    from .reconstruct.scene import time_grid
 
     times = time_grid(t_end, dt)
     if len(times) > MAX_FRAMES:
@@ -192,16 +193,12 @@ class SceneAnimation:
     def clock_text(self, k: int) -> str:
         """The clock of frame ``k``: ``"t = 1.25 s"`` (the last frame of a whole run-out adds
         ", at rest" or ", run stopped")."""
-        from .units import Kind, to_unit
-
         v, unit = to_unit(float(self.times[k]), Kind.TIME, self._S.system)
         text = f"t = {v:.{self._decimals}f} {unit}" + (", before impact" if v < 0 else "")
         return text + self._end_note if k == len(self.times) - 1 and self._end_note else text
 
     def frame(self, k: int) -> list:
         """Move the outlines, pins and clock to frame ``k``; returns the artists changed."""
-        from .geometry import to_world
-
         S = self._S
         poses = self.poses(self.times[k])
         for name, artist in self.outlines.items():
@@ -220,8 +217,6 @@ class SceneAnimation:
 
 def _pin_points(S, vehicle_name: str, poses: dict) -> np.ndarray:
     """Hitch pins of a vehicle (from the front body's pose) in display units, shape (n, 2)."""
-    from .geometry import to_world
-
     v = next(x for x in S.sc.vehicles if x.name == vehicle_name)
     pts = [to_world(h.front_point, *poses[v.bodies[i].name]) for i, h in enumerate(v.hitches)]
     return S.d(np.reshape(pts, (-1, 2)))
@@ -229,8 +224,6 @@ def _pin_points(S, vehicle_name: str, poses: dict) -> np.ndarray:
 
 def _frame_points(S, anim: SceneAnimation) -> np.ndarray:
     """Every outline corner (or CG) and pin of every frame, display units, shape (n, 2)."""
-    from .geometry import to_world
-
     pts = []
     for k in range(len(anim.times)):
         poses = anim.poses(anim.times[k])
@@ -245,8 +238,6 @@ def _frame_points(S, anim: SceneAnimation) -> np.ndarray:
 def _contain(ax, pts: np.ndarray) -> bool:
     """Widen the axis limits (3 % margin) to contain ``pts`` and lay the scene figure out again
     at the new aspect; True if the limits changed."""
-    from .plotting import _layout_scene_figure
-
     x0, x1 = ax.get_xlim()
     y0, y1 = ax.get_ylim()
     lo, hi = pts.min(axis=0), pts.max(axis=0)
@@ -260,7 +251,7 @@ def _contain(ax, pts: np.ndarray) -> bool:
     r = fig.canvas.get_renderer()
     # plot_scene put the legend under a wide scene, else at the right: keep its choice
     below = leg is not None and leg.get_window_extent(r).y1 <= ax.get_window_extent(r).y0 + 1.0
-    _layout_scene_figure(ax, leg, below)
+    layout_scene_figure(ax, leg, below)
     return True
 
 
@@ -300,10 +291,7 @@ def scene_animation(scene, *, dt: float = 0.05, system: str | None = None, t_end
     """
     from matplotlib.colors import to_rgba
 
-    from .errors import ScenarioError
-    from .plotting import _Z_REST, _Z_TEXT, _Scene, _system, plot_scene
-
-    system = _system(scene, system)
+    system = figure_system(scene, system)
     if not scene.runout:
         raise ScenarioError(f"scene {scene.scenario.title!r} has no run-out (impact only): nothing moves after "
                             "separation, so there is nothing to animate; add a [runout] section to the scenario",
@@ -321,16 +309,14 @@ def scene_animation(scene, *, dt: float = 0.05, system: str | None = None, t_end
         before = -frame_times(t0, dt)[::-1]  # -t0, ..., -2 dt, -dt, 0: multiples of dt back from the impact
         times = np.concatenate([before[:-1], times])
         if len(times) > MAX_FRAMES:
-            from .errors import ScenarioError
-
             raise ScenarioError(f"time between frames {dt:g} s gives {len(times)} frames from the start of braking "
                                 f"({-t0:.4g} s) to {float(t_end):.4g} s; at most {MAX_FRAMES}", field="dt")
 
     ax = plot_scene(scene, times=(), system=system, approach=approach)
     fig = ax.figure
-    S = _Scene(scene, ax, system)
+    S = SceneDrawing(scene, ax, system)
     outlines, pins = {}, {}
-    z = _Z_REST + 0.5
+    z = Z_REST + 0.5
     for vn, r in scene.runout.items():
         _, line, dark = S.colors(next(iter(r.bodies)))
         for name in r.bodies:
@@ -348,7 +334,7 @@ def scene_animation(scene, *, dt: float = 0.05, system: str | None = None, t_end
             (pins[vn],) = ax.plot([], [], "o", ls="none", ms=4.5, mfc="white", mec=dark, mew=1.0, zorder=z + 0.2,
                                   gid=f"anim:pins:{vn}")
     clock = ax.text(0.985, 0.975, "", transform=ax.transAxes, ha="right", va="top", fontsize=11, family="monospace",
-                    zorder=_Z_TEXT + 3, gid="anim:clock",
+                    zorder=Z_TEXT + 3, gid="anim:clock",
                     bbox=dict(boxstyle="round,pad=0.3", facecolor="white", edgecolor="0.5", lw=0.6, alpha=0.9))
     end_note = ""
     if times[-1] >= run_end:
@@ -408,8 +394,6 @@ def animate_scene(scene, path, *, dt: float = 0.05, speed: float = 1.0, system: 
     ``speed / dt <= 50`` for a GIF (a warning on the "crashsim" logger says so otherwise).
     Identical consecutive GIF frames (the hold) are stored once with their delays summed.
     """
-    from .errors import ScenarioError
-
     p = check_animation_path(path)
     if not (isinstance(speed, (int, float, np.floating)) and math.isfinite(speed) and speed > 0):
         raise ScenarioError(f"playback speed {speed!r} is not a positive number; allowed speed > 0 "

@@ -13,24 +13,41 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any, Mapping
 
+from .errors import ScenarioError
+from .reconstruct import run_scene
+from .reconstruct.fit import fit_scene
+from .reconstruct.montecarlo import monte_carlo as _mc
+from .reconstruct.overrides import parse_value, resolve_path, set_value, set_written
+from .reconstruct.posterior import run_posterior
+from .scenario import Scenario, load_scenario, scenario_from_dict
+from .schema import load_toml
+
 __all__ = ["load", "run", "fit", "monte_carlo", "posterior", "with_overrides"]
 
 
 def _raw(source) -> tuple[dict, str | None]:
-    """The file contents (raw TOML dict) and the file name of a path, a Scenario or a dict."""
-    from .schema import load_toml
+    """The file contents (raw TOML dict) and the file name of a path, a Scenario or a dict.
 
+    A Scenario gives the contents it was built from (:attr:`crashsim.scenario.Scenario.file_data`,
+    not read again), else those of its file."""
     if isinstance(source, (str, Path)):
         return load_toml(source), str(source)
     if isinstance(source, Mapping):
         return dict(source), None
+    data = getattr(source, "file_data", None)
+    if data is not None:
+        return data, getattr(source, "path", None)
     path = getattr(source, "path", None)
     if path is None:
-        from .errors import ScenarioError
-
         raise ScenarioError(f"cannot read scenario inputs from {type(source).__name__}: give a file path, a dict of "
                             "the file's contents, or a Scenario loaded from a file", field="scenario")
     return load_toml(path), str(path)
+
+
+def _validated(source, data: dict, file: str | None) -> None:
+    """The whole file validated first, as the CLI does (a Scenario built from ``data`` already was)."""
+    if not (isinstance(source, Scenario) and source.file_data is data):
+        scenario_from_dict(data, file=file)
 
 
 def with_overrides(data: Mapping, overrides: Mapping[str, Any] | None = None, **kwargs) -> dict:
@@ -54,8 +71,6 @@ def with_overrides(data: Mapping, overrides: Mapping[str, Any] | None = None, **
     ScenarioError
         A path the schema does not have, or a value that cannot be read (naming the path).
     """
-    from .reconstruct.overrides import parse_value, resolve_path, set_value, set_written
-
     items = dict(overrides or {})
     items.update({k.replace("__", "."): v for k, v in kwargs.items()})
     out = dict(data)
@@ -76,8 +91,6 @@ def load(path):
     Raises :class:`~crashsim.errors.ScenarioError` naming the file, key, value and allowed
     range of anything wrong.
     """
-    from .scenario import load_scenario
-
     return load_scenario(path)
 
 
@@ -98,9 +111,6 @@ def run(scenario, overrides: Mapping[str, Any] | None = None, **kwargs):
         With ``.report(units=...)``, ``.to_dict()``, ``.plot(ax=None)``, ``.animate(path)``,
         ``.history(dt)`` (arrays) and ``.history_frame(dt)`` (pandas).
     """
-    from .reconstruct import run_scene
-    from .scenario import Scenario, scenario_from_dict
-
     if isinstance(scenario, Scenario) and not overrides and not kwargs:
         return run_scene(scenario)
     if isinstance(scenario, (str, Path)) and not overrides and not kwargs:
@@ -115,11 +125,8 @@ def fit(scenario, **options):
     ``options`` go to :func:`crashsim.reconstruct.fit.fit_scene` (``engine``, ``workers``,
     ``progress``, ``sample_time_limit``). Returns a :class:`~crashsim.reconstruct.fit.FitResult`.
     """
-    from .reconstruct.fit import fit_scene
-    from .scenario import scenario_from_dict
-
     data, file = _raw(scenario)
-    scenario_from_dict(data, file=file)  # the whole file validated first, as the CLI does
+    _validated(scenario, data, file)
     return fit_scene(data, None, file=file, **options)
 
 
@@ -130,11 +137,8 @@ def monte_carlo(scenario, samples: int | None = None, **options):
     ``engine``, ``workers``, ``out_path``, ``progress``, ...). Returns an
     :class:`~crashsim.reconstruct.montecarlo.MCResult`.
     """
-    from .reconstruct.montecarlo import monte_carlo as _mc
-    from .scenario import scenario_from_dict
-
     data, file = _raw(scenario)
-    scenario_from_dict(data, file=file)
+    _validated(scenario, data, file)
     options.setdefault("progress", False)
     return _mc(data, None, samples, file=file, **options)
 
@@ -146,10 +150,7 @@ def posterior(scenario, **options):
     ``start``, ``engine``, ``workers``, ``dask_address``, ``chain_path``, ``progress``, ...).
     Returns a :class:`~crashsim.reconstruct.posterior.PosteriorResult`.
     """
-    from .reconstruct.posterior import run_posterior
-    from .scenario import scenario_from_dict
-
     data, file = _raw(scenario)
-    scenario_from_dict(data, file=file)
+    _validated(scenario, data, file)
     options.setdefault("progress", False)
     return run_posterior(data, None, file=file, **options)

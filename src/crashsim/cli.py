@@ -12,16 +12,33 @@ import json
 import sys
 from pathlib import Path
 
+from tqdm import tqdm
+
+from ._jit import cache_dir, ready
+from ._version import __version__
+from .animation import animate_scene, check_animation_path, frame_times
 from .errors import CrashsimError, ScenarioError, SolverError
-from .motion.result import _jsonable as _clean  # JSON-safe copy: numpy to Python, NaN/inf to None
+from .motion.result import jsonable as _clean  # JSON-safe copy: numpy to Python, NaN/inf to None
+from .outputs import check_output_dir, check_output_file, check_workers
+from .plotting import save_scene_figures
+from .reconstruct import run_scene
+from .reconstruct.fit import fit_scene, same_file
+from .reconstruct.mc_plots import save_mc_figures
+from .reconstruct.montecarlo import monte_carlo
+from .reconstruct.posterior import run_posterior
+from .reconstruct.posterior_plots import save_posterior_figures
+from .scenario import load_scenario, presets, schema_document
+from .survey.export import export_frame, export_items, write_dxf, write_geojson
+from .survey.inspect import preview, read_any, summary
+from .survey.mapping import load_scene_data
+from .units import Kind, parse, resolve_system
+from .warmup import COMPILE_STEPS, compile_kernels
 
 __all__ = ["main"]
 
 
 def _units(text: str) -> str:
     """argparse type of ``--units``: SI or US in any case."""
-    from .units import resolve_system
-
     try:
         return resolve_system(text)
     except ScenarioError:
@@ -29,8 +46,6 @@ def _units(text: str) -> str:
 
 
 def _dt(text: str | None) -> float | None:
-    from .units import Kind, parse
-
     if text is None:
         return None
     dt = parse(text, Kind.TIME, field="--dt")
@@ -40,9 +55,6 @@ def _dt(text: str | None) -> float | None:
 
 
 def _cmd_run(args) -> int:
-    from .scenario import load_scenario
-    from .reconstruct import run_scene
-
     scenario = load_scenario(args.file)
     dt = _dt(args.dt)
     if dt is not None and not args.csv:
@@ -66,14 +78,9 @@ def _cmd_run(args) -> int:
 
 
 def _cmd_fit(args) -> int:
-    from .reconstruct.fit import fit_scene
-    from .scenario import load_scenario
-    from .survey.mapping import load_scene_data
-
     if args.write_best is not None:  # before the fit, not after it
-        from .reconstruct.fit import _same_file
 
-        if _same_file(Path(args.write_best), Path(args.file)):
+        if same_file(Path(args.write_best), Path(args.file)):
             raise ScenarioError(f"{args.write_best!r} is the input file; write the best fit to another file",
                                 field="--write-best", file=args.file)
     scenario = load_scenario(args.file)  # the whole file validated first ([fit] and evidence sigmas included)
@@ -92,10 +99,6 @@ def _cmd_fit(args) -> int:
 
 
 def _cmd_mc(args) -> int:
-    from .reconstruct.montecarlo import monte_carlo
-    from .scenario import load_scenario
-    from .survey.mapping import load_scene_data
-
     scenario = load_scenario(args.file)
     system = _units(args.units or scenario.units)
     if args.accept and scenario.evidence.empty:
@@ -112,7 +115,6 @@ def _cmd_mc(args) -> int:
         import matplotlib
 
         matplotlib.use("Agg")
-        from .reconstruct.mc_plots import save_mc_figures
 
         save_mc_figures(result, Path(args.plots), system=system)
     if args.json:
@@ -143,10 +145,6 @@ def _stopped(what: str, kept_in) -> int:
 
 
 def _cmd_posterior(args) -> int:
-    from .reconstruct.posterior import run_posterior
-    from .scenario import load_scenario
-    from .survey.mapping import load_scene_data
-
     scenario = load_scenario(args.file)  # the whole file validated first ([fit], [posterior], evidence sigmas)
     system = _units(args.units or scenario.units)
     try:
@@ -160,7 +158,6 @@ def _cmd_posterior(args) -> int:
         import matplotlib
 
         matplotlib.use("Agg")
-        from .reconstruct.posterior_plots import save_posterior_figures
 
         for path in save_posterior_figures(result, Path(args.plots), system=system):
             sys.stderr.write(f"crashsim: wrote {path}\n")
@@ -220,11 +217,6 @@ def _add_inverse_commands(sub):
 
 
 def _cmd_plot(args) -> int:
-    from .plotting import save_scene_figures
-    from .reconstruct import run_scene
-    from .scenario import load_scenario
-    from .units import Kind, parse
-
     interval = None if args.interval is None else parse(args.interval, Kind.TIME, field="--interval")
     scene = run_scene(load_scenario(args.file))
     written = save_scene_figures(scene, Path(args.output), histories_path=args.histories and Path(args.histories),
@@ -237,11 +229,6 @@ def _cmd_plot(args) -> int:
 
 
 def _cmd_animate(args) -> int:
-    from .animation import animate_scene, check_animation_path, frame_times
-    from .reconstruct import run_scene
-    from .scenario import load_scenario
-    from .units import Kind, parse
-
     out = check_animation_path(args.output, field="-o")  # before anything long
     dt = parse(args.dt, Kind.TIME, field="--dt")
     frame_times(0.0, dt, field="--dt")  # dt > 0; the frame count is checked once the run-out's end is known
@@ -255,8 +242,6 @@ def _cmd_animate(args) -> int:
 
 
 def _cmd_survey(args) -> int:
-    from .survey.inspect import preview, read_any, summary
-
     data = read_any(args.file, units=args.units, columns=args.columns, crs=args.crs,
                     layer_property=args.layer_property)
     sys.stdout.write(summary(data) + "\n")
@@ -266,11 +251,6 @@ def _cmd_survey(args) -> int:
 
 
 def _cmd_export(args) -> int:
-    from .reconstruct import run_scene
-    from .scenario import load_scenario
-    from .survey.export import export_frame, export_items, write_dxf, write_geojson
-    from .units import Kind, parse
-
     if not (args.dxf or args.geojson):
         raise ScenarioError("give --dxf OUT.dxf and/or --geojson OUT.geojson", field="export")
     times = [parse(t.strip(), Kind.TIME, field="--times") for t in (args.times or "").split(",") if t.strip()]
@@ -287,15 +267,11 @@ def _cmd_export(args) -> int:
 
 
 def _cmd_schema(args) -> int:
-    from .scenario import schema_document
-
     sys.stdout.write(schema_document(args.format) + "\n")
     return 0
 
 
 def _cmd_presets(args) -> int:
-    from .scenario import presets
-
     for name, p in presets().items():
         sys.stdout.write(f"{name}\n    mass {p['mass']}, yaw inertia {p['yaw_inertia']}, "
                          f"{len(p.get('axles', []))} axles\n    source: {p['source']}\n")
@@ -306,7 +282,6 @@ def _cmd_presets(args) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="crashsim", description="Reconstruct collisions of articulated vehicles.")
-    from . import __version__
 
     p.add_argument("--version", action="version", version=f"crashsim {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
@@ -380,8 +355,6 @@ _COMPUTING = ("run", "fit", "mc", "posterior", "plot", "animate", "export")
 def _first_compile(bar: bool = True) -> None:
     """Compile the run-out kernels once, saying so on stderr with a progress bar (a line per step
     without ``bar``); the first run after installing or upgrading, later runs load them from the cache."""
-    from .motion.jitcache import COMPILE_STEPS, cache_dir, compile_kernels, ready
-
     if ready():
         return
     sys.stderr.write("crashsim: compiling the run-out kernels (once after installing or upgrading; about 1-2 "
@@ -391,7 +364,6 @@ def _first_compile(bar: bool = True) -> None:
         compile_kernels(lambda i, label: sys.stderr.write(f"crashsim: compiling {i + 1}/{n}: {label}\n"))
         sys.stderr.write("crashsim: compiled\n")
         return
-    from tqdm import tqdm
 
     with tqdm(total=len(COMPILE_STEPS), file=sys.stderr, unit="step",
               bar_format="{l_bar}{bar}| {n_fmt}/{total_fmt} [{elapsed}]") as bar:
@@ -415,8 +387,6 @@ def _figure_suffixes() -> tuple[str, ...]:
 def _check_outputs(args) -> None:
     """Every output path and worker count of the command, before any work (loading, compiling,
     computing): a path that cannot be written is an input error (exit 2) now, not a traceback later."""
-    from .outputs import check_output_dir, check_output_file, check_workers
-
     c = args.command
     if hasattr(args, "workers"):
         args.workers = check_workers(args.workers, field="--workers")
@@ -437,9 +407,6 @@ def _check_outputs(args) -> None:
             if path:
                 check_output_file(path, field=field, suffixes=figs, what="a figure")
     if c == "animate":
-        from .animation import check_animation_path
-        from .units import Kind, parse
-
         check_output_file(check_animation_path(args.output, field="-o"), field="-o", what="the animation")
         if not parse(args.dt, Kind.TIME, field="--dt") > 0:
             raise ScenarioError(f"{args.dt!r} is not a positive time; allowed a time between frames > 0 s, "

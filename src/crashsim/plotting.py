@@ -8,9 +8,20 @@ degrees and percent appear only on the axes.
 
 from __future__ import annotations
 
+import textwrap
+from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
+
+from .errors import ScenarioError
+from .evidence.crush import profile_outline
+from .geometry import rotate, to_body, to_world
+from .motion.approach import path_length
+from .motion.road import points_in_polygon, signed_distance
+from .report import fmt
+from .survey.underlay import draw_underlay, scene_underlay
+from .units import Kind, convert, resolve_system, to_unit
 
 __all__ = ["is_color", "BarrierAxes", "plot_barrier_sweep", "plot_barrier_figures", "plot_scene", "plot_histories",
            "history_panels", "save_scene_figures", "SCENE_FIGURE_SUFFIXES"]
@@ -187,7 +198,7 @@ _NICE = (1.0, 2.0, 2.5, 5.0)
 
 # z-order of the layers, bottom to top (friction zones under the grid, which sits at 0.5)
 _Z_ZONE, _Z_MAP = 0.3, 1.0
-_Z_BARRIER, _Z_TRACK, _Z_GHOST, _Z_IMPACT, _Z_REST, _Z_EVIDENCE, _Z_ARROW, _Z_TEXT = 2, 3, 4, 5, 6, 7, 8, 9
+_Z_BARRIER, _Z_TRACK, _Z_GHOST, _Z_IMPACT, Z_REST, _Z_EVIDENCE, _Z_ARROW, Z_TEXT = 2, 3, 4, 5, 6, 7, 8, 9
 
 #: Friction zones, in scenario order: (pale fill, hatch and edge). Green, tan, grey-blue, sand.
 _ZONE_COLORS = (("#e2efcf", "#7da453"), ("#f0e2c4", "#a27c3f"), ("#dde5ee", "#637a92"), ("#f3efc9", "#a39a3c"))
@@ -212,10 +223,8 @@ def is_color(value) -> bool:
     return bool(is_color_like(value))
 
 
-def _system(scene, system):
+def figure_system(scene, system):
     """The figure's unit system: ``system`` (SI or US, any case) or the scenario's units."""
-    from .units import resolve_system
-
     return resolve_system(system, scene.scenario.units, field="system")
 
 
@@ -240,8 +249,6 @@ def _halo(width: float = 2.5):
 
 
 def _wrap(text: str, width: int) -> str:
-    import textwrap
-
     return "\n".join(textwrap.wrap(text, width, break_on_hyphens=False)) if text else text
 
 
@@ -268,12 +275,10 @@ def _default_intervals(ends: dict) -> dict:
     return out
 
 
-class _Scene:
+class SceneDrawing:
     """State shared by the drawing steps of :func:`plot_scene` (display units, legend, extent)."""
 
     def __init__(self, scene, ax, system):
-        from .units import Kind, to_unit
-
         self.scene = scene
         self.sc = scene.scenario
         self.ax = ax
@@ -314,8 +319,6 @@ class _Scene:
         """Outline rectangle of ``body`` at a pose; None if the body has no outline data."""
         from matplotlib.patches import Polygon
 
-        from .geometry import to_world
-
         corners = body.outline()
         if corners is None:
             return None
@@ -327,8 +330,6 @@ class _Scene:
         return patch
 
     def axle_lines(self, body, position, heading, color, lw, alpha=1.0, zorder=_Z_IMPACT):
-        from .geometry import to_world
-
         for a in body.axles:
             xy = self.d(to_world(np.array([[a.x, -a.track / 2], [a.x, a.track / 2]]), position, heading))
             self.ax.plot(xy[:, 0], xy[:, 1], "-", color=color, lw=lw, alpha=alpha, zorder=zorder,
@@ -336,8 +337,6 @@ class _Scene:
 
     def pins(self, vehicle, poses: dict, color, size, alpha=1.0, zorder=_Z_IMPACT):
         """Hitch pins of a vehicle at the given body poses (pin position from the front body)."""
-        from .geometry import to_world
-
         for i, h in enumerate(vehicle.hitches):
             front = vehicle.bodies[i].name
             if front not in poses:
@@ -347,8 +346,6 @@ class _Scene:
 
     def skeleton(self, body, position, heading, color):
         """A body without outline data: CG symbol, heading tick, links to its pins and the contact."""
-        from .geometry import rotate, to_body, to_world
-
         vehicle = self.vehicle_of[body.name]
         self.no_outline.add(body.name)
         pts = []
@@ -377,7 +374,7 @@ class _Scene:
 
     def text(self, xy, text, **kw):
         """A label anchored at a data point (kept inside the axes limits by :func:`_fit_texts`)."""
-        kw.setdefault("zorder", _Z_TEXT)
+        kw.setdefault("zorder", Z_TEXT)
         t = self.ax.annotate(text, xy=tuple(xy), **kw)
         self.texts.append(t)
         return t
@@ -406,7 +403,7 @@ class _Scene:
 
 def _check_map(scene) -> dict:
     """Evidence checks keyed by (kind, index of the evidence item), walking the report in the
-    order :func:`crashsim.reconstruct.evidence.evaluate_evidence` writes it; each key is
+    order :func:`crashsim.evidence.checks.evaluate_evidence` writes it; each key is
     confirmed by the check's kind and its (default) name."""
     ev = scene.scenario.evidence
     rep = scene.evidence
@@ -446,15 +443,11 @@ def _verdict(checks) -> tuple[str, str]:
 
 
 def _residual_text(c, system) -> str:
-    from .report import fmt
-
     if c is None:
         return ""
     if np.isinf(c.residual):
         return "nothing computed"
     if c.quantity == "angle":
-        from .units import Kind, convert
-
         return (f"{convert(c.residual, 'rad', 'deg', Kind.ANGLE):+.1f}\N{DEGREE SIGN} "
                 f"(tol. {convert(c.tolerance, 'rad', 'deg', Kind.ANGLE):.0f}\N{DEGREE SIGN})")
     return f"{fmt(abs(c.residual), c.quantity, system, 2)} (tol. {fmt(c.tolerance, c.quantity, system, 2)})"
@@ -464,9 +457,6 @@ def _draw_crush(S, sc) -> None:
     """Each measured crush profile (``[[evidence.crush]]``) on the damaged face of its body's outline at
     impact, to scale (gid ``"crush:<body>:<face>"``)."""
     from matplotlib.patches import Patch, Polygon
-
-    from .geometry import to_world
-    from .reconstruct.crush import profile_outline
 
     drawn = False
     for it in sc.evidence.crush:
@@ -550,12 +540,12 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    system = _system(scene, system)
+    system = figure_system(scene, system)
     new = ax is None
     if new:
-        # laid out by _layout_scene_figure (exact equal-aspect box plus legend), not by a layout engine
+        # laid out by layout_scene_figure (exact equal-aspect box plus legend), not by a layout engine
         ax = _plt().figure(figsize=(10.0, 6.0)).add_subplot()
-    S = _Scene(scene, ax, system)
+    S = SceneDrawing(scene, ax, system)
     S.approach = approach
     sc = S.sc
     runout = scene.runout or {}
@@ -606,8 +596,6 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
         else:
             if interval is not None:
                 if not (np.isfinite(interval) and interval > 0):
-                    from .errors import ScenarioError
-
                     raise ScenarioError(f"must be a positive time in s, got {interval!r}", field="interval")
                 steps = dict.fromkeys(runout, float(interval))
             else:
@@ -655,14 +643,14 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
             for name, br in r.bodies.items():
                 poses[name] = (br.rest_position, br.rest_heading)
                 p = S.outline(S.body_of[name], br.rest_position, br.rest_heading, gid=f"outline:rest:{name}",
-                              fill=fill, edge=dark, lw=1.8, alpha=0.55 if r.success else 0.3, zorder=_Z_REST)
+                              fill=fill, edge=dark, lw=1.8, alpha=0.55 if r.success else 0.3, zorder=Z_REST)
                 if p is None:
                     S.skeleton(S.body_of[name], br.rest_position, br.rest_heading, dark)
                 elif axles:
-                    S.axle_lines(S.body_of[name], br.rest_position, br.rest_heading, dark, 1.0, zorder=_Z_REST)
+                    S.axle_lines(S.body_of[name], br.rest_position, br.rest_heading, dark, 1.0, zorder=Z_REST)
                 S.body_label(name, np.asarray(br.rest_position), suffix="" if r.success else " (run stopped)",
                              offset=6.0 if name in S.no_outline else -5.0)
-            S.pins(v, poses, dark, 4.0, zorder=_Z_REST)
+            S.pins(v, poses, dark, 4.0, zorder=Z_REST)
         if ghost_note:
             S.legend_entry(ghost_note, Patch(facecolor="none", edgecolor="0.4", lw=0.7, alpha=0.7))
         S.legend_entry("at rest (end of run)", Patch(facecolor="0.8", edgecolor="0.1", lw=1.8))
@@ -729,27 +717,25 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     below = new and (hi[1] - lo[1]) / (hi[0] - lo[0]) < 0.75
     leg = _scene_legend(S, legend, below) if legend else None
     if new:
-        _layout_scene_figure(ax, leg if legend is True else None, below)
+        layout_scene_figure(ax, leg if legend is True else None, below)
     _fit_texts(S)
     if new:
-        _layout_scene_figure(ax, leg if legend is True else None, below)
+        layout_scene_figure(ax, leg if legend is True else None, below)
     _draw_scene_underlay(S)
     xl = ax.get_xlim()
     _scale_bar(S, xl[1] - xl[0])
     return ax
 
 
-def _draw_scene_underlay(S: _Scene) -> None:
+def _draw_scene_underlay(S: SceneDrawing) -> None:
     """The survey's orthophoto ([survey.underlay]) under everything, in the figure's units."""
-    from .survey.underlay import draw_underlay, scene_underlay
-
     got = scene_underlay(S.sc)
     if got is not None:
         image, georef, opacity, clip = got
         draw_underlay(S.ax, image, georef, scale=S.k, opacity=opacity, clip=clip)
 
 
-def _draw_track(S: _Scene, track, line, dark, gid: str | None = None) -> None:
+def _draw_track(S: SceneDrawing, track, line, dark, gid: str | None = None) -> None:
     """A wheel's track: sliding stretches bold and dark (a tyre mark expected), rolling ones thin and dashed."""
     for seg in track.segments:
         if len(seg.points) < 2:
@@ -763,14 +749,12 @@ def _draw_track(S: _Scene, track, line, dark, gid: str | None = None) -> None:
         S.add(xy)
 
 
-def _draw_approaches(S: _Scene) -> None:
+def _draw_approaches(S: SceneDrawing) -> None:
     """The approach of each vehicle before the impact: its tyre tracks (sliding bold: pre-impact
     marks expected), the CG paths (dash-dot), the outlines at the start of braking (thin,
     dashed) and the first body's CG at perception (open diamond, joined by a dotted line)."""
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
-
-    from .report import fmt
 
     ax = S.ax
     for vn, a in S.sc.approaches.items():
@@ -829,11 +813,7 @@ def plot_time_distance(scene, axes=None, *, system: str | None = None):
     -------
     matplotlib Figure
     """
-    from .motion.approach import _path_length
-    from .report import fmt
-    from .units import Kind, to_unit
-
-    system = _system(scene, system)
+    system = figure_system(scene, system)
     plt = _plt()
     if axes is None:
         fig, axes = plt.subplots(2, 1, figsize=(9.0, 6.5), sharex=True, layout="constrained")
@@ -867,7 +847,7 @@ def plot_time_distance(scene, axes=None, *, system: str | None = None):
             t_end = scene.runout[v.name].t_end
             t = np.linspace(0.0, t_end, 400)
             sv = np.asarray(br.sol(t))
-            ax_s.plot(t, kl * _path_length(br.sol, t), "-", color=c, lw=1.6, label=f"vehicle {v.name} ({first})",
+            ax_s.plot(t, kl * path_length(br.sol, t), "-", color=c, lw=1.6, label=f"vehicle {v.name} ({first})",
                       gid=f"td:runout:{v.name}")
             ax_v.plot(t, kv * np.hypot(sv[3], sv[4]), "-", color=c, lw=1.6)
             if br.time_to_rest is not None:
@@ -899,11 +879,9 @@ def plot_time_distance(scene, axes=None, *, system: str | None = None):
     return fig
 
 
-def _draw_evidence(S: _Scene, checks: dict) -> None:
+def _draw_evidence(S: SceneDrawing, checks: dict) -> None:
     from matplotlib.lines import Line2D
     from matplotlib.patches import Circle, Polygon
-
-    from .geometry import to_world
 
     ax, ev, system = S.ax, S.sc.evidence, S.system
     for i, r in enumerate(ev.rest):
@@ -976,12 +954,9 @@ def _draw_evidence(S: _Scene, checks: dict) -> None:
                        Line2D([], [], ls="none"), color)
 
 
-def _draw_arrows(S: _Scene) -> None:
+def _draw_arrows(S: SceneDrawing) -> None:
     from matplotlib.lines import Line2D
     from matplotlib.patches import FancyArrowPatch
-
-    from .report import fmt
-    from .units import Kind, convert, to_unit
 
     ax, imp, system, sc = S.ax, S.scene.impact, S.system, S.sc
     moving = [b for b in imp.bodies.values() if not b.fixed]
@@ -1009,7 +984,7 @@ def _draw_arrows(S: _Scene) -> None:
             tip = tail + vec + u * 0.5 * S.k
             S.text(tip, f"\u0394v {b.name}\n{fmt(b.delta_v_magnitude, Kind.SPEED, system, 3)}",
                     fontsize=7, color=dark, ha="left" if u[0] >= 0 else "right", va="bottom" if u[1] >= 0 else "top",
-                    zorder=_Z_TEXT, path_effects=_halo())
+                    zorder=Z_TEXT, path_effects=_halo())
         per = 1.0 / scale
         S.legend_entry(f"\u0394v at the CG (1 {S.lunit} of arrow = {per:.3g} {sunit})",
                        Line2D([], [], color="0.15", lw=1.6, marker=">", markevery=[1], ms=5))
@@ -1044,13 +1019,13 @@ def _draw_arrows(S: _Scene) -> None:
                 best = (hits, anchor, d)
         _, lab, d = best
         S.text(lab, text, fontsize=7, color=dark, ha="left" if d[0] >= 0 else "right",
-               va="bottom" if d[1] >= 0 else "top", zorder=_Z_TEXT, path_effects=_halo())
+               va="bottom" if d[1] >= 0 else "top", zorder=Z_TEXT, path_effects=_halo())
         S.labels.append(lab)
     S.legend_entry("PDOF: crush force on each body in contact",
                    Line2D([], [], ls="none", marker=r"$\Rightarrow$", ms=12, color="0.15"))
 
 
-def _draw_obstacles(S: _Scene) -> None:
+def _draw_obstacles(S: SceneDrawing) -> None:
     """Fixed obstacles of the scene (guardrails, walls, poles), hatched, with their names."""
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch, Polygon
@@ -1065,12 +1040,12 @@ def _draw_obstacles(S: _Scene) -> None:
                                    zorder=_Z_BARRIER, gid=f"obstacle:{o.name}"))
             S.add(xy)
         mid = S.d(np.asarray(o.points)[len(o.points) // 2])
-        S.text(mid, o.name, fontsize=7, color="0.15", ha="center", va="bottom", zorder=_Z_TEXT, path_effects=_halo())
+        S.text(mid, o.name, fontsize=7, color="0.15", ha="center", va="bottom", zorder=Z_TEXT, path_effects=_halo())
     if obstacles:
         S.legend_entry("fixed obstacle", Patch(facecolor="0.78", edgecolor="0.25", hatch="xxx", lw=0.8))
 
 
-def _draw_impacts(S: _Scene) -> None:
+def _draw_impacts(S: SceneDrawing) -> None:
     """Every impact as a numbered marker at its contact point, in time order (1 = the first impact)."""
     from matplotlib.lines import Line2D
 
@@ -1088,7 +1063,7 @@ def _draw_impacts(S: _Scene) -> None:
                    Line2D([], [], ls="none", marker="o", ms=9, mfc="#ffd54f", mec="0.1"))
 
 
-def _draw_barrier(S: _Scene) -> None:
+def _draw_barrier(S: SceneDrawing) -> None:
     from matplotlib.lines import Line2D
     from matplotlib.patches import Polygon
 
@@ -1136,7 +1111,7 @@ class _Roi(NamedTuple):
     shapes: list         # outlines and obstacles (polygons) a label must not sit in
 
 
-def _region_of_interest(S: _Scene) -> _Roi:
+def _region_of_interest(S: SceneDrawing) -> _Roi:
     """The box around everything drawn so far (vehicles, tracks, evidence, obstacles, arrows,
     impacts) plus a margin (:data:`_ROI_MARGIN`, :data:`_ROI_FRACTION`)."""
     pts = np.vstack(S.points)
@@ -1205,7 +1180,7 @@ def _clip_polyline(points, lo, hi) -> list[np.ndarray]:
     return pieces
 
 
-def _zones(S: _Scene) -> tuple:
+def _zones(S: SceneDrawing) -> tuple:
     spec = S.sc.runout
     return spec.road.zones if spec is not None else ()
 
@@ -1214,7 +1189,7 @@ def _zone_label(zone) -> str:
     return f"{zone.name}, f = {zone.mu:g}"
 
 
-def _draw_zones(S: _Scene, roi: _Roi) -> None:
+def _draw_zones(S: SceneDrawing, roi: _Roi) -> None:
     """Every friction zone of the road as a pale hatched polygon under everything else, with a
     legend entry; only its part inside the region of interest counts toward the axis limits."""
     from matplotlib.patches import Patch, Polygon
@@ -1252,7 +1227,7 @@ def _map_line_artist_kw(line) -> tuple[str, dict]:
     return text, kw
 
 
-def _draw_map_lines(S: _Scene, roi: _Roi) -> None:
+def _draw_map_lines(S: SceneDrawing, roi: _Roi) -> None:
     """The road layout of ``[[map.lines]]`` under the vehicles, each in its style; only the parts
     inside the region of interest count toward the axis limits."""
     from matplotlib.lines import Line2D
@@ -1272,7 +1247,7 @@ class _LabelPlacer:
     points, vehicle outlines, obstacles, placed labels and axes corners (axes indicator, scale
     bar), and then keeps clearest of what is drawn."""
 
-    def __init__(self, S: _Scene, roi: _Roi, lo, hi):
+    def __init__(self, S: SceneDrawing, roi: _Roi, lo, hi):
         from scipy.spatial import cKDTree
 
         self.S, self.roi = S, roi
@@ -1290,8 +1265,6 @@ class _LabelPlacer:
 
     def _blocked(self, q: np.ndarray, pad: float) -> np.ndarray:
         """Which points q (m, 2) are covered by something drawn or kept free."""
-        from .motion.road import points_in_polygon
-
         bad = np.isfinite(self.tree.query(q, distance_upper_bound=pad)[0])
         for shape in self.roi.shapes:
             bad |= points_in_polygon(q, shape)
@@ -1345,11 +1318,9 @@ class _LabelPlacer:
         return k
 
 
-def _label_road_layout(S: _Scene, roi: _Roi, lo, hi) -> None:
+def _label_road_layout(S: SceneDrawing, roi: _Roi, lo, hi) -> None:
     """Label each friction zone inside its visible part ("grass verge, f = 0.35") and each named
     map line along its visible part, where the text covers least of the scene (:class:`_LabelPlacer`)."""
-    from .motion.road import points_in_polygon, signed_distance
-
     zones = _zones(S)
     lines = [ln for ln in getattr(S.sc, "map_lines", ()) if ln.name]
     if not zones and not lines:
@@ -1379,7 +1350,7 @@ def _label_road_layout(S: _Scene, roi: _Roi, lo, hi) -> None:
         k = place.best(cand, text, 7.5, allowed=effective, room=signed_distance(cand, polys[i]))
         edge = _ZONE_COLORS[i % len(_ZONE_COLORS)][1]
         t = S.text(cand[k], text, fontsize=7.5, ha="center", va="center", style="italic", color=_darker(edge),
-                   path_effects=_halo(2.2), zorder=_Z_TEXT - 0.5)
+                   path_effects=_halo(2.2), zorder=Z_TEXT - 0.5)
         t.set_gid(f"zone-label:{i}")
         S.labels.append(cand[k])
     step = 0.015 * float((np.asarray(hi) - np.asarray(lo)).max())
@@ -1401,7 +1372,7 @@ def _label_road_layout(S: _Scene, roi: _Roi, lo, hi) -> None:
         color = _darker(line.color or _MAP_STYLES[line.style][1])
         t = S.text(cand[k], line.name, xytext=tuple(off), textcoords="offset points", fontsize=6.5, ha="center",
                    va="bottom", rotation=deg, rotation_mode="anchor", color=color, path_effects=_halo(2.0),
-                   zorder=_Z_TEXT - 0.5)
+                   zorder=Z_TEXT - 0.5)
         t.set_gid(f"map-label:{i}")
         S.labels.append(cand[k])
 
@@ -1413,7 +1384,7 @@ def _darker(color, factor: float = 0.6):
     return tuple(factor * c for c in to_rgb(color))
 
 
-def _scale_bar(S: _Scene, width: float) -> None:
+def _scale_bar(S: SceneDrawing, width: float) -> None:
     from matplotlib.font_manager import FontProperties
     from mpl_toolkits.axes_grid1.anchored_artists import AnchoredSizeBar
 
@@ -1425,7 +1396,7 @@ def _scale_bar(S: _Scene, width: float) -> None:
     # the bar itself: a thick line (size_vertical would be in data units)
     bar.size_bar.get_children()[0].set_linewidth(3.0)
     bar.set_gid("scalebar")
-    bar.set_zorder(_Z_TEXT + 1)
+    bar.set_zorder(Z_TEXT + 1)
     S.ax.add_artist(bar)
 
 
@@ -1436,12 +1407,12 @@ def _axes_indicator(ax) -> None:
     for off, text, ha, va, toff in (((26, 0), "+X", "left", "center", (30, 0)),
                                     ((0, 26), "+Y", "center", "bottom", (0, 29))):
         ax.annotate("", xy=base, xycoords="axes fraction", xytext=off, textcoords="offset points",
-                    arrowprops=arrow, zorder=_Z_TEXT + 1)
+                    arrowprops=arrow, zorder=Z_TEXT + 1)
         ax.annotate(text, xy=base, xycoords="axes fraction", xytext=toff, textcoords="offset points",
-                    fontsize=8, ha=ha, va=va, zorder=_Z_TEXT + 1, path_effects=_halo(), gid="axes-indicator")
+                    fontsize=8, ha=ha, va=va, zorder=Z_TEXT + 1, path_effects=_halo(), gid="axes-indicator")
 
 
-def _layout_scene_figure(ax, leg, below: bool, width: float = 10.0, height: float = 7.0) -> None:
+def layout_scene_figure(ax, leg, below: bool, width: float = 10.0, height: float = 7.0) -> None:
     """Size a figure made by :func:`plot_scene` and place its axes: the axes box gets exactly
     the aspect of the limits (equal scale, no wasted band), the legend its measured size.
 
@@ -1476,7 +1447,7 @@ def _layout_scene_figure(ax, leg, below: bool, width: float = 10.0, height: floa
     ax.set_position([left / w_fig, (h_fig - top - h_ax) / h_fig, w_ax / w_fig, h_ax / h_fig])
 
 
-def _fit_texts(S: _Scene) -> None:
+def _fit_texts(S: SceneDrawing) -> None:
     """Widen the limits so that every data-anchored label lies inside the axes."""
     ax = S.ax
     fig = ax.figure
@@ -1499,7 +1470,7 @@ def _fit_texts(S: _Scene) -> None:
         ax.set_ylim(lo[1] - margin if lo[1] < y0 else y0, hi[1] + margin if hi[1] > y1 else y1)
 
 
-def _scene_legend(S: _Scene, legend, below: bool):
+def _scene_legend(S: SceneDrawing, legend, below: bool):
     labels = list(S.handles)
     handles = [S.handles[k] for k in labels]
     if legend is True and below:
@@ -1520,7 +1491,7 @@ def _scene_legend(S: _Scene, legend, below: bool):
         failed = S.scene.evidence.n_failed
         leg.set_title(f"Evidence: {n - failed} of {n} items within tolerance", prop={"size": 8, "weight": "bold"})
         leg.get_title().set_color(_PASS if failed == 0 else _FAIL)
-    leg.set_zorder(_Z_TEXT + 2)
+    leg.set_zorder(Z_TEXT + 2)
     for text in leg.get_texts():
         c = S.label_colors.get(text.get_text())
         if c is not None:
@@ -1569,10 +1540,7 @@ def plot_histories(scene, axes=None, *, system: str | None = None):
     thin vertical lines, numbered as in the report (#2, #3, ...); the contact-force panel
     shows each pair's sampled sustained-contact force (``PairSummary.force``).
     """
-    from .errors import ScenarioError
-    from .units import Kind, convert, to_unit
-
-    system = _system(scene, system)
+    system = figure_system(scene, system)
     if not scene.runout:
         raise ScenarioError(f"scene {scene.scenario.title!r} has no run-out (impact only): there are no time "
                             "histories to plot; add a [runout] section to the scenario", field="runout")
@@ -1688,10 +1656,6 @@ def save_scene_figures(scene, path, *, histories_path=None, dpi: int = 150, inte
         For a suffix other than .png/.svg/.pdf (before anything is drawn or written), or
         histories asked of a scene without a run-out.
     """
-    from pathlib import Path
-
-    from .errors import ScenarioError
-
     named = [(Path(path), "path")] + ([(Path(histories_path), "histories_path")] if histories_path is not None else [])
     named += [(Path(time_distance_path), "time_distance_path")] if time_distance_path is not None else []
     targets = [p for p, _ in named]

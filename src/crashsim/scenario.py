@@ -11,27 +11,32 @@ naming the body in the matching ``*_frame`` / ``frame`` key.
 
 from __future__ import annotations
 
+import copy
+import dataclasses
+import difflib
 import math
-from dataclasses import dataclass, field
+import tomllib
+from dataclasses import dataclass, field, replace as _replace
+from importlib.resources import files
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .errors import ScenarioError
+from .errors import ScenarioError, with_file
+from .evidence.checks import (CORNERS, DeltaVEvidence, Evidence, ImpactPointEvidence, MarkEvidence,
+                              RecorderEvidence, RestEvidence, named_body_points, register_points)
 from .geometry import rotate
-from .motion.levels import LEVELS
-from .motion import (LATERAL_MODELS, METHODS, WHEEL_STATES, ContactModel, FrictionZone, Obstacle, Road, RunoutOptions,
-                     ScheduledChange, WheelSetting, WheelSettings)
-from .motion.contact import CONTACT_KEYS
-from .motion.wheels import _select, enumerate_wheels
 from .impact import (CrushSurface, ExternalImpulse, ImpactProblem, TangentialLaw, VelocityConstraint,
                      tyre_friction_impulse)
+from .motion import (LATERAL_MODELS, METHODS, WHEEL_STATES, ContactModel, FrictionZone, Obstacle, Road, RunoutOptions,
+                     ScheduledChange, WheelSetting, WheelSettings)
+from .motion.contact import CONTACT_KEYS, WEIGHT_DEPTH
+from .motion.levels import LEVELS
+from .motion.wheels import select_wheels, enumerate_wheels
 from .schema import ArrayOf, Field, Section, Table, document, load_toml, validate
-from .survey.schema import SURVEY
-from .units import Kind
-from .reconstruct.evidence import (DeltaVEvidence, Evidence, ImpactPointEvidence, MarkEvidence, RecorderEvidence,
-                                   RestEvidence)
+from .survey.schema import MAP_LINE_STYLES, SURVEY
+from .units import Kind, format_value, parse, toml_repr
 from .vehicles import Axle, Body, BodyState, Hitch, Vehicle, chain_states
 
 __all__ = ["SCHEMA", "MAP_LINE_STYLES", "MapLine", "Scenario", "RunoutSpec", "load_scenario", "presets",
@@ -509,9 +514,6 @@ OBSTACLE = Section("obstacle", [
     Field("description", "str", default="", description="Free text for the report"),
 ], description="A fixed obstacle: guardrail, wall, pole, pier")
 
-#: Styles of a map line (``[[map.lines]]``); crashsim.plotting draws each in its conventional way.
-MAP_LINE_STYLES = ("edge", "lane", "centre", "kerb", "stop", "other")
-
 MAP_LINE = Section("line", [
     Field("name", "str", default="", description="Label drawn on the scene figure (\"north kerb\"); empty: none"),
     Field("style", choices=MAP_LINE_STYLES, example="edge",
@@ -552,7 +554,14 @@ SCHEMA = Section("scenario file", subsections=[
 ], description="A crashsim scenario file (TOML)")
 
 # [fit], [uncertainty] and the evidence sigmas (crashsim fit / crashsim mc)
-from .reconstruct.inverse_schema import with_inverse_sections  # noqa: E402
+from .inverse_schema import with_inverse_sections  # noqa: E402
+from .evidence.crush import CrushEvidence, crush_groups
+from .motion.approach import ApproachSpec, simulate_approach
+from .motion.loads import STANDARD_GRAVITY
+from .motion.road import signed_distance
+from .plotting import is_color
+from .scene.run import simulate_approaches
+from .survey.mapping import expand_survey
 
 SCHEMA = with_inverse_sections(SCHEMA)
 
@@ -614,8 +623,6 @@ def _build_map_lines(m: dict, file: str | None) -> tuple[MapLine, ...]:
     for i, ln in enumerate(m["lines"]):
         color = ln["color"]
         if color is not None:
-            from .plotting import is_color
-
             if not is_color(color):
                 raise _err(f"{color!r} is not a colour; use a matplotlib colour name (\"white\", \"tab:orange\") "
                            "or a hex code (\"#7f7f7f\")", f"map.lines[{i}].color", file)
@@ -646,7 +653,12 @@ class Scenario:
         The road layout of ``[[map.lines]]`` (drawing only; empty without a ``[map]``).
     approaches : dict of ApproachResult
         By vehicle name: the simulated approach of each vehicle with ``[vehicles.<name>.approach]``
-        (its velocity and yaw rates at impact are in ``states``).
+        (its velocity and yaw rates at impact are in ``states``); empty until the approaches are
+        simulated (:func:`crashsim.reconstruct.scene.simulate_approaches`: by :func:`scenario_from_dict` unless asked not to,
+        else by the scene run).
+    approach_inputs : dict of ApproachInput
+        By vehicle name: what each vehicle's approach needs (its spec, road and options, the
+        speed at impact if the file gives it), built and checked at load.
     """
 
     path: str | None
@@ -661,6 +673,19 @@ class Scenario:
     data: dict = field(repr=False)
     map_lines: tuple[MapLine, ...] = ()
     approaches: dict = field(default_factory=dict)
+    approach_inputs: dict = field(default_factory=dict)
+
+    @property
+    def approaches_simulated(self) -> bool:
+        """True when every vehicle's approach has been simulated (its states at impact are final)."""
+        return len(self.approaches) == len(self.approach_inputs)
+
+    @property
+    def file_data(self) -> dict | None:
+        """The file contents (raw, as from TOML) this scenario was built from by
+        :func:`scenario_from_dict`, or None (a scenario made another way, e.g. by
+        :func:`dataclasses.replace`): what fit, Monte Carlo and posterior samples vary."""
+        return self.__dict__.get("_file_data")
 
     @property
     def barrier_extent(self) -> tuple[float, float] | None:
@@ -827,8 +852,6 @@ def _contact_model(base: ContactModel, entry: dict, key: str, file: str | None) 
 
 def _with_contact(spec: "RunoutSpec", d: dict, vehicles, problem: ImpactProblem, file: str | None) -> "RunoutSpec":
     """The run-out's contact model, pair overrides and obstacles (the barrier of the impact first)."""
-    from dataclasses import replace as _replace
-
     c = d["contacts"] or {}
     contact = _contact_model(ContactModel(), c, "contacts", file)
     bodies = {b.name for v in vehicles for b in v.bodies if not b.is_fixed}
@@ -864,8 +887,6 @@ def _with_contact(spec: "RunoutSpec", d: dict, vehicles, problem: ImpactProblem,
         key = f"contacts.pairs[{i}]"
         for which in ("first", "second"):
             if p[which] not in names:
-                import difflib
-
                 near = difflib.get_close_matches(p[which], sorted(names), n=1)
                 hint = f"; did you mean {near[0]!r}?" if near else ""
                 raise _err(f"{p[which]!r} names no body, vehicle or obstacle of the scene{hint} Names: "
@@ -885,9 +906,6 @@ def _with_contact(spec: "RunoutSpec", d: dict, vehicles, problem: ImpactProblem,
 
 def _check_stiffness(contact: ContactModel, pairs: dict, raw: dict, vehicles, file: str | None) -> None:
     """A contact stiffness must hold the heaviest vehicle's weight within WEIGHT_DEPTH."""
-    from .motion.contact import WEIGHT_DEPTH
-    from .motion.loads import STANDARD_GRAVITY
-
     movable = [v for v in vehicles if not v.is_barrier]
     if not movable:
         return
@@ -944,10 +962,10 @@ def _build_vehicle(name: str, v: dict, file: str | None) -> tuple[Vehicle, dict[
         veh = Vehicle(name, tuple(bodies), tuple(hitches))
     except ScenarioError as exc:
         raise _err(str(exc), f"vehicles.{name}", file) from None
-    return veh, _vehicle_states(veh, v)
+    return veh, vehicle_states(veh, v)
 
 
-def _vehicle_states(veh: Vehicle, v: dict) -> dict[str, BodyState]:
+def vehicle_states(veh: Vehicle, v: dict) -> dict[str, BodyState]:
     """The states at impact of a vehicle's bodies from its validated table ``v`` (position, heading,
     course, speed, the bodies' yaw rates and articulations)."""
     raw = v["bodies"]
@@ -958,11 +976,29 @@ def _vehicle_states(veh: Vehicle, v: dict) -> dict[str, BodyState]:
                         [b["yaw_rate"] for b in raw], [b["articulation"] for b in raw[1:]])
 
 
-def _build_approach(veh: Vehicle, v: dict, runout: "RunoutSpec | None", states: dict, file: str | None):
-    """Simulate the approach of ``veh`` (``v["approach"]``) to its impact configuration in ``states``."""
-    from .errors import with_file
-    from .motion.approach import ApproachSpec, simulate_approach
+@dataclass(frozen=True)
+class ApproachInput:
+    """What a vehicle's approach needs, built and checked at load (SI).
 
+    Attributes
+    ----------
+    spec : ApproachSpec
+    road : Road
+        The approach's road (the run-out's unless ``approach.road_friction`` is given).
+    options : RunoutOptions
+    speed_at_impact : float or None
+        The file's speed at impact (``vehicles.<name>.speed``); None when the approach gives
+        the speed at the start of braking.
+    """
+
+    spec: Any
+    road: Road
+    options: RunoutOptions
+    speed_at_impact: float | None
+
+
+def _approach_input(veh: Vehicle, v: dict, runout: "RunoutSpec | None", file: str | None) -> ApproachInput:
+    """What the approach of ``veh`` (``v["approach"]``) needs, checked (its simulation comes later)."""
     a = v["approach"]
     key = f"vehicles.{veh.name}.approach"
     if a["speed"] is not None and v["speed"] is not None:
@@ -985,19 +1021,16 @@ def _build_approach(veh: Vehicle, v: dict, runout: "RunoutSpec | None", states: 
         spec = ApproachSpec(wheels, a["speed"], a["distance"], a["time"],
                             None if a["start_position"] is None else tuple(a["start_position"]), a["start_heading"],
                             a["reaction_time"], a["tolerance"], key)
-        return simulate_approach(veh, spec, {b.name: states[b.name] for b in veh.bodies}, road, options,
-                                 speed_at_impact=v["speed"])
     except ScenarioError as exc:
         raise with_file(exc, file) from None
+    return ApproachInput(spec, road, options, v["speed"])
 
 
-def _frame_xform(frame: str, states: dict, key: str, file: str | None):
+def frame_xform(frame: str, states: dict, key: str, file: str | None):
     """(origin, angle) of a frame named in the file."""
     if frame == "world":
         return np.zeros(2), 0.0
     if frame not in states:
-        import difflib
-
         names = ["world", *states]
         near = difflib.get_close_matches(frame, names, n=1)
         hint = f"; did you mean {near[0]!r}?" if near else ""
@@ -1006,24 +1039,20 @@ def _frame_xform(frame: str, states: dict, key: str, file: str | None):
     return np.asarray(s.position), s.heading
 
 
-def _point(p, frame, states, key, file):
-    origin, ang = _frame_xform(frame, states, key, file)
+def frame_point(p, frame, states, key, file):
+    """The point ``p`` [m] given in ``frame`` (``"world"`` or a body's name, see :func:`frame_xform`) in world
+    coordinates; the scenario loader and :mod:`crashsim.reconstruct.patch` build impact points with it."""
+    origin, ang = frame_xform(frame, states, key, file)
     return tuple(origin + rotate(np.asarray(p), ang))
 
 
 def presets() -> dict[str, dict]:
     """crashsim's library of body parameter sets (raw file values, each with its ``source``)."""
-    import tomllib
-    from importlib.resources import files
-
     return tomllib.loads(files("crashsim").joinpath("data/vehicles.toml").read_text(encoding="utf-8"))
 
 
-def _apply_presets(data: dict, file: str | None) -> dict:
+def apply_presets(data: dict, file: str | None) -> dict:
     """Merge each body's preset under its own keys (before validation, so units are checked alike)."""
-    import copy
-    import difflib
-
     vehicles = data.get("vehicles")
     if not isinstance(vehicles, dict):
         return data
@@ -1057,17 +1086,24 @@ def _units_any_case(data: dict) -> dict:
     return data
 
 
-def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scenario:
+def scenario_from_dict(data: dict[str, Any], *, file: str | None = None, approaches: bool = True) -> Scenario:
     """Validate a parsed scenario (as from TOML) and build the typed SI objects.
 
     A ``[survey]`` section not yet read is read here (:func:`crashsim.survey.expand_survey`): its
-    items join the file's own tables before validation."""
-    if isinstance(data, dict) and "survey" in data:
-        from .survey.mapping import expand_survey
+    items join the file's own tables before validation.
 
+    ``approaches``: simulate the vehicles' approaches (:func:`crashsim.reconstruct.scene.simulate_approaches`,
+    the default);
+    False leaves them to the scene run (:func:`crashsim.reconstruct.run_scene` simulates them
+    before the impact): the scenario then carries their inputs (``approach_inputs``), and the
+    states at impact of a vehicle with an approach are those of its file speed (0 if none) until
+    then.  Fit, Monte Carlo and posterior samples build their scenarios so, and a sample that
+    changes an approach re-runs only that approach."""
+    source = data
+    if isinstance(data, dict) and "survey" in data:
         data = expand_survey(data, file)
     data = _units_any_case(data)
-    merged = _apply_presets(data, file)
+    merged = apply_presets(data, file)
     d = validate(merged, SCHEMA, file=file)
     vehicles, states = [], {}
     for name, v in d["vehicles"].items():
@@ -1090,17 +1126,11 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
     if d["runout"] is not None:
         raw_runout = data.get("runout") if isinstance(data.get("runout"), dict) else {}
         runout = _build_runout(d["runout"], vehicles, d["vehicles"], file, raw_runout)
-    approaches = {}
+    approach_inputs = {}
     for veh in vehicles:
         v = d["vehicles"][veh.name]
-        if v["approach"] is None:
-            continue
-        res = _build_approach(veh, v, runout, states, file)
-        approaches[veh.name] = res
-        end = res.impact_states
-        states.update(chain_states(veh, v["position"], v["heading"], end[veh.bodies[0].name].velocity,
-                                   [end[b.name].yaw_rate for b in veh.bodies],
-                                   [b["articulation"] for b in v["bodies"][1:]]))
+        if v["approach"] is not None:
+            approach_inputs[veh.name] = _approach_input(veh, v, runout, file)
     imp = d["impact"]
     if d["barrier"] is not None:
         bname = d["barrier"]["name"]
@@ -1112,8 +1142,6 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
     for k in ("body1", "body2"):
         allowed = list(states) + ([d["barrier"]["name"]] if d["barrier"] is not None else [])
         if imp[k] not in allowed:
-            import difflib
-
             near = difflib.get_close_matches(imp[k], allowed, n=1)
             hint = f"; did you mean {near[0]!r}?" if near else ""
             raise _err(f"unknown body {imp[k]!r}{hint} Bodies: {', '.join(map(repr, allowed))}", f"impact.{k}", file)
@@ -1127,8 +1155,8 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
         raise _err(f"the barrier {d['barrier']['name']!r} is neither impact.body1 ({imp['body1']!r}) nor impact.body2 "
                    f"({imp['body2']!r}); [barrier] is the rigid body of the impact (fixed obstacles met in the "
                    "run-out go in [[obstacles]])", "barrier.name", file)
-    point = _point(imp["point"], imp["point_frame"], states, "impact.point_frame", file)
-    _, nang = _frame_xform(imp["normal_frame"], states, "impact.normal_frame", file)
+    point = frame_point(imp["point"], imp["point_frame"], states, "impact.point_frame", file)
+    _, nang = frame_xform(imp["normal_frame"], states, "impact.normal_frame", file)
     if d["barrier"] is not None:
         bname = d["barrier"]["name"]
         vehicles.append(Vehicle(bname, (Body(bname, math.inf, math.inf),)))
@@ -1154,13 +1182,13 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
     constraints = []
     for i, c in enumerate(imp["constraints"]):
         key = f"impact.constraints[{i}]"
-        origin, ang = _frame_xform(c["frame"], states, f"{key}.frame", file)
+        origin, ang = frame_xform(c["frame"], states, f"{key}.frame", file)
         constraints.append(VelocityConstraint(c["body"], tuple(origin + rotate(np.asarray(c["point"]), ang)),
                                               c["direction"] + ang, c["value"], c["name"] or f"constraint {i + 1}"))
     external = []
     for i, x in enumerate(imp["external_impulses"]):
         key = f"impact.external_impulses[{i}]"
-        origin, ang = _frame_xform(x["frame"], states, f"{key}.frame", file)
+        origin, ang = frame_xform(x["frame"], states, f"{key}.frame", file)
         helper = [x[k] is not None for k in ("friction", "load", "duration", "direction")]
         if x["impulse"] is not None:
             if any(helper):
@@ -1195,19 +1223,21 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
     except ScenarioError as exc:
         raise ScenarioError(str(exc), field=exc.field, file=file) from None
     _check_overlap(problem, vehicles, states, imp["overlap_tolerance"], d["scenario"]["units"], file)  # the cause first
-    _check_contact_point(problem, imp["contact_tolerance"], d["scenario"]["units"], file)
+    check_contact_point(problem, imp["contact_tolerance"], d["scenario"]["units"], file)
     if runout is not None:
         runout = _with_contact(runout, d, vehicles, problem, file)
     evidence = _build_evidence(d["evidence"], states, file, vehicles,
                                {n: v["approach"] for n, v in d["vehicles"].items()})
     if d["evidence"] is not None and d["evidence"]["crush"]:
-        import dataclasses
-
         evidence = dataclasses.replace(evidence, crush=_build_crush(d["evidence"]["crush"], d, vehicles, file))
     map_lines = _build_map_lines(d["map"], file)
     meta = d["scenario"]
-    return Scenario(file, meta["title"], meta["source"], meta["units"], tuple(vehicles), states, problem, runout,
-                    evidence, d, map_lines, approaches)
+    out = Scenario(file, meta["title"], meta["source"], meta["units"], tuple(vehicles), states, problem, runout,
+                   evidence, d, map_lines, {}, approach_inputs)
+    object.__setattr__(out, "_file_data", source)  # the file contents it was built from (Scenario.file_data)
+    if not approaches:
+        return out
+    return simulate_approaches(out)
 
 
 def outline_problem(points) -> str | None:
@@ -1240,8 +1270,6 @@ def outline_problem(points) -> str | None:
 
 def _written(raw) -> str:
     """A value as written in the file (``["-6.2 m", "0 m"]``)."""
-    from .units import toml_repr
-
     return toml_repr(raw)
 
 
@@ -1249,9 +1277,6 @@ def _check_vehicle_geometry(veh: Vehicle, v: dict, raw: dict, system: str, file:
     """Hitch points within (or within ``drawbar`` of) both bodies they join; tyre contacts within
     (or within ``overhang`` of) their body's outline. One error, naming the key as written, the
     value as written in the file, how far it is off and the allowed range."""
-    from .motion.road import signed_distance
-    from .units import format_value, parse
-
     def L(x, like=None):
         """A length in the unit of ``like`` (a value as written in the file), else the file's system's."""
         like = like[0] if isinstance(like, (list, tuple)) and like else like
@@ -1320,8 +1345,6 @@ def _check_overlap(problem: ImpactProblem, vehicles, states: dict, tolerance: fl
     """Bodies of different vehicles may overlap at the impact by at most ``tolerance``: the impact's
     two bodies measured along the impact normal (their crush), any other pair by the distance one
     must move to clear the other (they are not in the impact: any overlap is a misplaced vehicle)."""
-    from .units import format_value
-
     normal = np.asarray(problem.surface.normal, dtype=float)
     pair = {problem.body1, problem.body2}
     placed = []
@@ -1351,11 +1374,8 @@ def _check_overlap(problem: ImpactProblem, vehicles, states: dict, tolerance: fl
                            file)
 
 
-def _check_contact_point(problem: ImpactProblem, tolerance: float, system: str, file: str | None) -> None:
+def check_contact_point(problem: ImpactProblem, tolerance: float, system: str, file: str | None) -> None:
     """The contact point must lie in or near (``tolerance``) the outline of both contacting bodies."""
-    from .motion.road import signed_distance
-    from .units import format_value
-
     point = np.asarray(problem.surface.point)
     far = []
     for name in (problem.body1, problem.body2):
@@ -1378,11 +1398,6 @@ def _check_contact_point(problem: ImpactProblem, tolerance: float, system: str, 
 
 def _rest_registration(r: dict, body: Body, key: str, file: str | None):
     """The CG and heading of a rest item given by measured points of ``body`` (a rigid least-squares fit)."""
-    import difflib
-
-    from .reconstruct.evidence import CORNERS, named_body_points, register_points
-    from .units import format_value
-
     if r["position"] is not None:
         raise _err("give either position (the measured CG) or points (measured points of the body), not both",
                    f"{key}.points", file)
@@ -1431,7 +1446,6 @@ def _build_evidence(e: dict | None, states: dict, file: str | None, vehicles=(),
     """The evidence items; ``d_approach``: the validated approach section of each vehicle (or None)."""
     if e is None:
         return Evidence()
-    import difflib
 
     def body(name, key):
         if name not in states:
@@ -1465,7 +1479,7 @@ def _build_evidence(e: dict | None, states: dict, file: str | None, vehicles=(),
             key = f"evidence.marks[{i}].wheel"
             vehicle = next(v for v in vehicles if body(sel.split("/")[0], key) in {b.name for b in v.bodies})
             try:  # the wheels the selector names must exist (as for wheel settings)
-                _select(vehicle, enumerate_wheels(vehicle), sel, key)
+                select_wheels(vehicle, enumerate_wheels(vehicle), sel, key)
             except ScenarioError as exc:
                 raise _err(str(exc).removeprefix(f"{key}: "), key, file) from None
         if m["phase"] == "approach":
@@ -1500,11 +1514,6 @@ def _build_evidence(e: dict | None, states: dict, file: str | None, vehicles=(),
 
 def _build_crush(items: list, d: dict, vehicles, file: str | None) -> tuple:
     """The ``[[evidence.crush]]`` items as CrushEvidence (A and B from the body's preset where omitted)."""
-    import difflib
-
-    from .reconstruct.crush import CrushEvidence, crush_groups
-    from .units import parse
-
     by_name = {b.name: b for v in vehicles for b in v.bodies}
     preset_of = {b["name"]: b.get("preset") for v in d["vehicles"].values() for b in v["bodies"]}
     out = []

@@ -271,7 +271,9 @@ def _num(x: float) -> str:
     return format(x, ".12g")
 
 
-def _interval(f: Field) -> str:
+def interval_text(f: Field) -> str:
+    """The allowed range of a numeric field as text, e.g. ``"[0, 1]"`` or ``"(0, inf) m/s"`` (SI bounds,
+    brackets closed or open as the field says); used in error messages here and by the inverse sections."""
     lo = "-inf" if f.minimum is None else _num(f.minimum)
     hi = "inf" if f.maximum is None else _num(f.maximum)
     left = "(" if f.exclusive_minimum or f.minimum is None else "["
@@ -280,7 +282,8 @@ def _interval(f: Field) -> str:
     return f"{left}{lo}, {hi}{right}{unit}"
 
 
-def _in_range(x: float, f: Field) -> bool:
+def in_range(x: float, f: Field) -> bool:
+    """Whether the SI value ``x`` lies in the field's range (its minimum/maximum, open or closed)."""
     if f.minimum is not None and (x < f.minimum or (f.exclusive_minimum and x == f.minimum)):
         return False
     return f.maximum is None or not (x > f.maximum or (f.exclusive_maximum and x == f.maximum))
@@ -347,10 +350,10 @@ def _interval_in(f: Field, unit: str) -> str | None:
 
 
 def _check_range(x: float, raw: object, f: Field, path: str, problems: _Problems) -> None:
-    if _in_range(x, f):
+    if in_range(x, f):
         return
     shown = toml_repr(raw)
-    allowed = _interval(f)
+    allowed = interval_text(f)
     if f.is_quantity and isinstance(raw, str):
         si = f"{_num(x)} {units.si_unit(f.kind)}".strip()
         match = units._NUMBER.fullmatch(raw)
@@ -611,7 +614,7 @@ def _field_row(f: Field, path: str) -> tuple[str, str, str, str, str]:
     else:
         need = f"optional, default {toml_repr(f.default)}"
     ranged = f.minimum is not None or f.maximum is not None
-    allowed = _interval(f) if ranged else ""
+    allowed = interval_text(f) if ranged else ""
     desc = f.description + (f" (example: {_example(f)})" if f.example is not None else "")
     return _join(path, f.name), _type_text(f), need, allowed, desc
 

@@ -24,7 +24,7 @@ from pathlib import Path
 import pytest
 
 from crashsim.impact import solve_impact
-from crashsim.reconstruct.scene import run_scene
+from crashsim.scene.run import run_scene
 from crashsim.scenario import load_scenario, scenario_from_dict
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -19,7 +19,7 @@ import pytest
 from scipy.optimize import minimize
 
 from crashsim.geometry import rotate
-from crashsim.reconstruct.evidence import named_body_points, register_points
+from crashsim.evidence.checks import named_body_points, register_points
 from crashsim.vehicles import Axle, Body
 
 BODY = Body("van", 2500.0, 4500.0, length=5.4, width=2.0, outline_center=(0.35, 0.05),

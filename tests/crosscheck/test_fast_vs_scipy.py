@@ -29,7 +29,7 @@ import pytest
 
 from crashsim import solve_impact
 from crashsim.motion import RunoutOptions, make_hitch_consistent, simulate_runout
-from crashsim.reconstruct.scene import separation_states
+from crashsim.scene.run import separation_states
 from crashsim.scenario import load_scenario
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -150,7 +150,7 @@ def test_trajectories_tracks_and_hitch_forces_agree(case, runs):
 
 def test_scene_pipeline_runs_unchanged_on_the_compiled_engine(tmp_path):
     """run_scene -> evidence -> report -> CSV with the compiled engine: the same verdicts."""
-    from crashsim.reconstruct.scene import run_scene
+    from crashsim.scene.run import run_scene
 
     path = ROOT / "scenarios" / "scenes" / "car_trailer_side_impact.toml"
     sc = load_scenario(path)

@@ -13,7 +13,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "unit"))
 from test_approach_scenario import scene as approach_scene  # noqa: E402
 
 from crashsim.plotting import plot_scene, plot_time_distance, save_scene_figures  # noqa: E402
-from crashsim.reconstruct.scene import run_scene  # noqa: E402
+from crashsim.scene.run import run_scene  # noqa: E402
 from crashsim.scenario import scenario_from_dict  # noqa: E402
 
 FT = 0.3048

@@ -15,7 +15,7 @@ matplotlib.use("Agg")
 from crashsim.geometry import to_world  # noqa: E402
 from crashsim.plotting import plot_scene  # noqa: E402
 from crashsim.reconstruct import run_scene  # noqa: E402
-from crashsim.reconstruct.crush import profile_outline  # noqa: E402
+from crashsim.evidence.crush import profile_outline  # noqa: E402
 from crashsim.scenario import load_scenario  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]

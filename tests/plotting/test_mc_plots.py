@@ -14,7 +14,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.colors import to_rgb  # noqa: E402
 
-from crashsim.reconstruct.mc_plots import (_display, _label, plot_histograms, plot_rest_clouds,  # noqa: E402
+from crashsim.reconstruct.mc_plots import (display_values, output_label, plot_histograms, plot_rest_clouds,  # noqa: E402
                                            save_mc_figures)
 from crashsim.reconstruct.montecarlo import monte_carlo  # noqa: E402
 from crashsim.reconstruct.overrides import default_engine  # noqa: E402
@@ -97,10 +97,10 @@ def test_accepted_samples_are_drawn_dark_the_others_pale(mc_accept):
         bars = a.containers
         assert len(bars) == 2  # all samples (pale), then the accepted ones (dark) on the same bins
         # each group as its share per bin: the accepted bars are the accepted samples' histogram, in % of 3
-        key = next(k for k in mc_accept.outputs if a.get_xlabel().startswith(_label(k)))
+        key = next(k for k in mc_accept.outputs if a.get_xlabel().startswith(output_label(k)))
         v = mc_accept.outputs[key]
         edges = [p.get_x() for p in bars[0]] + [bars[0][-1].get_x() + bars[0][-1].get_width()]
-        scale = _display(v, mc_accept.kind_of(key), "SI")[0] / v
+        scale = display_values(v, mc_accept.kind_of(key), "SI")[0] / v
         counts, _ = np.histogram(v[[1, 4, 7]] * scale[0], bins=edges)
         assert np.allclose([p.get_height() for p in bars[1]], 100.0 * counts / 3)
         assert sum(p.get_height() for p in bars[0]) == pytest.approx(100.0)

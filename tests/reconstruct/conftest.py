@@ -1,7 +1,7 @@
 import pytest
 
 import crashsim.scenario as scenario_module
-from crashsim.reconstruct.inverse_schema import with_inverse_sections
+from crashsim.inverse_schema import with_inverse_sections
 
 
 @pytest.fixture(autouse=True)

@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 from crashsim.reconstruct.overrides import ScenarioOverrides, default_engine
-from crashsim.reconstruct.scene import run_scene
+from crashsim.scene.run import run_scene
 
 #: Run-out engine of these tests: the compiled one when this crashsim has it (as fit/mc default to).
 ENGINE = default_engine()

@@ -16,7 +16,7 @@ import pytest
 
 from crashsim.reconstruct.fit import FitSpec, fit_scene
 from crashsim.reconstruct.overrides import ScenarioOverrides
-from crashsim.reconstruct.scene import run_scene
+from crashsim.scene.run import run_scene
 
 from scenes import ENGINE, car_car, with_evidence
 

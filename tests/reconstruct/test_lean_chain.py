@@ -1,7 +1,7 @@
 """The fit and Monte Carlo chain gives the same numbers on its fast path as on the full one.
 
 The fast path (:mod:`crashsim.reconstruct.patch` scenarios, the reused scene model of
-:mod:`crashsim.reconstruct.models`, the per-coordinate polyline distances of the evidence
+:mod:`crashsim.scene.models`, the per-coordinate polyline distances of the evidence
 checks) is compared with the full path (``crashsim.reconstruct.overrides.FAST = False``: every
 scenario validated and built from the file dict, every scene model built again) on the shipped
 fit scene: fit residuals and Monte Carlo sample records must agree exactly.
@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 
 import crashsim.reconstruct.overrides as overrides
-from crashsim.reconstruct import models
-from crashsim.reconstruct.evidence import _nearest_on_polyline
+from crashsim.scene import models
+from crashsim.evidence.checks import _nearest_on_polyline
 from crashsim.reconstruct.fit import FitProblem, FitSpec
 from crashsim.reconstruct.montecarlo import monte_carlo
 from crashsim.schema import load_toml
@@ -91,7 +91,7 @@ def _reference_nearest(points, polyline):
 def test_polyline_distance_bit_for_bit(seed, compiled, monkeypatch):
     """Random tracks (with repeated vertices: zero-length segments) and points on, near and far off them:
     the array form and the compiled loop both give the reference's bits."""
-    import crashsim.reconstruct.evidence as evidence
+    import crashsim.evidence.checks as evidence
 
     monkeypatch.setattr(evidence, "_COMPILED_FROM", 0 if compiled else 10**12)
     rng = np.random.default_rng(seed)
@@ -103,9 +103,72 @@ def test_polyline_distance_bit_for_bit(seed, compiled, monkeypatch):
     for got, ref in zip(_nearest_on_polyline(on_grid, grid), _reference_nearest(on_grid, grid)):
         assert np.array_equal(got, ref)
     if compiled:
-        from crashsim.reconstruct._polyline import nearest_on_polyline
+        from crashsim.evidence._polyline import nearest_on_polyline
 
         assert nearest_on_polyline(pts, line) is not None  # numba is there: the loop is what is tested
     d_new, s_new = _nearest_on_polyline(pts, line)
     d_ref, s_ref = _reference_nearest(pts, line)
     assert np.array_equal(d_new, d_ref) and np.array_equal(s_new, s_ref)
+
+
+def test_lean_scene_gives_the_full_numbers(raw):
+    """A lean run (``run_scene(..., lean=True)``, as fit, Monte Carlo and posterior samples run) gives the
+    full run's sample record, evidence checks and fit residuals exactly, for the shipped fit scene's
+    Monte Carlo samples (and the bodies' rest states and histories, the kept wheels' tracks)."""
+    from crashsim.reconstruct.montecarlo import UncertaintySpec, _check_key, sample_inputs, scene_outputs
+    from crashsim.reconstruct.overrides import ScenarioOverrides
+    from crashsim.reconstruct.scene import run_scene
+
+    spec = UncertaintySpec.from_dict(raw["uncertainty"], file=str(FILE))
+    fspec = FitSpec.from_dict(raw["fit"], raw, file=str(FILE))
+    ov = ScenarioOverrides(raw, spec.paths, engine=ENGINE, file=str(FILE))
+    fit = FitProblem(raw, fspec, engine=ENGINE, file=str(FILE))
+    for i in range(8):
+        sc = ov.scenario(sample_inputs(spec, spec.seed, i))
+        full, lean = run_scene(sc), run_scene(sc, lean=True)
+        assert scene_outputs(lean) == scene_outputs(full)
+        assert lean.warnings == full.warnings and lean.at_rest == full.at_rest
+        checks = lambda s: [(_check_key(c), c.residual, c.passed, json.dumps(c.details, sort_keys=True))  # noqa: E731
+                            for c in s.evidence.checks]
+        assert checks(lean) == checks(full)
+        assert np.array_equal(fit.evidence.weighted(lean), fit.evidence.weighted(full))
+        assert lean.joint.pairs == () and len(lean.joint.impacts) == len(full.joint.impacts)
+        for v, r in full.runout.items():
+            lr = lean.runout[v]
+            assert (lr.status, lr.message, lr.t_end, lr.energy_dissipated) == (r.status, r.message, r.t_end,
+                                                                               r.energy_dissipated)
+            assert [(e.t, e.kind) for e in lr.events] == [(e.t, e.kind) for e in r.events]
+            for name, b in r.bodies.items():
+                lb = lr.bodies[name]
+                assert (lb.rest_position, lb.rest_heading, lb.time_to_rest, lb.distance) == \
+                    (b.rest_position, b.rest_heading, b.time_to_rest, b.distance)
+                assert np.array_equal(lb.history.x, b.history.x)
+            assert set(lr.wheels) <= set(r.wheels)
+            for key, tr in lr.wheels.items():
+                assert np.array_equal(tr.points, r.wheels[key].points)
+                assert tr.path_length == r.wheels[key].path_length
+        assert any(lean.runout[v].wheels for v in lean.runout)  # the mark's wheels are kept
+        assert sum(len(r.wheels) for r in lean.runout.values()) < sum(len(r.wheels) for r in full.runout.values())
+
+
+def test_the_inverse_api_takes_a_scenario(raw, monkeypatch):
+    """crashsim.fit / monte_carlo accept a Scenario (its file_data varied, not its file read again), also
+    one built in memory with no file; the same numbers as from the file's path."""
+    import crashsim
+    import crashsim.scenario as sm
+    from crashsim.reconstruct.inverse_schema import with_inverse_sections
+    from crashsim.reconstruct.overrides import file_contents
+
+    monkeypatch.setattr(sm, "SCHEMA", with_inverse_sections(sm.SCHEMA))
+    sc = sm.scenario_from_dict(raw)  # no file behind it
+    assert sc.path is None and sc.file_data is raw
+    assert file_contents(sc) == (raw, None)
+    import dataclasses
+
+    with pytest.raises(crashsim.errors.ScenarioError):
+        file_contents(dataclasses.replace(sc))  # made another way: no file contents to vary
+    a = crashsim.monte_carlo(sc, samples=3, workers=1, engine=ENGINE)
+    b = crashsim.monte_carlo(crashsim.load(FILE), samples=3, workers=1, engine=ENGINE)
+    assert np.array_equal(a.inputs, b.inputs) and a.outputs.keys() == b.outputs.keys()
+    for k in a.outputs:
+        assert np.array_equal(a.outputs[k], b.outputs[k], equal_nan=True), k

@@ -184,9 +184,9 @@ def test_whole_event_outputs_of_a_joint_run_out():
     car of the third-vehicle scene, in no first impact, has only the whole-event one."""
     from pathlib import Path
 
-    from crashsim.reconstruct.evidence import body_impacts
+    from crashsim.evidence.checks import body_impacts
     from crashsim.reconstruct.montecarlo import scene_outputs
-    from crashsim.reconstruct.scene import run_scene
+    from crashsim.scene.run import run_scene
     from crashsim.scenario import load_scenario
 
     scene = run_scene(load_scenario(Path(__file__).resolve().parents[2] / "scenarios" / "scenes"

@@ -8,7 +8,7 @@ import math
 import pytest
 
 from crashsim.errors import ScenarioError
-from crashsim.reconstruct.inverse_schema import FIT, UNCERTAINTY, with_inverse_sections
+from crashsim.inverse_schema import FIT, UNCERTAINTY, with_inverse_sections
 from crashsim.reconstruct.overrides import ScenarioOverrides, resolve_path
 from crashsim.schema import document
 

@@ -18,7 +18,7 @@ import pytest
 from crashsim.errors import ScenarioError
 from crashsim.reconstruct.overrides import ScenarioOverrides
 from crashsim.reconstruct.patch import patch_kind
-from crashsim.reconstruct.scene import run_scene
+from crashsim.scene.run import run_scene
 from crashsim.schema import load_toml
 
 from scenes import ENGINE, car_car, car_trailer
@@ -63,7 +63,7 @@ SHIPPED_PATHS = ["vehicles.A.speed", "vehicles.B.speed", "impact.restitution", "
 @pytest.fixture(scope="module")
 def shipped():
     import crashsim.scenario as sm
-    from crashsim.reconstruct.inverse_schema import with_inverse_sections
+    from crashsim.inverse_schema import with_inverse_sections
 
     saved = sm.SCHEMA
     sm.SCHEMA = with_inverse_sections(saved)
@@ -185,25 +185,65 @@ def test_shipped_scenes_with_a_barrier_or_zones(name, paths):
 
 
 def test_a_scene_with_an_approach():
-    """The impact's coefficients are patched (the approach ends at the impact positions, unchanged); the
-    speed of a vehicle with an approach and the road friction are not (the approach depends on them)."""
-    data = load_toml(ROOT / "scenarios" / "scenes" / "truck_brakes_into_car.toml")
+    """The approach runs in the scene run: a sample's scenario carries the approach's inputs, and the speed at
+    braking, the road friction (the approach runs on the run-out's road) and the impact's coefficients are
+    patched into them (the approach ends at the impact positions, unchanged); the run simulates the approach.
+    The same scenario and scene as the full build, and at the file's values the scene of the loaded file."""
+    import crashsim
+
+    path = ROOT / "scenarios" / "scenes" / "truck_brakes_into_car.toml"
+    data = load_toml(path)
     with_approach = [n for n, v in data["vehicles"].items() if "approach" in v]
-    assert with_approach
-    fast, full = _pair(data, ["impact.restitution"])
-    x0 = fast.base_value(0)
-    fast.scenario([x0])
-    assert fast._fast_base.approaches
-    for x in (0.5 * x0 + 0.01, x0 + 0.02):
-        a, b = fast.scenario([x]), full.scenario([x])
-        assert a.vehicles is fast._fast_base.vehicles and a.approaches is fast._fast_base.approaches  # patched
-        same(replace_approaches(a), replace_approaches(b))
+    assert with_approach == ["truck"]
+    paths = ["vehicles.truck.approach.speed", "runout.road_friction", "impact.restitution",
+             "vehicles.truck.approach.reaction_time"]
+    fast, full = _pair(data, paths)
+    x0 = [fast.base_value(i) for i in range(len(paths))]
+    base = fast.scenario(x0)
+    assert base.approach_inputs and not base.approaches  # not simulated at load
+    assert fast._variant is not None and fast._variant.patchable
+    sc = crashsim.load(path)  # the approach simulated at load (the file's options), the run-out as fast's
+    sc = dataclasses.replace(sc, path=None, runout=dataclasses.replace(sc.runout, options=base.runout.options))
+    assert sc.approaches and sc.approach_inputs == base.approach_inputs
+    loaded = run_scene(sc)
+    ran = run_scene(base)
+    assert ran.scenario.approaches and ran.scenario.approaches_simulated
+    assert json.dumps(ran.to_dict(), sort_keys=True) == json.dumps(loaded.to_dict(), sort_keys=True)
+    for x in ([x0[0] * 1.03, x0[1], x0[2], x0[3]], [x0[0], 0.65, x0[2] + 0.02, x0[3] + 0.3],
+              [x0[0] * 0.98, 0.72, x0[2], 0.0]):
+        a, b = fast.scenario(x), full.scenario(x)
+        assert a.vehicles is fast._fast_base.vehicles  # patched
+        same(a, b)
         assert json.dumps(run_scene(a).to_dict(), sort_keys=True) == json.dumps(run_scene(b).to_dict(), sort_keys=True)
     from crashsim.reconstruct.overrides import resolve_path
 
     d = fast._fast_base.data
-    assert patch_kind(resolve_path(f"vehicles.{with_approach[0]}.speed"), d) is None
-    assert patch_kind(resolve_path("runout.road_friction"), d) is None
+    # the file gives the speed at braking: the speed at impact follows from the approach (both given: an error)
+    assert patch_kind(resolve_path("vehicles.truck.speed"), d) is None
+    assert patch_kind(resolve_path("vehicles.truck.approach.speed"), d) == "approach_speed"
+    assert patch_kind(resolve_path("runout.road_friction"), d) == "road_friction"
+    assert patch_kind(resolve_path("vehicles.truck.approach.reaction_time"), d) == "approach_reaction_time"
+    assert patch_kind(resolve_path("vehicles.truck.approach.distance"), d) is None
+
+
+def test_an_approach_from_its_speed_at_impact():
+    """A file that gives the speed at impact (the approach solves the speed at braking): that speed is patched
+    into the approach's inputs and the placeholder states; the same scenario and scene as the full build."""
+    data = load_toml(ROOT / "scenarios" / "scenes" / "truck_brakes_into_car.toml")
+    data["vehicles"]["truck"] = dict(data["vehicles"]["truck"], speed="40 mph")
+    data["vehicles"]["truck"]["approach"] = {k: v for k, v in data["vehicles"]["truck"]["approach"].items()
+                                             if k != "speed"}
+    fast, full = _pair(data, ["vehicles.truck.speed"])
+    x0 = fast.base_value(0)
+    fast.scenario([x0])
+    assert fast._variant is not None and fast._variant.kinds == ("approach_impact_speed",)
+    for x in (x0 * 0.95, x0 * 1.05):
+        a, b = fast.scenario([x]), full.scenario([x])
+        assert a.vehicles is fast._fast_base.vehicles
+        same(a, b)
+        ra, rb = run_scene(a), run_scene(b)
+        assert ra.scenario.approaches["truck"].speed_solved
+        assert json.dumps(ra.to_dict(), sort_keys=True) == json.dumps(rb.to_dict(), sort_keys=True)
 
 
 def replace_approaches(sc):
@@ -212,11 +252,11 @@ def replace_approaches(sc):
 
 
 def test_scene_model_on_another_road_equals_a_new_model():
-    """SceneModel.with_road (the cached model of reconstruct.models with another road friction) holds the
+    """SceneModel.with_road (the cached model of crashsim.scene.models with another road friction) holds the
     arrays of a model built from scratch on that road; another zone set is refused."""
     from crashsim.motion.model import SceneModel
     from crashsim.motion.road import Road
-    from crashsim.reconstruct import models
+    from crashsim.scene import models
 
     data = load_toml(ROOT / "scenarios" / "scenes" / "verge_run_off.toml")
     sc = ScenarioOverrides(data, ["runout.road_friction"], engine=ENGINE).scenario([0.75])
@@ -238,3 +278,93 @@ def test_scene_model_on_another_road_equals_a_new_model():
     assert models.scene_model(movable, spec) is m1  # cached
     m2 = models.scene_model(movable, dataclasses.replace(spec, road=road))
     assert m2 is not m1 and m2.road is road and all(np.array_equal(a, b) for a, b in zip(m2.M, fresh.M))
+
+
+def _law(data, law, key, value):
+    out = dict(data)
+    out["impact"] = {k: v for k, v in data["impact"].items() if k not in ("mu", "mu_fraction", "friction")}
+    out["impact"].update(tangential=law, **{key: value})
+    return out
+
+
+#: Every path kind the variant patches, on a scene that has it: (scene, path, values around the file's).
+EVERY_PATH = [
+    (car_car, "vehicles.A.speed", [9.0, 12.5]),
+    (car_car, "vehicles.B.speed", [8.0, 11.0]),
+    (car_trailer, "vehicles.striking.speed", [10.5, 12.0]),
+    (car_trailer, "vehicles.towing.speed", [0.0, 3.0]),
+    (car_car, "impact.restitution", [0.0, 0.35]),
+    (car_trailer, "impact.restitution", [0.02, 1.0]),
+    (car_car, "impact.friction", [0.0, 0.8]),
+    (lambda: _law(car_car(), "ratio", "mu", -0.2), "impact.mu", [-0.05, -0.4]),
+    (lambda: _law(car_car(), "fraction", "mu_fraction", 0.8), "impact.mu_fraction", [0.0, 1.0]),
+    (car_car, "impact.normal", [1.5, 1.62]),
+    (car_trailer, "impact.normal", [1.45, 1.7]),
+    (car_car, "impact.point[0]", [-0.5, -0.3]),
+    (car_car, "impact.point[1]", [-0.95, -0.85]),
+    (car_trailer, "impact.point[0]", [-0.7, -0.2]),
+    (car_trailer, "impact.point[1]", [-0.95, -0.8]),
+    (car_car, "runout.road_friction", [0.4, 0.9]),
+    (car_trailer, "runout.road_friction", [0.55, 1.1]),
+]
+
+
+@pytest.mark.parametrize("scene, path, values", EVERY_PATH, ids=[f"{s.__name__}:{p}" for s, p, _ in EVERY_PATH])
+def test_every_path_through_the_variant(scene, path, values):
+    """Each patchable path alone and beside a speed: the variant's scenario is the full build's, value for
+    value, and its scene is the full build's, number for number."""
+    from crashsim.reconstruct.variants import ScenarioVariant
+
+    data = scene()
+    speed = next(f"vehicles.{n}.speed" for n in data["vehicles"] if f"vehicles.{n}.speed" != path)
+    for paths in ([path], [path, speed]):
+        fast, full = _pair(data, paths)
+        x0 = [fast.base_value(i) for i in range(len(paths))]
+        fast.scenario(x0)
+        variant = fast._variant
+        assert isinstance(variant, ScenarioVariant) and variant.patchable, paths
+        for v in values:
+            x = [v, *x0[1:]]
+            a, b = variant.scenario(x), full.scenario(x)
+            assert a is not None and a.vehicles is fast._fast_base.vehicles
+            same(a, b)
+        a, b = variant.scenario([values[-1], *x0[1:]]), full.scenario([values[-1], *x0[1:]])
+        assert json.dumps(run_scene(a).to_dict(), sort_keys=True) == json.dumps(run_scene(b).to_dict(), sort_keys=True)
+
+
+@pytest.mark.parametrize("scene, path, bad", [
+    (car_car, "impact.restitution", [1.01, -1e-9, math.inf]),
+    (car_car, "vehicles.A.speed", [-1.0, math.nan]),
+    (car_car, "runout.road_friction", [0.0, 2.5]),
+    (car_car, "impact.friction", [-0.1]),
+    (car_car, "impact.point[1]", [-4.0, 3.0]),
+])
+def test_the_variant_leaves_what_it_cannot_vouch_for_to_the_full_build(scene, path, bad):
+    """Out of its field's range, not finite, or a contact point off the outlines: the variant gives None, and
+    ScenarioOverrides raises the full build's error, text for text."""
+    data = scene()
+    fast, full = _pair(data, [path])
+    fast.scenario([fast.base_value(0)])
+    for x in bad:
+        assert fast._variant.scenario([x]) is None
+        with pytest.raises(ScenarioError) as e_fast:
+            fast.scenario([x])
+        with pytest.raises(ScenarioError) as e_full:
+            full.scenario([x])
+        assert str(e_fast.value) == str(e_full.value)
+
+
+@pytest.mark.parametrize("path", ["vehicles.A.speed", "impact.restitution", "impact.point[0]", "impact.normal",
+                                  "runout.road_friction", "impact.friction"])
+def test_the_file_text_round_trip_is_the_identity(path):
+    """The full build sees a sampled SI value as file text and back (``parse_value(format_value(x))``): for
+    the SI units that is exactly x, so the variant, which uses x as given, builds the same floats."""
+    from crashsim.reconstruct.overrides import format_value, parse_value, resolve_path
+
+    t = resolve_path(path)
+    rng = np.random.default_rng(3)
+    xs = np.concatenate([rng.normal(size=2000) * 10.0 ** rng.integers(-9, 9, size=2000), rng.uniform(-8, 8, 2000),
+                         [0.0, -0.0, 5e-324, 1.7976931348623157e308, 0.1, 1 / 3]])
+    for x in xs.tolist():
+        y = parse_value(format_value(x, t), t, field=path)
+        assert y == x and math.copysign(1.0, y) == math.copysign(1.0, x), (path, x, y)

@@ -63,7 +63,7 @@ def test_the_model_is_the_closed_form_here():
     """Separation speed e v exactly, a straight slide, rest within 1e-3 sigma of d(v): the
     likelihood the sampler sees is the closed-form one to far below the Monte Carlo error."""
     from crashsim.reconstruct.overrides import ScenarioOverrides
-    from crashsim.reconstruct.scene import run_scene
+    from crashsim.scene.run import run_scene
 
     ov = ScenarioOverrides(rebound(), ["vehicles.car.speed"], engine=ENGINE)
     for v in (LO, 9.0, HI):

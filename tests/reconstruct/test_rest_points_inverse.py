@@ -16,7 +16,7 @@ import pytest
 import tomli_w
 
 from crashsim.geometry import rotate
-from crashsim.reconstruct.evidence import named_body_points
+from crashsim.evidence.checks import named_body_points
 from crashsim.reconstruct.fit import FitProblem, FitSpec, fit_scene
 from crashsim.reconstruct.montecarlo import monte_carlo
 from crashsim.scenario import load_scenario

@@ -12,7 +12,7 @@ from crashsim.cli import main
 from crashsim.errors import ScenarioError
 from crashsim.reconstruct.fit import EvidenceModel, fit_scene
 from crashsim.reconstruct.overrides import resolve_path, set_value
-from crashsim.reconstruct.scene import run_scene
+from crashsim.scene.run import run_scene
 from crashsim.scenario import load_scenario
 from crashsim.schema import load_toml
 from crashsim.units import parse

@@ -105,7 +105,7 @@ def test_free_rolling_car_chooses_a_small_v_stop():
 @pytest.mark.parametrize("vehicle", ["A", "B"])
 def test_shipped_intersection_scene_is_honest(vehicle):
     from crashsim.impact import solve_impact
-    from crashsim.reconstruct.scene import separation_states
+    from crashsim.scene.run import separation_states
     from crashsim.scenario import load_scenario
 
     sc = load_scenario(ROOT / "scenarios" / "scenes" / "intersection_car_trailer_wheels.toml")

@@ -21,7 +21,7 @@ from crashsim.cli import main
 from crashsim.errors import InadmissibleImpactError, ScenarioError
 from crashsim.impact import ImpactBatch
 from crashsim.impact.admissible import admissibility, impulse_work
-from crashsim.reconstruct.scene import run_scene
+from crashsim.scene.run import run_scene
 from crashsim.scenario import load_scenario, scenario_from_dict
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -11,7 +11,7 @@ import tomli_w
 
 from crashsim.cli import main
 from crashsim.errors import ScenarioError
-from crashsim.reconstruct.scene import run_scene
+from crashsim.scene.run import run_scene
 from crashsim.scenario import scenario_from_dict
 
 
@@ -196,7 +196,7 @@ def test_mc_histograms_show_the_speed_at_braking():
 
     import numpy as np
 
-    from crashsim.reconstruct.mc_plots import _label, default_histogram_keys
+    from crashsim.reconstruct.mc_plots import default_histogram_keys, output_label
 
     outputs = {"delta_v.carA": np.array([1.0, 2.0]), "speed.A": np.array([10.0, 11.0]),
                "speed_at_braking.A": np.array([20.0, 21.0]), "perception_distance.A": np.array([50.0, 60.0]),
@@ -204,4 +204,4 @@ def test_mc_histograms_show_the_speed_at_braking():
     keys = default_histogram_keys(SimpleNamespace(outputs=outputs))
     assert "speed_at_braking.A" in keys and "perception_distance.A" in keys
     assert "braking_distance.A" not in keys  # given, not varied
-    assert _label("speed_at_braking.A") == "speed at the start of braking, A"
+    assert output_label("speed_at_braking.A") == "speed at the start of braking, A"

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from crashsim.reconstruct.evidence import (Check, EvidenceReport, _densify, _wheel_matches, distance_to_polyline)
+from crashsim.evidence.checks import (Check, EvidenceReport, _densify, wheel_matches, distance_to_polyline)
 
 
 def test_distance_to_polyline_known_values():
@@ -36,7 +36,7 @@ class _Track:
                                      ("trailer/1", True), ("trailer/axle 2", True), ("trailer/0", False),
                                      ("trailer/1/right", True), ("trailer/1/left", False)])
 def test_wheel_selector(sel, ok):
-    assert _wheel_matches(_Track(), sel) is ok
+    assert wheel_matches(_Track(), sel) is ok
 
 
 def test_report_counts_failures():
@@ -47,7 +47,7 @@ def test_report_counts_failures():
 
 
 def test_bbox_bound_is_a_lower_bound():
-    from crashsim.reconstruct.evidence import _bbox_lower_bound
+    from crashsim.evidence.checks import _bbox_lower_bound
 
     rng = np.random.default_rng(3)
     for _ in range(50):
@@ -84,7 +84,7 @@ def test_tensile_normal_impulse_is_refused():
 
 
 def test_signed_distance_sides():
-    from crashsim.reconstruct.evidence import signed_distance_to_polyline
+    from crashsim.evidence.checks import signed_distance_to_polyline
 
     line = np.array([[0.0, 0.0], [10.0, 0.0]])
     d = signed_distance_to_polyline(np.array([[5.0, 2.0], [5.0, -3.0]]), line)

@@ -234,7 +234,7 @@ def test_articulated_and_load_transfer_are_the_engine():
 # ---------------------------------------------------------------- every level on a shipped scene
 def test_every_level_on_the_shipped_intersection_scene():
     from crashsim.impact import solve_impact
-    from crashsim.reconstruct.scene import separation_states
+    from crashsim.scene.run import separation_states
     from crashsim.scenario import load_scenario
 
     sc = load_scenario(ROOT / "scenarios" / "scenes" / "intersection_car_trailer_wheels.toml")

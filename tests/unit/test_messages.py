@@ -73,7 +73,7 @@ def test_fit_unknown_path_error_names_the_file(tmp_path, capsys):
 
 
 def test_posterior_steps_range_is_the_real_minimum():
-    from crashsim.reconstruct.inverse_schema import MIN_KEPT_STEPS, MIN_STEPS_DEFAULT_BURN, POSTERIOR
+    from crashsim.inverse_schema import MIN_KEPT_STEPS, MIN_STEPS_DEFAULT_BURN, POSTERIOR
     from crashsim.reconstruct.posterior import PosteriorSpec
 
     steps = next(f for f in POSTERIOR.fields if f.name == "steps")

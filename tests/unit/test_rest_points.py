@@ -15,7 +15,7 @@ import pytest
 
 from crashsim import ScenarioError
 from crashsim.geometry import rotate
-from crashsim.reconstruct.evidence import Evidence, evaluate_evidence, named_body_points
+from crashsim.evidence.checks import Evidence, evaluate_evidence, named_body_points
 from crashsim.scenario import load_scenario, scenario_from_dict
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -110,7 +110,7 @@ def test_the_check_reports_the_registration(car):
 
 
 def test_report_of_a_scene_gives_the_derived_pose(car):
-    from crashsim.reconstruct.scene import _format_registrations
+    from crashsim.scene.run import _format_registrations
 
     pts = _measured(car, ["front_left", "rear_right"], (-7.3, -0.7), -25.0)
     sc = scenario_from_dict(_with_points(pts), file="case.toml")
@@ -183,8 +183,8 @@ def test_the_cli_exits_2_with_the_message(tmp_path, capsys):
 def test_a_large_rigid_fit_misfit_warns(car):
     """Two measured points 2.1 m further apart than the body's corners: the fit cannot place the
     body on both; the scene warns (report and JSON), a consistent pair does not."""
-    from crashsim.reconstruct.evidence import REST_MISFIT_SHARE
-    from crashsim.reconstruct.scene import run_scene
+    from crashsim.evidence.checks import REST_MISFIT_SHARE
+    from crashsim.scene.run import run_scene
 
     good = _measured(car, ["front_left", "rear_right"], (-7.3, -0.7), -25.0)
     scene = run_scene(scenario_from_dict(_with_points(good)))

@@ -24,7 +24,7 @@ import pytest
 
 from crashsim.cli import main
 from crashsim.motion import Road, RunoutOptions, simulate_runout
-from crashsim.reconstruct.scene import run_scene
+from crashsim.scene.run import run_scene
 from crashsim.scenario import load_scenario, scenario_from_dict
 from crashsim.vehicles import BodyState
 

@@ -18,7 +18,7 @@ import pytest
 
 from crashsim.cli import main
 from crashsim.errors import ScenarioError
-from crashsim.reconstruct.scene import run_scene
+from crashsim.scene.run import run_scene
 from crashsim.scenario import scenario_from_dict
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -110,7 +110,7 @@ def test_event_lines_in_the_report(side):
 
 
 def test_zone_events_lie_on_the_zone_edge():
-    from crashsim.motion.jitcache import _tiny_scene  # a scene with a friction zone, built from the schema
+    from crashsim.warmup import _tiny_scene  # a scene with a friction zone, built from the schema
     from crashsim.reconstruct import run_scene
 
     scene = run_scene(_tiny_scene())
@@ -204,15 +204,15 @@ def test_top_level_api(swing, tmp_path):
 
 # ------------------------------------------------------------------ first compile
 def test_cache_directory_and_marker(tmp_path, monkeypatch, capsys):
-    from crashsim.motion import jitcache
+    from crashsim import _jit, warmup
 
     monkeypatch.setenv("CRASHSIM_CACHE_DIR", str(tmp_path / "cache"))
-    assert jitcache.cache_dir() == tmp_path / "cache"
-    assert not jitcache.ready()
+    assert _jit.cache_dir() == tmp_path / "cache"
+    assert not _jit.ready()
     steps = []
-    where = jitcache.compile_kernels(lambda i, label: steps.append(label))  # kernels already in memory here
-    assert steps == list(jitcache.COMPILE_STEPS)
-    assert where.parent == tmp_path / "cache" and jitcache.ready()
+    where = warmup.compile_kernels(lambda i, label: steps.append(label))  # kernels already in memory here
+    assert steps == list(warmup.COMPILE_STEPS)
+    assert where.parent == tmp_path / "cache" and _jit.ready()
     # the command line says so before a first run, and not after
     monkeypatch.setenv("CRASHSIM_CACHE_DIR", str(tmp_path / "other"))
     from crashsim.cli import _first_compile

@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 from crashsim.cli import main
-from crashsim.reconstruct.scene import run_scene
+from crashsim.scene.run import run_scene
 from crashsim.scenario import load_scenario
 
 ROOT = Path(__file__).resolve().parents[2]

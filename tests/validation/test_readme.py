@@ -269,9 +269,9 @@ def test_reliability_section_numbers_are_the_code_s():
     import numpy as np
 
     from crashsim.geometry import circular_percentiles, wrap_angle
-    from crashsim.reconstruct.evidence import REST_MISFIT_SHARE
+    from crashsim.evidence.checks import REST_MISFIT_SHARE
     from crashsim.report import LEDGER_BOUND
-    from crashsim.reconstruct.inverse_schema import CORRELATION_WARNING, MIN_KEPT_STEPS, MIN_STEPS_DEFAULT_BURN
+    from crashsim.inverse_schema import CORRELATION_WARNING, MIN_KEPT_STEPS, MIN_STEPS_DEFAULT_BURN
     from crashsim.scenario import DEFAULT_DRAWBAR, DEFAULT_OVERHANG, DEFAULT_OVERLAP, SCHEMA
 
     section = _section("## Reliability")

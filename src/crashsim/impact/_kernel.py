@@ -30,7 +30,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..motion.jitcache import configure as _configure_cache
+from .._jit import configure as _configure_cache
 from .core import WORK_KEYS  # noqa: F401  (the columns of the work arrays)
 
 _configure_cache()

@@ -56,7 +56,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..errors import InadmissibleImpactError
-from .core import MU_MAX_LIMIT, WORK_KEYS, ImpactArrays, ImpactStructure, _c, _kernel_structure, solve_arrays
+from .core import MU_MAX_LIMIT, WORK_KEYS, ImpactArrays, ImpactStructure, contiguous, kernel_structure, solve_arrays
 
 __all__ = ["impulse_work", "admissibility", "check_admissible", "REASONS"]
 
@@ -95,12 +95,12 @@ def impulse_work(S: ImpactStructure, A: ImpactArrays, out: dict) -> dict[str, np
     """
     from . import _kernel
 
-    fixed, b1, b2, _, hitches, cb, xb = _kernel_structure(S)
-    W = _kernel.work_batch(fixed, b1, b2, hitches, cb, xb, _c(A.position), _c(A.heading), _c(A.velocity),
-                           _c(A.yaw_rate), _c(A.hitch_front_point), _c(A.hitch_rear_point), _c(A.point),
-                           _c(A.normal_angle), _c(A.tangent_sign), _c(A.constraint_point),
-                           _c(A.constraint_direction), _c(A.external_point), _c(A.external_impulse),
-                           _c(out["velocity"]), _c(out["yaw_rate"]), _c(out["impulses"]))
+    fixed, b1, b2, _, hitches, cb, xb = kernel_structure(S)
+    W = _kernel.work_batch(fixed, b1, b2, hitches, cb, xb, contiguous(A.position), contiguous(A.heading), contiguous(A.velocity),
+                           contiguous(A.yaw_rate), contiguous(A.hitch_front_point), contiguous(A.hitch_rear_point), contiguous(A.point),
+                           contiguous(A.normal_angle), contiguous(A.tangent_sign), contiguous(A.constraint_point),
+                           contiguous(A.constraint_direction), contiguous(A.external_point), contiguous(A.external_impulse),
+                           contiguous(out["velocity"]), contiguous(out["yaw_rate"]), contiguous(out["impulses"]))
     return {key: W[:, j] for j, key in enumerate(WORK_KEYS)}
 
 
@@ -119,10 +119,10 @@ def admissibility(S: ImpactStructure, A: ImpactArrays, out: dict, work: dict | N
     work = impulse_work(S, A, out) if work is None else work
     W = np.ascontiguousarray(np.stack([np.broadcast_to(work[key], (A.size,)) for key in WORK_KEYS], axis=1),
                              dtype=float)
-    reason = _kernel.reason_batch(np.ascontiguousarray(out["ok"], dtype=bool), _c(out["impulses"]),
-                                  _kernel.LAW_CODES[S.tangential], _c(A.law_value), _c(out["mu_max"]),
-                                  _c(out["no_slide_normal"]), _c(out["approach_tangential"]),
-                                  _c(out["separation_tangential"]), _c(out["ke_before"].sum(axis=1)), W,
+    reason = _kernel.reason_batch(np.ascontiguousarray(out["ok"], dtype=bool), contiguous(out["impulses"]),
+                                  _kernel.LAW_CODES[S.tangential], contiguous(A.law_value), contiguous(out["mu_max"]),
+                                  contiguous(out["no_slide_normal"]), contiguous(out["approach_tangential"]),
+                                  contiguous(out["separation_tangential"]), contiguous(out["ke_before"].sum(axis=1)), W,
                                   _kernel.limits())
     return reason == 0, reason
 

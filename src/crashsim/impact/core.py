@@ -506,7 +506,7 @@ def _solve_chunk(S: ImpactStructure, A: ImpactArrays, condition: bool) -> dict[s
 # The compiled path: the dense path's algorithm item by item (crashsim.impact._kernel)
 # --------------------------------------------------------------------------------------------
 
-def _kernel_structure(S: ImpactStructure) -> tuple:
+def kernel_structure(S: ImpactStructure) -> tuple:
     """The structure as the kernels take it (int arrays), kept on S after the first call."""
     meta = S.__dict__.get("_kernel_meta")
     if meta is None:
@@ -522,7 +522,8 @@ def _kernel_structure(S: ImpactStructure) -> tuple:
 _LIMITS = None
 
 
-def _c(a):
+def contiguous(a):
+    """``a`` as a C-contiguous float64 array (itself if it is one already): the kernels' argument form."""
     return a if a.flags.c_contiguous and a.dtype == np.float64 else np.ascontiguousarray(a, dtype=np.float64)
 
 
@@ -584,13 +585,13 @@ def solve_compiled(S: ImpactStructure, A: ImpactArrays, extras: bool = False):
 
     if _LIMITS is None:
         _LIMITS = _kernel.limits()
-    fixed, b1, b2, law, hitches, cb, xb = _kernel_structure(S)
+    fixed, b1, b2, law, hitches, cb, xb = kernel_structure(S)
     Y = _kernel.solve_batch(
-        fixed, b1, b2, law, hitches, cb, xb, _c(A.mass), _c(A.yaw_inertia), _c(A.position), _c(A.heading),
-        _c(A.velocity), _c(A.yaw_rate), _c(A.hitch_front_point), _c(A.hitch_rear_point), _c(A.point),
-        _c(A.normal_angle), _c(A.tangent_sign), _c(A.restitution), _c(A.law_value), _c(A.moment_restitution),
-        _c(A.constraint_point), _c(A.constraint_direction), _c(A.constraint_value), _c(A.external_point),
-        _c(A.external_impulse), _LIMITS, extras)
+        fixed, b1, b2, law, hitches, cb, xb, contiguous(A.mass), contiguous(A.yaw_inertia), contiguous(A.position), contiguous(A.heading),
+        contiguous(A.velocity), contiguous(A.yaw_rate), contiguous(A.hitch_front_point), contiguous(A.hitch_rear_point), contiguous(A.point),
+        contiguous(A.normal_angle), contiguous(A.tangent_sign), contiguous(A.restitution), contiguous(A.law_value), contiguous(A.moment_restitution),
+        contiguous(A.constraint_point), contiguous(A.constraint_direction), contiguous(A.constraint_value), contiguous(A.external_point),
+        contiguous(A.external_impulse), _LIMITS, extras)
     return unpack(S, Y, A.size, extras)
 
 
@@ -621,7 +622,7 @@ def solve_packed(S: ImpactStructure, X: np.ndarray) -> dict:
         _LIMITS = _kernel.limits()
     meta = S.__dict__.get("_packed_meta")
     if meta is None:
-        fixed, b1, b2, law, hitches, cb, xb = _kernel_structure(S)
+        fixed, b1, b2, law, hitches, cb, xb = kernel_structure(S)
         ints = np.array([S.n_bodies, len(S.hitches), len(S.constraint_bodies), len(S.external_bodies), b1, b2, law],
                         dtype=np.int64)
         meta = (ints, fixed, hitches, cb, xb, flat_spec(output_shapes(S.n_bodies, S.n_unknowns, True)),

@@ -13,7 +13,7 @@ from typing import Literal, Mapping
 import numpy as np
 
 from ..errors import ScenarioError
-from ..geometry import unit
+from ..geometry import perp, rotate, unit
 from ..vehicles import BodyState, Vehicle
 
 __all__ = [
@@ -291,8 +291,6 @@ class ImpactProblem:
 
 def _check_pins(vehicle: Vehicle, states: Mapping[str, BodyState], tol_pos: float = 1e-3, tol_vel: float = 1e-3):
     """Bodies of one vehicle must meet at their pins, with equal pin velocities."""
-    from ..geometry import perp, rotate
-
     for front, rear, hitch in zip(vehicle.bodies[:-1], vehicle.bodies[1:], vehicle.hitches):
         sf, sr = states[front.name], states[rear.name]
         a = rotate(hitch.front_point, sf.heading)

@@ -2,15 +2,15 @@
 
 from __future__ import annotations
 
-import math
 import functools
+import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
 from ..geometry import rotate, wrap_angle
-from .admissible import REASONS
+from .admissible import REASONS, admissibility, impulse_work
 from .core import MU_MAX_LIMIT, energy_loss_fraction
 
 __all__ = ["ImpactResult", "BodyImpact", "HitchImpulse", "ConstraintImpulse", "clock_direction", "pdof_from_force"]
@@ -18,8 +18,6 @@ __all__ = ["ImpactResult", "BodyImpact", "HitchImpulse", "ConstraintImpulse", "c
 
 def _row(A, i: int):
     """Batch item ``i`` of ImpactArrays as a batch of one."""
-    from dataclasses import fields, replace
-
     return replace(A, **{f.name: getattr(A, f.name)[i : i + 1] for f in fields(A)})
 
 
@@ -283,10 +281,6 @@ class ImpactResult:
         None). ``condition``: the 2-norm condition number, or a function computing it on first
         access of :attr:`condition_number` (default: ``out["condition"]``, NaN if absent).
         """
-        from dataclasses import fields
-
-        from .admissible import admissibility, impulse_work
-
         if work is None:
             work = impulse_work(S, A, out)
         if reason is None:

@@ -80,7 +80,7 @@ import numpy as np
 from numba import njit, objmode, types
 from numba.extending import overload
 
-from .jitcache import configure as _configure_cache
+from .._jit import configure as _configure_cache
 
 _configure_cache()  # a user-writable cache directory (crashsim.motion.jitcache), before any kernel is defined
 

@@ -95,10 +95,12 @@ import numpy as np
 from ..errors import ScenarioError
 from ..vehicles import BodyState, Vehicle
 from .dynamics import RunoutModel
+from .levels import simulate_level
 from .loads import STANDARD_GRAVITY
 from .options import RunoutOptions
 from .result import RunoutResult
 from .road import Road
+from .simulate import simulate_scene
 from .wheels import WheelSettings
 
 __all__ = ["AccuracyReport", "AccuracyRun", "SHARES", "simulate_to_accuracy", "scene_to_accuracy"]
@@ -358,8 +360,6 @@ def simulate_to_accuracy(
     >>> rep.met, rep.estimate_position <= 0.01
     (True, True)
     """
-    from .levels import simulate_level
-
     level = _check_targets(target_position, target_heading, base_options, level)
     settings = WheelSettings.all_locked() if wheels is None else wheels
     if not isinstance(vehicle, Vehicle) or vehicle.is_barrier:
@@ -392,8 +392,6 @@ def scene_to_accuracy(
     -------
     (SceneRunout, AccuracyReport)
     """
-    from .simulate import simulate_scene
-
     level = _check_targets(target_position, target_heading, base_options, level)
     if level == "rigid":
         raise ScenarioError("the rigid level runs each vehicle alone; use simulate_to_accuracy per vehicle",

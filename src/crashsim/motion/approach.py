@@ -43,14 +43,17 @@ from dataclasses import dataclass, field, replace
 from typing import Mapping
 
 import numpy as np
+from scipy.optimize import brentq, minimize_scalar
 
 from ..errors import ScenarioError, UnreachableImpactError
 from ..geometry import rotate
 from ..vehicles import BodyState, Vehicle, chain_states
 from .loads import STANDARD_GRAVITY
 from .options import RunoutOptions
+from .postprocess import split_track
 from .result import RunoutResult, TrackSegment, WheelTrack
 from .road import Road
+from .simulate import simulate_runout
 from .wheels import WheelSettings
 
 __all__ = ["ApproachSpec", "ApproachResult", "simulate_approach", "approach_speed_at_braking"]
@@ -197,7 +200,7 @@ class ApproachResult:
         first = next(iter(self.bodies))
         sol = self.runout.bodies[first].sol
         tb = np.linspace(0.0, self.time_to_impact, max(n, 2))
-        s_b = _path_length(sol, tb)
+        s_b = path_length(sol, tb)
         t = np.concatenate([[-self.time_to_impact - self.reaction_time], tb - self.time_to_impact])
         s = np.concatenate([[-self.distance - self.reaction_distance], s_b - self.distance])
         sv = np.asarray(sol(tb))
@@ -223,7 +226,7 @@ class ApproachResult:
         }
 
 
-def _path_length(sol, t: np.ndarray) -> np.ndarray:
+def path_length(sol, t: np.ndarray) -> np.ndarray:
     """Cumulative CG path length at sorted times ``t`` from ``t[0]`` (trapezoid on a fine grid of the dense output)."""
     t = np.asarray(t, dtype=float)
     if len(t) == 0:
@@ -247,7 +250,6 @@ def _run(vehicle: Vehicle, spec: ApproachSpec, speed: float, position, heading: 
     """
     vel = speed * np.array([math.cos(heading), math.sin(heading)])
     init = chain_states(vehicle, position, heading, vel)
-    from .simulate import simulate_runout
 
     if spec.mode == "distance":
         limit = 2.0 * spec.distance / speed + 0.1
@@ -274,7 +276,7 @@ def _end_time(run: RunoutResult, spec: ApproachSpec, vehicle: Vehicle, target) -
     b = run.bodies[first]
     t_end = run.t_end
     grid = np.linspace(0.0, t_end, max(int(t_end * _PATH_SAMPLES_PER_S), 16) + 1)
-    s = _path_length(b.sol, grid)
+    s = path_length(b.sol, grid)
     if spec.mode == "distance":
         if s[-1] < spec.distance:
             raise UnreachableImpactError(
@@ -296,7 +298,6 @@ def _end_time(run: RunoutResult, spec: ApproachSpec, vehicle: Vehicle, target) -
     d = np.hypot(sv[0] - target[0], sv[1] - target[1])
     k = int(np.argmin(d))
     lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
-    from scipy.optimize import minimize_scalar
 
     if hi > lo:
         r = minimize_scalar(lambda tt: float(np.hypot(*(np.asarray(b.sol(tt))[:2] - target))), bounds=(lo, hi),
@@ -308,8 +309,6 @@ def _end_time(run: RunoutResult, spec: ApproachSpec, vehicle: Vehicle, target) -
 
 
 def _trim_track(w: WheelTrack, ti: float, R: np.ndarray, T: np.ndarray) -> WheelTrack:
-    from .postprocess import split_track
-
     keep = w.t <= ti + 1e-12
     t = w.t[keep] - ti
     pts = w.points[keep] @ R.T + T
@@ -439,8 +438,6 @@ def approach_speed_at_braking(vehicle: Vehicle, spec: ApproachSpec, impact_state
 
     Brent's method on ``v_impact(v_b) - speed_at_impact`` (``v_impact`` grows with ``v_b``).
     """
-    from scipy.optimize import brentq
-
     if not (speed_at_impact > 0.0):
         raise ScenarioError(f"solving the speed at braking needs a moving vehicle at impact, got "
                             f"{speed_at_impact} m/s", field=f"{spec.key}.speed")

@@ -38,8 +38,10 @@ import numpy as np
 
 from ..errors import ScenarioError, SolverError
 from ..vehicles import BodyState, Vehicle
+from .contact import ContactModel
 from .layout import StateLayout
 from .loads import StaticLoads, load_transfer_matrix, static_loads
+from .model import SceneModel, kernels, reference_lengths
 from .options import RunoutOptions
 from .road import Road
 from .wheels import ResolvedWheels, WheelSetting
@@ -55,9 +57,6 @@ __all__ = [
     "project_velocities",
     "reference_lengths",
 ]
-
-# Minimum rest reference length [m] (|yaw rate| * L_ref is compared with v_stop).
-_MIN_L_REF = 0.5
 
 
 @functools.lru_cache(maxsize=64)
@@ -255,29 +254,6 @@ def make_hitch_consistent(
     return out
 
 
-def reference_lengths(vehicle: Vehicle, specs) -> np.ndarray:
-    """Rest reference length L_ref of every body [m]: half its length, else its farthest contact (>= 0.5 m).
-
-    Parameters
-    ----------
-    vehicle : Vehicle
-    specs : sequence of WheelSpec
-        The vehicle's contacts (:func:`~crashsim.motion.wheels.enumerate_wheels`).
-
-    Returns
-    -------
-    ndarray, shape (n_bodies,)
-    """
-    out = []
-    for i, body in enumerate(vehicle.bodies):
-        if body.length is not None:
-            out.append(max(body.length / 2, _MIN_L_REF))
-        else:
-            reach = [math.hypot(*s.position) for s in specs if s.body_index == i]
-            out.append(max(max(reach, default=0.0), _MIN_L_REF))
-    return np.array(out, dtype=float)
-
-
 @dataclass(frozen=True, eq=False)
 class SegmentParams:
     """Inputs held constant over one integration segment of a :class:`RunoutModel`.
@@ -362,9 +338,6 @@ class RunoutModel:
     """
 
     def __init__(self, vehicle: Vehicle, wheels, road: Road, options: RunoutOptions, *, hitches: bool = True):
-        from .contact import ContactModel
-        from .model import SceneModel
-
         if vehicle.is_barrier:
             raise ScenarioError("a barrier (infinite mass) has no run-out", field=f"{vehicle.name}.bodies")
         self.scene = SceneModel([vehicle], {vehicle.name: wheels}, road, options, contact=ContactModel(enabled=False),
@@ -430,8 +403,6 @@ class RunoutModel:
 
     def membership(self, y: np.ndarray) -> np.ndarray:
         """Zone membership of every wheel (the kernels' rule: a wheel on an edge goes where it heads)."""
-        from .model import kernels
-
         out = np.zeros((len(self.specs), len(self.road.zones)), dtype=bool)
         kernels().membership(np.ascontiguousarray(y, dtype=float), self.scene.M, out,
                              np.zeros((2, self.layout.n_bodies)))
@@ -455,8 +426,6 @@ class RunoutModel:
     # ------------------------------------------------------------------ forces and accelerations
     def evaluate(self, y: np.ndarray, seg: SegmentParams, full: bool = True) -> Evaluation:
         """Evaluate the model (the compiled kernels) for K states ``y`` of shape (n_state, K)."""
-        from .model import kernels
-
         k = kernels()
         Y = np.ascontiguousarray(np.asarray(y, dtype=float).reshape(self.layout.size, -1))
         mu = np.full(len(self.specs), np.nan) if seg.road_mu is None else seg.road_mu

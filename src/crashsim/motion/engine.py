@@ -31,14 +31,19 @@ from dataclasses import dataclass, field
 from typing import Mapping
 
 import numpy as np
+from scipy.integrate import BDF, DOP853, LSODA, RK45, Radau
+from scipy.optimize import brentq
 
 from ..errors import InadmissibleImpactError, ScenarioError, SolverError
+from ..impact import CrushSurface, ImpactProblem, TangentialLaw, solve_impact
 from ..vehicles import Body, BodyState, Vehicle
+from .dynamics import make_hitch_consistent
+from .fast import CompiledSolution
 from .model import SceneModel, kernels
 from .options import MAX_STILL_SEGMENTS
+from .postprocess import GL_NODES, GL_WEIGHTS, assemble_scene, mode_snapshot, segment_arrays, split_track
 from .result import (BodyHistory, BodyRunout, HitchHistory, PairSummary, RunoutEvent, RunoutResult, SceneRunout,
                      SecondaryImpact, limit_message)
-from .postprocess import _GL_NODES, _GL_WEIGHTS, split_track
 
 __all__ = ["run_model", "STATUS_OF_CODE"]
 
@@ -84,13 +89,17 @@ class _Integrator:
         self.nlu = 0
         self.message = ""
 
+    def segment_data(self, mode):
+        """``(bounds, arrays)``: ``(t0, t1, _)`` of every segment, and their stacked mode arrays
+        (:func:`~crashsim.motion.postprocess.segment_arrays`; with no segment, those of ``mode``, the run's mode at its end)."""
+        table = self.segment_table()
+        return table, segment_arrays(table if table else [(0.0, 0.0, mode_snapshot(0, mode))], self.model)
+
 
 class _ScipyIntegrator(_Integrator):
     """Segments integrated by SciPy's ODE solvers, stepped from Python (one step at a time)."""
 
     def __init__(self, model: SceneModel):
-        from scipy.integrate import BDF, DOP853, LSODA, RK45, Radau
-
         super().__init__(model)
         self.solver_cls = {"LSODA": LSODA, "RK45": RK45, "DOP853": DOP853, "Radau": Radau, "BDF": BDF}[model.options.method]
         self.segments: list[dict] = []
@@ -116,7 +125,7 @@ class _ScipyIntegrator(_Integrator):
             ev_kind, ev_idx, ev_val, ev_dir = k.segment_events(M, D, offsets)
             g_old, r_old = k.event_values(y, M, phase, D, ev_kind, ev_idx, ev_val)
             resolution = k.event_resolutions(M, ev_kind, ev_idx)
-            snapshot = _snapshot(phase, D)
+            snapshot = mode_snapshot(phase, D)
             # pairs in contact: their work is integrated with the state (module rhs_work)
             n = y.size
             n_work = len(model.pairs) if bool(np.any(D[5] == k.PS_CONTACT)) else 0
@@ -238,7 +247,7 @@ class _CompiledIntegrator(_Integrator):
         k = kernels()
         model = self.model
         stops = np.array(model.segment_stops, dtype=float)
-        out = k.run(float(t), np.ascontiguousarray(y, dtype=float), model.M, D, offsets, stops, _GL_NODES, _GL_WEIGHTS,
+        out = k.run(float(t), np.ascontiguousarray(y, dtype=float), model.M, D, offsets, stops, GL_NODES, GL_WEIGHTS,
                     float(deadline), counters, quad)
         status, t_end, y_end = int(out[0]), float(out[1]), np.array(out[2])
         self.parts.append(out[3:17])
@@ -250,6 +259,11 @@ class _CompiledIntegrator(_Integrator):
     def _joined(self):
         if getattr(self, "_cache", None) is not None and self._cache[0] == len(self.parts):
             return self._cache[1]
+        if len(self.parts) == 1:  # one run of the kernel (no later impact): its arrays as they are
+            p = self.parts[0]
+            joined = ([p[i] for i in range(4)], p[5], [p[i] for i in range(4, 14)])
+            self._cache = (1, joined)
+            return joined
         st = [np.concatenate([p[i] for p in self.parts]) for i in range(4)] if self.parts else None
         offs = np.cumsum([0] + [len(p[0]) for p in self.parts[:-1]]) if self.parts else []
         sg_s = np.concatenate([p[5] + off for p, off in zip(self.parts, offs)]) if self.parts else np.zeros((0, 2), np.int64)
@@ -267,6 +281,18 @@ class _CompiledIntegrator(_Integrator):
                  (int(phase[i]), memb[i], int(nlk[i]), lkj[i], lkth[i], pstate[i], pref[i], parked[i]))
                 for i in range(len(sg_t))]
 
+    def segment_data(self, mode):
+        """As :meth:`_Integrator.segment_data`, from the joined segment arrays (the same arrays as
+        stacking :meth:`segment_table`'s modes, without the per-segment tuples)."""
+        _, _, sg = self._joined()
+        if sg is None or not len(sg[0]):  # no segment (at rest from the start): the mode's arrays
+            return super().segment_data(mode)
+        sg_t, _, phase, memb, nlk, lkj, lkth, pstate, pref, parked = sg
+        bounds = list(zip(sg_t[:, 0].tolist(), sg_t[:, 1].tolist(), [None] * len(sg_t)))
+        i64 = np.int64
+        return bounds, (phase.astype(i64), memb.copy(), nlk.astype(i64), lkj.copy(), lkth.copy(), pstate.astype(i64),
+                        pref.copy(), parked.astype(i64))
+
     def sample(self, T, seg_of, y_end):
         st, sg_s, _ = self._joined()
         if st is None or not len(T):
@@ -279,8 +305,6 @@ class _CompiledIntegrator(_Integrator):
         return np.zeros(0) if st is None else np.unique(np.concatenate([st[0], st[0] + st[1]]))
 
     def solution(self, y_end, t_end):
-        from .fast import CompiledSolution
-
         st, _, _ = self._joined()
         if st is None:
             n = y_end.size
@@ -290,24 +314,6 @@ class _CompiledIntegrator(_Integrator):
     @property
     def method(self):
         return f"compiled/{self.model.options.scheme}"
-
-
-def _snapshot(phase, D):
-    memb, lk_j, lk_th, lk_n, _, pstate, pref, parked = D
-    return (int(phase), memb.copy(), int(lk_n[0]), lk_j.copy(), lk_th.copy(), pstate.copy(), pref.copy(), parked.copy())
-
-
-def _segment_arrays(table, model):
-    """Stacked mode arrays of the segments (``sg_phase, sg_memb, ...``) for the kernels' post-processing."""
-    k = kernels()
-    if not table:
-        D = model.fresh_mode()
-        table = [(0.0, 0.0, _snapshot(0, D))]
-    modes = [m for _, _, m in table]
-    return (np.array([m[0] for m in modes], dtype=np.int64), np.stack([m[1] for m in modes]),
-            np.array([m[2] for m in modes], dtype=np.int64), np.stack([m[3] for m in modes]),
-            np.stack([m[4] for m in modes]), np.stack([m[5] for m in modes]).astype(np.int64),
-            np.stack([m[6] for m in modes]), np.stack([m[7] for m in modes]).astype(np.int64))
 
 
 def _segment_dense(seg):
@@ -358,8 +364,6 @@ class _PiecewiseSolution:
 def _first_root(k, M, phase, D, t, t_new, dense, g_old, g_new, r_old, r_new, ev_kind, ev_idx, ev_val, ev_dir,
                 resolution):
     """The SciPy engine's :func:`crashsim.motion._kernels.first_root`: the same rule, SciPy's brentq."""
-    from scipy.optimize import brentq
-
     h = t_new - t
     t_first, fired = math.inf, -1
     eps4 = 4 * np.finfo(float).eps
@@ -413,16 +417,16 @@ def _add_quadrature(k, M, seg, quad, work=None):
         half = 0.5 * (b - a)
         if half <= 0:
             continue
-        tq = 0.5 * (a + b) + half * _GL_NODES
+        tq = 0.5 * (a + b) + half * GL_NODES
         nodes.append(np.asarray(dense(tq)).reshape(-1, tq.size))
-        weights.append(half * _GL_WEIGHTS)
+        weights.append(half * GL_WEIGHTS)
     if not nodes:
         if work is not None:
             quad[quad.size - work.size:] += work
         return
     Yq = np.ascontiguousarray(np.concatenate(nodes, axis=1))
     wq = np.concatenate(weights)
-    arrays = _segment_arrays([(seg["t0"], seg["t1"], seg["mode"])], None)
+    arrays = segment_arrays([(seg["t0"], seg["t1"], seg["mode"])], None)
     part = k.quad_sums(Yq, wq, np.zeros(wq.size, dtype=np.int64), M, *arrays)
     if work is not None:
         part[part.size - work.size:] = work
@@ -525,9 +529,6 @@ def _secondary_impact(model: SceneModel, t: float, y: np.ndarray, geo: np.ndarra
     returned impact event).  The impact's delta-v includes that stop reaction (the velocity
     change of the instant); its energy loss is the crush impulse's alone.
     """
-    from ..impact import CrushSurface, ImpactProblem, TangentialLaw, solve_impact
-    from .dynamics import make_hitch_consistent
-
     p = int(geo[0])
     pair = model.pairs[p]
     names = model.layout.bodies
@@ -639,8 +640,11 @@ def check_scene_hitches(model: SceneModel, y: np.ndarray) -> None:
                                     field=f"initial[{rear!r}].heading")
 
 
-def run_model(model: SceneModel, initial: Mapping[str, BodyState]) -> SceneRunout:
-    """Integrate the scene from separation to rest (or a limit); see the module docstring."""
+def run_model(model: SceneModel, initial: Mapping[str, BodyState], *, lean=None) -> SceneRunout:
+    """Integrate the scene from separation to rest (or a limit); see the module docstring.
+
+    ``lean``: None for the full result, or a predicate on wheel specs for the lean result of a
+    fit or Monte Carlo sample (:func:`crashsim.motion.postprocess.assemble_scene`)."""
     k = kernels()
     o = model.options
     M = model.M
@@ -688,10 +692,9 @@ def run_model(model: SceneModel, initial: Mapping[str, BodyState]) -> SceneRunou
     log.append(RunoutEvent(t, status, message, data={"v_stop_m_s": o.v_stop} if status == "rest" else {}))
     if status != "rest":
         _log.warning("run-out did not reach rest (%s): %s", status, message)
-    from .postprocess import assemble_scene
 
     return assemble_scene(model, integrator, status=status, message=message, t_end=t, y_initial=y_initial, y_end=y,
-                          quad=quad, events=log, impacts=impacts, nfev=int(counters[2]), mode=D)
+                          quad=quad, events=log, impacts=impacts, nfev=int(counters[2]), mode=D, lean=lean)
 
 
 def _message(code, o, t, y, k, M, log, integrator) -> str:

@@ -36,21 +36,14 @@ Compile time
 ------------
 The first call in a fresh environment compiles the kernels (a minute or two on a 2-CPU
 machine); later processes load them from numba's on-disk cache in about a second.
-:func:`compile_kernels` triggers this explicitly and reports the time.
+:func:`crashsim.warmup.compile_runout` triggers this explicitly and reports the time.
 """
 
 from __future__ import annotations
 
-import threading
-import time
-
 import numpy as np
 
-from ..vehicles import BodyState
-from .options import RunoutOptions
-from .road import Road
-
-__all__ = ["compile_kernels", "compile_report", "CompiledSolution"]
+__all__ = ["CompiledSolution"]
 
 
 # ----------------------------------------------------------------------------- dense output
@@ -95,48 +88,3 @@ class CompiledSolution:
             out[:] = (self._y[idx] + h[:, None] * np.einsum("kid,kd->ki", self._q[idx], powers)).T
             out[:, flat >= self._t_end] = self._y_end[:, None]
         return out[:, 0] if t_arr.ndim == 0 else out.reshape((n,) + t_arr.shape)
-
-
-# ----------------------------------------------------------------------------- compile / warm-up
-_COMPILE = {"seconds": None, "from_cache": None}
-_COMPILE_LOCK = threading.Lock()
-
-
-def compile_kernels() -> float:
-    """Compile (or load from numba's on-disk cache) the kernels by running a tiny scene on both engines.
-
-    Returns
-    -------
-    float
-        Wall time [s] of the first call in this process (0.0 if already done).  The first call
-        in a fresh environment compiles (a minute or two); later processes load the cache.
-    """
-    with _COMPILE_LOCK:
-        if _COMPILE["seconds"] is not None:
-            return 0.0
-        from ..vehicles import Axle, Body, Hitch, Vehicle
-        from .model import kernels
-        from .simulate import simulate_scene
-
-        t0 = time.perf_counter()
-        k = kernels()
-        tractor = Body("a", 1000.0, 1000.0, 3.0, 1.8, axles=(Axle(1.0, 1.5), Axle(-1.0, 1.5)))
-        trailer = Body("b", 500.0, 500.0, 2.0, 1.6, axles=(Axle(-1.0, 1.5),))
-        other = Body("c", 800.0, 900.0, 3.0, 1.6, axles=(Axle(1.0, 1.4), Axle(-1.0, 1.4)))
-        states = {
-            "a": BodyState((0.0, 0.0), 0.0, (2.0, 0.0), 0.0),
-            "b": BodyState((-3.5, 0.0), 0.0, (2.0, 0.0), 0.0),
-            "c": BodyState((3.5, 0.0), 0.0, (0.0, 0.0), 0.0),
-        }
-        scene = [Vehicle("warm-up", (tractor, trailer), (Hitch((-2.0, 0.0), (1.5, 0.0), articulation_limit=1.0),)),
-                 Vehicle("struck", (other,))]
-        for engine in ("compiled", "scipy"):
-            simulate_scene(scene, states, None, Road(0.7), RunoutOptions(engine=engine, t_max=2.0))
-        _COMPILE["seconds"] = time.perf_counter() - t0
-        _COMPILE["from_cache"] = bool(k.run.stats.cache_hits) and not k.run.stats.cache_misses
-        return _COMPILE["seconds"]
-
-
-def compile_report() -> dict:
-    """``{"seconds": first-call time [s] or None, "from_cache": bool or None}`` of this process."""
-    return dict(_COMPILE)

@@ -119,12 +119,16 @@ from scipy.optimize import brentq
 
 from ..errors import ScenarioError
 from ..vehicles import BodyState, Vehicle
+from .contact import ContactModel
 from .dynamics import RunoutModel
+from .engine import run_model
 from .loads import STANDARD_GRAVITY
+from .model import SceneModel
 from .options import RunoutOptions
 from .postprocess import split_track
 from .result import BodyHistory, BodyRunout, HitchHistory, RunoutEvent, RunoutResult, WheelTrack
 from .road import Road
+from .simulate import simulate_runout
 from .tyres import tyre_forces
 from .wheels import WheelSettings
 
@@ -231,7 +235,6 @@ def simulate_level(
         return energy_runout(vehicle, initial, settings, road, options)
     if level == "rigid":
         return rigid_runout(vehicle, initial, settings, road, options)
-    from .simulate import simulate_runout
 
     opts = dataclasses.replace(options, load_transfer=(level == "load_transfer"))
     res = simulate_runout(vehicle, initial, settings, road, opts)
@@ -644,11 +647,6 @@ def rigid_runout(
         ``method`` ``"rigid/scipy/<method>"``; hitch histories with the articulation angle
         and zero force; ``max_hitch_gap`` the largest pin separation reached.
     """
-    from .contact import ContactModel
-    from .engine import run_model
-    from .model import SceneModel
-    from .simulate import simulate_runout
-
     settings = _check_inputs(vehicle, road, options, wheels)
     opts = dataclasses.replace(options, load_transfer=False)
     if len(vehicle.bodies) == 1:

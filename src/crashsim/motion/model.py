@@ -9,6 +9,7 @@ bundle; nothing here is engine-specific.
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass
 from typing import Mapping, Sequence
@@ -19,14 +20,16 @@ from scipy.integrate import RK23, RK45
 from ..errors import ScenarioError
 from ..vehicles import BodyState, Vehicle
 from .contact import ContactModel, Obstacle, convex_pieces, piece_thickness
-from .dynamics import reference_lengths
 from .layout import StateLayout
 from .loads import StaticLoads, load_transfer_matrix, static_loads
 from .options import RunoutOptions
 from .road import Road
 from .wheels import ResolvedWheels, WheelSettings, WheelSpec
 
-__all__ = ["SceneModel", "Pair", "kernels"]
+__all__ = ["SceneModel", "Pair", "kernels", "reference_lengths"]
+
+# Minimum rest reference length [m] (|yaw rate| * L_ref is compared with v_stop).
+_MIN_L_REF = 0.5
 
 #: Explicit RK schemes of the compiled engine: solve_ivp's tableaux (A, B, C, E, P).
 SCHEMES = {"dopri5": RK45, "bs3": RK23}
@@ -34,6 +37,29 @@ SCHEMES = {"dopri5": RK45, "bs3": RK23}
 ZONE_RESOLUTION = 0.02
 #: Finest contact feature [m]: at most this, and at most a quarter of the thinner piece.
 CONTACT_RESOLUTION = 0.05
+
+
+def reference_lengths(vehicle: Vehicle, specs) -> np.ndarray:
+    """Rest reference length L_ref of every body [m]: half its length, else its farthest contact (>= 0.5 m).
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+    specs : sequence of WheelSpec
+        The vehicle's contacts (:func:`~crashsim.motion.wheels.enumerate_wheels`).
+
+    Returns
+    -------
+    ndarray, shape (n_bodies,)
+    """
+    out = []
+    for i, body in enumerate(vehicle.bodies):
+        if body.length is not None:
+            out.append(max(body.length / 2, _MIN_L_REF))
+        else:
+            reach = [math.hypot(*s.position) for s in specs if s.body_index == i]
+            out.append(max(max(reach, default=0.0), _MIN_L_REF))
+    return np.array(out, dtype=float)
 
 
 def kernels():
@@ -296,8 +322,6 @@ class SceneModel:
         """This model on another road with the same friction zones (objects): only its friction
         coefficient differs, which enters the arrays in one place (``cfg[C_ROADMU]``).  The same
         model as ``SceneModel(..., road, ...)`` built from scratch, without building it again."""
-        import copy
-
         if road.zones is not self.road.zones:
             raise ScenarioError("with_road keeps the friction zones; build a new SceneModel for other zones",
                                 field="road.zones")

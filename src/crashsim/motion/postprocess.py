@@ -15,25 +15,20 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Callable, Sequence
 
 import numpy as np
 
 from .dynamics import RunoutModel, SegmentParams, hitch_rows
-from .result import (
-    BodyHistory,
-    BodyRunout,
-    HitchHistory,
-    RunoutEvent,
-    RunoutResult,
-    TrackSegment,
-    WheelTrack,
-)
+from .layout import StateLayout
+from .model import kernels
+from .result import (BodyHistory, BodyRunout, HitchHistory, PairSummary, RunoutEvent, RunoutResult,
+                     SceneRunout, TrackSegment, WheelTrack)
 
 __all__ = ["assemble_result", "build_result", "gauss_legendre_chunks", "split_track"]
 
-_GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(5)
+GL_NODES, GL_WEIGHTS = np.polynomial.legendre.leggauss(5)
 _log = logging.getLogger("crashsim")
 
 #: Distance from every zone edge [m] beyond which a membership disagreement at a sample is a missed crossing.
@@ -58,8 +53,8 @@ def gauss_legendre_chunks(ts: np.ndarray, sol: Callable, seg: SegmentParams):
     """
     a, b = ts[:-1], ts[1:]
     half = 0.5 * (b - a)
-    nodes = (0.5 * (a + b))[:, None] + half[:, None] * _GL_NODES[None, :]
-    weights = half[:, None] * _GL_WEIGHTS[None, :]
+    nodes = (0.5 * (a + b))[:, None] + half[:, None] * GL_NODES[None, :]
+    weights = half[:, None] * GL_WEIGHTS[None, :]
     nodes, weights = nodes.ravel(), weights.ravel()
     return seg, weights, np.asarray(sol(nodes)).reshape(-1, nodes.size)
 
@@ -239,6 +234,7 @@ def build_result(
     n_segments: int,
     method: str,
     kinetic_energies: tuple[float, float] | None = None,
+    energy_dissipated: float | None = None,
 ) -> RunoutResult:
     """The result objects from the computed arrays (shared by the SciPy and compiled engines).
 
@@ -272,6 +268,9 @@ def build_result(
         As :class:`~crashsim.motion.result.RunoutResult`.
     kinetic_energies : (float, float), optional
         Initial and final kinetic energy [J], if already computed.
+    energy_dissipated : float, optional
+        Energy dissipated by all the vehicle's tyres [J] (default: the sum of ``energy``; given
+        where ``energy`` holds some of the wheels only).
     """
     L = model.layout
     nh = hitch_force.shape[1] // 2  # the hitches modelled (none at the rigid level)
@@ -384,7 +383,7 @@ def build_result(
         events=tuple(events),
         kinetic_energy_initial=float(ke0),
         kinetic_energy_final=float(ke1),
-        energy_dissipated=float(energy.sum()),
+        energy_dissipated=float(energy.sum()) if energy_dissipated is None else float(energy_dissipated),
         max_hitch_gap=float(max_gap),
         method=method,
         options=dict(options) if options is not None else model.options.to_dict(),
@@ -433,13 +432,17 @@ def _vehicle_rows(model, name: str) -> np.ndarray:
     return np.concatenate([np.arange(f * nb + b0, f * nb + b1) for f in range(fields)])
 
 
+def _lean_view(view: _VehicleView, keep: list) -> _VehicleView:
+    """``view`` with the wheels ``keep`` (indices into its specs) only."""
+    return _VehicleView(view.vehicle, view.layout, tuple(view.specs[i] for i in keep), view.static_load[keep],
+                        view.loads, view.mass, view.inertia, view.options_dict)
+
+
 def _vehicle_statics(model) -> dict:
     """Per vehicle of a scene model, what its results need of the model: its state rows and its
     :class:`_VehicleView`; built once per model (a model reused across runs keeps them)."""
     static = model.__dict__.get("_vehicle_statics")
     if static is None:
-        from .layout import StateLayout
-
         o = model.options
         opts = o.to_dict()
         static = {}
@@ -454,22 +457,47 @@ def _vehicle_statics(model) -> dict:
     return static
 
 
-def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_end, quad, events, impacts, nfev, mode):
-    """The :class:`~crashsim.motion.result.SceneRunout` of a run (per vehicle, impacts, pairs, ledger)."""
-    from .engine import _segment_arrays, _snapshot
-    from .model import kernels
-    from .result import PairSummary, SceneRunout
+def mode_snapshot(phase, D):
+    """A copy of the mode arrays ``D`` of one segment with its phase: a row of the segment table."""
+    memb, lk_j, lk_th, lk_n, _, pstate, pref, parked = D
+    return (int(phase), memb.copy(), int(lk_n[0]), lk_j.copy(), lk_th.copy(), pstate.copy(), pref.copy(), parked.copy())
 
+
+def segment_arrays(table, model):
+    """Stacked mode arrays of the segments (``sg_phase, sg_memb, ...``) for the kernels' post-processing."""
+    k = kernels()
+    if not table:
+        D = model.fresh_mode()
+        table = [(0.0, 0.0, mode_snapshot(0, D))]
+    modes = [m for _, _, m in table]
+    return (np.array([m[0] for m in modes], dtype=np.int64), np.stack([m[1] for m in modes]),
+            np.array([m[2] for m in modes], dtype=np.int64), np.stack([m[3] for m in modes]),
+            np.stack([m[4] for m in modes]), np.stack([m[5] for m in modes]).astype(np.int64),
+            np.stack([m[6] for m in modes]), np.stack([m[7] for m in modes]).astype(np.int64))
+
+
+def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_end, quad, events, impacts, nfev, mode,
+                   lean=None):
+    """The :class:`~crashsim.motion.result.SceneRunout` of a run (per vehicle, impacts, pairs, ledger).
+
+    ``lean`` (optional): a predicate on the model's wheel specs (``spec.key``, ``body``,
+    ``axle_index``, ``axle_name``, ``side``) for a *lean* result, the one a fit or Monte Carlo
+    sample reads: each body's rest state, time to rest, path length and sampled history; the
+    tracks of the wheels the predicate keeps (the same arrays as the full result's); the
+    impacts, the energy ledger and the events (without their places).  Left out: the other
+    wheels' tracks, the hitch histories (``hitches`` empty, ``max_hitch_gap`` NaN) and the pair
+    summaries (``pairs`` empty).  Every value it has is the full result's, bit for bit.
+    """
     k = kernels()
     o = model.options
     M = model.M
-    table = integrator.segment_table()
+    table, arrays = integrator.segment_data(mode)  # (t0, t1, _) per segment; their mode arrays
     T, seg_of = _sample_times(table, o.sample_dt, t_end)
     Y = integrator.sample(T, seg_of, y_end)
-    arrays = _segment_arrays(table if table else [(t_end, t_end, _snapshot(0, mode))], model)
     P, SL, LD, LAMH, STOPM, CF, max_gap, pen = k.evaluate_samples(np.ascontiguousarray(Y), seg_of, M, *arrays)
     sol = integrator.solution(y_end, t_end)
-    events[:] = event_places(model, sol, events)
+    if lean is None:
+        events[:] = event_places(model, sol, events)
     missed = None
     if model.road.zones and table:
         miss_t, miss_k = k.missed_zone(M, T, P, seg_of, arrays[1])
@@ -511,24 +539,37 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
         if missed and w0 <= missed[1] < w1:
             v_missed = (missed[0], model.specs[missed[1]].key)
         quad_b = quad[b0:b1]
-        quad_w = lambda c: quad[nb + c * nw + w0: nb + c * nw + w1]  # noqa: E731
+        if lean is not None:  # the kept wheels' tracks only, no hitch histories (see the docstring)
+            keep = [w for w in range(w0, w1) if lean(model.specs[w])]
+            view = _lean_view(view, [w - w0 for w in keep])
+            idx = np.asarray(keep, dtype=np.int64)
+            quad_w = lambda c: quad[nb + c * nw + idx]  # noqa: E731
+            P_v, SL_v, LD_v = P[idx][:, cols], SL[idx][:, cols], LD[idx][:, cols]
+            h1 = h0
+            gap = math.nan
+        else:
+            quad_w = lambda c: quad[nb + c * nw + w0: nb + c * nw + w1]  # noqa: E731
+            P_v, SL_v, LD_v = P[w0:w1][:, cols], SL[w0:w1][:, cols], LD[w0:w1][:, cols]
+            gap = _vehicle_gap(model, Y[:, cols], h0, h1)
         vehicles[v.name] = build_result(
-            view, t=Tv, Y=Y[rows][:, cols], points=P[w0:w1][:, cols], sliding=SL[w0:w1][:, cols],
-            load=LD[w0:w1][:, cols], hitch_force=LAMH[cols][:, 2 * h0:2 * h1], stop_moment=STOPM[cols][:, h0:h1],
+            view, t=Tv, Y=Y[rows][:, cols], points=P_v, sliding=SL_v,
+            load=LD_v, hitch_force=LAMH[cols][:, 2 * h0:2 * h1], stop_moment=STOPM[cols][:, h0:h1],
             distance=quad_b, path_length=quad_w(0), sliding_length=quad_w(1), energy=quad_w(2),
-            max_gap=_vehicle_gap(model, Y[:, cols], h0, h1), missed=v_missed, status=v_status, message=v_message,
+            max_gap=gap, missed=v_missed, status=v_status, message=v_message,
             t_end=t_v, y_initial=y_initial[rows], y_final=y_end[rows],
             sol=lambda tq, rows=rows: np.asarray(sol(tq))[rows], events=v_events, nfev=nfev, njev=integrator.njev,
             nlu=integrator.nlu, n_segments=len(table), method=integrator.method,
-            kinetic_energies=(_ke(model, y_initial, b0, b1), _ke(model, y_end, b0, b1)))
+            kinetic_energies=(_ke(model, y_initial, b0, b1), _ke(model, y_end, b0, b1)),
+            energy_dissipated=float(quad[nb + 2 * nw + w0: nb + 2 * nw + w1].sum()))
 
     # ---- pairs and the ledger
     n_imp = {}
     for imp in impacts:
         n_imp[f"{imp.body1}|{imp.body2}"] = n_imp.get(f"{imp.body1}|{imp.body2}", 0) + 1
-    span, peak, deepest, closing = contact_summaries(model, integrator, table, arrays, y_end, t_end)
     pairs = []
-    for p, pair in enumerate(model.pairs):
+    if lean is None:
+        span, peak, deepest, closing = contact_summaries(model, integrator, table, arrays, y_end, t_end)
+    for p, pair in enumerate(model.pairs if lean is None else ()):
         pairs.append(PairSummary(pair.name, pair.a, pair.b, n_imp.get(pair.name, 0), float(span[p]),
                                  float(peak[p]), float(max(pen[p], deepest[p])), float(quad[nb + 3 * nw + p]),
                                  T.copy(), CF[:, p].copy(), float(closing[p])))
@@ -569,8 +610,6 @@ def contact_summaries(model, integrator, table, arrays, y_end, t_end):
     those of the solution to about the solver tolerance, and the same whatever ``sample_dt``
     says.
     """
-    from .model import kernels
-
     k = kernels()
     npr = len(model.pairs)
     span, peak, deepest, closing = np.zeros(npr), np.zeros(npr), np.zeros(npr), np.zeros(npr)
@@ -627,10 +666,6 @@ def event_places(model, sol, events) -> list:
     contact point of the pair's manifold (none once they part); a vehicle at rest: its first
     body's CG.  States come from the run's dense solution at the event's time.
     """
-    from dataclasses import replace
-
-    from .model import kernels
-
     L = model.layout
     want = [i for i, e in enumerate(events) if e.place is None and
             (any(key in e.data for key in ("wheel", "hitch", "pair")) or e.kind == "vehicle_rest")]

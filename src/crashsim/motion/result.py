@@ -17,6 +17,8 @@ from ..geometry import wrap_angle
 from ..vehicles import BodyState
 
 __all__ = [
+    "time_grid",
+    "jsonable",
     "BodyHistory",
     "BodyRunout",
     "TrackSegment",
@@ -77,13 +79,26 @@ def limit_message(kind: str, options, t: float, speed: float | None = None, last
     raise ValueError(kind)
 
 
-def _jsonable(value: Any) -> Any:
+def time_grid(t_end: float, dt: float):
+    """0, dt, 2 dt, ... below ``t_end``, and ``t_end`` itself as the last time [s] (a multiple of
+    dt within 1e-9 dt of ``t_end`` is replaced by it); ``dt`` > 0 is the caller's to check."""
+    n = int(np.floor(t_end / dt + 1e-9))
+    times = dt * np.arange(n + 1, dtype=float)
+    if t_end - times[-1] > 1e-9 * dt:
+        return np.append(times, t_end)
+    times[-1] = t_end
+    return times
+
+
+def jsonable(value: Any) -> Any:
+    """``value`` with NumPy arrays and scalars, tuples and dict keys turned into plain JSON types
+    (lists, floats, ints, str keys); used by ``to_dict`` here and by the command line's JSON output."""
     if isinstance(value, np.ndarray):
-        return _jsonable(value.tolist())
+        return jsonable(value.tolist())
     if isinstance(value, (list, tuple)):
-        return [_jsonable(v) for v in value]
+        return [jsonable(v) for v in value]
     if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
+        return {str(k): jsonable(v) for k, v in value.items()}
     if isinstance(value, (np.floating, float)):
         v = float(value)
         return v if math.isfinite(v) else None
@@ -489,7 +504,7 @@ class RunoutResult:
                     stop_moment_Nm=h.stop_moment,
                 )
             hitches.append(d)
-        return _jsonable(
+        return jsonable(
             {
                 "vehicle": self.vehicle,
                 "success": self.success,
@@ -564,7 +579,7 @@ class SecondaryImpact:
     warning: str = ""
 
     def to_dict(self) -> dict:
-        return _jsonable({
+        return jsonable({
             "time": self.t, "body1": self.body1, "body2": self.body2, "point": self.point, "normal": self.normal,
             "closing_speed": self.closing_speed, "normal_impulse": self.normal_impulse,
             "tangential_impulse": self.tangential_impulse, "energy_loss": self.energy_loss,
@@ -630,7 +645,7 @@ class PairSummary:
         d = {k: v for k, v in self.__dict__.items() if k not in ("t", "force")}
         if history:
             d.update(t=self.t, force=self.force)
-        return _jsonable(d)
+        return jsonable(d)
 
 
 @dataclass(frozen=True, eq=False)
@@ -677,7 +692,7 @@ class SceneRunout:
         return self.status == "rest"
 
     def to_dict(self, *, history: bool = True) -> dict:
-        return _jsonable({
+        return jsonable({
             "status": self.status, "message": self.message, "t_end_s": self.t_end, "method": self.method,
             "nfev": self.nfev, "n_segments": self.n_segments,
             "impacts": [i.to_dict() for i in self.impacts],

@@ -32,6 +32,8 @@ import numpy as np
 from ..errors import ScenarioError
 from ..vehicles import BodyState, Vehicle
 from .contact import ContactModel, Obstacle
+from .engine import run_model
+from .model import SceneModel
 from .options import RunoutOptions
 from .result import RunoutResult, SceneRunout
 from .road import Road
@@ -42,7 +44,9 @@ __all__ = ["simulate_runout", "simulate_scene", "zone_membership"]
 _log = logging.getLogger("crashsim")
 
 
-def _check_common(road, options):
+def check_common(road, options):
+    """Type checks of the inputs every run-out entry shares: ``road`` a :class:`Road`, ``options`` a
+    :class:`RunoutOptions` (raises :class:`~crashsim.errors.ScenarioError`)."""
     if not isinstance(road, Road):
         raise ScenarioError(f"must be a Road, got {type(road).__name__}", field="road")
     if not isinstance(options, RunoutOptions):
@@ -101,10 +105,7 @@ def simulate_scene(
     >>> len(run.impacts), run.impacts[0].body2, run.status
     (1, 'b', 'rest')
     """
-    from .engine import run_model
-    from .model import SceneModel
-
-    _check_common(road, options)
+    check_common(road, options)
     vehicles = list(vehicles)
     for v in vehicles:
         if not isinstance(v, Vehicle):

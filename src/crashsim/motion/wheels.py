@@ -273,7 +273,7 @@ def enumerate_wheels(vehicle: Vehicle) -> tuple[WheelSpec, ...]:
     return tuple(out)
 
 
-def _select(vehicle: Vehicle, specs: Sequence[WheelSpec], selector: str, where: str) -> tuple[list[int], int]:
+def select_wheels(vehicle: Vehicle, specs: Sequence[WheelSpec], selector: str, where: str) -> tuple[list[int], int]:
     """Indices of the wheels a selector matches and the selector's specificity (0..3)."""
     if selector == "*":
         return list(range(len(specs))), 0
@@ -328,7 +328,7 @@ def _resolve_map(vehicle, specs, default, overrides, where) -> list[WheelSetting
     for selector, setting in overrides.items():
         if not isinstance(setting, WheelSetting):
             raise ScenarioError(f"must be a WheelSetting, got {type(setting).__name__}", field=f"{where}[{selector!r}]")
-        idx, spec = _select(vehicle, specs, selector, f"{where}[{selector!r}]")
+        idx, spec = select_wheels(vehicle, specs, selector, f"{where}[{selector!r}]")
         ranked.append((spec, selector, idx, setting))
     for spec, selector, idx, setting in sorted(ranked, key=lambda r: r[0]):
         for i in idx:
@@ -400,7 +400,7 @@ class WheelSettings:
         phases = [(0.0, tuple(base))]
         current = list(base)
         for change in self.schedule:
-            idx, _ = _select(vehicle, specs, change.wheels, f"{where}.schedule[t={change.time}]")
+            idx, _ = select_wheels(vehicle, specs, change.wheels, f"{where}.schedule[t={change.time}]")
             for i in idx:
                 current[i] = change.apply(current[i])
             if phases[-1][0] == change.time:

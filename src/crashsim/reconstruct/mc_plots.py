@@ -17,6 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..plotting import plot_scene
+from ..units import resolve_system, to_unit
+
 __all__ = ["plot_histograms", "plot_rest_clouds", "plot_tornado", "save_mc_figures", "default_histogram_keys"]
 
 
@@ -28,15 +31,11 @@ def _plt():
 
 def _system(mc, system):
     """SI or US (any case); default the scenario's units."""
-    from ..units import resolve_system
-
     return resolve_system(system, mc.nominal.scenario.units if mc.nominal is not None else "SI", field="system")
 
 
-def _display(values, kind: str, system: str):
+def display_values(values, kind: str, system: str):
     """Values and axis label unit in the display system (angles in deg, fractions in %)."""
-    from ..units import to_unit
-
     v = np.asarray(values, dtype=float)
     if kind == "angle":
         return np.degrees(v), "deg"
@@ -73,7 +72,8 @@ def _headline(mc) -> str:
     return f"Monte Carlo, seed {mc.seed}: {mc.evidence_headline()}"
 
 
-def _label(key: str) -> str:
+def output_label(key: str) -> str:
+    """Axis label of a Monte Carlo output key such as ``"delta_v.car"`` ('delta-v of car')."""
     what, _, who = key.partition(".")
     names = {"delta_v": "delta-v", "speed": "impact speed", "speed_after": "speed after impact",
              "energy_loss": "energy loss", "rest_x": "rest x", "rest_y": "rest y", "rest_heading": "rest heading",
@@ -144,8 +144,8 @@ def plot_histograms(mc, keys=None, axes=None, *, system: str | None = None, bins
     for ax, key in zip(flat, keys):
         v = mc.values(key)  # an angle on its arc around the circular mean (as its percentiles)
         ok = np.isfinite(v)
-        d, unit = _display(v[ok], mc.kind_of(key), sysname)
-        ax.set_xlabel(f"{_label(key)} [{unit}]" if unit else _label(key))
+        d, unit = display_values(v[ok], mc.kind_of(key), sysname)
+        ax.set_xlabel(f"{output_label(key)} [{unit}]" if unit else output_label(key))
         ax.set_ylabel("samples")
         if not d.size:
             continue
@@ -201,8 +201,6 @@ def plot_rest_clouds(mc, scene=None, ax=None, *, system: str | None = None, max_
     scene = scene if scene is not None else mc.nominal
     sysname = _system(mc, system)
     if scene is not None:
-        from ..plotting import plot_scene
-
         ax = plot_scene(scene, ax=ax, times=(), evidence=evidence, arrows=False, system=sysname, legend=True)
     elif ax is None:
         _, ax = plt.subplots(figsize=(8, 6), layout="constrained")
@@ -217,8 +215,8 @@ def plot_rest_clouds(mc, scene=None, ax=None, *, system: str | None = None, max_
     meets = np.asarray(mc.meets_all, dtype=bool) if mc.accept and len(mc.meets_all) == mc.n_done else None
     pts = []
     for j, b in enumerate(bodies):
-        x, unit = _display(mc.outputs[f"rest_x.{b}"], "length", sysname)
-        y, _ = _display(mc.outputs[f"rest_y.{b}"], "length", sysname)
+        x, unit = display_values(mc.outputs[f"rest_x.{b}"], "length", sysname)
+        y, _ = display_values(mc.outputs[f"rest_y.{b}"], "length", sysname)
         ok = np.isfinite(x) & np.isfinite(y)
         acc = meets[ok] if meets is not None else np.zeros(int(ok.sum()), dtype=bool)
         x, y = x[ok], y[ok]
@@ -278,11 +276,11 @@ def plot_tornado(mc, key: str | None = None, ax=None, *, system: str | None = No
     kind = mc.kind_of(key)
     if ax is None:
         _, ax = plt.subplots(figsize=(7.5, 0.55 * len(rows) + 1.6), layout="constrained")
-    base, unit = _display([rows[0]["base"]], kind, sysname)
+    base, unit = display_values([rows[0]["base"]], kind, sysname)
     base = float(base[0])
     ys = np.arange(len(rows))[::-1]
     for y, r in zip(ys, rows):
-        lo, hi = _display([r["low"], r["high"]], kind, sysname)[0]
+        lo, hi = display_values([r["low"], r["high"]], kind, sysname)[0]
         if not (np.isfinite(lo) and np.isfinite(hi)):
             continue
         ax.barh(y, lo - base, left=base, color="#4C72B0", height=0.6)
@@ -291,8 +289,8 @@ def plot_tornado(mc, key: str | None = None, ax=None, *, system: str | None = No
         ax.text(max(lo, hi, base), y, f"  {abs(hi - lo):.3g} {unit}{rho}", va="center", fontsize=8)
     ax.axvline(base, color="k", lw=1)
     ax.set_yticks(ys, [r["input"] for r in rows])
-    ax.set_xlabel(f"{_label(key)} [{unit}]")
-    ax.set_title(f"What moves {_label(key)}: each input from its 5th (blue) to its 95th (orange) percentile",
+    ax.set_xlabel(f"{output_label(key)} [{unit}]")
+    ax.set_title(f"What moves {output_label(key)}: each input from its 5th (blue) to its 95th (orange) percentile",
                  fontsize=9)
     ax.margins(x=0.25)
     return ax

@@ -43,20 +43,28 @@ import hashlib
 import json
 import logging
 import math
+import multiprocessing as mp
 import os
 import sys
 import threading
 import time
-from dataclasses import dataclass, field
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
 import numpy as np
 
 from ..errors import CrashsimError, ScenarioError, failure_reason, in_file
-from ..outputs import check_workers
+from ..evidence.checks import body_impacts
 from ..geometry import circular_mean, unwrap_about_mean
-from .overrides import ScenarioOverrides, default_engine, parse_value
+from ..impact import solve_impact
+from ..inverse_schema import DISTRIBUTIONS, validate_uncertainty
+from ..outputs import check_workers
+from ..report import fmt
+from ..scene.run import run_scene
+from ..schema import interval_text
+from .overrides import INVERSE_SECTIONS, ScenarioOverrides, default_engine, file_contents, parse_value, resolve_path
 
 __all__ = ["InputDistribution", "UncertaintySpec", "MCResult", "monte_carlo", "sample_inputs", "load_results",
            "DEFAULT_PERCENTILES", "DEFAULT_SAMPLE_TIME_LIMIT"]
@@ -183,9 +191,6 @@ class UncertaintySpec:
     @classmethod
     def from_dict(cls, raw: dict, *, file: str | None = None) -> "UncertaintySpec":
         """Validate a raw [uncertainty] table (values with units) and convert it to SI."""
-        from .inverse_schema import DISTRIBUTIONS, validate_uncertainty
-        from .overrides import resolve_path
-
         d = validate_uncertainty(raw, file=file)
         out = []
         for i, e in enumerate(d["inputs"]):
@@ -243,14 +248,12 @@ def _fit_to_range(distribution: str, vals: dict, target, key: str, raw: dict, fi
     """
     from scipy import stats
 
-    from ..schema import _interval
-
     f = target.field
     lo_ok = -math.inf if f.minimum is None else float(f.minimum)
     hi_ok = math.inf if f.maximum is None else float(f.maximum)
     if lo_ok == -math.inf and hi_ok == math.inf:
         return vals, ""
-    allowed = _interval(f)
+    allowed = interval_text(f)
     # an exclusive end is kept off by a relative 1e-9 (a value there would be refused)
     lo_in = lo_ok if not f.exclusive_minimum else lo_ok + 1e-9 * max(1.0, abs(lo_ok), abs(hi_ok) if hi_ok < math.inf else 1.0)
     hi_in = hi_ok if not f.exclusive_maximum else hi_ok - 1e-9 * max(1.0, abs(hi_ok))
@@ -333,8 +336,6 @@ def scene_outputs(scene) -> dict[str, float]:
         out[f"energy_loss.{k}"] = float(v)
     joint = getattr(scene, "joint", None)
     if joint is not None:
-        from .evidence import body_impacts
-
         out["impacts.later"] = float(len(joint.impacts))
         for r in scene.runout.values():
             for name in r.bodies:
@@ -362,12 +363,10 @@ class _Runner:
                                            field_prefix="uncertainty.inputs", max_wall_time=sample_time_limit)
 
     def run(self, seed: int, i: int) -> dict:
-        from .scene import run_scene
-
         x = sample_inputs(self.spec, seed, i)
         row: dict[str, Any] = {"i": int(i), "x": [float(v) for v in x]}
         try:
-            scene = run_scene(self.overrides.scenario(x))
+            scene = run_scene(self.overrides.scenario(x), lean=True)  # what the record reads, the same numbers
         except CrashsimError as exc:
             row["error"] = f"{type(exc).__name__}: {exc}"
             row["reason"] = failure_reason(exc)
@@ -557,8 +556,6 @@ class MCResult:
         }
 
     def report(self, system: str = "SI") -> str:
-        from ..report import fmt
-
         def show(v, kind):
             if v is None or not np.isfinite(v):
                 return "n/a"
@@ -665,8 +662,6 @@ class MCResult:
 # ---------------------------------------------------------------------------------------------
 
 def _run_hash(data: dict, spec: UncertaintySpec) -> str:
-    from .overrides import INVERSE_SECTIONS
-
     forward = {k: v for k, v in data.items() if k not in INVERSE_SECTIONS}
     blob = json.dumps({"data": forward, "inputs": spec.to_dict()["inputs"], "seed": spec.seed}, sort_keys=True,
                       default=str)
@@ -727,10 +722,11 @@ def _spec_from_header(header: dict) -> UncertaintySpec:
 # ---------------------------------------------------------------------------------------------
 
 def _spearman(a: np.ndarray, b: np.ndarray) -> float | None:
+    from scipy.stats import rankdata
+
     ok = np.isfinite(a) & np.isfinite(b)
     if ok.sum() < 3 or np.ptp(a[ok]) == 0 or np.ptp(b[ok]) == 0:
         return None
-    from scipy.stats import rankdata
 
     ra, rb = rankdata(a[ok]), rankdata(b[ok])
     return float(np.corrcoef(ra, rb)[0, 1])
@@ -822,9 +818,6 @@ def _assemble(spec, seed, n, rows: dict, n_resumed, elapsed, engine, backend, wo
 
 def _swings(data, spec: UncertaintySpec, engine, file, q=(0.05, 0.95)) -> tuple[dict, Any]:
     """One-at-a-time swings of the contact bodies' delta-v (impact only) and the median scene."""
-    from ..impact import solve_impact
-    from .scene import run_scene
-
     ov = ScenarioOverrides(data, spec.paths, engine=engine, file=file, cache=1, field_prefix="uncertainty.inputs")
     med = np.array([d.median for d in spec.inputs])
     nominal = None
@@ -925,6 +918,7 @@ def monte_carlo(scenario_data: dict, spec: UncertaintySpec | dict | None = None,
     ScenarioError
         Invalid [uncertainty] table or paths, or a results file of another run.
     """
+    scenario_data, file = file_contents(scenario_data, file)
     t0 = time.perf_counter()
     if spec is None:
         if "uncertainty" not in scenario_data:
@@ -935,8 +929,6 @@ def monte_carlo(scenario_data: dict, spec: UncertaintySpec | dict | None = None,
         spec = spec if isinstance(spec, UncertaintySpec) else UncertaintySpec.from_dict(spec, file=file)
     seed = spec.seed if seed is None else int(seed)
     if seed != spec.seed:
-        from dataclasses import replace
-
         spec = replace(spec, seed=seed)
     n = spec.samples if n is None else int(n)
     if n < 1:
@@ -1016,9 +1008,6 @@ def monte_carlo(scenario_data: dict, spec: UncertaintySpec | dict | None = None,
 
 
 def _run_pool(payload, chunks, workers, take) -> None:
-    import multiprocessing as mp
-    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-
     ctx = mp.get_context("fork") if "fork" in mp.get_all_start_methods() else None
     pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_pool_init, initargs=(payload,))
     try:

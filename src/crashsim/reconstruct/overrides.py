@@ -34,18 +34,24 @@ from __future__ import annotations
 
 import copy
 import difflib
+import importlib.util
 import math
 import re
 from collections import OrderedDict
-from dataclasses import dataclass
-from typing import Any, Sequence
+from dataclasses import dataclass, replace
+from typing import Any, Mapping, Sequence
 
 from ..errors import ScenarioError
+from ..motion import RunoutOptions
+from ..scenario import SCHEMA, apply_presets, scenario_from_dict
 from ..schema import ArrayOf, Field, Section, Table
-from ..units import Kind, parse, si_unit, write_like
+from ..survey.mapping import expand_survey
+from ..units import Kind
+from .values import format_value, parse_value
+from .variants import ScenarioVariant
 
 __all__ = ["Target", "resolve_path", "parse_value", "format_value", "set_value", "get_value",
-           "ScenarioOverrides", "INVERSE_SECTIONS"]
+           "ScenarioOverrides", "INVERSE_SECTIONS", "file_contents"]
 
 #: Top-level sections of a file that belong to the inverse side and not to the forward model;
 #: they are removed before the forward scenario is built.
@@ -118,7 +124,7 @@ def resolve_path(path: str, schema: Section | None = None, *, field: str = "path
         that does not end at one number.
     """
     if schema is None:
-        from ..scenario import SCHEMA as schema
+        schema = SCHEMA
     if not isinstance(path, str) or not path.strip():
         raise ScenarioError(f"{path!r} is not a path such as \"vehicles.B.speed\"", field=field)
     parts = path.strip().split(".")
@@ -191,32 +197,6 @@ def resolve_path(path: str, schema: Section | None = None, *, field: str = "path
         raise ScenarioError(f"{path!r}: unknown key {name!r}{_close(name, node.keys)} "
                             f"Valid keys here: {', '.join(node.keys)}", field=field)
     raise ScenarioError(f"{path!r} does not end at a value", field=field)  # pragma: no cover
-
-
-def parse_value(value: Any, target: Target, *, field: str) -> float:
-    """Read a value written like the file's value at ``target`` (``"25 mph"``, ``"0.05"``) into SI.
-
-    Quantities need their unit; plain numbers may be written as numbers or strings (``"5 %"``
-    is 0.05). Range checks are left to the scenario validation (the value is validated when
-    it is written into the file dict).
-    """
-    f = target.field
-    if isinstance(f.kind, Kind) and f.kind is not Kind.DIMENSIONLESS:
-        return parse(value, f.kind, field=field)
-    return parse(value, Kind.DIMENSIONLESS, field=field)
-
-
-def format_value(x: float, target: Target, like: Any = None) -> Any:
-    """An SI value written as the file writes it at ``target`` (``"13.41 m/s"``, or a number).
-
-    With ``like`` (a file value) in the unit of ``like`` (:func:`crashsim.units.write_like`).
-    """
-    f = target.field
-    if like is not None:
-        return write_like(x, f.kind if isinstance(f.kind, Kind) else Kind.DIMENSIONLESS, like)
-    if isinstance(f.kind, Kind) and f.kind is not Kind.DIMENSIONLESS:
-        return f"{float(x)!r} {si_unit(f.kind)}"
-    return float(x)
 
 
 def _container(data: dict, target: Target, *, create: bool, copy_path: bool):
@@ -315,10 +295,8 @@ def forward_data(data: dict, *, file: str | None = None) -> dict:
     The ``preset`` keys are dropped after merging (their values are in the body now), so
     building a scenario from the result does not read the preset library again.
     """
-    from ..scenario import _apply_presets
-
     base = {k: v for k, v in data.items() if k not in INVERSE_SECTIONS}
-    merged = _apply_presets(base, file)
+    merged = apply_presets(base, file)
     if merged is base:
         merged = copy.deepcopy(base)
     for v in (merged.get("vehicles") or {}).values():
@@ -330,8 +308,6 @@ def forward_data(data: dict, *, file: str | None = None) -> dict:
 
 def _engine_options(options, engine: str | None):
     """RunoutOptions with ``engine`` set, if the installed RunoutOptions has that field."""
-    from dataclasses import replace
-
     if engine is None:
         return options
     if "engine" in type(options).__dataclass_fields__:
@@ -342,12 +318,25 @@ def _engine_options(options, engine: str | None):
     return options
 
 
+def file_contents(source, file: str | None = None) -> tuple[dict, str | None]:
+    """The raw file contents a fit, Monte Carlo or posterior run varies, and the file name.
+
+    ``source``: the file's contents (a dict, as from TOML), or a
+    :class:`~crashsim.scenario.Scenario` built from them (its
+    :attr:`~crashsim.scenario.Scenario.file_data`; the file name its ``path`` unless ``file``
+    is given).
+    """
+    if isinstance(source, Mapping):
+        return source, file
+    data = getattr(source, "file_data", None)
+    if data is None:
+        raise ScenarioError(f"cannot vary the inputs of {type(source).__name__}: give the file's contents (a dict) "
+                            "or a Scenario built from them (crashsim.load, scenario_from_dict)", field="scenario")
+    return data, getattr(source, "path", None) if file is None else file
+
+
 def default_engine() -> str:
     """``"compiled"`` when the run-out has the compiled engine, else ``"scipy"``."""
-    import importlib.util
-
-    from ..motion import RunoutOptions
-
     if "engine" not in RunoutOptions.__dataclass_fields__:
         return "scipy"
     try:
@@ -389,14 +378,12 @@ class ScenarioOverrides:
     def __init__(self, data: dict, paths: Sequence[str], *, engine: str | None = None, file: str | None = None,
                  cache: int = 8, field_prefix: str = "path", max_wall_time: float | None = None,
                  fast: bool | None = None):
-        from ..scenario import SCHEMA
-
         self.file = file
         self.fast = FAST if fast is None else bool(fast)
         self._fast_base = None  # the first scenario built the full way (the base of the fast path)
+        self._variant = None  # ScenarioVariant of the base and the paths, when they can be patched
         self.engine = engine
         self.max_wall_time = max_wall_time
-        from ..survey.mapping import expand_survey
 
         data = expand_survey(data, file)  # a [survey] read here once: the samples rebuild from its items
         self.base = forward_data(data, file=file)
@@ -445,22 +432,16 @@ class ScenarioOverrides:
             If a value is not valid there (out of range, inconsistent with other inputs),
             exactly as if it had been written in the file.
         """
-        from dataclasses import replace
-
-        from ..scenario import scenario_from_dict
-
         key = tuple(float(v) for v in values)
         hit = self._cache.get(key)
         if hit is not None:
             self._cache.move_to_end(key)
             return hit
         sc = None
-        if self._fast_base is not None:
-            from .patch import patch_scenario
-
-            sc = patch_scenario(self._fast_base, self.targets, key, self.file)
+        if self._variant is not None:
+            sc = self._variant.scenario(key)
         if sc is None:
-            sc = scenario_from_dict(self.data(key), file=self.file)
+            sc = scenario_from_dict(self.data(key), file=self.file, approaches=False)  # approaches: in the run
             if sc.runout is not None and (self.engine is not None or self.max_wall_time is not None):
                 options = _engine_options(sc.runout.options, self.engine)
                 if self.max_wall_time is not None:
@@ -468,6 +449,9 @@ class ScenarioOverrides:
                 sc = replace(sc, runout=replace(sc.runout, options=options))
             if self.fast and self._fast_base is None:
                 self._fast_base = sc
+                self._variant = ScenarioVariant(sc, self.targets, self.file)
+                if not self._variant.patchable:
+                    self._variant = None
         self._cache[key] = sc
         while len(self._cache) > self._cache_size:
             self._cache.popitem(last=False)

@@ -23,33 +23,36 @@ path                                  objects rebuilt
 ``runout.road_friction``              the road of the run-out
 ====================================  ===============================================================
 
-A vehicle's speed is not patched when the vehicle has an approach (``[vehicles.<name>.approach]``:
-its speed sets the approach, which the full build simulates), nor the road friction when any
-vehicle has one (the approach runs on the run-out's road by default); the impact's coefficients,
-normal and point do not reach an approach (it ends at the impact positions) and are patched.
+A vehicle with an approach (``[vehicles.<name>.approach]``) is simulated in the scene run
+(:func:`crashsim.reconstruct.scene.simulate_approaches`), from the inputs the scenario carries:
+its speed at impact (``vehicles.<name>.speed``), at the start of braking
+(``vehicles.<name>.approach.speed``) or its reaction time changes only those inputs, and the road friction also the
+road of every approach that runs on the run-out's road; the run re-runs the approach.  The
+impact's coefficients, normal and point do not reach an approach (it ends at the impact
+positions).
 
-Each value is first written as the file would write it and read back
-(``parse_value(format_value(x))``), so it is the SI float the full build would see, and
-checked against its field's allowed range.  Anything else (another path, a value out of
-range, an error in a constructor) returns None and the caller builds the scenario the full
-way, which gives the same scenario or the same error as before.
+Each value is taken as the SI float it is (the full build's file-text round trip,
+``parse_value(format_value(x))``, is the identity for SI units) and checked against its
+field's allowed range (:class:`~crashsim.reconstruct.variants.ScenarioVariant` applies the
+values; this module says which objects a path reaches).  Anything else (another path, a value
+out of range, an error in a constructor) returns None and the caller builds the scenario the
+full way, which gives the same scenario or the same error as before.
 
 The objects a sample does not change keep their identity (the vehicles, the wheel settings,
 the contact model, the obstacles, the run-out options), which lets the run-out reuse its
-compiled scene model (:mod:`crashsim.reconstruct.scene`).
+compiled scene model (:mod:`crashsim.scene.run`).
 """
 
 from __future__ import annotations
 
-from dataclasses import replace
-from typing import Sequence
-
-from ..errors import ScenarioError
-
-__all__ = ["patch_kind", "patch_scenario"]
+__all__ = ["patch_kind", "set_validated", "LAW_KEY", "APPROACH_KEYS"]
 
 #: The tangential-law key that carries the law's value, by law.
-_LAW_KEY = {"ratio": "mu", "fraction": "mu_fraction", "friction": "friction"}
+LAW_KEY = {"ratio": "mu", "fraction": "mu_fraction", "friction": "friction"}
+
+#: The keys of ``[vehicles.<name>.approach]`` a sample may change in the approach's spec (its field
+#: of the same name), by their patch kind.
+APPROACH_KEYS = {"speed": "approach_speed", "reaction_time": "approach_reaction_time"}
 
 
 def patch_kind(target, data: dict) -> str | None:
@@ -59,33 +62,36 @@ def patch_kind(target, data: dict) -> str | None:
     keys = tuple(k for k, _ in target.steps)
     index = target.steps[-1][1]
     vehicles = data.get("vehicles") or {}
-    approach = {n: (v or {}).get("approach") is not None for n, v in vehicles.items()}
     if len(keys) == 3 and keys[0] == "vehicles" and keys[2] == "speed":
-        # a vehicle with an approach: its speed changes the approach (simulated in the full build)
-        return "speed" if keys[1] in vehicles and not approach[keys[1]] else None
+        if keys[1] not in vehicles:
+            return None
+        a = vehicles[keys[1]].get("approach")
+        if a is None:
+            return "speed"
+        # with an approach: the speed at impact its simulation starts from (in the run); none when the
+        # approach gives the speed at braking (both given: the full build's error)
+        return "approach_impact_speed" if a.get("speed") is None else None
+    if len(keys) == 4 and keys[0] == "vehicles" and keys[2] == "approach" and keys[3] in APPROACH_KEYS:
+        v = vehicles.get(keys[1])
+        if v is None or v.get("approach") is None:
+            return None
+        # the speed at braking with the speed at impact given too: the full build's error
+        return APPROACH_KEYS[keys[3]] if keys[3] != "speed" or v["speed"] is None else None
     if keys == ("runout", "road_friction"):
-        # an approach runs on the run-out's road by default: the full build
-        return "road_friction" if data.get("runout") is not None and not any(approach.values()) else None
+        return "road_friction" if data.get("runout") is not None else None
     if len(keys) != 2 or keys[0] != "impact":
         return None
     key = keys[1]
     if key == "restitution":
         return "restitution"
-    if key in _LAW_KEY.values():
-        return "law" if _LAW_KEY.get(data["impact"]["tangential"]) == key else None
+    if key in LAW_KEY.values():
+        return "law" if LAW_KEY.get(data["impact"]["tangential"]) == key else None
     if key in ("normal", "point") and data.get("barrier") is None:
         return key if (key == "normal") == (index is None) else None
     return None
 
 
-def _si(x: float, target) -> float:
-    """``x`` written as a file value and read back: the SI float the full build would see."""
-    from .overrides import format_value, parse_value
-
-    return parse_value(format_value(x, target), target, field=target.path)
-
-
-def _set(d: dict, target, x: float) -> dict:
+def set_validated(d: dict, target, x: float) -> dict:
     """A copy of the validated dict ``d`` with ``x`` at ``target`` (only the dicts along the path copied)."""
     out = dict(d)
     node = out
@@ -100,70 +106,3 @@ def _set(d: dict, target, x: float) -> dict:
         vec[index] = x
         node[key] = type(node[key])(vec) if isinstance(node[key], tuple) else vec
     return out
-
-
-def patch_scenario(base, targets: Sequence, values: Sequence[float], file: str | None = None):
-    """``base`` with ``values`` (SI, one per target) at ``targets``, or None if the full build is needed.
-
-    Parameters
-    ----------
-    base : Scenario
-        Built the full way from the same file dict (its ``data`` the validated dict).
-    targets : sequence of Target
-    values : sequence of float
-    file : str, optional
-
-    Returns
-    -------
-    Scenario or None
-    """
-    from ..impact.model import ImpactProblem
-    from ..motion.road import Road
-    from ..schema import _in_range
-    from ..scenario import _check_contact_point, _frame_xform, _point, _vehicle_states
-
-    d = base.data
-    kinds = []
-    for t, x in zip(targets, values):
-        kind = patch_kind(t, d)
-        if kind is None:
-            return None
-        kinds.append(kind)
-    try:
-        for t, x in zip(targets, values):
-            x = _si(float(x), t)
-            if not (x == x and abs(x) != float("inf")) or not _in_range(x, t.field):
-                return None
-            d = _set(d, t, x)
-        states = base.states
-        speeds = {t.steps[1][0] for t, k in zip(targets, kinds) if k == "speed"}
-        if speeds:
-            states = dict(states)
-            for veh in base.vehicles:
-                if veh.name in speeds:
-                    states.update(_vehicle_states(veh, d["vehicles"][veh.name]))
-        problem = base.impact
-        imp = d["impact"]
-        surface_changes = {}
-        if "restitution" in kinds:
-            surface_changes["restitution"] = imp["restitution"]
-        if "law" in kinds:
-            surface_changes["tangential"] = replace(problem.surface.tangential, value=imp[_LAW_KEY[imp["tangential"]]])
-        if "normal" in kinds:
-            _, nang = _frame_xform(imp["normal_frame"], states, "impact.normal_frame", file)
-            surface_changes["normal_angle"] = imp["normal"] + nang
-        if "point" in kinds:
-            surface_changes["point"] = _point(imp["point"], imp["point_frame"], states, "impact.point_frame", file)
-        if speeds or surface_changes:
-            surface = replace(problem.surface, **surface_changes) if surface_changes else problem.surface
-            problem = ImpactProblem(problem.vehicles, {b.name: states[b.name] for v in problem.vehicles
-                                                       for b in v.bodies},
-                                    problem.body1, problem.body2, surface, problem.constraints, problem.external)
-        if "point" in kinds:
-            _check_contact_point(problem, imp["contact_tolerance"], d["scenario"]["units"], file)
-        runout = base.runout
-        if "road_friction" in kinds:
-            runout = replace(runout, road=Road(d["runout"]["road_friction"], runout.road.zones))
-    except ScenarioError:
-        return None
-    return replace(base, states=states, impact=problem, runout=runout, data=d)

@@ -58,10 +58,13 @@ import hashlib
 import json
 import logging
 import math
+import multiprocessing as mp
 import os
 import sys
 import threading
 import time
+import warnings
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Callable
@@ -78,7 +81,12 @@ _log = logging.getLogger("crashsim")
 
 #: Percentiles reported for every unknown and derived quantity (the median, +-1 sigma and 95 % of a normal).
 PERCENTILES = (2.5, 16.0, 50.0, 84.0, 97.5)
-from .inverse_schema import MIN_KEPT_STEPS  # noqa: E402 - fewest steps kept after burn-in and thinning
+from ..inverse_schema import MIN_KEPT_STEPS, validate_posterior  # noqa: E402 - fewest steps kept after burn-in and thinning
+from ..report import fmt, table
+from ..units import resolve_system
+from .fit import FitProblem, FitSpec, NotAtRest, fit_scene
+from .montecarlo import DEFAULT_SAMPLE_TIME_LIMIT, MCResult, UncertaintySpec, scene_outputs
+from .overrides import INVERSE_SECTIONS, default_engine, file_contents
 #: The kept chain should be this many autocorrelation times long (emcee's documentation: "you
 #: should not trust an estimate of tau unless the chain is longer than about 50 tau").
 TAU_FACTOR = 50
@@ -103,7 +111,7 @@ LOOSEST_RTOL = 1e-4
 
 @dataclass(frozen=True)
 class PosteriorSpec:
-    """A validated ``[posterior]`` table (see :data:`~crashsim.reconstruct.inverse_schema.POSTERIOR`)."""
+    """A validated ``[posterior]`` table (see :data:`~crashsim.inverse_schema.POSTERIOR`)."""
 
     walkers: int = 32
     steps: int = 2000
@@ -126,8 +134,6 @@ class PosteriorSpec:
 
     @classmethod
     def from_dict(cls, raw: dict | None, *, file: str | None = None) -> "PosteriorSpec":
-        from .inverse_schema import validate_posterior
-
         d = validate_posterior(raw or {}, file=file)
         return cls(**{k: d[k] for k in ("walkers", "steps", "burn", "thin", "seed", "prior", "start", "init_scale",
                                         "move", "checkpoint_every", "ess", "check_every", "tolerance")})
@@ -182,8 +188,6 @@ class Prior:
         return max(lo, self.lower), min(hi, self.upper)
 
     def describe(self, kind: str, system: str) -> str:
-        from ..report import fmt
-
         show = (lambda v: f"{v:.4g}") if kind == "dimensionless" else (lambda v: fmt(v, kind, system))  # noqa: E731
         bounds = f"[{show(self.lower)}, {show(self.upper)}]"
         d = self.dist
@@ -196,7 +200,6 @@ def build_priors(data: dict, spec, prior: str, *, file: str | None = None) -> tu
     """The prior of each unknown of ``spec`` (a FitSpec) under ``prior`` = "fit" or "uncertainty"."""
     if prior == "fit":
         return tuple(Prior(u.path, u.lower, u.upper) for u in spec.unknowns)
-    from .montecarlo import UncertaintySpec
 
     if "uncertainty" not in data:
         raise ScenarioError("prior = \"uncertainty\" takes the priors from the [uncertainty] table, but the scenario "
@@ -234,16 +237,12 @@ class PosteriorProblem:
 
     def __init__(self, data: dict, fit_spec, priors, *, engine: str | None = None, file: str | None = None,
                  sample_time_limit: float | None = None, derived=None):
-        from .fit import FitProblem
-
         self.fit = FitProblem(data, fit_spec, engine=engine, file=file, sample_time_limit=sample_time_limit)
         self.spec = fit_spec
         self.priors = tuple(priors)
         self.derived = None if derived is None else tuple(derived)
 
     def derived_keys(self, z0) -> tuple[str, ...]:
-        from .montecarlo import scene_outputs
-
         if self.derived is None:
             _, scene = self.fit.evaluate(z0)
             if isinstance(scene, Exception):
@@ -266,16 +265,13 @@ class PosteriorProblem:
 
     def evaluate(self, z) -> tuple[float, np.ndarray, str | None]:
         """``(log posterior, derived values, failure reason or None)`` at ``z``."""
-        from .fit import _NotAtRest
-        from .montecarlo import scene_outputs
-
         nan = np.full(len(self.derived or ()), np.nan)
         lp = self.log_prior(z)
         if not np.isfinite(lp):
             return -math.inf, nan, None
         r, scene = self.fit.evaluate(np.asarray(z, float))
         if isinstance(scene, Exception):
-            reason = f"run-out: {scene.status}" if isinstance(scene, _NotAtRest) else failure_reason(scene)
+            reason = f"run-out: {scene.status}" if isinstance(scene, NotAtRest) else failure_reason(scene)
             _log.debug("posterior: proposal rejected, its scene cannot be evaluated (%s): %s", reason, scene)
             return -math.inf, nan, reason
         out = scene_outputs(scene)
@@ -332,9 +328,6 @@ def _pool_eval(z):
 
 class _ProcessPool(_Pool):
     def __init__(self, payload: dict, workers: int):
-        import multiprocessing as mp
-        from concurrent.futures import ProcessPoolExecutor
-
         super().__init__()
         ctx = mp.get_context("fork") if "fork" in mp.get_all_start_methods() else None
         self.workers = workers
@@ -481,8 +474,6 @@ class PosteriorResult:
         return int(self.chain.shape[0])
 
     def kind_of(self, label: str) -> str:
-        from .montecarlo import MCResult
-
         for u in self.unknowns:
             if u.path == label:
                 return u.kind
@@ -524,9 +515,6 @@ class PosteriorResult:
     def report(self, system: str | None = None) -> str:
         """Readable report: priors, percentiles of unknowns and derived quantities (beside the fit's
         linearised intervals when started from the fit), correlations, diagnostics, warnings."""
-        from ..report import fmt, table
-        from ..units import resolve_system
-
         system = resolve_system(system, self.units)
 
         def show(v, kind):
@@ -780,8 +768,6 @@ def _correlation(m: np.ndarray) -> np.ndarray:
 
 def _diagnostics(chain_kept: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Integrated autocorrelation time of each unknown (emcee, quiet) and effective sample size."""
-    import warnings
-
     from emcee.autocorr import integrated_time
 
     steps, walkers, n = chain_kept.shape
@@ -804,8 +790,6 @@ def _diagnostics(chain_kept: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 # ---------------------------------------------------------------------------------------------
 
 def _run_hash(data: dict, fit_spec, spec: PosteriorSpec, priors, start: np.ndarray, engine: str) -> str:
-    from .overrides import INVERSE_SECTIONS
-
     forward = {k: v for k, v in data.items() if k not in INVERSE_SECTIONS}
     key = {"data": forward, "unknowns": [u.__dict__ for u in fit_spec.unknowns],
            "priors": [_prior_dict(p) for p in priors], "walkers": spec.walkers, "seed": spec.seed,
@@ -936,9 +920,7 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
     """
     import emcee
 
-    from .fit import FitSpec, fit_scene
-    from .montecarlo import DEFAULT_SAMPLE_TIME_LIMIT
-    from .overrides import default_engine
+    scenario_data, file = file_contents(scenario_data, file)
 
     t0 = time.perf_counter()
     if "fit" not in scenario_data:
@@ -1089,7 +1071,7 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
         evaluations += pool.evaluations
     nominal = None
     try:
-        nominal = problem.fit.evaluate(z0)[1]
+        nominal = problem.fit.full_scene(z0)
     except Exception:  # pragma: no cover - evaluated above already
         nominal = None
     if spec.ess is not None and len(z_all) < spec.steps:

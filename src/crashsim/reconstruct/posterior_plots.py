@@ -3,7 +3,7 @@
 matplotlib (and ``corner``) are imported on first use; every function draws on given axes or
 a figure (``None``: a new one) and returns it; nothing calls ``plt.show()``. Values are shown in
 the display units of ``system`` (default: the scenario's), converted by :mod:`crashsim.units`
-(:func:`crashsim.reconstruct.mc_plots._display`: angles in deg, fractions in %).
+(:func:`crashsim.reconstruct.mc_plots.display_values`: angles in deg, fractions in %).
 """
 
 from __future__ import annotations
@@ -12,7 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .mc_plots import _display, _label
+from ..units import resolve_system
+from .mc_plots import display_values, output_label
 
 __all__ = ["plot_corner", "plot_traces", "save_posterior_figures"]
 
@@ -24,8 +25,6 @@ def _plt():
 
 
 def _system(post, system):
-    from ..units import resolve_system
-
     return resolve_system(system, post.units, field="system")
 
 
@@ -33,7 +32,7 @@ def _name(post, label: str) -> str:
     for u in post.unknowns:
         if u.path == label:
             return u.name
-    return _label(label)
+    return output_label(label)
 
 
 def _columns(post, derived: bool):
@@ -42,7 +41,7 @@ def _columns(post, derived: bool):
     cols, labels = [], []
     for j, u in enumerate(post.unknowns):
         kind = "plain" if u.kind == "dimensionless" else u.kind
-        v, unit = (post.samples[:, j], "") if kind == "plain" else _display(post.samples[:, j], u.kind, post._system)
+        v, unit = (post.samples[:, j], "") if kind == "plain" else display_values(post.samples[:, j], u.kind, post._system)
         cols.append(v)
         labels.append(f"{u.name} [{unit}]" if unit else u.name)
     if derived:
@@ -53,9 +52,9 @@ def _columns(post, derived: bool):
             ok = np.isfinite(v)
             if not ok.all() or float(np.ptp(v)) <= 1e-9 * max(1.0, float(np.max(np.abs(v)))):
                 continue
-            d, unit = _display(v, post.kind_of(key), post._system)
+            d, unit = display_values(v, post.kind_of(key), post._system)
             cols.append(d)
-            labels.append(f"{_label(key)} [{unit}]")
+            labels.append(f"{output_label(key)} [{unit}]")
     return np.column_stack(cols), labels
 
 
@@ -96,7 +95,7 @@ def plot_corner(post, *, derived: bool = True, system: str | None = None, fig=No
         truths = []
         for j, u in enumerate(post.unknowns):
             x = post.fit["x"][j]
-            truths.append(x if u.kind == "dimensionless" else float(_display(np.array([x]), u.kind, view._system)[0][0]))
+            truths.append(x if u.kind == "dimensionless" else float(display_values(np.array([x]), u.kind, view._system)[0][0]))
         truths += [None] * (data.shape[1] - len(truths))
     fig = corner.corner(data, labels=labels, quantiles=(0.025, 0.5, 0.975), show_titles=True, title_fmt=".3g",
                         levels=(1 - np.exp(-0.5), 1 - np.exp(-2.0)), smooth=1.0, plot_datapoints=False,
@@ -133,7 +132,7 @@ def plot_traces(post, *, system: str | None = None, axes=None, max_walkers: int 
         if u.kind == "dimensionless":
             v, unit = post.chain[:, :w, j], ""
         else:
-            v, unit = _display(post.chain[:, :w, j], u.kind, sysname)
+            v, unit = display_values(post.chain[:, :w, j], u.kind, sysname)
         ax.plot(steps, v, lw=0.4, alpha=0.5, color="#4C72B0")
         tau = post.tau[j]
         ax.set_ylabel(f"{u.name}\n[{unit}]" if unit else u.name, fontsize=8)

@@ -29,7 +29,9 @@ import numpy as np
 
 from ..errors import ScenarioError
 from ..geometry import rotate
+from ..units import Kind, format_value
 from .frame import INSUNITS, SceneFrame, unit_scale
+from .mapping import read_survey_file
 
 __all__ = ["ExportItem", "export_items", "export_frame", "write_dxf", "write_geojson"]
 
@@ -58,8 +60,6 @@ def export_frame(scenario) -> tuple[SceneFrame, str]:
             unit = "m"
             for f in files:
                 if str(f.get("file", "")).lower().endswith(".dxf"):
-                    from .mapping import read_survey_file
-
                     unit = read_survey_file(f, s.get("crs"), file=scenario.path).unit
                     break
     unit_scale(unit, field="survey.units", file=scenario.path)
@@ -79,8 +79,6 @@ def _layer_name(text: str) -> str:
 
 def export_items(scene, times=()) -> list[ExportItem]:
     """What :func:`write_dxf` and :func:`write_geojson` write, in scene metres."""
-    from ..units import Kind, format_value
-
     sc = scene.scenario
     out: list[ExportItem] = []
     bodies = {b.name: b for v in sc.vehicles for b in v.bodies if not b.is_fixed}

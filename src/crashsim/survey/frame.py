@@ -8,6 +8,7 @@ survey's axes and units (CAD export).
 
 from __future__ import annotations
 
+import difflib
 import math
 from dataclasses import dataclass
 
@@ -32,8 +33,6 @@ def unit_scale(unit: str, *, field: str = "units", file: str | None = None) -> f
     """Metres per ``unit`` (one of :data:`UNIT_METRES`)."""
     key = str(unit).strip()
     if key not in UNIT_METRES:
-        import difflib
-
         near = difflib.get_close_matches(key, list(UNIT_METRES), n=1)
         hint = f"; did you mean {near[0]!r}?" if near else ""
         raise ScenarioError(f"unknown survey unit {unit!r}{hint} Allowed: {', '.join(UNIT_METRES)}", field=field,

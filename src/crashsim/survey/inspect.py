@@ -2,11 +2,17 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import ScenarioError
+from .dxf import read_dxf
+from .frame import UNIT_METRES
+from .geojson import read_geojson
+from .mapping import SURVEY_FORMATS
+from .points import read_points
 
 __all__ = ["read_any", "summary", "preview"]
 
@@ -14,22 +20,14 @@ __all__ = ["read_any", "summary", "preview"]
 def read_any(path: str, *, units: str | None = None, columns: str = "PNEZD", crs: str | None = None,
              layer_property: str = "layer"):
     """Read a survey file by its extension (.dxf; .csv/.txt/.asc/.pnezd points; .geojson/.json)."""
-    from .mapping import _EXT
-
-    fmt = _EXT.get(Path(path).suffix.lower())
+    fmt = SURVEY_FORMATS.get(Path(path).suffix.lower())
     if not Path(path).is_file():
         raise ScenarioError(f"{path}: no such file", field="file")
     if fmt == "dxf":
-        from .dxf import read_dxf
-
         return read_dxf(path, units)
     if fmt == "points":
-        from .points import read_points
-
         return read_points(path, units or "m", columns)
     if fmt == "geojson":
-        from .geojson import read_geojson
-
         note = None
         if crs is None:
             crs, note = _utm_for(path)
@@ -43,8 +41,6 @@ def read_any(path: str, *, units: str | None = None, columns: str = "PNEZD", crs
 
 def _utm_for(path: str):
     """(UTM zone CRS, note) for a lon/lat GeoJSON shown without --crs; (None, None) otherwise."""
-    import json
-
     try:
         doc = json.loads(Path(path).read_text(encoding="utf-8"))
     except (OSError, ValueError):
@@ -69,8 +65,6 @@ def _utm_for(path: str):
 
 def summary(data) -> str:
     """The layers or codes of a survey file with entity counts by type and extents (in its unit)."""
-    from .frame import UNIT_METRES
-
     k = UNIT_METRES.get(data.unit, 1.0)
     unit = data.unit if data.unit in UNIT_METRES else "m"
     what = {"dxf": "layer", "points": "code", "geojson": "layer"}[data.format]
@@ -98,8 +92,6 @@ def preview(data, path: str, dpi: int = 120) -> str:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from .frame import UNIT_METRES
 
     k = UNIT_METRES.get(data.unit, 1.0)
     layers = sorted(data.layers())

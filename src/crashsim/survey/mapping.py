@@ -24,16 +24,21 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ScenarioError
-from ..schema import Section, validate
-from .frame import SceneFrame
-from .schema import SURVEY
+from ..schema import Section, load_toml, validate
+from .dxf import read_dxf
+from .frame import SceneFrame, unit_scale
+from .geojson import read_geojson
+from .points import read_points
+from .recorder import read_recorder
+from .schema import MAP_LINE_STYLES, SURVEY
+from .underlay import georef_from_section
 
 __all__ = ["expand_survey", "load_scene_data", "read_survey_file", "survey_frame", "survey_section",
            "is_expanded"]
 
 _log = logging.getLogger("crashsim")
 _ROOT = Section("root", subsections=[SURVEY], description="survey only")
-_EXT = {".dxf": "dxf", ".csv": "points", ".txt": "points", ".asc": "points", ".pnezd": "points", ".xyz": "points",
+SURVEY_FORMATS = {".dxf": "dxf", ".csv": "points", ".txt": "points", ".asc": "points", ".pnezd": "points", ".xyz": "points",
         ".geojson": "geojson", ".json": "geojson"}
 _CACHE: dict = {}
 _COLORS = {"gouge": "#8c564b", "debris": "#7f7f7f"}
@@ -66,10 +71,10 @@ def _format(entry: dict, path: str, key: str, file: str | None) -> str:
     if entry["format"] is not None:
         return entry["format"]
     ext = Path(path).suffix.lower()
-    if ext not in _EXT:
+    if ext not in SURVEY_FORMATS:
         raise ScenarioError(f"{entry['file']!r}: cannot tell the format from the extension {ext!r}; give format = "
                             "\"dxf\", \"points\" or \"geojson\"", field=f"{key}.format", file=file)
-    return _EXT[ext]
+    return SURVEY_FORMATS[ext]
 
 
 def read_survey_file(entry: dict, crs: str | None, *, key: str = "survey.files[0]", file: str | None = None):
@@ -89,19 +94,13 @@ def read_survey_file(entry: dict, crs: str | None, *, key: str = "survey.files[0
         return _CACHE[ck]
     try:
         if fmt == "dxf":
-            from .dxf import read_dxf
-
             data = read_dxf(path, entry["units"], chord_tolerance=entry["chord_tolerance"], file=file)
         elif fmt == "points":
-            from .points import read_points
-
             if entry["units"] is None:
                 raise ScenarioError(f"{entry['file']!r}: a point file does not state its units; give units = \"m\" "
                                     "(or \"ft\", \"us_ft\", ...)", field=f"{key}.units", file=file)
             data = read_points(path, entry["units"], entry["columns"], join=entry["join"], breaklines=brk, file=file)
         else:
-            from .geojson import read_geojson
-
             data = read_geojson(path, crs, crs=entry["crs"], layer_property=entry["layer_property"], file=file)
     except ScenarioError as exc:
         if exc.field is None:
@@ -196,8 +195,6 @@ def _map_file(out: _Out, sd, entry: dict, raw_entry: dict, frame: SceneFrame, ke
 def _map_entries(out: _Out, sd, entry: dict, raw_entry: dict, frame: SceneFrame, key: str, file: str | None,
                  have_runout: bool) -> np.ndarray:
     """Apply the file's map entries; returns which entities were taken."""
-    from ..scenario import MAP_LINE_STYLES
-
     src = entry["file"]
     layers = sorted({e.layer for e in sd.entities})
     taken = np.zeros(len(sd.entities), dtype=bool)
@@ -386,8 +383,6 @@ def expand_survey(data: dict, file: str | None = None) -> dict:
         return data
     s = survey_section(data, file)
     if s["units"] is not None:
-        from .frame import unit_scale
-
         unit_scale(s["units"], field="survey.units", file=file)
     frame = survey_frame(s)
     out = _Out(copy.deepcopy(data))
@@ -406,7 +401,6 @@ def expand_survey(data: dict, file: str | None = None) -> dict:
     raw_rec = data["survey"].get("recorders", [])
     for i, r in enumerate(s["recorders"]):
         key = f"survey.recorders[{i}]"
-        from .recorder import read_recorder
 
         path = _resolve(r["file"], file)
         samples, notes = read_recorder(path, r, key=key, file=file)
@@ -419,7 +413,6 @@ def expand_survey(data: dict, file: str | None = None) -> dict:
         out.records.append({"file": r["file"], "layer": "", "ref": f"{len(samples)} samples", "type": "CSV",
                             "kind": "recorder", "target": target, "note": "; ".join(notes)})
     if s["underlay"]:  # placed now, so that a world file or control points that do not fit fail at load
-        from .underlay import georef_from_section
 
         g = georef_from_section(s["underlay"], frame, file, file)
         # the image and world file by absolute path in the expanded file: a best-fit file written
@@ -440,6 +433,4 @@ def expand_survey(data: dict, file: str | None = None) -> dict:
 def load_scene_data(path: str | os.PathLike) -> dict:
     """The raw scenario dict of a file (:func:`crashsim.schema.load_toml`) with its survey read
     (:func:`expand_survey`): what fit, Monte Carlo and posterior take."""
-    from ..schema import load_toml
-
     return expand_survey(load_toml(path), str(path))

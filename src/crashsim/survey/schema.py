@@ -6,7 +6,10 @@ from __future__ import annotations
 from ..schema import ArrayOf, Field, Section
 from ..units import Kind
 
-__all__ = ["SURVEY", "KINDS", "FORMATS"]
+__all__ = ["SURVEY", "KINDS", "FORMATS", "MAP_LINE_STYLES"]
+
+#: Styles of a map line (``[[map.lines]]``); crashsim.plotting draws each in its conventional way.
+MAP_LINE_STYLES = ("edge", "lane", "centre", "kerb", "stop", "other")
 
 #: What a layer or code can be. line: a [[map.lines]] line (needs style); obstacle: an [[obstacles]]
 #: item; zone: a [[runout.zones]] friction zone (closed outlines, needs friction); mark: an

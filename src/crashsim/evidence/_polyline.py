@@ -1,19 +1,23 @@
 """The nearest point of a polyline to each of many points, compiled (numba), for the evidence checks.
 
 The same arithmetic, operation for operation, as the array form in
-:func:`crashsim.reconstruct.evidence._nearest_on_polyline` (no fused multiply-adds, no
+:func:`crashsim.evidence.checks._nearest_on_polyline` (no fused multiply-adds, no
 reordering: numba's default, not ``fastmath``), so both give the same bits
 (``tests/reconstruct/test_lean_chain.py``); a loop over the segments of each point instead of
 (n, m) temporary arrays, and the exact (slow) ``hypot`` only for the segments whose squared
 distance is within rounding of the least, several times faster for a measured mark against a
 computed track.
-Compiled on first use and cached on disk (:mod:`crashsim.motion.jitcache`); without numba the
+Compiled on first use and cached on disk (:mod:`crashsim._jit`); without numba the
 array form is used.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+
+from .._jit import configure
 
 __all__ = ["nearest_on_polyline"]
 
@@ -23,10 +27,6 @@ _KERNEL = None
 def _kernel():
     global _KERNEL
     if _KERNEL is None:
-        import math
-
-        from ..motion.jitcache import configure
-
         configure()
         from numba import njit
 

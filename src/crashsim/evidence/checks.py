@@ -24,7 +24,7 @@ delta-v         computed minus recorded delta-v of a body [m/s]: its magnitude, 
                 body's impacts (``impacts = "all"``: a recorder that accumulates a whole event
                 which includes a later impact).
 crush energy    the impact model's energy loss at the crush surface minus the CRASH3 crush energy
-                of the bodies [J], per group of crush items (:mod:`crashsim.reconstruct.crush`).
+                of the bodies [J], per group of crush items (:mod:`crashsim.evidence.crush`).
 """
 
 from __future__ import annotations
@@ -35,6 +35,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..geometry import rotate, wrap_angle
+from ._polyline import nearest_on_polyline
+from .crush import crush_checks
+from .outcome import Check
 
 __all__ = [
     "RestEvidence", "MarkEvidence", "ImpactPointEvidence", "DeltaVEvidence", "Evidence",
@@ -259,7 +262,7 @@ class Evidence:
     impact_point: ImpactPointEvidence | None = None
     delta_v: tuple[DeltaVEvidence, ...] = ()
     recorder: tuple[RecorderEvidence, ...] = ()
-    crush: tuple = ()  # CrushEvidence (crashsim.reconstruct.crush)
+    crush: tuple = ()  # CrushEvidence (crashsim.evidence.crush)
 
     @property
     def empty(self) -> bool:
@@ -293,40 +296,6 @@ def _check_recorder(ev: RecorderEvidence, approach, index: int) -> Check:
 
 
 @dataclass(frozen=True)
-class Check:
-    """Outcome of one evidence item.
-
-    Attributes
-    ----------
-    kind : {"rest", "rest heading", "mark", "point of impact", "delta-v", "crush energy"}
-    name : str
-    residual : float
-        Computed minus measured (or a distance) in SI: m, rad or m/s (``quantity`` says which);
-        ``inf`` if the computation has nothing to compare (no run-out, no track).
-    tolerance : float
-        The user's tolerance for this item, same unit.
-    passed : bool
-        ``abs(residual) <= tolerance``.
-    quantity : str
-        Unit kind of residual and tolerance ("length", "angle", "speed", "energy").
-    details : dict
-        Computed and measured values and any extra figure (mean distance, matched wheel).
-    """
-
-    kind: str
-    name: str
-    residual: float
-    tolerance: float
-    passed: bool
-    quantity: str
-    details: dict = field(default_factory=dict)
-
-    def to_dict(self) -> dict:
-        return {"kind": self.kind, "name": self.name, "residual": self.residual, "tolerance": self.tolerance,
-                "passed": self.passed, "quantity": self.quantity, "details": self.details}
-
-
-@dataclass(frozen=True)
 class EvidenceReport:
     checks: tuple[Check, ...]
 
@@ -356,7 +325,7 @@ def _densify(points: np.ndarray, spacing: float) -> np.ndarray:
 
 
 #: Points x vertices from which the point-to-polyline distances are computed by the compiled loop
-#: (:mod:`crashsim.reconstruct._polyline`, the same bits); below, by the array form.
+#: (:mod:`crashsim.evidence._polyline`, the same bits); below, by the array form.
 _COMPILED_FROM = 256
 
 #: Densified marks by evidence object: a fit or Monte Carlo run checks the same marks at every sample.
@@ -384,8 +353,6 @@ def _nearest_on_polyline(points, polyline) -> tuple[np.ndarray, np.ndarray]:
     if len(line) == 1:
         return np.hypot(*(p - line[0]).T), np.ones(p.shape[0])
     if len(p) * len(line) >= _COMPILED_FROM:
-        from ._polyline import nearest_on_polyline
-
         out = nearest_on_polyline(p, line)
         if out is not None:
             return out
@@ -418,7 +385,10 @@ def signed_distance_to_polyline(points, polyline) -> np.ndarray:
     return side * dist
 
 
-def _wheel_matches(track, selector: str | None) -> bool:
+def wheel_matches(track, selector: str | None) -> bool:
+    """True if the wheel ``track`` (a WheelTrack or a wheel spec: ``body``, ``axle_index``,
+    ``axle_name``, ``side``) is one a mark's ``wheel`` selector (``"body/axle/side"``, parts
+    optional; None or ``"*"``: any wheel) names."""
     if selector in (None, "*"):
         return True
     parts = selector.split("/")
@@ -443,7 +413,7 @@ def _check_mark(ev: MarkEvidence, tracks: dict, index: int) -> Check:
     pts = _densified(ev)
     candidates = []
     for key, tr in tracks.items():
-        if not _wheel_matches(tr, ev.wheel):
+        if not wheel_matches(tr, ev.wheel):
             continue
         pieces = [seg.points for seg in tr.segments if (seg.kind == "sliding" or not ev.sliding_only) and len(seg.points)]
         if not pieces:
@@ -574,7 +544,5 @@ def evaluate_evidence(evidence: Evidence, impact, runout: dict | None, contact_p
     for i, ev in enumerate(evidence.recorder):
         checks.append(_check_recorder(ev, approach_of_body(approaches, ev.body), i))
     if evidence.crush:
-        from .crush import crush_checks
-
         checks += crush_checks(evidence.crush, impact, secondary)
     return EvidenceReport(tuple(checks))

@@ -2,20 +2,38 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import csv
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from ..impact import ImpactResult, solve_impact
+import numpy as np
 
-__all__ = ["SceneResult", "run_scene", "rest_misfit_warnings"]
+from ..animation import animate_scene
+from ..errors import ScenarioError, with_file
+from ..evidence.checks import REST_MISFIT_SHARE, evaluate_evidence, wheel_matches
+from ..impact import ImpactResult, solve_impact
+from ..impact.model import ImpactProblem
+from ..motion import make_hitch_consistent
+from ..motion.accuracy import scene_to_accuracy, simulate_to_accuracy
+from ..motion.approach import simulate_approach
+from ..motion.engine import run_model
+from ..motion.levels import simulate_level
+from ..motion.result import time_grid
+from ..plotting import plot_scene
+from ..report import (format_approach, format_crush, format_events, format_evidence, format_impact,
+                      format_joint, format_runout, message_in)
+from ..survey.report import format_survey, survey_records
+from ..units import Kind, format_value, resolve_system, to_unit
+from ..vehicles import BodyState, chain_states
+from .models import scene_model
+
+__all__ = ["SceneResult", "run_scene", "rest_misfit_warnings", "simulate_approaches"]
 
 
 def rest_misfit_warnings(evidence) -> list[str]:
     """A warning for each rest item whose measured points fit the body with an RMS misfit above
-    :data:`~crashsim.reconstruct.evidence.REST_MISFIT_SHARE` of its tolerance (SI text)."""
-    from .evidence import REST_MISFIT_SHARE
-
+    :data:`~crashsim.evidence.checks.REST_MISFIT_SHARE` of its tolerance (SI text)."""
     out = []
     for r in getattr(evidence, "rest", ()):
         reg = r.registration
@@ -30,8 +48,6 @@ def rest_misfit_warnings(evidence) -> list[str]:
 
 def _format_registrations(evidence, system: str) -> str:
     """Lines for the rest items derived from measured points: the derived CG and heading, the fit's misfit."""
-    from ..units import Kind, format_value
-
     lines = []
     for r in evidence.rest:
         reg = r.registration
@@ -174,7 +190,6 @@ class SceneResult:
         if self.scenario.runout is not None:
             out["runout_level"] = self.scenario.runout.level
         out["warnings"] = list(self.warnings)
-        from ..survey.report import survey_records
 
         if survey_records(sc):
             out["survey"] = survey_records(sc)
@@ -185,8 +200,6 @@ class SceneResult:
 
         ``units`` (or ``system``): ``"SI"`` or ``"US"`` (any case); default the scenario's ``units``.
         """
-        from ..report import format_impact
-
         system = _system(self, units if units is not None else system)
         sc = self.scenario
         head = [f"crashsim: {sc.title}"]
@@ -197,18 +210,12 @@ class SceneResult:
         head.append(f"units: {system}")
         text = "\n".join(head) + "\n\n"
         if sc.approaches:
-            from ..report import format_approach
-
             text += format_approach(sc.approaches, system) + "\n\n"
         text += format_impact(self.impact, system)
         if self.runout is not None:
-            from ..report import format_events, format_runout
-
             text += "\n\n" + format_runout(self.runout, system, joint=self.joint is not None)
             text += f"\n  model level: {self.scenario.runout.level}"
             if self.joint is not None:
-                from ..report import format_joint
-
                 joint = format_joint(self, system)
                 if joint:
                     text += "\n\n" + joint
@@ -219,21 +226,14 @@ class SceneResult:
             for name, rep in (self.accuracy or {}).items():
                 text += f"\n  accuracy, vehicle {name}: {rep.message}"
         if self.evidence is not None:
-            from ..report import format_evidence
-
             text += "\n\n" + format_evidence(self.evidence, system)
             text += _format_registrations(self.scenario.evidence, system)
             if any(c.kind == "crush energy" for c in self.evidence.checks):
-                from ..report import format_crush
-
                 text += "\n\n" + format_crush(self.evidence, system)
-        from ..survey.report import format_survey, survey_records
 
         if survey_records(sc):
             text += "\n\n" + format_survey(survey_records(sc))
         if self.warnings:
-            from ..report import message_in
-
             text += "\n\nWarnings\n" + "\n".join(f"  - {message_in(w, system)}" for w in self.warnings)
         return text
 
@@ -246,10 +246,6 @@ class SceneResult:
     def times(self, dt: float | None = None):
         """Times from the first separation to :attr:`t_end` every ``dt`` [s] (default: the
         run-out's ``sample_dt``), the end included."""
-        import numpy as np
-
-        from ..errors import ScenarioError
-
         if self.runout is None:
             raise ScenarioError("this scene has no run-out (runout.level = \"impact\" or no [runout])", field="runout")
         dt = self.scenario.runout.options.sample_dt if dt is None else float(dt)
@@ -276,8 +272,6 @@ class SceneResult:
             ``"t"`` [s] and per body ``"<body>.x"``, ``".y"`` [m], ``".heading"`` [rad],
             ``".vx"``, ``".vy"``, ``".speed"`` [m/s], ``".yaw_rate"`` [rad/s].
         """
-        import numpy as np
-
         t = self.times(dt)
         out = {"t": t}
         for r in self.runout.values():
@@ -301,15 +295,11 @@ class SceneResult:
     def plot(self, ax=None, **kwargs):
         """The scene diagram on ``ax`` (a new figure if None); see :func:`crashsim.plotting.plot_scene`.
         Returns the axes."""
-        from ..plotting import plot_scene
-
         return plot_scene(self, ax, **kwargs)
 
     def animate(self, path, **kwargs):
         """Write an animation (``.gif``; ``.mp4`` where ffmpeg is present); see
         :func:`crashsim.animation.animate_scene`.  Returns the path written."""
-        from ..animation import animate_scene
-
         return animate_scene(self, path, **kwargs)
 
     def write_csv(self, directory: Path, *, system: str | None = None, dt: float | None = None) -> list[Path]:
@@ -324,8 +314,6 @@ class SceneResult:
         ``system``: ``"SI"`` (angles in rad) or ``"US"`` (ft, mph, lbf, deg); default the
         scenario's ``units``.
         """
-        import csv
-
         system = _system(self, system)
         directory = Path(directory)
         if dt is not None:
@@ -396,39 +384,20 @@ def crush_by_body(evidence) -> dict:
     return out
 
 
-def time_grid(t_end: float, dt: float):
-    """0, dt, 2 dt, ... below ``t_end``, and ``t_end`` itself as the last time [s] (a multiple of
-    dt within 1e-9 dt of ``t_end`` is replaced by it); ``dt`` > 0 is the caller's to check."""
-    import numpy as np
-
-    n = int(np.floor(t_end / dt + 1e-9))
-    times = dt * np.arange(n + 1, dtype=float)
-    if t_end - times[-1] > 1e-9 * dt:
-        return np.append(times, t_end)
-    times[-1] = t_end
-    return times
-
-
 #: The kind of a CSV column from its SI unit label.
 _SI_KIND = {"s": "time", "m": "length", "rad": "angle", "m/s": "speed", "rad/s": "angular_velocity", "N": "force"}
 
 
 def _unit(kind: str, system: str) -> str:
-    from ..units import to_unit
-
     return to_unit(0.0, kind, system)[1]
 
 
 def _convert(value: float, kind: str, system: str) -> float:
-    from ..units import to_unit
-
     return to_unit(value, kind, system)[0] if system != "SI" else float(value)
 
 
 def _system(scene, system: str | None) -> str:
     """``system`` (any case) or the scenario's units; a ScenarioError names anything else."""
-    from ..units import resolve_system
-
     return resolve_system(system, scene.scenario.units)
 
 
@@ -438,8 +407,6 @@ def separation_states(scenario, impact: ImpactResult) -> dict:
     A vehicle that is not in the impact keeps its state from the file (it may be at rest, or
     moving towards the scene: the run-out finds out whether it is struck).
     """
-    from ..vehicles import BodyState
-
     out = {}
     for v in scenario.vehicles:
         for b in v.bodies:
@@ -454,11 +421,56 @@ def separation_states(scenario, impact: ImpactResult) -> dict:
     return out
 
 
+def simulate_approaches(scenario):
+    """The scenario with its vehicles' approaches simulated (itself if there are none, or they are).
+
+    Each approach runs from the start of braking to the vehicle's impact configuration
+    (:func:`crashsim.motion.approach.simulate_approach`); its velocity and yaw rates at the end
+    become the vehicle's states at impact (hitch-consistent, the file's articulations), in
+    ``states`` and in the impact problem.
+
+    Raises
+    ------
+    ScenarioError
+        (naming the file) An approach that does not reach the impact, or a speed that cannot be solved.
+    """
+    if scenario.approaches_simulated:
+        return scenario
+    states = dict(scenario.states)
+    approaches = {}
+    d = scenario.data
+    for veh in scenario.vehicles:
+        a = scenario.approach_inputs.get(veh.name)
+        if a is None:
+            continue
+        try:
+            res = simulate_approach(veh, a.spec, {b.name: states[b.name] for b in veh.bodies}, a.road, a.options,
+                                    speed_at_impact=a.speed_at_impact)
+        except ScenarioError as exc:
+            raise with_file(exc, scenario.path) from None
+        approaches[veh.name] = res
+        v = d["vehicles"][veh.name]
+        end = res.impact_states
+        states.update(chain_states(veh, v["position"], v["heading"], end[veh.bodies[0].name].velocity,
+                                   [end[b.name].yaw_rate for b in veh.bodies],
+                                   [b["articulation"] for b in v["bodies"][1:]]))
+    p = scenario.impact
+    try:
+        problem = ImpactProblem(p.vehicles, {b.name: states[b.name] for v in p.vehicles for b in v.bodies}, p.body1,
+                                p.body2, p.surface, p.constraints, p.external)
+    except ScenarioError as exc:
+        raise ScenarioError(str(exc), field=exc.field, file=scenario.path) from None
+    out = replace(scenario, states=states, impact=problem, approaches=approaches)
+    if scenario.file_data is not None:
+        object.__setattr__(out, "_file_data", scenario.file_data)
+    return out
+
+
 #: Fidelity levels whose run-out models contact between vehicles and with obstacles.
 CONTACT_LEVELS = ("articulated", "load_transfer")
 
 
-def run_scene(scenario) -> SceneResult:
+def run_scene(scenario, *, lean: bool = False) -> SceneResult:
     """Solve a loaded scenario: the impact, then the run-out of the whole scene if asked for.
 
     At the ``articulated`` and ``load_transfer`` levels every vehicle runs out together, with
@@ -466,14 +478,19 @@ def run_scene(scenario) -> SceneResult:
     them): later impacts are solved by the impulse solver (:func:`crashsim.motion.simulate_scene`).
     The ``energy`` and ``rigid`` levels run each vehicle alone, without contact.
 
+    ``lean``: the result a fit, Monte Carlo or posterior sample reads (its records, residuals
+    and evidence checks), with the same numbers: the joint run-out keeps only the tracks of
+    the wheels a run-out tyre mark of the evidence can match, no hitch histories, no pair
+    summaries, no event places (:func:`crashsim.motion.postprocess.assemble_scene`).  Reports,
+    figures and ``to_dict`` need the full result (the default).
+
     Raises
     ------
     ScenarioError
         (naming the scenario file) The impact cannot be solved as given: the bodies are not
         approaching, or the coefficients are inadmissible for this geometry.
     """
-    from ..errors import ScenarioError, with_file
-
+    scenario = simulate_approaches(scenario)  # a vehicle's approach before the impact (unless already run)
     try:
         impact = solve_impact(scenario.impact)
     except ScenarioError as exc:
@@ -483,22 +500,18 @@ def run_scene(scenario) -> SceneResult:
     joint = None
     spec = scenario.runout
     if spec is not None and spec.level != "impact":
-        from ..motion import make_hitch_consistent
-
         states = separation_states(scenario, impact)
         movable = [v for v in scenario.vehicles if not v.is_barrier]
         initial = {}
         for veh in movable:
             initial.update(make_hitch_consistent(veh, {b.name: states[b.name] for b in veh.bodies}))
         if spec.level in CONTACT_LEVELS:
-            joint, accuracy = _joint_runout(movable, initial, spec)
+            joint, accuracy = _joint_runout(movable, initial, spec, _track_filter(scenario) if lean else None)
             runout = dict(joint.vehicles)
         else:
             runout, accuracy = _separate_runouts(movable, initial, spec)
     evidence = None
     if not scenario.evidence.empty:
-        from .evidence import evaluate_evidence
-
         evidence = evaluate_evidence(scenario.evidence, impact, runout, scenario.impact.surface.point,
                                      secondary=joint.impacts if joint is not None else (),
                                      approaches=scenario.approaches)
@@ -518,16 +531,19 @@ def run_scene(scenario) -> SceneResult:
                        accuracy=accuracy, joint=joint)
 
 
-def _joint_runout(movable, initial, spec):
-    """Every vehicle together, with contact (and to an accuracy target if the scenario asks)."""
+def _track_filter(scenario):
+    """The wheels whose tracks a lean run keeps: those a run-out tyre mark of the evidence can match."""
+    selectors = tuple(m.wheel for m in scenario.evidence.marks if m.phase == "runout")
+    return lambda spec: any(wheel_matches(spec, s) for s in selectors)
+
+
+def _joint_runout(movable, initial, spec, lean=None):
+    """Every vehicle together, with contact (and to an accuracy target if the scenario asks);
+    ``lean``: None, or the wheel filter of a lean result."""
     kwargs = dict(contact=spec.contact, pair_contact=spec.pair_contact, obstacles=spec.obstacles)
     if spec.accuracy is None:
-        from ..motion.engine import run_model
-        from .models import scene_model
-
         # the same as simulate_scene(...), with the scene model reused across fit/MC samples
-        return run_model(scene_model(movable, spec), initial), None
-    from ..motion.accuracy import scene_to_accuracy
+        return run_model(scene_model(movable, spec), initial, lean=lean), None
 
     joint, report = scene_to_accuracy(movable, initial, spec.wheels, spec.road, spec.accuracy, spec.accuracy_heading,
                                       spec.options, level=spec.level, **kwargs)
@@ -536,9 +552,6 @@ def _joint_runout(movable, initial, spec):
 
 def _separate_runouts(movable, initial, spec):
     """The ``energy`` and ``rigid`` levels: each vehicle alone (no contact)."""
-    from ..motion.accuracy import simulate_to_accuracy
-    from ..motion.levels import simulate_level
-
     runout, accuracy = {}, ({} if spec.accuracy is not None else None)
     for veh in movable:
         init = {b.name: initial[b.name] for b in veh.bodies}
@@ -559,8 +572,6 @@ BARRIER_OVERLAP_WARNING = 0.25
 def barrier_crossings(scenario, runout: dict) -> list[str]:
     """Warnings for bodies whose outline moves into the barrier after separation (the ``energy``
     and ``rigid`` levels, which model no contact)."""
-    import numpy as np
-
     extent = scenario.barrier_extent
     if extent is None:
         return []

@@ -26,7 +26,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 from ..impact.crush import (energy_equivalent_speed, face_angle, force_direction_factor, profile_energy)
+from .outcome import Check
 
 __all__ = ["CrushEvidence", "crush_groups", "crush_checks", "group_impacts", "profile_outline", "GROUP_TITLES"]
 
@@ -137,7 +140,7 @@ def _item_result(it: CrushEvidence, own) -> dict:
 
 
 def crush_checks(items, impact, secondary=()) -> list:
-    """One :class:`~crashsim.reconstruct.evidence.Check` (kind ``"crush energy"``, quantity
+    """One :class:`~crashsim.evidence.checks.Check` (kind ``"crush energy"``, quantity
     ``"energy"``) per group of crush items (:func:`crush_groups`), in group order.
 
     ``details`` holds ``bodies`` (per body: ``energy`` and ``energy_uncorrected`` [J], ``ees``
@@ -147,8 +150,6 @@ def crush_checks(items, impact, secondary=()) -> list:
     ``computed`` (the model's loss compared) and ``measured`` (the crush energy compared),
     ``complete`` and ``missing`` (movable bodies in contact without a crush item), ``warnings``.
     """
-    from .evidence import Check
-
     checks = []
     for which, idx in crush_groups(items):
         group = [items[i] for i in idx]
@@ -215,8 +216,6 @@ def profile_outline(body, item: CrushEvidence):
     rear on the sides; ``offset`` moves the centre of the damage along the face.  None for an
     EES item or a body without an outline (length and width).
     """
-    import numpy as np
-
     if item.profile is None or body.length is None or body.width is None:
         return None
     cx, cy = body.outline_center

@@ -18,6 +18,9 @@ from __future__ import annotations
 import threading
 from collections import OrderedDict
 
+from ..motion.model import SceneModel
+from ..motion.simulate import check_common
+
 __all__ = ["scene_model", "clear"]
 
 #: Scene models kept (a fit or Monte Carlo run needs one).
@@ -43,9 +46,6 @@ def scene_model(movable, spec):
         The movable vehicles of the scene.
     spec : RunoutSpec
     """
-    from ..motion.model import SceneModel
-    from ..motion.simulate import _check_common
-
     held = (tuple(movable), spec.wheels, spec.contact, spec.pair_contact, spec.obstacles, spec.options,
             spec.road.zones)
     key = tuple(id(o) for o in held[0]) + tuple(id(o) for o in held[1:])
@@ -58,7 +58,7 @@ def scene_model(movable, spec):
         if model.road is spec.road or model.road.mu == spec.road.mu:  # the zones are the key's
             return model
         return model.with_road(spec.road)
-    _check_common(spec.road, spec.options)
+    check_common(spec.road, spec.options)
     model = SceneModel(list(movable), spec.wheels, spec.road, spec.options, contact=spec.contact,
                        pair_contact=spec.pair_contact, obstacles=spec.obstacles)
     with _LOCK:

@@ -50,8 +50,8 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from ..schema import ArrayOf, Field, Section, validate
-from ..units import Kind
+from .schema import ArrayOf, Field, Section, validate
+from .units import Kind
 
 __all__ = ["UNKNOWN", "FIT", "INPUT", "UNCERTAINTY", "POSTERIOR", "EVIDENCE_SIGMA_FIELDS", "DISTRIBUTIONS",
            "with_inverse_sections", "validate_fit", "validate_uncertainty", "validate_posterior"]

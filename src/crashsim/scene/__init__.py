@@ -1,0 +1,11 @@
+"""One run of a scene: impact -> run-out of every vehicle to rest -> evidence checks -> SceneResult.
+
+:func:`run_scene` (:mod:`crashsim.scene.run`) takes a validated :class:`~crashsim.scenario.Scenario`;
+:mod:`crashsim.scene.models` caches the compiled scene models that repeated runs (fits, Monte Carlo)
+share. This layer sits above the physics (impact, motion), the evidence checks and the views of a
+result (plotting, animation, report), and below the scenario files and the reconstruction.
+"""
+
+from .run import SceneResult, rest_misfit_warnings, run_scene
+
+__all__ = ["SceneResult", "run_scene", "rest_misfit_warnings"]

@@ -14,6 +14,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
+from . import first_run
 from ._jit import cache_dir, ready
 from ._version import __version__
 from .animation import animate_scene, check_animation_path, frame_times
@@ -417,9 +418,6 @@ def _first_run(args, argv: list[str]) -> int | None:
     """On a machine whose kernels are not compiled: run a single-scene command interpreted while they
     compile in the background, or compile first (:mod:`crashsim.first_run`). An exit code if the command
     ran in a child process, else None (run it here)."""
-    from . import first_run
-    from .motion.jitcache import ready
-
     if args.command not in _COMPUTING or ready() or first_run.interpreted():
         return None
     how = first_run.policy()

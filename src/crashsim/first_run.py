@@ -1,7 +1,7 @@
 """What a command does on a machine whose kernels are not compiled yet (the first run).
 
 The run-out and impact kernels are numba functions, compiled on first use and cached on disk
-(:mod:`crashsim.motion.jitcache`). Compiling all of them takes 1-2 minutes on one core; running one
+(:mod:`crashsim._jit`). Compiling all of them takes 1-2 minutes on one core; running one
 scene with the same kernel source *interpreted* (numba's ``NUMBA_DISABLE_JIT=1``: the kernels are
 then the plain Python functions they are written as) takes a few seconds, and gives the same
 report to every printed digit (``tests/unit/test_first_run.py``). So a first command that runs one
@@ -27,7 +27,9 @@ import sys
 import time
 from pathlib import Path
 
-from .motion.jitcache import cache_dir, ready
+from ._jit import cache_dir, ready
+from .errors import ScenarioError
+from .warmup import compile_kernels
 
 __all__ = ["POLICIES", "SINGLE_SCENE", "ENV", "policy", "interpreted", "run_interpreted", "start_background_compile",
            "compile_in_progress", "wait_for_background_compile", "background_main"]
@@ -43,8 +45,6 @@ STALE_LOCK = 1800.0
 
 def policy() -> str:
     """The first-run policy from ``$CRASHSIM_FIRST_RUN`` (``background`` when unset)."""
-    from .errors import ScenarioError
-
     value = os.environ.get(ENV, "background").strip().lower() or "background"
     if value not in POLICIES:
         raise ScenarioError(f"{ENV} = {value!r} is not a first-run policy; allowed {', '.join(POLICIES)}", field=ENV)
@@ -141,8 +141,6 @@ def _take(lock: Path) -> bool:
 
 def background_main() -> int:
     """The detached compile: take the lock, compile every kernel (marking the cache ready), drop the lock."""
-    from .motion.jitcache import compile_kernels
-
     lock = _lock()
     if not _take(lock):
         return 0  # another compile is under way

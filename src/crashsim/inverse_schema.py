@@ -137,6 +137,10 @@ UNCERTAINTY = Section("uncertainty", [
           description="Number of Monte Carlo samples (crashsim mc --samples overrides it)"),
     Field("seed", "int", default=0, minimum=0,
           description="Seed: sample i depends only on (seed, i), so local, resumed and cluster runs agree"),
+    Field("tolerance", choices=("file", "evidence"), default="file",
+          description="Run-out tolerance of the samples: file (the [runout] rtol and atol as written) or evidence "
+                      "(the loosest rtol whose integration error stays below 1 % of the smallest tolerance of the "
+                      "run-out's evidence checks, never tighter than the file's, at most 1e-4)"),
 ], subsections=[ArrayOf("inputs", INPUT, min_items=1, description="The uncertain inputs")],
    required=False, description="Monte Carlo propagation of input uncertainty through impact and run-out (crashsim mc)")
 

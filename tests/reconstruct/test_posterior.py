@@ -362,7 +362,7 @@ def test_samples_integrate_at_the_tolerance_their_evidence_needs():
     """The rule: rtol = 0.01 sigma / D (D the longest CG path), never tighter than the file's, at
     most 1e-4; atol scaled with it. Here sigma = 0.2 m and the rebound slides d ~ 1.9 m: the rule
     asks 1.06e-3, capped at 1e-4."""
-    from crashsim.reconstruct.posterior import LOOSEST_RTOL, evidence_tolerance
+    from crashsim.reconstruct.tolerance import LOOSEST_RTOL, evidence_tolerance
 
     res = run_posterior(rebound(), workers=1, progress=False, engine=ENGINE)
     tol = res.tolerance

@@ -87,6 +87,7 @@ from ..units import resolve_system
 from .fit import FitProblem, FitSpec, NotAtRest, fit_scene
 from .montecarlo import DEFAULT_SAMPLE_TIME_LIMIT, MCResult, UncertaintySpec, scene_outputs
 from .overrides import INVERSE_SECTIONS, default_engine, file_contents
+from .tolerance import SampleTolerance, evidence_tolerance, with_tolerance
 #: The kept chain should be this many autocorrelation times long (emcee's documentation: "you
 #: should not trust an estimate of tau unless the chain is longer than about 50 tau").
 TAU_FACTOR = 50
@@ -98,11 +99,6 @@ EDGE, EDGE_SHARE = 0.05, 0.01
 #: Prefixes of :func:`~crashsim.reconstruct.montecarlo.scene_outputs` kept as derived quantities.
 DERIVED_PREFIXES = ("speed", "speed_at_braking", "delta_v", "speed_after", "energy_loss")
 _FORMAT = "crashsim-posterior/1"
-#: Tolerance rule of the samples (``[posterior] tolerance = "evidence"``): the integration error of
-#: the run-out is bounded by EVIDENCE_SHARE of the smallest sigma of the evidence it feeds.
-EVIDENCE_SHARE = 0.01
-#: The loosest relative tolerance the rule gives (a run-out must still resolve its events).
-LOOSEST_RTOL = 1e-4
 
 
 # ---------------------------------------------------------------------------------------------
@@ -659,80 +655,6 @@ def settle_step(log_prob: np.ndarray, n_unknowns: int) -> int | None:
     return first if first < lp.shape[0] else None
 
 
-@dataclass(frozen=True)
-class SampleTolerance:
-    """The run-out tolerance of the posterior's samples and how it was chosen (:func:`evidence_tolerance`).
-
-    ``rtol``, ``atol``: what the samples integrate at; ``file_rtol``, ``file_atol``: the scenario's;
-    ``rule``: the sentence of the report that says why.
-    """
-
-    rtol: float
-    atol: float
-    file_rtol: float
-    file_atol: float
-    rule: str
-
-    @property
-    def changed(self) -> bool:
-        return self.rtol != self.file_rtol or self.atol != self.file_atol
-
-    def to_dict(self) -> dict:
-        return dict(self.__dict__)
-
-
-def evidence_tolerance(items, scene, rtol: float, atol: float) -> SampleTolerance:
-    """The loosest run-out tolerance whose integration error stays negligible beside the evidence.
-
-    The integration error of a rest position is at most about ``rtol * D`` (``D`` the longest
-    CG path of a body; the floor of :mod:`crashsim.motion.accuracy`, which overestimates the
-    measured error of the shipped fit scene about tenfold), of a heading ``rtol * max(|change|,
-    1 rad)``, of a speed ``rtol * v`` (``v`` the largest body speed at separation). The rule keeps
-    each bound at :data:`EVIDENCE_SHARE` (1 %) of the smallest sigma of the evidence of its kind
-    (rest positions and tyre marks; rest headings; recorder speeds), so that the likelihood moves by
-    at most about ``(0.01)^2`` per item::
-
-        rtol_s = min(0.01 sigma_len / D,  0.01 sigma_ang / max(dpsi, 1),  0.01 sigma_v / v)
-
-    and the samples integrate at ``min(max(rtol, rtol_s), LOOSEST_RTOL)`` (never tighter than the
-    file's ``rtol``), with ``atol`` scaled by the same factor (the file's ratio kept). Evidence that
-    the run-out does not reach (point of impact, delta-v, crush) sets no bound. ``D``, ``dpsi`` and
-    ``v`` are read off ``scene`` (the scene at the start values, integrated at the file's
-    tolerance).
-
-    Parameters
-    ----------
-    items : sequence
-        The evidence items of :class:`~crashsim.reconstruct.fit.EvidenceModel` (``kind``,
-        ``quantity``, ``sigma`` [SI]).
-    scene : SceneResult
-    rtol, atol : float
-        The scenario's run-out tolerances.
-    """
-    path = turn = speed = 0.0
-    for r in scene.runout.values():
-        for b in r.bodies.values():
-            path = max(path, float(b.distance))
-            turn = max(turn, abs(float(b.final.heading) - float(b.initial.heading)))
-            speed = max(speed, math.hypot(*b.initial.velocity))
-    bounds = []
-    runout_kinds = {"rest", "rest heading", "mark", "recorder"}
-    for quantity, scale, label in (("length", max(path, 1.0), f"the longest CG path {max(path, 1.0):.3g} m"),
-                                   ("angle", max(turn, 1.0), f"the largest heading change {max(turn, 1.0):.3g} rad"),
-                                   ("speed", max(speed, 1.0), f"the largest speed {max(speed, 1.0):.3g} m/s")):
-        sig = [it.sigma for it in items if it.kind in runout_kinds and it.quantity == quantity]
-        if sig:
-            bounds.append((EVIDENCE_SHARE * min(sig) / scale, f"{EVIDENCE_SHARE:g} x the smallest {quantity} sigma "
-                                                               f"{min(sig):.3g} (SI) over {label}"))
-    if not bounds:
-        return SampleTolerance(rtol, atol, rtol, atol, "the file's tolerance (no evidence of the run-out sets a bound)")
-    bound, why = min(bounds)
-    new = min(max(rtol, bound), LOOSEST_RTOL) if rtol < LOOSEST_RTOL else rtol
-    rule = (f"rtol {new:.3g} (file {rtol:.3g}): the integration error bound rtol x scale is at most "
-            f"{why}" + (f", capped at {LOOSEST_RTOL:g}" if bound > LOOSEST_RTOL and new == LOOSEST_RTOL else ""))
-    return SampleTolerance(new, atol * new / rtol, rtol, atol, rule)
-
-
 def _percentiles(v: np.ndarray) -> dict:
     """Percentiles, mean and sd of one unknown or derived quantity over the kept samples.
 
@@ -963,7 +885,7 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
             opts = scene0.scenario.runout.options
             tolerance = evidence_tolerance(problem.fit.evidence.items, scene0, opts.rtol, opts.atol)
             if tolerance.changed:
-                sampled_data = dict(scenario_data, runout=dict(raw_runout, rtol=tolerance.rtol, atol=tolerance.atol))
+                sampled_data = with_tolerance(scenario_data, tolerance)
                 problem = PosteriorProblem(sampled_data, fit_spec, priors, engine=engine, file=file,
                                            sample_time_limit=limit)
     derived = problem.derived_keys(z0)   # one scene here first: compiles the engine before any fork

@@ -105,7 +105,7 @@ class _Timers:
 #: Rows of the per-sample split: (label, how it is computed from the timers), physics first.
 SPLIT_ROWS = [
     ("physics: impact equations (`solve_packed`, the compiled solve; `solve_arrays` where it defers)", "impact_eq"),
-    ("physics: run-out integration (the compiled kernel, `_kernels.run`)", "kernel"),
+    ("physics: run-out integration (the compiled kernel, `kernels.run`)", "kernel"),
     ("**physics alone**", "physics"),
     ("scenario from the sample's inputs (`ScenarioOverrides.scenario`)", "scenario"),
     ("impact result objects (`solve_impact` beyond the equations)", "impact_obj"),
@@ -122,7 +122,7 @@ SPLIT_ROWS = [
 def _split(raw, spec, n: int, fast: bool) -> dict[str, float]:
     """CPU seconds per Monte Carlo sample of the shipped scene, in this process, by part (see SPLIT_ROWS)."""
     import crashsim.impact.solve as solve_mod
-    import crashsim.motion._kernels as kernels_mod
+    import crashsim.motion.kernels as kernels_mod
     import crashsim.motion.engine as engine_mod
     import crashsim.motion.postprocess as post_mod
     import crashsim.evidence.checks as evidence_mod
@@ -176,7 +176,7 @@ def _fit_physics(raw, spec) -> dict[str, float]:
     """CPU seconds of one fit run in this process (``workers=1``): in all, and in its physics (the
     impact equations and the run-out kernel of every scene evaluation)."""
     import crashsim.impact.solve as solve_mod
-    import crashsim.motion._kernels as kernels_mod
+    import crashsim.motion.kernels as kernels_mod
     from crashsim.reconstruct.fit import fit_scene
 
     tm = _Timers()

@@ -56,7 +56,7 @@ sys.path.insert(0, str(ROOT / "src"))
 from crashsim import (Body, BodyState, CrushSurface, Hitch, ImpactBatch, ImpactProblem,  # noqa: E402
                       TangentialLaw, Vehicle, chain_states, solve_impact)
 from crashsim.geometry import rotate  # noqa: E402
-from crashsim.impact import _kernel, core  # noqa: E402
+from crashsim.impact import kernel as _kernel, core  # noqa: E402
 from crashsim.impact import solve as _solve  # noqa: E402
 from crashsim.impact.result import ImpactResult, _body_impacts  # noqa: E402
 from crashsim.scenario import load_scenario  # noqa: E402
@@ -225,12 +225,7 @@ def single_times(name: str, repeats: int) -> dict:
 def raw_kernel(batch: ImpactBatch):
     """The kernel call alone (inputs prepared, no dict, no post-processing)."""
     S, A = batch.structure, batch.arrays
-    fixed, b1, b2, law, hitches, cb, xb = core.kernel_structure(S)
-    args = (fixed, b1, b2, law, hitches, cb, xb, A.mass, A.yaw_inertia, A.position, A.heading, A.velocity,
-            A.yaw_rate, A.hitch_front_point, A.hitch_rear_point, A.point, A.normal_angle, A.tangent_sign,
-            A.restitution, A.law_value, A.moment_restitution, A.constraint_point, A.constraint_direction,
-            A.constraint_value, A.external_point, A.external_impulse, _kernel.limits(), False)
-    args = tuple(np.ascontiguousarray(a) if isinstance(a, np.ndarray) else a for a in args)
+    args = (core.kernel_structure(S), _kernel.pack_items(A), _kernel.limits(), False)
     return lambda: _kernel.solve_batch(*args)
 
 

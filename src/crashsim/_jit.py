@@ -1,6 +1,6 @@
 """Where the compiled kernels are cached (the numba set-up; no pipeline here).
 
-The kernels of :mod:`crashsim.motion._kernels` (the run-out) and :mod:`crashsim.impact._kernel`
+The kernels of :mod:`crashsim.motion.kernels` (the run-out) and :mod:`crashsim.impact.kernel`
 (the impact solver) are compiled by numba on first use (about a minute or two on one core) and
 cached on disk. The cache lives in a user-writable directory,
 so an installation into a read-only or non-editable location keeps it too:
@@ -67,25 +67,17 @@ def configure() -> Path:
     return path
 
 
-def kernel_sources() -> list[Path]:
-    """The source files the compiled kernels are built from, in a fixed order.
-
-    The run-out's kernels (``motion/kernels/*.py`` if that package exists, else
-    ``motion/_kernels.py``), the tyre laws and options they inline (``motion/tyres.py``,
-    ``motion/options.py``), and the impact solver's kernel (``impact/_kernel.py``, or the
-    ``impact/kernel*.py`` / ``impact/kernels/*.py`` that succeed it).
-    """
+def kernel_sources(impact: bool = True) -> list[Path]:
+    """The source files the compiled kernels are built from, in a fixed order: every module of the
+    run-out kernel package (``motion/kernels/*.py``), the tyre law and the options they compile in
+    (``motion/tyres.py``, ``motion/options.py``), and (``impact``) the impact solver's kernel
+    (``impact/kernel.py``)."""
     here = Path(__file__).parent
-    motion, impact = here / "motion", here / "impact"
-    if (motion / "kernels").is_dir():
-        runout = sorted((motion / "kernels").rglob("*.py"))
-    else:
-        runout = [motion / "_kernels.py"]
-    impact_kernels = [impact / "_kernel.py"] if (impact / "_kernel.py").exists() else []
-    impact_kernels += sorted(impact.glob("kernel*.py"))
-    if (impact / "kernels").is_dir():
-        impact_kernels += sorted((impact / "kernels").rglob("*.py"))
-    return runout + [motion / "tyres.py", motion / "options.py"] + impact_kernels
+    motion = here / "motion"
+    paths = sorted((motion / "kernels").glob("*.py")) + [motion / "tyres.py", motion / "options.py"]
+    if impact:
+        paths.append(here / "impact" / "kernel.py")
+    return paths
 
 
 def digest() -> str:

@@ -1,7 +1,7 @@
 """Property: the compiled batch solver gives the dense solver's answers.
 
 ``core.solve_arrays(method="compiled")`` (the default without ``condition=True``) solves by the
-numba kernel of ``crashsim.impact._kernel`` (the dense algorithm item by item);
+numba kernel of ``crashsim.impact.kernel`` (the dense algorithm item by item);
 ``condition=True`` goes through ``_solve_chunk`` (equilibrated K x K inverses). Both must return
 the same dict: keys, shapes, dtypes, the ``ok`` rule (finite and 1-norm condition of the
 equilibrated system < COND_LIMIT), NaN for not-ok items, mu_max NaN where the no-slide system
@@ -353,7 +353,7 @@ def _solve_all_laws(S, A, seed):
     for law in LAWS:
         S_l, A_l = _with_law(S, A, law, rng, ns)
         dense = core.solve_arrays(S_l, A_l, method="dense")
-        # the compiled kernel (crashsim.impact._kernel): the dense path's algorithm item by
+        # the compiled kernel (crashsim.impact.kernel): the dense path's algorithm item by
         # item, so the same tolerances and threshold rules
         comp = core.solve_arrays(S_l, A_l, method="compiled")
         check_agreement(S_l, A_l, dense, comp, ns)

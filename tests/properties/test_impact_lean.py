@@ -1,6 +1,6 @@
 """Property: the fast single solve gives the full path's answers, refusals and warnings.
 
-``solve_impact`` solves with the compiled kernel (``crashsim.impact._kernel``) and builds the
+``solve_impact`` solves with the compiled kernel (``crashsim.impact.kernel``) and builds the
 result from plain floats, computing the per-body objects and the SVD condition number on first
 access; anything not clear-cut (not approaching, not solvable, within a factor 2K of the
 condition limit, inadmissible) goes to ``solve._solve_impact_full``: the dense numpy solve with

@@ -99,7 +99,7 @@ def test_the_analytic_functions_really_ran_compiled():
 # ----------------------------------------------------------------------------- same model
 @pytest.mark.parametrize("fiala", [True, False])
 def test_compiled_tyre_law_is_the_numpy_tyre_law(fiala):
-    from crashsim.motion import _kernels as k
+    from crashsim.motion import kernels as k
 
     rng = np.random.default_rng(7)
     n = 20000

@@ -7,9 +7,7 @@
 * no private name (a leading underscore) imported from another module;
 * the old paths of moved modules still work and warn.
 
-Exceptions, by name: the numba kernel files and their lazy imports belong to the engineer who splits
-``motion/_kernels.py`` into ``motion/kernels/`` and renames ``impact/_kernel.py`` (issue 20); they
-are listed in ``KERNEL_LAZY`` and ``KERNEL_PRIVATE`` and go when that work lands.
+No exceptions.
 """
 
 from __future__ import annotations
@@ -49,21 +47,6 @@ OPTIONAL_HEAVY = {
 
 def _optional(module: str) -> bool:
     return any(module == h or module.startswith(h + ".") for h in OPTIONAL_HEAVY)
-
-#: Lazy imports of the numba kernel modules (importing them imports numba and defines the kernels):
-#: (file under src/crashsim, module imported). The kernel engineer's (see the module notes).
-KERNEL_LAZY = {
-    ("impact/core.py", "crashsim.impact._kernel"),
-    ("impact/admissible.py", "crashsim.impact._kernel"),
-    ("impact/_kernel.py", "crashsim.impact.admissible"),
-    ("impact/_kernel.py", "crashsim.impact.core"),
-    ("motion/model.py", "crashsim.motion._kernels"),
-    ("motion/_kernels.py", "crashsim.motion.options"),
-}
-
-#: Private names imported across modules that are the kernel files' (module imported, name).
-KERNEL_PRIVATE = {("crashsim.impact", "_kernel"), ("crashsim.motion", "_kernels")}
-
 
 def _module_name(path: Path) -> str:
     parts = list(path.relative_to(SRC.parent).with_suffix("").parts)
@@ -146,11 +129,8 @@ def test_no_function_level_import_of_crashsim_or_of_a_light_dependency():
                 targets = [a.name for a in node.names]
             for t in targets:
                 if t.split(".")[0] == "crashsim":
-                    if (rel, t) not in KERNEL_LAZY:
-                        bad.append(f"{_where(path, node)}: function-level import of {t}")
-                elif not _optional(t) and rel not in {f for f, _ in KERNEL_LAZY
-                                                                             if f.endswith("_kernel.py")
-                                                                             or f.endswith("_kernels.py")}:
+                    bad.append(f"{_where(path, node)}: function-level import of {t}")
+                elif not _optional(t):
                     bad.append(f"{_where(path, node)}: function-level import of {t} (import it at module top, "
                                f"or add it to OPTIONAL_HEAVY with the reason)")
     assert not bad, "\n".join(bad)
@@ -168,8 +148,6 @@ def test_no_private_name_imported_across_modules():
                 continue
             for a in node.names:
                 if a.name.startswith("_") and not a.name.startswith("__") and target != module:
-                    if (target, a.name) in KERNEL_PRIVATE:
-                        continue
                     bad.append(f"{_where(path, node)}: {module} imports the private {a.name} of {target}")
     assert not bad, "\n".join(bad)
 

@@ -94,7 +94,7 @@ def test_time_limit_is_not_rest():
 def test_non_finite_derivative_stops_with_a_solver_failure(monkeypatch):
     """An integrator can loop forever on NaN; the SciPy engine checks every right-hand side and
     the run reports why it stopped (the compiled engine checks every RK stage)."""
-    from crashsim.motion import _kernels
+    from crashsim.motion import kernels as _kernels
 
     real = _kernels.rhs
 

@@ -56,6 +56,8 @@ from dataclasses import replace
 import numpy as np
 
 from ..errors import InadmissibleImpactError
+from . import kernel
+from .kernel import REL_ENERGY, REL_IMPULSE, REL_RATIO
 from .core import MU_MAX_LIMIT, WORK_KEYS, ImpactArrays, ImpactStructure, contiguous, kernel_structure, solve_arrays
 
 __all__ = ["impulse_work", "admissibility", "check_admissible", "REASONS"]
@@ -75,12 +77,6 @@ REASONS = {
 _MU_SEARCH = 5.0
 
 
-#: Relative round-off allowances of the tests (impulses; energies relative to the kinetic energy).
-_REL_IMPULSE = 1e-9
-_REL_ENERGY = 1e-9
-_REL_RATIO = 1e-9
-
-
 def impulse_work(S: ImpactStructure, A: ImpactArrays, out: dict) -> dict[str, np.ndarray]:
     """Work [J] done on the system by each group of impulses of a solved batch (module docstring).
 
@@ -90,17 +86,11 @@ def impulse_work(S: ImpactStructure, A: ImpactArrays, out: dict) -> dict[str, np
         ``normal``, ``tangential``, ``moment`` (crush surface), ``hitches``, ``constraints``,
         ``external``; their sum equals ``KE_after - KE_before`` of the batch item.
 
-    The formula is coded once, in :func:`crashsim.impact._kernel.impulse_work_item` (compiled;
+    The formula is coded once, in :func:`crashsim.impact.kernel.impulse_work_item` (compiled;
     the single solve calls it inside its kernel).
     """
-    from . import _kernel
-
-    fixed, b1, b2, _, hitches, cb, xb = kernel_structure(S)
-    W = _kernel.work_batch(fixed, b1, b2, hitches, cb, xb, contiguous(A.position), contiguous(A.heading), contiguous(A.velocity),
-                           contiguous(A.yaw_rate), contiguous(A.hitch_front_point), contiguous(A.hitch_rear_point), contiguous(A.point),
-                           contiguous(A.normal_angle), contiguous(A.tangent_sign), contiguous(A.constraint_point),
-                           contiguous(A.constraint_direction), contiguous(A.external_point), contiguous(A.external_impulse),
-                           contiguous(out["velocity"]), contiguous(out["yaw_rate"]), contiguous(out["impulses"]))
+    W = kernel.work_batch(kernel_structure(S), kernel.pack_items(A), contiguous(out["velocity"]), contiguous(out["yaw_rate"]),
+                          contiguous(out["impulses"]))
     return {key: W[:, j] for j, key in enumerate(WORK_KEYS)}
 
 
@@ -111,19 +101,17 @@ def admissibility(S: ImpactStructure, A: ImpactArrays, out: dict, work: dict | N
     -------
     (ok, reason) : ndarray of bool, ndarray of int, shape (B,)
         ``reason`` indexes :data:`REASONS` (0 where admissible; the first rule broken otherwise).
-    The rules are coded once, in :func:`crashsim.impact._kernel.reason_item` (compiled; the
+    The rules are coded once, in :func:`crashsim.impact.kernel.reason_item` (compiled; the
     single solve calls it inside its kernel), with the allowances of this module.
     """
-    from . import _kernel
-
     work = impulse_work(S, A, out) if work is None else work
     W = np.ascontiguousarray(np.stack([np.broadcast_to(work[key], (A.size,)) for key in WORK_KEYS], axis=1),
                              dtype=float)
-    reason = _kernel.reason_batch(np.ascontiguousarray(out["ok"], dtype=bool), contiguous(out["impulses"]),
-                                  _kernel.LAW_CODES[S.tangential], contiguous(A.law_value), contiguous(out["mu_max"]),
+    reason = kernel.reason_batch(np.ascontiguousarray(out["ok"], dtype=bool), contiguous(out["impulses"]),
+                                  kernel.LAW_CODES[S.tangential], contiguous(A.law_value), contiguous(out["mu_max"]),
                                   contiguous(out["no_slide_normal"]), contiguous(out["approach_tangential"]),
                                   contiguous(out["separation_tangential"]), contiguous(out["ke_before"].sum(axis=1)), W,
-                                  _kernel.limits())
+                                  kernel.limits())
     return reason == 0, reason
 
 

@@ -38,7 +38,7 @@ visible, and a solution is only returned where it is below :data:`COND_LIMIT`.
 
 Two implementations of the same solve (:func:`solve_arrays` picks one):
 
-* compiled (:func:`solve_compiled`, :mod:`crashsim.impact._kernel`): the dense path's
+* compiled (:func:`solve_compiled`, :mod:`crashsim.impact.kernel`): the dense path's
   algorithm item by item in a numba kernel (compiled on first use, cached on disk); every call
   without ``condition=True``, and the single solve (:func:`solve_packed`);
 * dense (:func:`_solve_chunk`): the K x K systems formed and inverted as batched numpy arrays;
@@ -57,13 +57,13 @@ from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
+from . import kernel
+from .kernel import COND_LIMIT, MU_MAX_LIMIT, WORK_KEYS
+
 __all__ = ["ImpactStructure", "ImpactArrays", "solve_arrays", "energy_loss_fraction", "TANGENTIAL_KINDS"]
 
 TANGENTIAL_KINDS = ("ratio", "fraction", "no_slide", "friction")
 
-#: The groups of impulses whose work ``admissible.impulse_work`` reports (the columns of the
-#: compiled kernels' work arrays).
-WORK_KEYS = ("normal", "tangential", "moment", "hitches", "constraints", "external")
 
 
 @dataclass(frozen=True)
@@ -264,9 +264,6 @@ def _equilibrate(M, b):
     return M / c[:, None, :], b, c
 
 
-#: 1-norm condition number of an equilibrated system above which its solution is not trusted
-#: (double precision then leaves fewer than ~4 significant digits).
-COND_LIMIT = 1e12
 
 
 def _norm1(M):
@@ -304,9 +301,6 @@ def _solve(M, b):
 #: one pass over 1e5-1e6 items when introduced; see the history of plots/impact_speed.md).
 CHUNK = 2048
 
-#: |mu_max| above which the no-sliding-at-separation solution is taken as impossible (the
-#: tangential impulse cannot stop the sliding: a singular or near-singular tangential row).
-MU_MAX_LIMIT = 1e6
 
 
 def solve_arrays(S: ImpactStructure, A: ImpactArrays, *, condition: bool = False,
@@ -323,7 +317,7 @@ def solve_arrays(S: ImpactStructure, A: ImpactArrays, *, condition: bool = False
     method : {"auto", "dense", "compiled"}
         ``"dense"``: :func:`_solve_chunk` (equilibrated K x K inverses, numpy), in chunks of
         :data:`CHUNK`. ``"compiled"``: :func:`solve_compiled` (the dense path's algorithm item by item in a
-        numba kernel, :mod:`crashsim.impact._kernel`; compiled on first use, cached on disk):
+        numba kernel, :mod:`crashsim.impact.kernel`; compiled on first use, cached on disk):
         the same outputs, the numbers to about cond * eps. ``"auto"`` (default): compiled
         when ``condition`` is False, dense otherwise.
 
@@ -503,18 +497,17 @@ def _solve_chunk(S: ImpactStructure, A: ImpactArrays, condition: bool) -> dict[s
 
 
 # --------------------------------------------------------------------------------------------
-# The compiled path: the dense path's algorithm item by item (crashsim.impact._kernel)
+# The compiled path: the dense path's algorithm item by item (crashsim.impact.kernel)
 # --------------------------------------------------------------------------------------------
 
 def kernel_structure(S: ImpactStructure) -> tuple:
-    """The structure as the kernels take it (int arrays), kept on S after the first call."""
+    """The structure as the kernels take it (``kernel.Structure``), kept on S after the first call."""
     meta = S.__dict__.get("_kernel_meta")
     if meta is None:
-        from . import _kernel
-
-        meta = (np.asarray(S.fixed, dtype=np.bool_), S.body1, S.body2, _kernel.LAW_CODES[S.tangential],
-                np.asarray(S.hitches, dtype=np.int64).reshape(len(S.hitches), 2),
-                np.asarray(S.constraint_bodies, dtype=np.int64), np.asarray(S.external_bodies, dtype=np.int64))
+        meta = kernel.Structure(np.asarray(S.fixed, dtype=np.bool_), S.body1, S.body2, kernel.LAW_CODES[S.tangential],
+                                np.asarray(S.hitches, dtype=np.int64).reshape(len(S.hitches), 2),
+                                np.asarray(S.constraint_bodies, dtype=np.int64),
+                                np.asarray(S.external_bodies, dtype=np.int64))
         object.__setattr__(S, "_kernel_meta", meta)  # a cache, not a field: eq, hash, replace unaffected
     return meta
 
@@ -529,7 +522,7 @@ def contiguous(a):
 
 def input_shapes(n: int, h: int, c: int, x: int) -> tuple:
     """(field, shape of one item) of :class:`ImpactArrays`, in field order: the layout of the
-    packed input vector of ``_kernel.solve_packed`` (field by field, each (B,) + shape)."""
+    packed input vector of ``kernel.solve_packed`` (field by field, each (B,) + shape)."""
     return (("mass", (n,)), ("yaw_inertia", (n,)), ("position", (n, 2)), ("heading", (n,)), ("velocity", (n, 2)),
             ("yaw_rate", (n,)), ("hitch_front_point", (h, 2)), ("hitch_rear_point", (h, 2)), ("point", (2,)),
             ("normal_angle", ()), ("tangent_sign", ()), ("restitution", ()), ("law_value", ()),
@@ -539,7 +532,7 @@ def input_shapes(n: int, h: int, c: int, x: int) -> tuple:
 
 def output_shapes(n: int, K: int, extras: bool) -> tuple:
     """(key, shape of one item) of the compiled kernels' output vector, in its order
-    (``_kernel._out_views``; flags stored as 0.0 / 1.0)."""
+    (``kernel._out_views``; flags stored as 0.0 / 1.0)."""
     return ((("velocity", (n, 2)), ("yaw_rate", (n,)), ("impulses", (K,)), ("mu", ()), ("mu_max", ()),
              ("sliding", ()), ("closing_velocity", ()), ("separation_normal", ()), ("separation_tangential", ()),
              ("ok", ()), ("approach_tangential", ()), ("no_slide_normal", ()), ("ke_before", (n,)), ("ke_after", (n,)),
@@ -573,7 +566,7 @@ def unpack(S: ImpactStructure, Y: np.ndarray, B: int, extras: bool = False):
 
 
 def solve_compiled(S: ImpactStructure, A: ImpactArrays, extras: bool = False):
-    """Solve a batch with the compiled kernel (:mod:`crashsim.impact._kernel`).
+    """Solve a batch with the compiled kernel (:mod:`crashsim.impact.kernel`).
 
     Returns ``(out, work, reason)``: ``out`` the dict of :func:`_solve_chunk` (without the SVD
     condition number); with ``extras`` also the work of each group of impulses (B, 6), in the
@@ -581,17 +574,9 @@ def solve_compiled(S: ImpactStructure, A: ImpactArrays, extras: bool = False):
     (else None, None).
     """
     global _LIMITS
-    from . import _kernel
-
     if _LIMITS is None:
-        _LIMITS = _kernel.limits()
-    fixed, b1, b2, law, hitches, cb, xb = kernel_structure(S)
-    Y = _kernel.solve_batch(
-        fixed, b1, b2, law, hitches, cb, xb, contiguous(A.mass), contiguous(A.yaw_inertia), contiguous(A.position), contiguous(A.heading),
-        contiguous(A.velocity), contiguous(A.yaw_rate), contiguous(A.hitch_front_point), contiguous(A.hitch_rear_point), contiguous(A.point),
-        contiguous(A.normal_angle), contiguous(A.tangent_sign), contiguous(A.restitution), contiguous(A.law_value), contiguous(A.moment_restitution),
-        contiguous(A.constraint_point), contiguous(A.constraint_direction), contiguous(A.constraint_value), contiguous(A.external_point),
-        contiguous(A.external_impulse), _LIMITS, extras)
+        _LIMITS = kernel.limits()
+    Y = kernel.solve_batch(kernel_structure(S), kernel.pack_items(A), _LIMITS, extras)
     return unpack(S, Y, A.size, extras)
 
 
@@ -616,10 +601,8 @@ def solve_packed(S: ImpactStructure, X: np.ndarray) -> dict:
     admissibility code) as python floats and flat lists: the single solve's fast path.
     ``inputs(S, values)`` splits the input list the same way."""
     global _LIMITS
-    from . import _kernel
-
     if _LIMITS is None:
-        _LIMITS = _kernel.limits()
+        _LIMITS = kernel.limits()
     meta = S.__dict__.get("_packed_meta")
     if meta is None:
         fixed, b1, b2, law, hitches, cb, xb = kernel_structure(S)
@@ -628,7 +611,7 @@ def solve_packed(S: ImpactStructure, X: np.ndarray) -> dict:
         meta = (ints, fixed, hitches, cb, xb, flat_spec(output_shapes(S.n_bodies, S.n_unknowns, True)),
                 flat_spec(input_shapes(S.n_bodies, len(S.hitches), len(S.constraint_bodies), len(S.external_bodies))))
         object.__setattr__(S, "_packed_meta", meta)
-    Y = _kernel.solve_packed(meta[0], meta[1], meta[2], meta[3], meta[4], X, _LIMITS, True)
+    Y = kernel.solve_packed(meta[0], meta[1], meta[2], meta[3], meta[4], X, _LIMITS, True)
     return _flat_fields(meta[5], Y.tolist())
 
 

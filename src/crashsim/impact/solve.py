@@ -157,7 +157,7 @@ def solve_impact(problem: ImpactProblem, *, check: bool = True) -> ImpactResult:
 
     Notes
     -----
-    The equations are solved by the compiled kernel (:mod:`crashsim.impact._kernel`; the
+    The equations are solved by the compiled kernel (:mod:`crashsim.impact.kernel`; the
     cost of a call is measured in ``plots/impact_speed.md``). An impact that is not clearly
     approaching, solvable, well inside the condition limit and admissible is solved again by
     the dense numpy path with the SVD condition number (:func:`_solve_impact_full`), which

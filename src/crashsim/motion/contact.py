@@ -1,6 +1,6 @@
 """Contact between vehicles, and between a vehicle and fixed obstacles, during the run-out.
 
-What is modelled (the equations are in :mod:`crashsim.motion._kernels`)
+What is modelled (the equations are in :mod:`crashsim.motion.kernels`)
 ----------------------------------------------------------------------
 Every body with an outline (``Body.length`` and ``width``, a rectangle about
 ``outline_center``) takes part; a body without one cannot be touched.  Pairs are the bodies of

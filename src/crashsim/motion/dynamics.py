@@ -21,7 +21,7 @@ acceleration constraint ``g'' + 2 zeta omega0 g' + omega0^2 g = 0``::
 rear body receives ``-lambda_j``.  A stop row's multiplier is the stop moment on the front
 body [N m].
 
-The engines evaluate these equations in the compiled kernels (:mod:`crashsim.motion._kernels`,
+The engines evaluate these equations in the compiled kernels (:mod:`crashsim.motion.kernels`,
 the one source of the run-out physics).  This module keeps the hitch geometry in NumPy for
 preparing inputs (:func:`make_hitch_consistent`, the consistency checks) and offers
 :class:`RunoutModel`, one vehicle's equations for NumPy callers, evaluated by the kernels.
@@ -322,7 +322,7 @@ class RunoutModel:
     The pymunk cross-check, the rigid and energy levels and the tests use it; the engines
     integrate the same kernels directly (:mod:`crashsim.motion.engine`).  There is no second
     copy of the equations here: :meth:`evaluate` calls
-    :func:`crashsim.motion._kernels.evaluate_columns`.
+    :func:`crashsim.motion.kernels.samples.evaluate_columns`.
 
     Parameters
     ----------
@@ -357,7 +357,7 @@ class RunoutModel:
         self.wheel_body = np.array([s.body_index for s in self.specs], dtype=int)
         self.front_points = np.array([h.front_point for h in vehicle.hitches], dtype=float).reshape(-1, 2)
         self.rear_points = np.array([h.rear_point for h in vehicle.hitches], dtype=float).reshape(-1, 2)
-        self.l_ref = self.scene.M[0][:, 2].copy()
+        self.l_ref = self.scene.M.body[:, 2].copy()
         rho = np.array([s.position for s in self.specs], dtype=float).reshape(-1, 2)
         self._rx, self._ry = rho[:, 0:1], rho[:, 1:2]
 
@@ -373,11 +373,11 @@ class RunoutModel:
     def _mode(self, seg: SegmentParams):
         D = self.scene.fresh_mode()
         if seg.membership.size:
-            D[0][:] = seg.membership
+            D.memb[:] = seg.membership
         for n, (j, theta) in enumerate(seg.locks):
-            D[1][n] = j
-            D[2][n] = theta
-        D[3][0] = len(seg.locks)
+            D.lk_j[n] = j
+            D.lk_th[n] = theta
+        D.lk_n[0] = len(seg.locks)
         return D
 
     # ------------------------------------------------------------------ kinematics

@@ -5,11 +5,11 @@ How a run proceeds (both engines)
 The time axis is cut into **segments** in which every input is constant: the wheel-setting
 phase (cut at the scheduled change times of every vehicle), the friction zone each wheel is
 in, the closed articulation stops, the contact state of every pair and which vehicles are
-parked.  A segment ends at the first event (:mod:`crashsim.motion._kernels`: a vehicle's rest,
+parked.  A segment ends at the first event (:mod:`crashsim.motion.kernels`: a vehicle's rest,
 a zone crossing, an articulation stop or its release, a touch, the arming or pressing of a
 pair), located on the integrator's dense output, or at a scheduled change.  What happens at an
-event is the kernels' :func:`~crashsim.motion._kernels.handle_event` and
-:func:`~crashsim.motion._kernels.settle`, the same code for both engines.
+event is the kernels' :func:`~crashsim.motion.kernels.handle_event` and
+:func:`~crashsim.motion.kernels.settle`, the same code for both engines.
 
 A touch at speed stops the integration: the impact is solved here by the impulse solver
 (:func:`_secondary_impact`), the velocities jump, the pair enters sustained contact, and the
@@ -18,7 +18,7 @@ a contact or an impact moves it again; the run ends when every vehicle is parked
 
 The engines differ only in the integrator of a segment: SciPy's ``LSODA`` (or another
 solve_ivp method) stepped from Python (``engine="scipy"``), or the compiled explicit
-Runge-Kutta loop of :func:`crashsim.motion._kernels.run` (``engine="compiled"``), which
+Runge-Kutta loop of :func:`crashsim.motion.kernels.run` (``engine="compiled"``), which
 returns to Python only for an impact.
 """
 
@@ -113,7 +113,7 @@ class _ScipyIntegrator(_Integrator):
         stops = model.segment_stops
         max_eval = int(o.max_evaluations)
         while True:
-            if bool(np.all(D[7] != 0)):
+            if bool(np.all(D.parked != 0)):
                 return k.ST_REST, t, y, None
             if counters[0] >= o.max_segments:
                 return k.ST_MAX_SEGMENTS, t, y, None
@@ -121,14 +121,14 @@ class _ScipyIntegrator(_Integrator):
                 return k.ST_NO_PROGRESS, t, y, None
             counters[0] += 1
             t_stop = next(s for s in stops if s > t)
-            phase = int(k.phase_at(t, M[6]))
+            phase = int(k.phase_at(t, M.phase_times))
             ev_kind, ev_idx, ev_val, ev_dir = k.segment_events(M, D, offsets)
             g_old, r_old = k.event_values(y, M, phase, D, ev_kind, ev_idx, ev_val)
             resolution = k.event_resolutions(M, ev_kind, ev_idx)
             snapshot = mode_snapshot(phase, D)
             # pairs in contact: their work is integrated with the state (module rhs_work)
             n = y.size
-            n_work = len(model.pairs) if bool(np.any(D[5] == k.PS_CONTACT)) else 0
+            n_work = len(model.pairs) if bool(np.any(D.pstate == k.PS_CONTACT)) else 0
             if self.energy_scale is None:
                 self.energy_scale = max(model.kinetic_energy(y), 1.0)
 
@@ -237,7 +237,7 @@ class _ScipyIntegrator(_Integrator):
 
 
 class _CompiledIntegrator(_Integrator):
-    """Segments integrated by the compiled loop (:func:`crashsim.motion._kernels.run`)."""
+    """Segments integrated by the compiled loop (:func:`crashsim.motion.kernels.run`)."""
 
     def __init__(self, model: SceneModel):
         super().__init__(model)
@@ -290,8 +290,8 @@ class _CompiledIntegrator(_Integrator):
         sg_t, _, phase, memb, nlk, lkj, lkth, pstate, pref, parked = sg
         bounds = list(zip(sg_t[:, 0].tolist(), sg_t[:, 1].tolist(), [None] * len(sg_t)))
         i64 = np.int64
-        return bounds, (phase.astype(i64), memb.copy(), nlk.astype(i64), lkj.copy(), lkth.copy(), pstate.astype(i64),
-                        pref.copy(), parked.astype(i64))
+        return bounds, kernels().Segments(phase.astype(i64), memb.copy(), nlk.astype(i64), lkj.copy(), lkth.copy(),
+                                          pstate.astype(i64), pref.copy(), parked.astype(i64))
 
     def sample(self, T, seg_of, y_end):
         st, sg_s, _ = self._joined()
@@ -363,7 +363,7 @@ class _PiecewiseSolution:
 
 def _first_root(k, M, phase, D, t, t_new, dense, g_old, g_new, r_old, r_new, ev_kind, ev_idx, ev_val, ev_dir,
                 resolution):
-    """The SciPy engine's :func:`crashsim.motion._kernels.first_root`: the same rule, SciPy's brentq."""
+    """The SciPy engine's :func:`crashsim.motion.kernels.first_root`: the same rule, SciPy's brentq."""
     h = t_new - t
     t_first, fired = math.inf, -1
     eps4 = 4 * np.finfo(float).eps
@@ -427,7 +427,7 @@ def _add_quadrature(k, M, seg, quad, work=None):
     Yq = np.ascontiguousarray(np.concatenate(nodes, axis=1))
     wq = np.concatenate(weights)
     arrays = segment_arrays([(seg["t0"], seg["t1"], seg["mode"])], None)
-    part = k.quad_sums(Yq, wq, np.zeros(wq.size, dtype=np.int64), M, *arrays)
+    part = k.quad_sums(Yq, wq, np.zeros(wq.size, dtype=np.int64), M, arrays)
     if work is not None:
         part[part.size - work.size:] = work
     quad += part
@@ -523,7 +523,7 @@ def _secondary_impact(model: SceneModel, t: float, y: np.ndarray, geo: np.ndarra
     """Solve the impact of a touch with the impulse solver; update ``y`` and the mode ``D`` in place.
 
     The impulse solver takes the hitches as free pins.  A closed articulation stop of an involved
-    vehicle is then reconciled at the same instant (:func:`crashsim.motion._kernels.reconcile_stops`):
+    vehicle is then reconciled at the same instant (:func:`crashsim.motion.kernels.reconcile_stops`):
     released if the impact turns the articulation away from it, else a plastic stop impact whose
     loss goes to the stop-impact line of the energy ledger (appended to ``log`` after the
     returned impact event).  The impact's delta-v includes that stop reaction (the velocity
@@ -580,11 +580,11 @@ def _secondary_impact(model: SceneModel, t: float, y: np.ndarray, geo: np.ndarra
     for name, (vx0, vy0) in v_before.items():
         i = names.index(name)
         delta_v[name] = (float(y[L.vx][i] - vx0), float(y[L.vy][i] - vy0))
-    if D[5][p] == k.PS_DISARMED:  # struck outside the crush: the force starts from this depth, as a press
-        D[6][p, k.A_DEPTH] = max(D[6][p, k.A_DEPTH], -float(k.pair_geometry(y, model.M, p)[0]))
-    D[5][p] = k.PS_CONTACT  # the allowance (the crush of the first impact, if any) is kept
+    if D.pstate[p] == k.PS_DISARMED:  # struck outside the crush: the force starts from this depth, as a press
+        D.pref[p, k.A_DEPTH] = max(D.pref[p, k.A_DEPTH], -float(k.pair_geometry(y, model.M, p)[0]))
+    D.pstate[p] = k.PS_CONTACT  # the allowance (the crush of the first impact, if any) is kept
     for v in involved:
-        D[7][model.vehicles.index(v)] = 0
+        D.parked[model.vehicles.index(v)] = 0
     record = SecondaryImpact(t=t, body1=pair.a, body2=pair.b, point=np.array(point), normal=np.array(geo[3:5]),
                              closing_speed=float(-geo[5]), normal_impulse=result.normal_impulse,
                              tangential_impulse=result.tangential_impulse, energy_loss=float(loss), delta_v=delta_v,
@@ -608,8 +608,8 @@ def _secondary_impact(model: SceneModel, t: float, y: np.ndarray, geo: np.ndarra
 def check_scene_hitches(model: SceneModel, y: np.ndarray) -> None:
     """Pins together, pin velocities equal, articulation inside its limit, for every hitch (else ScenarioError)."""
     L = model.layout
-    hb = model.M[20]
-    hitch = model.M[3]
+    hb = model.M.hitch_body
+    hitch = model.M.hitch
     for j in range(model.n_hitches):
         f, r = hb[j]
         front, rear = L.bodies[f], L.bodies[r]

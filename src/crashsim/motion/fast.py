@@ -17,7 +17,7 @@ array shape, has no event restarts with state jumps, and would add JAX.
 Design
 ------
 * **One source of the physics.**  The right-hand side, the event functions and what happens
-  at an event are the kernels of :mod:`crashsim.motion._kernels`, which the SciPy engine calls
+  at an event are the kernels of :mod:`crashsim.motion.kernels`, which the SciPy engine calls
   too; the tyre law is :func:`crashsim.motion.tyres.tyre_kernel`, compiled for scalars.
 * **Integrator.**  An explicit embedded Runge-Kutta pair with solve_ivp's own step-size
   controller, initial-step selection and tableaux: ``scheme="dopri5"`` (Dormand-Prince 5(4),

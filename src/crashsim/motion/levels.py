@@ -656,7 +656,7 @@ def rigid_runout(
                        hitches=False)
     res = run_model(model, initial).vehicles[vehicle.name]
     # each body's own time to rest (the run ends when the last body stops)
-    l_ref = model.M[0][:, 2]
+    l_ref = model.M.body[:, 2]
     bodies = {}
     for i, (name, b) in enumerate(res.bodies.items()):
         ttr = _own_rest_time(b, float(l_ref[i]), opts.v_stop, res.t_end) if res.success else None

@@ -1,4 +1,4 @@
-"""A scene compiled into the arrays the run-out kernels take (:mod:`crashsim.motion._kernels`).
+"""A scene compiled into the arrays the run-out kernels take (:mod:`crashsim.motion.kernels`).
 
 :class:`SceneModel` holds every movable vehicle of a scene in one state vector (bodies in
 vehicle order, :class:`~crashsim.motion.layout.StateLayout`), their wheels, hitches, static
@@ -19,6 +19,7 @@ from scipy.integrate import RK23, RK45
 
 from ..errors import ScenarioError
 from ..vehicles import BodyState, Vehicle
+from . import kernels as kernel_package
 from .contact import ContactModel, Obstacle, convex_pieces, piece_thickness
 from .layout import StateLayout
 from .loads import StaticLoads, load_transfer_matrix, static_loads
@@ -63,10 +64,8 @@ def reference_lengths(vehicle: Vehicle, specs) -> np.ndarray:
 
 
 def kernels():
-    """The kernel module (imported on first use: importing numba and compiling takes time)."""
-    from . import _kernels
-
-    return _kernels
+    """The run-out kernel package (:mod:`crashsim.motion.kernels`)."""
+    return kernel_package
 
 
 @dataclass(frozen=True)
@@ -310,12 +309,18 @@ class SceneModel:
             info.append([c[0], c[1], float(np.max(np.hypot(*(pc - c).T))), piece_thickness(pc)])
         pc_v = np.ascontiguousarray(np.concatenate(verts, 0)) if verts else np.zeros((0, 2))
         pc_n = np.ascontiguousarray(np.concatenate(normals, 0)) if normals else np.zeros((0, 2))
-        self.M = (body, wheel, wbody, np.ascontiguousarray(hitch), transfer, self.minv, self.phase_times, phase_w,
-                  zone_mu, zone_ptr, edge_arr, cfg, icfg, *tab, zone_box,
-                  self.body_vehicle, hbody, np.array(pc_body, dtype=np.int64), np.array(ptr, dtype=np.int64), pc_v,
-                  pc_n, np.array(info, dtype=float).reshape(-1, 4), np.array(pr_body, dtype=np.int64).reshape(-1, 2),
-                  np.array(pr_ptr, dtype=np.int64), np.array(pp, dtype=np.int64).reshape(-1, 2),
-                  np.array(pr_par, dtype=float).reshape(-1, k.N_R))
+        tab_a, tab_b, tab_c, tab_e, tab_p = tab
+        self.M = k.KernelModel(
+            body=body, wheel=wheel, wheel_body=wbody, hitch=np.ascontiguousarray(hitch), load_transfer=transfer,
+            inv_mass=self.minv, phase_times=self.phase_times, phase_wheels=phase_w,
+            zone_mu=zone_mu, zone_ptr=zone_ptr, zone_edges=edge_arr, cfg=cfg, icfg=icfg,
+            tab_a=tab_a, tab_b=tab_b, tab_c=tab_c, tab_e=tab_e, tab_p=tab_p, zone_box=zone_box,
+            body_vehicle=self.body_vehicle, hitch_body=hbody, piece_body=np.array(pc_body, dtype=np.int64),
+            piece_ptr=np.array(ptr, dtype=np.int64), piece_verts=pc_v, piece_normals=pc_n,
+            piece_info=np.array(info, dtype=float).reshape(-1, 4),
+            pair_body=np.array(pr_body, dtype=np.int64).reshape(-1, 2), pair_ptr=np.array(pr_ptr, dtype=np.int64),
+            piece_pairs=np.array(pp, dtype=np.int64).reshape(-1, 2),
+            pair_par=np.array(pr_par, dtype=float).reshape(-1, k.N_R))
         self.n_bodies, self.n_wheels, self.n_hitches = nb, nw, nh
 
     def with_road(self, road: Road) -> "SceneModel":
@@ -330,7 +335,7 @@ class SceneModel:
         cfg = self._cfg.copy()
         cfg[kernels().C_ROADMU] = road.mu
         new._cfg = cfg
-        new.M = tuple(cfg if a is self._cfg else a for a in self.M)
+        new.M = self.M._replace(cfg=cfg)
         return new
 
     # ------------------------------------------------------------------ pairs
@@ -365,7 +370,7 @@ class SceneModel:
     def offsets(self, y: np.ndarray) -> np.ndarray:
         """``2 pi k`` offset of every hitch's articulation angle at ``y`` (stops are at offset +- limit)."""
         psi = y[self.layout.psi]
-        hb = self.M[20]
+        hb = self.M.hitch_body
         out = np.zeros(max(self.n_hitches, 1))
         for j in range(self.n_hitches):
             raw = psi[hb[j, 0]] - psi[hb[j, 1]]

@@ -464,16 +464,16 @@ def mode_snapshot(phase, D):
 
 
 def segment_arrays(table, model):
-    """Stacked mode arrays of the segments (``sg_phase, sg_memb, ...``) for the kernels' post-processing."""
+    """Stacked modes of the segments (:class:`~crashsim.motion.kernels.arrays.Segments`) for the kernels' post-processing."""
     k = kernels()
     if not table:
         D = model.fresh_mode()
         table = [(0.0, 0.0, mode_snapshot(0, D))]
     modes = [m for _, _, m in table]
-    return (np.array([m[0] for m in modes], dtype=np.int64), np.stack([m[1] for m in modes]),
-            np.array([m[2] for m in modes], dtype=np.int64), np.stack([m[3] for m in modes]),
-            np.stack([m[4] for m in modes]), np.stack([m[5] for m in modes]).astype(np.int64),
-            np.stack([m[6] for m in modes]), np.stack([m[7] for m in modes]).astype(np.int64))
+    return k.Segments(np.array([m[0] for m in modes], dtype=np.int64), np.stack([m[1] for m in modes]),
+                      np.array([m[2] for m in modes], dtype=np.int64), np.stack([m[3] for m in modes]),
+                      np.stack([m[4] for m in modes]), np.stack([m[5] for m in modes]).astype(np.int64),
+                      np.stack([m[6] for m in modes]), np.stack([m[7] for m in modes]).astype(np.int64))
 
 
 def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_end, quad, events, impacts, nfev, mode,
@@ -494,13 +494,13 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
     table, arrays = integrator.segment_data(mode)  # (t0, t1, _) per segment; their mode arrays
     T, seg_of = _sample_times(table, o.sample_dt, t_end)
     Y = integrator.sample(T, seg_of, y_end)
-    P, SL, LD, LAMH, STOPM, CF, max_gap, pen = k.evaluate_samples(np.ascontiguousarray(Y), seg_of, M, *arrays)
+    P, SL, LD, LAMH, STOPM, CF, max_gap, pen = k.evaluate_samples(np.ascontiguousarray(Y), seg_of, M, arrays)
     sol = integrator.solution(y_end, t_end)
     if lean is None:
         events[:] = event_places(model, sol, events)
     missed = None
     if model.road.zones and table:
-        miss_t, miss_k = k.missed_zone(M, T, P, seg_of, arrays[1])
+        miss_t, miss_k = k.missed_zone(M, T, P, seg_of, arrays.memb)
         if miss_k >= 0:
             missed = (float(miss_t), int(miss_k))
     nb, nw = model.n_bodies, model.n_wheels
@@ -512,7 +512,7 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
         if e.kind == "vehicle_rest":
             rest_time[e.vehicles[0]] = e.t
     vehicles = {}
-    parked = mode[7]
+    parked = mode.parked
     for vi, v in enumerate(model.vehicles):
         at_rest = bool(parked[vi])
         t_v = rest_time.get(v.name, t_end) if at_rest else t_end
@@ -602,7 +602,7 @@ def contact_summaries(model, integrator, table, arrays, y_end, t_end):
 
     The span is the time the pair spent in sustained contact, from the segments the events cut
     (so it is the span of the pair's own contact events).  Force, depth and the closing speed
-    of points pressed beyond the allowance (:func:`crashsim.motion._kernels.contact_samples`) are
+    of points pressed beyond the allowance (:func:`crashsim.motion.kernels.contact_samples`) are
     evaluated on the dense solution at every step of the integrator in the segments with a
     pair in contact or disarmed (its start and quarter points), and the largest force is
     refined by the parabola through the largest node and its neighbours (in segments with a pair
@@ -615,7 +615,7 @@ def contact_summaries(model, integrator, table, arrays, y_end, t_end):
     span, peak, deepest, closing = np.zeros(npr), np.zeros(npr), np.zeros(npr), np.zeros(npr)
     if not npr or not table:
         return span, peak, deepest, closing
-    pstate = arrays[5]
+    pstate = arrays.pstate
     edges = integrator.step_edges()
     T, G = [], []
     for g, (t0, t1, _) in enumerate(table):
@@ -638,7 +638,7 @@ def contact_summaries(model, integrator, table, arrays, y_end, t_end):
     G = np.concatenate(G + [np.array([len(table) - 1], dtype=np.int64)])
     Y = integrator.sample(T, G, y_end)[:, :-1]
     T, G = T[:-1], G[:-1]
-    CF, deepest, closing = k.contact_samples(np.ascontiguousarray(Y), G, model.M, *arrays[1:])
+    CF, deepest, closing = k.contact_samples(np.ascontiguousarray(Y), G, model.M, arrays)
     # closing speeds inside the segments: a segment's end is the instant of its event (an
     # impact's state before the impulse)
     ends = np.array([t1 for _, t1, _ in table])[G]
@@ -688,7 +688,7 @@ def event_places(model, sol, events) -> list:
             place = at(spec.body_index, spec.position)
         elif "hitch" in e.data:
             j = [f"{a}-{b}" for a, b in model.hitch_names].index(e.data["hitch"])
-            place = at(int(model.M[20][j][0]), model.M[3][j, :2])
+            place = at(int(model.M.hitch_body[j][0]), model.M.hitch[j, :2])
         elif e.kind == "vehicle_rest" and e.vehicles and e.vehicles[0] in names:
             place = at(model.body_range[e.vehicles[0]][0], (0.0, 0.0))
         elif "pair" in e.data and e.kind != "contact_end":
@@ -712,8 +712,8 @@ def _vehicle_gap(model, Y, h0, h1) -> float:
     if h1 <= h0:
         return 0.0
     L = model.layout
-    hb = model.M[20]
-    hitch = model.M[3]
+    hb = model.M.hitch_body
+    hitch = model.M.hitch
     out = 0.0
     for j in range(h0, h1):
         f, r = hb[j]

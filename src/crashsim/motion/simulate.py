@@ -4,7 +4,7 @@ The run-out of a scene integrates every movable vehicle together, from the first
 until every vehicle is at rest, with contact between bodies of different vehicles and with
 fixed obstacles (:mod:`crashsim.motion.contact`): secondary impacts solved by the impulse
 solver, sustained contact as a penalty force.  How a run proceeds, its events and limits:
-:mod:`crashsim.motion.engine`; the equations: :mod:`crashsim.motion._kernels` (one source for
+:mod:`crashsim.motion.engine`; the equations: :mod:`crashsim.motion.kernels` (one source for
 both engines); the articulation stops:
 
 **Articulation limit handling.**  A hitch with ``articulation_limit`` has a stop at

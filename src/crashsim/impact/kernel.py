@@ -19,27 +19,27 @@ compiled loops instead of as batched numpy arrays:
 
 The numbers agree with the dense path to about cond * eps (another sequence of roundings;
 tests/properties/test_impact_fast_batch.py). Importing this module defines the kernels;
-numba compiles them on first use and caches them on disk (``crashsim.motion.jitcache``), so
-importing :mod:`crashsim` does not pay for it.
+numba compiles them on first use and caches them on disk (:mod:`crashsim._jit`).
 """
 
 from __future__ import annotations
 
 import math
+from collections import namedtuple
 
 import numpy as np
 from numba import njit
 
 from .._jit import configure as _configure_cache
-from .core import WORK_KEYS  # noqa: F401  (the columns of the work arrays)
 
 _configure_cache()
 
-__all__ = ["solve_batch", "solve_packed", "work_batch", "reason_batch", "impulse_work_item", "reason_item", "LAW_CODES"]
+__all__ = ["solve_batch", "solve_packed", "work_batch", "reason_batch", "impulse_work_item", "reason_item", "LAW_CODES",
+           "Structure", "Items", "pack_items"]
 
 _JIT = {"cache": True, "error_model": "numpy", "nogil": True}
 # Helpers that allocate nothing are compiled without NRT reference counting (as in
-# crashsim.motion._kernels): numba otherwise increfs/decrefs every array argument on every call.
+# crashsim.motion.kernels): numba otherwise increfs/decrefs every array argument on every call.
 _HOT = dict(_JIT, _nrt=False)
 _INLINE = dict(_HOT, inline="always")
 
@@ -47,25 +47,67 @@ _INLINE = dict(_HOT, inline="always")
 LAW_CODES = {"ratio": 0, "fraction": 1, "no_slide": 2, "friction": 3}
 _RATIO, _FRACTION, _NO_SLIDE, _FRICTION = 0, 1, 2, 3
 
-#: Layout of the ``limits`` argument (the thresholds live with the code that owns them:
-#: core.COND_LIMIT, core.MU_MAX_LIMIT, admissible._REL_*; :func:`limits` collects them).
+#: The groups of impulses whose work ``admissible.impulse_work`` reports (the columns of the
+#: kernels' work arrays).
+WORK_KEYS = ("normal", "tangential", "moment", "hitches", "constraints", "external")
+
+#: 1-norm condition number of an equilibrated system above which its solution is not trusted
+#: (double precision then leaves fewer than ~4 significant digits).
+COND_LIMIT = 1e12
+#: |mu_max| above which the no-sliding-at-separation solution is taken as impossible (the
+#: tangential impulse cannot stop the sliding: a singular or near-singular tangential row).
+MU_MAX_LIMIT = 1e6
+#: Relative round-off allowances of the admissibility tests (impulses; energies relative to the
+#: kinetic energy; impulse ratios), :mod:`crashsim.impact.admissible`.
+REL_IMPULSE = 1e-9
+REL_ENERGY = 1e-9
+REL_RATIO = 1e-9
+
+#: Layout of the ``limits`` argument (:func:`limits`): the thresholds above, defined here, below
+#: the dense path (core) and the admissibility rules (admissible) that share them.
 L_COND, L_MU_MAX, L_REL_IMPULSE, L_REL_RATIO, L_REL_ENERGY = range(5)
 
 
-def limits() -> np.ndarray:
-    """The thresholds the kernels use, from the modules that define them."""
-    from . import admissible, core
+#: The structure of a batch as the kernels take it (``core._kernel_structure``): ``fixed`` (n,)
+#: bool (barrier bodies), the bodies ``body1``, ``body2`` of the crush surface, the tangential
+#: ``law`` code (:data:`LAW_CODES`), ``hitches`` (h, 2) front and rear body of each hitch,
+#: ``cbodies`` (c,) the body of each velocity constraint, ``xbodies`` (x,) the body of each
+#: known external impulse.
+Structure = namedtuple("Structure", ["fixed", "body1", "body2", "law", "hitches", "cbodies", "xbodies"])
 
-    return np.array([core.COND_LIMIT, core.MU_MAX_LIMIT, admissible._REL_IMPULSE, admissible._REL_RATIO,
-                     admissible._REL_ENERGY])
+#: The numbers of a batch of B items, one array per field of :class:`crashsim.impact.core.ImpactArrays`
+#: (same names, shapes and SI units; C order, float64).
+Items = namedtuple("Items", ["mass", "yaw_inertia", "position", "heading", "velocity", "yaw_rate", "hitch_front_point",
+                             "hitch_rear_point", "point", "normal_angle", "tangent_sign", "restitution", "law_value",
+                             "moment_restitution", "constraint_point", "constraint_direction", "constraint_value",
+                             "external_point", "external_impulse"])
+
+
+def pack_items(A) -> Items:
+    """The :class:`Items` of an :class:`~crashsim.impact.core.ImpactArrays` (C-ordered float64 views or copies)."""
+    out = []
+    for name in Items._fields:
+        a = getattr(A, name)
+        out.append(a if a.flags.c_contiguous and a.dtype == np.float64 else np.ascontiguousarray(a, dtype=np.float64))
+    return Items(*out)
+
+
+def limits() -> np.ndarray:
+    """The thresholds the kernels use (in the order of the ``L_*`` indices)."""
+    return np.array([COND_LIMIT, MU_MAX_LIMIT, REL_IMPULSE, REL_RATIO, REL_ENERGY])
 
 
 
 
 @njit(**_HOT)
-def _rows(fixed, body1, body2, hitches, cbodies, position, heading, hfp, hrp, point, normal_angle, tangent_sign,
-          cpoint, cdir, i, J, rowb):
-    """Rows of J (K, n, 3) of batch item i (zeroed here), and the bodies of each row (ascending)."""
+def _rows(S, A, i, J, rowb):
+    """Rows of J (K, n, 3) of batch item i (zeroed here), and the bodies of each row (ascending):
+    the crush normal and tangent at the contact point, the moment row, the hitch pins (x, y),
+    the velocity constraints (module docstring, item 1). Returns the normal and tangent."""
+    body1, body2, hitches, cbodies = S.body1, S.body2, S.hitches, S.cbodies
+    position, heading, hfp, hrp = A.position, A.heading, A.hitch_front_point, A.hitch_rear_point
+    point, normal_angle, tangent_sign = A.point, A.normal_angle, A.tangent_sign
+    cpoint, cdir = A.constraint_point, A.constraint_direction
     for k in range(J.shape[0]):
         for b in range(J.shape[1]):
             J[k, b, 0] = J[k, b, 1] = J[k, b, 2] = 0.0
@@ -217,11 +259,13 @@ def _solve_system(Mat, rhs, K, Ms, aug, x, cond_limit, sc):
 
 
 @njit(**_HOT)
-def impulse_work_item(fixed, hitches, cbodies, xbodies, J, rowb, position, v0, w0, v1, w1, lam, xpoint, ximp, i,
-                      work):
+def impulse_work_item(S, A, J, rowb, v1, w1, lam, i, work):
     """Work of each group of impulses of batch item i (``admissible.impulse_work``'s formula):
     ``lambda_k (u_k^- + u_k^+) / 2`` over the non-fixed bodies of row k, and
-    ``p . (v^- + v^+) / 2`` at the point of a known external impulse. Fills ``work`` (6,)."""
+    ``p . (v^- + v^+) / 2`` at the point of a known external impulse (velocities before: the
+    items' ``velocity``, ``yaw_rate``; after: ``v1``, ``w1``). Fills ``work[i]`` (6,)."""
+    fixed, hitches, xbodies = S.fixed, S.hitches, S.xbodies
+    position, v0, w0, xpoint, ximp = A.position, A.velocity, A.yaw_rate, A.external_point, A.external_impulse
     K = lam.shape[1]
     k0 = 3 + 2 * hitches.shape[0]
     work[i, 3] = 0.0
@@ -294,19 +338,17 @@ def reason_item(ok, lam, law, law_value, mu_max, pn_no_slide, slip, sep_t, ke0, 
 
 
 @njit(**_JIT)
-def work_batch(fixed, body1, body2, hitches, cbodies, xbodies, position, heading, velocity, yaw_rate, hfp, hrp,
-               point, normal_angle, tangent_sign, cpoint, cdir, xpoint, ximp, vel_after, yaw_after, lam):
-    """:func:`impulse_work_item` over a batch: (B, 6) in the order of :data:`WORK_KEYS`."""
-    B, n = yaw_rate.shape
+def work_batch(S, A, vel_after, yaw_after, lam):
+    """:func:`impulse_work_item` over a batch (structure ``S``, items ``A``, velocities after and
+    impulses of a solution): (B, 6) in the order of :data:`WORK_KEYS`."""
+    B, n = A.yaw_rate.shape
     K = lam.shape[1]
     J = np.empty((K, n, 3))
     rowb = np.empty((K, 2), dtype=np.int64)
     out = np.empty((B, 6))
     for i in range(B):
-        _rows(fixed, body1, body2, hitches, cbodies, position, heading, hfp, hrp, point, normal_angle, tangent_sign,
-              cpoint, cdir, i, J, rowb)
-        impulse_work_item(fixed, hitches, cbodies, xbodies, J, rowb, position, velocity, yaw_rate, vel_after,
-                          yaw_after, lam, xpoint, ximp, i, out)
+        _rows(S, A, i, J, rowb)
+        impulse_work_item(S, A, J, rowb, vel_after, yaw_after, lam, i, out)
     return out
 
 
@@ -402,162 +444,222 @@ def solve_packed(meta, fixed, hitches, cbodies, xbodies, X, limits, extras):
     xpoint = X[o:o + 2 * B * x].reshape((B, x, 2))
     o += 2 * B * x
     ximp = X[o:o + 2 * B * x].reshape((B, x, 2))
-    return solve_batch(fixed, meta[4], meta[5], meta[6], hitches, cbodies, xbodies, mass, inertia, position, heading,
-                       velocity, yaw_rate, hfp, hrp, point, normal_angle, tangent_sign, restitution, law_value,
-                       moment_restitution, cpoint, cdir, cval, xpoint, ximp, limits, extras)
+    S = Structure(fixed, meta[4], meta[5], meta[6], hitches, cbodies, xbodies)
+    A = Items(mass, inertia, position, heading, velocity, yaw_rate, hfp, hrp, point, normal_angle, tangent_sign,
+              restitution, law_value, moment_restitution, cpoint, cdir, cval, xpoint, ximp)
+    return solve_batch(S, A, limits, extras)
+
+
+#: Scratch arrays of one batch item (K unknowns, n bodies): the rows ``J`` (K, n, 3) and their
+#: bodies ``rowb`` (K, 2); inverse masses ``minv`` (n, 3); known external impulses ``pext`` (n, 3);
+#: free velocities ``vfree``, ``wfree``; row velocities before ``u0`` and free ``uf`` (K,); ``W``
+#: = J Minv J^T and the system ``Mat``, ``rhs``; solver scratch ``Ms``, ``aug``, ``scr``; the
+#: no-slide and law solutions ``lam_ns``, ``lam_r``; velocities before ``vq``, ``wq`` and after
+#: ``vo``, ``wo``.
+Scratch = namedtuple("Scratch", ["J", "rowb", "minv", "pext", "vfree", "wfree", "u0", "uf", "W", "Mat", "rhs", "Ms", "aug",
+                                 "scr", "lam_ns", "lam_r", "vq", "wq", "vo", "wo"])
+#: The outputs of a batch as views of one vector (:func:`_out_views`; ``sc`` rows: mu, mu_max,
+#: sliding, closing, sep_n, sep_t, ok, slip, pn_no_slide).
+Outputs = namedtuple("Outputs", ["v", "w", "lam", "sc", "ke0", "ke1", "normal", "tangent", "cond", "work", "reason"])
+
+
+# The stages of one item are inlined into solve_batch (one compiled loop, as before the cut):
+# a call would pass the structure, the items and the scratch as a few hundred scalar arguments.
+@njit(**_JIT)
+def _scratch(n, K):
+    return Scratch(np.empty((K, n, 3)), np.empty((K, 2), dtype=np.int64), np.empty((n, 3)), np.zeros((n, 3)),
+                   np.empty((n, 2)), np.empty(n), np.empty(K), np.empty(K), np.empty((K, K)), np.empty((K, K)),
+                   np.empty(K), np.empty((K, K)), np.empty((K, 2 * K)), np.empty((3, K)), np.empty(K), np.empty(K),
+                   np.empty((n, 2)), np.empty(n), np.empty((n, 2)), np.empty(n))
+
+
+@njit(**_INLINE)
+def _assemble_item(S, A, i, X):
+    """The equations of item i before the laws (module docstring, items 1-2): the rows of J,
+    inverse masses, known external impulses, ``u0 = J q``, ``u_free = J (q + Minv p_ext)`` and
+    ``W = J Minv J^T``. Returns the normal and tangent (nx, ny, tx, ty)."""
+    fixed, xbodies = S.fixed, S.xbodies
+    mass, inertia, velocity, yaw_rate = A.mass, A.yaw_inertia, A.velocity, A.yaw_rate
+    position, xpoint, ximp = A.position, A.external_point, A.external_impulse
+    J, rowb, minv, pext, vfree, wfree, u0, uf, W = X.J, X.rowb, X.minv, X.pext, X.vfree, X.wfree, X.u0, X.uf, X.W
+    vq, wq = X.vq, X.wq
+    n = mass.shape[1]
+    K = J.shape[0]
+    nxv, nyv, txv, tyv = _rows(S, A, i, J, rowb)
+    for b in range(n):
+        if fixed[b]:
+            minv[b, 0] = minv[b, 1] = minv[b, 2] = 0.0
+        else:
+            minv[b, 0] = minv[b, 1] = 1.0 / mass[i, b]
+            minv[b, 2] = 1.0 / inertia[i, b]
+        pext[b, 0] = pext[b, 1] = pext[b, 2] = 0.0
+        vq[b, 0], vq[b, 1], wq[b] = velocity[i, b, 0], velocity[i, b, 1], yaw_rate[i, b]
+    for x in range(xbodies.shape[0]):
+        b = xbodies[x]
+        ix, iy = ximp[i, x, 0], ximp[i, x, 1]
+        rx, ry = xpoint[i, x, 0] - position[i, b, 0], xpoint[i, x, 1] - position[i, b, 1]
+        pext[b, 0] += ix
+        pext[b, 1] += iy
+        pext[b, 2] += rx * iy - ry * ix
+    for b in range(n):
+        vfree[b, 0] = vq[b, 0] + minv[b, 0] * pext[b, 0]
+        vfree[b, 1] = vq[b, 1] + minv[b, 1] * pext[b, 1]
+        wfree[b] = wq[b] + minv[b, 2] * pext[b, 2]
+    for k in range(K):
+        u0[k] = _row_dot(J, rowb, k, vq, wq)
+        uf[k] = _row_dot(J, rowb, k, vfree, wfree)
+        for l in range(k, K):      # W is symmetric
+            acc = 0.0
+            for a in range(2):
+                b = rowb[k, a]
+                if b >= 0 and (rowb[l, 0] == b or rowb[l, 1] == b):
+                    acc += (J[k, b, 0] * minv[b, 0] * J[l, b, 0] + J[k, b, 1] * minv[b, 1] * J[l, b, 1]
+                            + J[k, b, 2] * minv[b, 2] * J[l, b, 2])
+            W[k, l] = acc
+            W[l, k] = acc
+    return nxv, nyv, txv, tyv
+
+
+@njit(**_INLINE)
+def _law_rows(S, A, i, X):
+    """The system ``Mat lam = rhs`` of item i with the no-sliding tangential row (module
+    docstring, item 2: the restitution rows of the normal and the moment, Eqs. 4-7, the hitch
+    pins and the velocity constraints)."""
+    body1, body2, cbodies = S.body1, S.body2, S.cbodies
+    W, Mat, rhs, u0, uf, minv = X.W, X.Mat, X.rhs, X.u0, X.uf, X.minv
+    K = W.shape[0]
+    nc = cbodies.shape[0]
+    k0 = K - nc
+    e = A.restitution[i]
+    ep = A.moment_restitution[i]
+    inv_ibar = minv[body1, 2] + minv[body2, 2]
+    ibar = 1.0 / inv_ibar if inv_ibar > 0 else 0.0
+    g = (1.0 + ep) * ibar
+    for k in range(K):
+        for l in range(K):
+            Mat[k, l] = W[k, l]
+        rhs[k] = -uf[k]
+    rhs[0] = -e * u0[0] - uf[0]
+    for l in range(K):
+        Mat[2, l] = -g * W[2, l]
+    Mat[2, 2] += ep
+    rhs[2] = g * uf[2]
+    for c in range(nc):
+        rhs[k0 + c] = A.constraint_value[i, c] - uf[k0 + c]
+
+
+@njit(**_INLINE)
+def _tangential_law(S, A, i, X, limits):
+    """Solve item i's system without sliding, then apply the tangential law (module docstring,
+    item 4: no sliding -> mu_max; ratio, fraction, friction with its fallback), solving again
+    with the law's row where it applies. Returns ``(ok, cond, mu_max, pn_no_slide, sliding, redo)``."""
+    law = S.law
+    Mat, rhs, lam_ns, u0 = X.Mat, X.rhs, X.lam_ns, X.u0
+    K = Mat.shape[0]
+    ok, cond = _solve_system(Mat, rhs, K, X.Ms, X.aug, lam_ns, limits[L_COND], X.scr)
+    mu_max = lam_ns[1] / lam_ns[0] if ok else np.nan
+    pn_ns = lam_ns[0] if ok else np.nan
+    sliding = False
+    redo = False
+    mu_used = 0.0
+    if law == _RATIO:
+        redo = True
+        mu_used = A.law_value[i]
+    elif law == _FRACTION:
+        redo = True
+        mu_used = A.law_value[i] * mu_max
+    elif law == _FRICTION:
+        f = A.law_value[i]
+        # sliding can be stopped only by a compressive no-slide impulse of finite ratio
+        stoppable = ok and lam_ns[0] > 0.0 and abs(mu_max) <= limits[L_MU_MAX]
+        redo = not (stoppable and abs(mu_max) <= f)
+        if stoppable:
+            sgn = 1.0 if mu_max > 0 else (-1.0 if mu_max < 0 else 0.0)
+        else:
+            sgn = -1.0 if u0[1] > 0 else (1.0 if u0[1] < 0 else 0.0)
+        mu_used = f * sgn
+    if redo:
+        for l in range(K):
+            Mat[1, l] = 0.0
+        Mat[1, 1] = 1.0
+        Mat[1, 0] = -mu_used
+        rhs[1] = 0.0
+        ok, cond = _solve_system(Mat, rhs, K, X.Ms, X.aug, X.lam_r, limits[L_COND], X.scr)
+        sliding = True
+    return ok, cond, mu_max, pn_ns, sliding, redo
+
+
+@njit(**_INLINE)
+def _velocities_after(S, i, X, ok, redo, out):
+    """Impulses and velocities after of item i (module docstring, item 5): ``lam`` (NaN if not
+    solved), ``v+ = v- + Minv (p_ext + J^T lam)``, into the outputs ``out``."""
+    J, rowb, minv, pext, vq, wq, vo, wo = X.J, X.rowb, X.minv, X.pext, X.vq, X.wq, X.vo, X.wo
+    lam_out, v_out, w_out = out.lam, out.v, out.w
+    K = J.shape[0]
+    n = J.shape[1]
+    for k in range(K):
+        lam_out[i, k] = (X.lam_r[k] if redo else X.lam_ns[k]) if ok else np.nan
+    for b in range(n):
+        dx, dy, dw = pext[b, 0], pext[b, 1], pext[b, 2]
+        for k in range(K):
+            if rowb[k, 0] == b or rowb[k, 1] == b:
+                lk = lam_out[i, k]
+                dx += J[k, b, 0] * lk
+                dy += J[k, b, 1] * lk
+                dw += J[k, b, 2] * lk
+        if not ok:
+            dx = dy = dw = np.nan
+        vo[b, 0] = vq[b, 0] + minv[b, 0] * dx
+        vo[b, 1] = vq[b, 1] + minv[b, 1] * dy
+        wo[b] = wq[b] + minv[b, 2] * dw
+        v_out[i, b, 0], v_out[i, b, 1], w_out[i, b] = vo[b, 0], vo[b, 1], wo[b]
+
+
+@njit(**_INLINE)
+def _energies(S, A, i, X, out):
+    """Kinetic energies of each body of item i before and after [J] (barrier bodies: 0) into
+    ``out``; returns the total before."""
+    fixed, mass, inertia, vq, wq, vo, wo = S.fixed, A.mass, A.yaw_inertia, X.vq, X.wq, X.vo, X.wo
+    ke0 = 0.0
+    for b in range(mass.shape[1]):
+        m = 0.0 if fixed[b] else mass[i, b]
+        inr = 0.0 if fixed[b] else inertia[i, b]
+        e0 = 0.5 * m * (vq[b, 0] * vq[b, 0] + vq[b, 1] * vq[b, 1]) + 0.5 * inr * wq[b] * wq[b]
+        out.ke0[i, b] = e0
+        out.ke1[i, b] = 0.5 * m * (vo[b, 0] * vo[b, 0] + vo[b, 1] * vo[b, 1]) + 0.5 * inr * wo[b] * wo[b]
+        ke0 += e0
+    return ke0
 
 
 @njit(**_JIT)
-def solve_batch(fixed, body1, body2, law, hitches, cbodies, xbodies, mass, inertia, position, heading, velocity,
-                yaw_rate, hfp, hrp, point, normal_angle, tangent_sign, restitution, law_value, moment_restitution,
-                cpoint, cdir, cval, xpoint, ximp, limits, extras):
-    """Solve every item of a batch (module docstring). Inputs as ``core.ImpactArrays`` (C order,
-    float64), the structure as int arrays. Returns one float64 vector holding the outputs
-    field by field (``core.OUT_LAYOUT``; flags as 0.0 / 1.0); ``extras``: with the work (B, 6)
-    and the admissibility code (B,) of every item."""
-    B, n = mass.shape
-    h = hitches.shape[0]
-    nc = cbodies.shape[0]
-    K = 3 + 2 * h + nc
-    k0 = 3 + 2 * h
+def solve_batch(S, A, limits, extras):
+    """Solve every item of a batch (module docstring): structure ``S`` (:class:`Structure`),
+    items ``A`` (:class:`Items`). Returns one float64 vector holding the outputs field by field
+    (``core.OUT_LAYOUT``; flags as 0.0 / 1.0); ``extras``: with the work (B, 6) and the
+    admissibility code (B,) of every item."""
+    B, n = A.mass.shape
+    K = 3 + 2 * S.hitches.shape[0] + S.cbodies.shape[0]
     Y = np.empty(B * out_size(n, K, extras))
     v_out, w_out, lam_out, sc, ke0_out, ke1_out, normal, tangent, cond_out, work_out, reason_out = \
         _out_views(Y, B, n, K, extras)
+    out = Outputs(v_out, w_out, lam_out, sc, ke0_out, ke1_out, normal, tangent, cond_out, work_out, reason_out)
     mu_out, mumax_out, sliding_out, closing, sep_n, sep_t, ok_out = sc[0], sc[1], sc[2], sc[3], sc[4], sc[5], sc[6]
     slip_out, pn_ns_out = sc[7], sc[8]
-
-    J = np.empty((K, n, 3))
-    rowb = np.empty((K, 2), dtype=np.int64)
-    minv = np.empty((n, 3))
-    pext = np.zeros((n, 3))
-    vfree = np.empty((n, 2))
-    wfree = np.empty(n)
-    u0 = np.empty(K)
-    uf = np.empty(K)
-    W = np.empty((K, K))
-    Mat = np.empty((K, K))
-    rhs = np.empty(K)
-    Ms = np.empty((K, K))
-    aug = np.empty((K, 2 * K))
-    scr = np.empty((3, K))
-    lam_ns = np.empty(K)
-    lam_r = np.empty(K)
-    vq = np.empty((n, 2))
-    wq = np.empty(n)
-    vo = np.empty((n, 2))
-    wo = np.empty(n)
+    X = _scratch(n, K)
     for i in range(B):
-        nxv, nyv, txv, tyv = _rows(fixed, body1, body2, hitches, cbodies, position, heading, hfp, hrp, point,
-                                   normal_angle, tangent_sign, cpoint, cdir, i, J, rowb)
-        normal[i, 0], normal[i, 1] = nxv, nyv
-        tangent[i, 0], tangent[i, 1] = txv, tyv
-        for b in range(n):
-            if fixed[b]:
-                minv[b, 0] = minv[b, 1] = minv[b, 2] = 0.0
-            else:
-                minv[b, 0] = minv[b, 1] = 1.0 / mass[i, b]
-                minv[b, 2] = 1.0 / inertia[i, b]
-            pext[b, 0] = pext[b, 1] = pext[b, 2] = 0.0
-            vq[b, 0], vq[b, 1], wq[b] = velocity[i, b, 0], velocity[i, b, 1], yaw_rate[i, b]
-        for x in range(xbodies.shape[0]):
-            b = xbodies[x]
-            ix, iy = ximp[i, x, 0], ximp[i, x, 1]
-            rx, ry = xpoint[i, x, 0] - position[i, b, 0], xpoint[i, x, 1] - position[i, b, 1]
-            pext[b, 0] += ix
-            pext[b, 1] += iy
-            pext[b, 2] += rx * iy - ry * ix
-        for b in range(n):
-            vfree[b, 0] = vq[b, 0] + minv[b, 0] * pext[b, 0]
-            vfree[b, 1] = vq[b, 1] + minv[b, 1] * pext[b, 1]
-            wfree[b] = wq[b] + minv[b, 2] * pext[b, 2]
-        for k in range(K):
-            u0[k] = _row_dot(J, rowb, k, vq, wq)
-            uf[k] = _row_dot(J, rowb, k, vfree, wfree)
-            for l in range(k, K):      # W is symmetric
-                acc = 0.0
-                for a in range(2):
-                    b = rowb[k, a]
-                    if b >= 0 and (rowb[l, 0] == b or rowb[l, 1] == b):
-                        acc += (J[k, b, 0] * minv[b, 0] * J[l, b, 0] + J[k, b, 1] * minv[b, 1] * J[l, b, 1]
-                                + J[k, b, 2] * minv[b, 2] * J[l, b, 2])
-                W[k, l] = acc
-                W[l, k] = acc
-        e = restitution[i]
-        ep = moment_restitution[i]
-        inv_ibar = minv[body1, 2] + minv[body2, 2]
-        ibar = 1.0 / inv_ibar if inv_ibar > 0 else 0.0
-        g = (1.0 + ep) * ibar
-        for k in range(K):
-            for l in range(K):
-                Mat[k, l] = W[k, l]
-            rhs[k] = -uf[k]
-        rhs[0] = -e * u0[0] - uf[0]
-        for l in range(K):
-            Mat[2, l] = -g * W[2, l]
-        Mat[2, 2] += ep
-        rhs[2] = g * uf[2]
-        for c in range(nc):
-            rhs[k0 + c] = cval[i, c] - uf[k0 + c]
-
-        ok, cond = _solve_system(Mat, rhs, K, Ms, aug, lam_ns, limits[L_COND], scr)
-        mu_max = lam_ns[1] / lam_ns[0] if ok else np.nan
-        pn_ns = lam_ns[0] if ok else np.nan
-        sliding = False
-        redo = False
-        mu_used = 0.0
-        if law == _RATIO:
-            redo = True
-            mu_used = law_value[i]
-        elif law == _FRACTION:
-            redo = True
-            mu_used = law_value[i] * mu_max
-        elif law == _FRICTION:
-            f = law_value[i]
-            # sliding can be stopped only by a compressive no-slide impulse of finite ratio
-            stoppable = ok and lam_ns[0] > 0.0 and abs(mu_max) <= limits[L_MU_MAX]
-            redo = not (stoppable and abs(mu_max) <= f)
-            if stoppable:
-                sgn = 1.0 if mu_max > 0 else (-1.0 if mu_max < 0 else 0.0)
-            else:
-                sgn = -1.0 if u0[1] > 0 else (1.0 if u0[1] < 0 else 0.0)
-            mu_used = f * sgn
-        if redo:
-            for l in range(K):
-                Mat[1, l] = 0.0
-            Mat[1, 1] = 1.0
-            Mat[1, 0] = -mu_used
-            rhs[1] = 0.0
-            ok, cond = _solve_system(Mat, rhs, K, Ms, aug, lam_r, limits[L_COND], scr)
-            sliding = True
-        for k in range(K):
-            lam_out[i, k] = (lam_r[k] if redo else lam_ns[k]) if ok else np.nan
-        for b in range(n):
-            dx, dy, dw = pext[b, 0], pext[b, 1], pext[b, 2]
-            for k in range(K):
-                if rowb[k, 0] == b or rowb[k, 1] == b:
-                    lk = lam_out[i, k]
-                    dx += J[k, b, 0] * lk
-                    dy += J[k, b, 1] * lk
-                    dw += J[k, b, 2] * lk
-            if not ok:
-                dx = dy = dw = np.nan
-            vo[b, 0] = vq[b, 0] + minv[b, 0] * dx
-            vo[b, 1] = vq[b, 1] + minv[b, 1] * dy
-            wo[b] = wq[b] + minv[b, 2] * dw
-            v_out[i, b, 0], v_out[i, b, 1], w_out[i, b] = vo[b, 0], vo[b, 1], wo[b]
-        sn = _row_dot(J, rowb, 0, vo, wo)
-        st = _row_dot(J, rowb, 1, vo, wo)
-        if law == _RATIO or law == _FRACTION:
+        nxv, nyv, txv, tyv = _assemble_item(S, A, i, X)
+        out.normal[i, 0], out.normal[i, 1] = nxv, nyv
+        out.tangent[i, 0], out.tangent[i, 1] = txv, tyv
+        _law_rows(S, A, i, X)
+        ok, cond, mu_max, pn_ns, sliding, redo = _tangential_law(S, A, i, X, limits)
+        _velocities_after(S, i, X, ok, redo, out)
+        sn = _row_dot(X.J, X.rowb, 0, X.vo, X.wo)
+        st = _row_dot(X.J, X.rowb, 1, X.vo, X.wo)
+        u0 = X.u0
+        if S.law == _RATIO or S.law == _FRACTION:
             sliding = abs(st) > 1e-9 * (1.0 + abs(u0[1]))
-        ke0 = 0.0
-        for b in range(n):
-            m = 0.0 if fixed[b] else mass[i, b]
-            inr = 0.0 if fixed[b] else inertia[i, b]
-            e0 = 0.5 * m * (vq[b, 0] * vq[b, 0] + vq[b, 1] * vq[b, 1]) + 0.5 * inr * wq[b] * wq[b]
-            ke0_out[i, b] = e0
-            ke1_out[i, b] = 0.5 * m * (vo[b, 0] * vo[b, 0] + vo[b, 1] * vo[b, 1]) + 0.5 * inr * wo[b] * wo[b]
-            ke0 += e0
-        mu_out[i] = lam_out[i, 1] / lam_out[i, 0]
+        ke0 = _energies(S, A, i, X, out)
+        mu_out[i] = out.lam[i, 1] / out.lam[i, 0]
         mumax_out[i] = mu_max
         sliding_out[i] = 1.0 if sliding else 0.0
         closing[i] = u0[0]
@@ -566,10 +668,9 @@ def solve_batch(fixed, body1, body2, law, hitches, cbodies, xbodies, mass, inert
         ok_out[i] = 1.0 if ok else 0.0
         slip_out[i] = u0[1]
         pn_ns_out[i] = pn_ns
-        cond_out[i] = cond
+        out.cond[i] = cond
         if extras:
-            impulse_work_item(fixed, hitches, cbodies, xbodies, J, rowb, position, velocity, yaw_rate, v_out, w_out,
-                              lam_out, xpoint, ximp, i, work_out)
-            reason_out[i] = reason_item(ok, lam_out, law, law_value[i], mu_max, pn_ns, u0[1], st, ke0, work_out, limits,
-                                        i)
+            impulse_work_item(S, A, X.J, X.rowb, out.v, out.w, out.lam, i, out.work)
+            out.reason[i] = reason_item(ok, out.lam, S.law, A.law_value[i], mu_max, pn_ns, u0[1], st, ke0, out.work,
+                                        limits, i)
     return Y

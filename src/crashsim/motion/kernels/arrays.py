@@ -1,0 +1,175 @@
+"""The named arrays the run-out kernels take, and the layouts of their columns.
+
+The kernels read three bundles, each a namedtuple of arrays (numba compiles namedtuples:
+attribute access costs what a tuple index does):
+
+* :class:`KernelModel` ``M``: the scene (built once by :class:`crashsim.motion.model.SceneModel`);
+* :class:`Mode` ``D``: the discrete state, changed only at events (:func:`mode_arrays`);
+* :class:`Work` ``W``: scratch arrays of one evaluation (:func:`make_work`).
+
+Columns inside the arrays have named indices: ``C_*`` (``cfg``), ``I_*`` (``icfg``), ``P_*``
+(``phase_wheels``), ``S_*`` (segment wheel inputs ``sw``), ``W_*`` (``Work.wheel_out``), ``R_*``
+(``pair_par``), ``A_*`` (``Mode.pref``); states ``PS_*``, event kinds ``EV_*``, log records
+``LOG_*`` and run statuses ``ST_*``.
+"""
+
+from __future__ import annotations
+
+from collections import namedtuple
+
+import numpy as np
+from numba import njit
+
+from .jit import JIT
+
+#: The model bundle ``M`` of a scene (SI units; nb bodies, nw wheels, nh hitches, np pairs).
+#:
+#: * ``body`` (nb, 3): mass [kg], yaw inertia [kg m^2], rest reference length L_ref [m];
+#: * ``wheel`` (nw, 3): contact x, y in body axes [m], static load [N]; ``wheel_body`` (nw,) its body;
+#: * ``hitch`` (nh, 5): front pin x, y (front body axes), rear pin x, y (rear body axes) [m],
+#:   articulation limit [rad] (NaN: none); ``hitch_body`` (nh, 2) front and rear body index;
+#: * ``load_transfer`` (nw, 2 nb): load-transfer matrix [N per m/s^2] on the filtered
+#:   body-axes accelerations; ``inv_mass`` (3 nb,): inverse masses [1/kg] and inertias
+#:   [1/(kg m^2)] in z order (x.., y.., psi..);
+#: * ``phase_times`` (P,) [s], ``phase_wheels`` (P, nw, N_P): wheel-setting phases (``P_*`` columns);
+#: * ``zone_mu`` (nz,), ``zone_ptr`` (nz + 1,), ``zone_edges`` (ne, 5: start x, y, edge x, y,
+#:   1/|edge|^2 [m, 1/m^2]), ``zone_box`` (nz, 4: xmin, ymin, xmax, ymax [m]): friction zones
+#:   (:func:`crashsim.motion.road._edges`);
+#: * ``cfg`` (N_CFG,) float options (``C_*``), ``icfg`` (N_ICFG,) int options (``I_*``);
+#: * ``tab_a, tab_b, tab_c, tab_e, tab_p``: the explicit RK scheme's tableau (solve_ivp's A, B, C, E, P);
+#: * ``body_vehicle`` (nb,): the vehicle of each body;
+#: * contact pieces (convex): ``piece_body`` (npc,) the body, -1 for a fixed obstacle in world
+#:   coordinates; vertices ``piece_verts[piece_ptr[i]:piece_ptr[i+1]]`` [m] counter-clockwise,
+#:   with the outward unit normal ``piece_normals`` of the edge from each vertex to the next;
+#:   ``piece_info`` (npc, 4): centre x, y and radius of a bounding circle, thickness [m];
+#: * pairs: ``pair_body`` (np, 2) bodies A and B (B = -1: an obstacle); piece pairs
+#:   ``piece_pairs[pair_ptr[p]:pair_ptr[p+1]]`` (rows: piece of A, piece of B);
+#:   ``pair_par`` (np, N_R) parameters (``R_*`` columns).
+KernelModel = namedtuple("KernelModel", [
+    "body", "wheel", "wheel_body", "hitch", "load_transfer", "inv_mass", "phase_times", "phase_wheels",
+    "zone_mu", "zone_ptr", "zone_edges", "cfg", "icfg", "tab_a", "tab_b", "tab_c", "tab_e", "tab_p",
+    "zone_box", "body_vehicle", "hitch_body", "piece_body", "piece_ptr", "piece_verts", "piece_normals",
+    "piece_info", "pair_body", "pair_ptr", "piece_pairs", "pair_par"])
+
+#: The mode ``D`` (the discrete state of a segment, changed in place at events):
+#:
+#: * ``memb`` (nw, nz) bool: zone membership of every wheel;
+#: * ``lk_j`` (max(nh, 1),) int, ``lk_th`` (max(nh, 1),) [rad], ``lk_n`` (1,) int: the closed
+#:   articulation stops (hitch, locked angle) and their count;
+#: * ``shift`` (max(nh, 1),) [rad]: raised thresholds of stops that were left;
+#: * ``pstate`` (np,) int: contact state of every pair (``PS_*``); ``pref`` (np, N_A): its
+#:   allowance (``A_*``: depth allowance [m], crush circle of the first impact [m]);
+#: * ``parked`` (nv,) int: 1 for a vehicle at rest (its bodies frozen).
+Mode = namedtuple("Mode", ["memb", "lk_j", "lk_th", "lk_n", "shift", "pstate", "pref", "parked"])
+
+#: Work arrays ``W`` of one evaluation (:func:`crashsim.motion.kernels.equations.evaluate` fills them):
+#:
+#: * ``wheel_out`` (nw, N_W): per-wheel wheel-axes velocity [m/s], force [N], sliding flag, load [N];
+#: * ``body_force`` (3 nb,): world-frame force and moment sums per body (z order) [N, N m];
+#: * ``jacobian`` (m_max, 3 nb), ``gram`` (m_max, m_max): constraint Jacobian G and G M^-1 G^T;
+#: * ``multipliers`` (m_max,): hitch forces on the front body [N], then stop moments [N m];
+#: * ``trig`` (2, nb): cos and sin of the body headings;
+#: * ``pair_power`` (np,): power of each pair's contact forces on the bodies [W];
+#: * ``manifold_pts`` (2, 3): scratch for a contact manifold (x, y, depth) [m].
+Work = namedtuple("Work", ["wheel_out", "body_force", "jacobian", "gram", "multipliers", "trig", "pair_power",
+                           "manifold_pts"])
+
+#: The modes of a run's stored segments, stacked (segment first), for the post-processing
+#: kernels: ``phase`` (ns,) wheel-setting phase, ``nlk`` (ns,) the number of closed stops, and
+#: the :class:`Mode` fields ``memb, lk_j, lk_th, pstate, pref, parked`` with a leading segment axis.
+Segments = namedtuple("Segments", ["phase", "memb", "nlk", "lk_j", "lk_th", "pstate", "pref", "parked"])
+
+#: The events of a segment (:func:`crashsim.motion.kernels.events.build_events`), one entry
+#: per event: ``kind`` (``EV_*``), ``idx`` (the vehicle, zone, hitch, closed stop or pair it
+#: belongs to), ``val`` (its threshold: a stop angle [rad], a release side, a press depth [m])
+#: and ``dir`` (the direction of the zero crossing that fires it: +1 rising, -1 falling).
+Events = namedtuple("Events", ["kind", "idx", "val", "dir"])
+
+#: Values and rate bounds of a segment's events at the start (``g_old``, ``r_old``) and the end
+#: (``g_new``, ``r_new``) of a step (units of each event's value, and per second).
+EventValues = namedtuple("EventValues", ["g_old", "g_new", "r_old", "r_new"])
+
+#: One accepted step of the compiled engine as its dense output sees it: start time ``t_old``
+#: [s], size ``h`` [s], start state ``y_old`` (n,), dense-output matrix ``Q`` (n, degree), and
+#: ``ytmp`` (n,) scratch for interpolated states (:func:`crashsim.motion.kernels.events.interpolate`).
+Step = namedtuple("Step", ["t_old", "h", "y_old", "Q", "ytmp"])
+
+# ----------------------------------------------------------------------------- array layouts
+# cfg (float options)
+(C_EPS, C_ALPHA2, C_BETA2, C_TAU, C_VSTOP, C_RTOL, C_ATOL, C_MAXSTEP, C_FIRST, C_TMAX, C_SDT, C_ROADMU,
+ C_ZRES) = range(13)
+N_CFG = 13
+# icfg (int options)
+I_FIALA, I_LT, I_MAXSEG, I_ORDER, I_NSTAGES, I_MAXEVAL = range(6)
+N_ICFG = 6
+# phase_wheels columns (per phase and wheel)
+P_MUF, P_BRAKE, P_FROLL, P_CFIX, P_CCOEF, P_CD, P_SD, P_LOCKED = range(8)
+N_P = 8
+# segment wheel columns (sw)
+S_MU, S_MULOAD, S_DEMAND, S_CALPHA, S_DCOEF, S_CFIX, S_CCOEF, S_CD, S_SD, S_LOCKED = range(10)
+N_S = 10
+# per-wheel outputs of an evaluation (Work.wheel_out)
+W_U, W_V, W_FX, W_FY, W_SLIDE, W_LOAD = range(6)
+N_W = 6
+# pair parameters (pair_par columns): contact stiffness [N/m], damping [N s/m], contact friction,
+# arming distance [m], impulse threshold [m/s], event resolution [m]
+R_K, R_C, R_MU, R_ARM, R_VTHR, R_RES = range(6)
+N_R = 6
+# pair states
+PS_DISARMED, PS_ARMED, PS_CONTACT = 0, 1, 2
+# pair allowance columns (D.pref, one row per pair): the depth allowance [m], and the crush of the
+# first impact as a circle in body A's axes: centre x, y and radius [m] (radius 0: none)
+A_DEPTH, A_CX, A_CY, A_R = range(4)
+N_A = 4
+# Reach of the crush of the first impact beyond the extent of its overlap [m]: points of a
+# disarmed pair within it are the crush (pressing on is sustained contact, not a new impact);
+# points farther away meet the other body anew (a strike counts from the surface)
+CRUSH_REACH = 0.5
+# event kinds of a segment
+EV_REST, EV_ZONE, EV_STOP, EV_RELEASE, EV_GAP, EV_ARM, EV_PRESS, EV_STRIKE = range(8)
+# log record kinds
+(LOG_ZONE_ENTER, LOG_ZONE_EXIT, LOG_SCHEDULE, LOG_STOP_CLOSED, LOG_STOP_IMPACT, LOG_STOP_OPEN, LOG_REST,
+ LOG_ARMED, LOG_CONTACT, LOG_PRESS, LOG_CONTACT_END) = range(11)
+# run status
+(ST_REST, ST_TIME_LIMIT, ST_MAX_SEGMENTS, ST_STEP_TOO_SMALL, ST_NONFINITE, ST_MAX_EVAL, ST_WALL_TIME,
+ ST_NO_PROGRESS, ST_IMPACT) = range(9)
+# zone-crossing tolerances: identical in both engines (they run this code)
+ZONE_TOL = 1e-9
+ZONE_OVERSHOOT = 1e-10
+# The wall clock is read every this many solver steps.
+WALL_CHECK_STEPS = 256
+# Largest number of points at which one step's dense output is searched for a feature the
+# step could have passed through (zones, contact gaps).
+MAX_SUBSAMPLES = 512
+# solve_ivp's step-size controller constants (scipy.integrate._ivp.rk)
+SAFETY = 0.9
+MIN_FACTOR = 0.2
+MAX_FACTOR = 10.0
+EPS = np.finfo(float).eps
+
+
+
+def mode_arrays(nw, nz, nh, npairs, nv):
+    """A fresh mode ``D`` (:class:`Mode`; Python helper)."""
+    return Mode(np.zeros((nw, nz), np.bool_), np.zeros(max(nh, 1), np.int64), np.zeros(max(nh, 1)),
+                np.zeros(1, np.int64), np.zeros(max(nh, 1)), np.zeros(npairs, np.int64), np.zeros((npairs, N_A)),
+                np.zeros(nv, np.int64))
+
+
+@njit(**JIT)
+def make_work(M):
+    """Work arrays of one evaluation (:class:`Work`)."""
+    nb = M.body.shape[0]
+    nw = M.wheel.shape[0]
+    nh = M.hitch.shape[0]
+    mmax = max(3 * nh, 1)
+    return Work(
+        np.zeros((nw, N_W)),
+        np.zeros(3 * nb),
+        np.zeros((mmax, 3 * nb)),
+        np.zeros((mmax, mmax)),
+        np.zeros(mmax),
+        np.zeros((2, nb)),
+        np.zeros(M.pair_body.shape[0]),
+        np.zeros((2, 3)),
+    )

@@ -1,0 +1,269 @@
+"""Kernel stage: the equations of motion of the scene and what is integrated along them.
+
+Segment inputs per wheel, the right-hand side (tyres + contacts + hitch constraints by
+Baumgarte-stabilised multipliers, load-transfer filter), rest measures, kinetic energy,
+the path-integral integrands, and the projections used at stop impacts and at the start.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .jit import HOT, INLINE
+from .arrays import (C_ROADMU, C_TAU, I_LT, PS_CONTACT, P_BRAKE, P_CCOEF, P_CD, P_CFIX, P_FROLL, P_LOCKED, P_MUF,
+    P_SD, S_CALPHA, S_CCOEF, S_CD, S_CFIX, S_DCOEF, S_DEMAND, S_LOCKED, S_MU, S_MULOAD, S_SD, W_FX, W_FY, W_SLIDE,
+    W_U, W_V)
+from .geometry import body_trig, constraint_rows, solve_spd
+from .tyres import tyre_eval
+from .contacts import contact_forces
+
+
+@njit(**HOT)
+def segment_params(t_phase, memb, M, sw):
+    """Fill ``sw`` (nw, N_S) with the inputs of wheel-setting phase ``t_phase`` and zone membership ``memb``."""
+    wheel, phase_w, zone_mu, cfg = M.wheel, M.phase_wheels, M.zone_mu, M.cfg
+    nw = wheel.shape[0]
+    nz = zone_mu.shape[0]
+    for k in range(nw):
+        road_mu = cfg[C_ROADMU]
+        for z in range(nz):
+            if memb[k, z]:
+                road_mu = zone_mu[z]
+        pw = phase_w[t_phase, k]
+        mu = road_mu * pw[P_MUF]
+        dcoef = min(pw[P_BRAKE] * mu + pw[P_FROLL], mu)
+        n = wheel[k, 2]
+        sw[k, S_MU] = mu
+        sw[k, S_MULOAD] = mu * n
+        sw[k, S_DEMAND] = dcoef * n
+        sw[k, S_CALPHA] = pw[P_CFIX] + pw[P_CCOEF] * n
+        sw[k, S_DCOEF] = dcoef
+        sw[k, S_CFIX] = pw[P_CFIX]
+        sw[k, S_CCOEF] = pw[P_CCOEF]
+        sw[k, S_CD] = pw[P_CD]
+        sw[k, S_SD] = pw[P_SD]
+        sw[k, S_LOCKED] = pw[P_LOCKED]
+
+
+@njit(**HOT)
+def phase_at(t, phase_t):
+    """Index of the wheel-setting phase in force at ``t`` (a change at ``t`` is in force)."""
+    i = 0
+    for p in range(phase_t.shape[0]):
+        if phase_t[p] <= t:
+            i = p
+    return i
+
+
+@njit(**HOT)
+def evaluate(y, M, sw, D, dydt, W):
+    """Right-hand side ``dydt`` of state ``y`` for the segment inputs ``sw`` and mode ``D``.
+
+    Leaves in the work bundle ``W`` (:class:`Work`): per-wheel wheel-axes velocity, force,
+    sliding flag and load (``wheel_out``), the world-frame force sums per body ``body_force``
+    (tyres and contacts, z order), the constraint multipliers ``multipliers`` (hitch forces on
+    the front body [N], then stop moments [N m]), the heading cosines/sines ``trig`` and the
+    contact powers ``pair_power``.  Returns the number of multipliers ``m``.
+
+    The run-out model of the README ("Run-out model": three planar degrees of freedom per
+    body, hitches as pins held by Lagrange multipliers with Baumgarte stabilisation):
+    ``M z'' = f + G^T lam`` with tyre forces (the shared tyre kernel) and penalty contact
+    forces in ``f``, and the multiplier solve ``(G M^-1 G^T) lam = -(G M^-1 f + gamma +
+    2 zeta w0 g' + w0^2 g)`` (:func:`constraint_rows`); with load transfer the body-axes
+    accelerations are filtered, ``a_f' = (a - a_f) / tau``.  The bodies of parked vehicles are
+    frozen (zero derivative).
+    """
+    body, hitch, minv, cfg, icfg, bveh = M.body, M.hitch, M.inv_mass, M.cfg, M.icfg, M.body_vehicle
+    lk_j, lk_th, nlk, parked = D.lk_j, D.lk_th, D.lk_n[0], D.parked
+    f, G, A, lam, cs = W.body_force, W.jacobian, W.gram, W.multipliers, W.trig
+    nb = body.shape[0]
+    nh = hitch.shape[0]
+    tyre_eval(y, M, sw, D, W)
+    if M.pair_body.shape[0] > 0:
+        contact_forces(y, M, D, cs, f, W.pair_power, W.manifold_pts)
+    n3 = 3 * nb
+    m = 0
+    if nh > 0:
+        m = constraint_rows(y, cs, M, lk_j, lk_th, nlk, G, lam, True)
+        for a in range(m):
+            s = 0.0
+            for col in range(n3):
+                s += G[a, col] * minv[col] * f[col]
+            lam[a] = -(s + lam[a])
+            for b in range(a + 1):
+                s = 0.0
+                for col in range(n3):
+                    s += G[a, col] * minv[col] * G[b, col]
+                A[a, b] = s
+                A[b, a] = s
+        solve_spd(A, lam, m)
+    for col in range(n3):
+        dydt[col] = y[n3 + col]
+        s = f[col]
+        for a in range(m):
+            s += G[a, col] * lam[a]
+        dydt[n3 + col] = minv[col] * s
+    lt = icfg[I_LT] != 0
+    if lt:
+        tau = cfg[C_TAU]
+        for i in range(nb):
+            c = cs[0, i]
+            s = cs[1, i]
+            accx = dydt[n3 + i]
+            accy = dydt[n3 + nb + i]
+            dydt[6 * nb + i] = ((c * accx + s * accy) - y[6 * nb + i]) / tau
+            dydt[7 * nb + i] = ((c * accy - s * accx) - y[7 * nb + i]) / tau
+    for i in range(nb):
+        if parked[bveh[i]] != 0:
+            for fld in range(8 if lt else 6):
+                dydt[fld * nb + i] = 0.0
+    return m
+
+
+@njit(**HOT)
+def rest_measure(y, M, v):
+    """``max over the bodies of vehicle v (all vehicles if v < 0) of max(|v_cg|, |yaw rate| L_ref)`` [m/s]."""
+    body, bveh = M.body, M.body_vehicle
+    nb = body.shape[0]
+    out = 0.0
+    for i in range(nb):
+        if v >= 0 and bveh[i] != v:
+            continue
+        sp = math.sqrt(y[3 * nb + i] ** 2 + y[4 * nb + i] ** 2)
+        rot = abs(y[5 * nb + i]) * body[i, 2]
+        out = max(out, max(sp, rot))
+    return out
+
+
+@njit(**HOT)
+def contact_group(M, D, v):
+    """Bit mask of the vehicles linked to vehicle ``v`` by sustained contacts, directly or
+    through others (``v`` included); only ``v`` in scenes of more than 62 vehicles."""
+    pstate = D.pstate
+    bveh, pr_body = M.body_vehicle, M.pair_body
+    mask = np.int64(1) << v
+    if D.parked.shape[0] > 62:
+        return mask
+    changed = True
+    while changed:
+        changed = False
+        for p in range(pr_body.shape[0]):
+            if pstate[p] != PS_CONTACT or pr_body[p, 1] < 0:
+                continue
+            va = bveh[pr_body[p, 0]]
+            vb = bveh[pr_body[p, 1]]
+            if ((mask >> va) & 1) != ((mask >> vb) & 1):
+                mask |= (np.int64(1) << va) | (np.int64(1) << vb)
+                changed = True
+    return mask
+
+
+@njit(**HOT)
+def group_rest_measure(y, M, D, v):
+    """Rest measure of vehicle ``v`` together with every moving vehicle of its contact group
+    (the largest of their rest measures) [m/s].
+
+    A vehicle pressed by a moving one cannot park; its rest event is the group's, so that the
+    group comes to rest at one instant instead of the event firing again and again while the
+    partner still moves (event chattering, found by the scene fuzz).
+    """
+    parked = D.parked
+    out = rest_measure(y, M, v)
+    if M.pair_body.shape[0] == 0:
+        return out
+    mask = contact_group(M, D, v)
+    for w in range(parked.shape[0]):
+        if w != v and (mask >> w) & 1 and parked[w] == 0:
+            out = max(out, rest_measure(y, M, w))
+    return out
+
+
+@njit(**HOT)
+def kinetic_energy(y, M):
+    body = M.body
+    nb = body.shape[0]
+    e = 0.0
+    for i in range(nb):
+        e += body[i, 0] * (y[3 * nb + i] ** 2 + y[4 * nb + i] ** 2) + body[i, 1] * y[5 * nb + i] ** 2
+    return 0.5 * e
+
+
+@njit(**INLINE)
+def quad_integrand(y, M, D, W, out):
+    """Integrands of the path integrals at a state just evaluated (``W`` filled by :func:`evaluate`).
+
+    ``out`` (nb + 3 nw + np + nw): CG speeds [m/s], contact speeds [m/s], contact speeds while
+    sliding [m/s], dissipated tyre power ``-F . v`` [W], the contacts' power on the bodies [W];
+    then the sliding flags (1/0), which are not integrated but tell where the sliding-length
+    integrand jumps.
+    """
+    nb = M.body.shape[0]
+    nw = M.wheel.shape[0]
+    npr = M.pair_body.shape[0]
+    wk = W.wheel_out
+    pf = W.pair_power
+    bveh, parked = M.body_vehicle, D.parked
+    for i in range(nb):
+        out[i] = 0.0 if parked[bveh[i]] != 0 else math.sqrt(y[3 * nb + i] ** 2 + y[4 * nb + i] ** 2)
+    for k in range(nw):
+        sp = math.sqrt(wk[k, W_U] ** 2 + wk[k, W_V] ** 2)
+        out[nb + k] = sp
+        out[nb + nw + k] = sp if wk[k, W_SLIDE] != 0.0 else 0.0
+        out[nb + 2 * nw + k] = -(wk[k, W_FX] * wk[k, W_U] + wk[k, W_FY] * wk[k, W_V])
+    for p in range(npr):
+        out[nb + 3 * nw + p] = pf[p]
+    for k in range(nw):
+        out[nb + 3 * nw + npr + k] = wk[k, W_SLIDE]
+
+
+@njit(**HOT)
+def project_velocities(y, M, lk_j, lk_th, nlk, G, A, b, cs):
+    """Velocities satisfying ``G z' = 0`` closest in the kinetic-energy metric (in place in ``y``)."""
+    minv = M.inv_mass
+    nb = M.body.shape[0]
+    n3 = 3 * nb
+    body_trig(y, nb, cs)
+    m = constraint_rows(y, cs, M, lk_j, lk_th, nlk, G, b, False)
+    for a in range(m):
+        s = 0.0
+        for col in range(n3):
+            s += G[a, col] * y[n3 + col]
+        b[a] = s
+        for c in range(a + 1):
+            s = 0.0
+            for col in range(n3):
+                s += G[a, col] * minv[col] * G[c, col]
+            A[a, c] = s
+            A[c, a] = s
+    solve_spd(A, b, m)
+    for col in range(n3):
+        s = 0.0
+        for a in range(m):
+            s += G[a, col] * b[a]
+        y[n3 + col] -= minv[col] * s
+
+
+@njit(**HOT)
+def consistent_accelerations(y, M, sw, D, dydt, W):
+    """Set the filtered accelerations to their quasi-static fixed point (50 iterations at most, 1e-10)."""
+    nb = M.body.shape[0]
+    n3 = 3 * nb
+    for _ in range(50):
+        evaluate(y, M, sw, D, dydt, W)
+        cs = W.trig
+        change = 0.0
+        for i in range(nb):
+            c = cs[0, i]
+            s = cs[1, i]
+            accx = dydt[n3 + i]
+            accy = dydt[n3 + nb + i]
+            new_x = c * accx + s * accy
+            new_y = c * accy - s * accx
+            change = max(change, abs(new_x - y[6 * nb + i]), abs(new_y - y[7 * nb + i]))
+            y[6 * nb + i] = new_x
+            y[7 * nb + i] = new_y
+        if change < 1e-10:
+            break

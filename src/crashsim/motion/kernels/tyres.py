@@ -1,0 +1,151 @@
+"""Kernel stage: the tyre law compiled for scalars, and the tyre forces of a state.
+
+The tyre module (:mod:`crashsim.motion.tyres`) is written with NumPy ufuncs and
+``tyres._select`` (np.where).  For scalars numba compiles the ufuncs to scalar arithmetic;
+``_select`` gets a scalar overload, and the two lateral curves are compiled from their own
+source, so both engines and the NumPy path evaluate one source.
+"""
+
+from __future__ import annotations
+
+from numba import njit, types
+from numba.extending import overload
+
+from .. import tyres as law
+from .jit import INLINE, JIT
+from .arrays import (C_EPS, I_FIALA, I_LT, S_CALPHA, S_CCOEF, S_CD, S_CFIX, S_DCOEF, S_DEMAND, S_LOCKED, S_MU,
+    S_MULOAD, S_SD, W_FX, W_FY, W_LOAD, W_SLIDE, W_U, W_V)
+from .geometry import body_trig
+
+
+# The tyre module is written with NumPy ufuncs and law._select (np.where).  For scalars
+# numba compiles the ufuncs to scalar arithmetic; _select gets a scalar overload, and the two
+# lateral curves are compiled from their own source.  error_model="numpy": IEEE division
+# (as NumPy), no Python ZeroDivisionError checks.
+_OV = {"error_model": "numpy"}
+
+
+@overload(law._select, jit_options=_OV)
+def _select_scalar(cond, if_true, if_false):
+    if isinstance(cond, types.Boolean):
+        return lambda cond, if_true, if_false: if_true if cond else if_false
+    return None
+
+
+@overload(law.fiala_curve, jit_options=_OV)
+def _fiala_scalar(tan_alpha, mu_load, cornering_stiffness):
+    return law.fiala_curve
+
+
+@overload(law.linear_curve, jit_options=_OV)
+def _linear_scalar(tan_alpha, mu_load, cornering_stiffness):
+    return law.linear_curve
+
+
+@overload(law.sliding_force, jit_options=_OV)
+def _sliding_scalar(u, w, mu_load, eps):
+    return law.sliding_force
+
+
+@overload(law.tyre_kernel, jit_options=_OV)
+def _tyre_scalar(u, w, mu_load, demand, cornering_stiffness, locked, eps, fiala):
+    return law.tyre_kernel
+
+
+@njit(**INLINE)
+def tyre_eval(y, M, sw, D, W):
+    """Tyre forces of state ``y``: per-wheel results in ``W.wheel_out`` (``W_*`` columns), world-frame body sums in ``W.body_force``.
+
+    The tyre law of the README ("Run-out model"): rolling tyres on the Fiala (or linear)
+    lateral curve inside a friction circle with braking priority, locked ones sliding with
+    Coulomb friction against the contact-point velocity (:func:`crashsim.motion.tyres.tyre_kernel`),
+    each on its load: static, or with load transfer ``N = N_static + T a_f`` (``M.load_transfer``
+    on the filtered accelerations).  Also fills ``W.trig`` with the body heading cosines and
+    sines.  Wheels of parked vehicles produce no force (their bodies are frozen).
+    """
+    body, wheel, wbody, transfer, cfg, icfg, bveh = M.body, M.wheel, M.wheel_body, M.load_transfer, M.cfg, M.icfg, M.body_vehicle
+    parked = D.parked
+    wk, f, cs = W.wheel_out, W.body_force, W.trig
+    nb = body.shape[0]
+    nw = wheel.shape[0]
+    lt = icfg[I_LT] != 0
+    fiala = icfg[I_FIALA] != 0
+    eps = cfg[C_EPS]
+    body_trig(y, nb, cs)
+    for i in range(3 * nb):
+        f[i] = 0.0
+    for k in range(nw):
+        i = wbody[k]
+        if parked[bveh[i]] != 0:
+            wk[k, W_U] = 0.0
+            wk[k, W_V] = 0.0
+            wk[k, W_FX] = 0.0
+            wk[k, W_FY] = 0.0
+            wk[k, W_SLIDE] = 0.0
+            wk[k, W_LOAD] = wheel[k, 2]
+            continue
+        c = cs[0, i]
+        s = cs[1, i]
+        vx = y[3 * nb + i]
+        vy = y[4 * nb + i]
+        w = y[5 * nb + i]
+        rx = wheel[k, 0]
+        ry = wheel[k, 1]
+        cvx = (c * vx + s * vy) - ry * w
+        cvy = (c * vy - s * vx) + rx * w
+        cd = sw[k, S_CD]
+        sd = sw[k, S_SD]
+        u = cd * cvx + sd * cvy
+        v = -sd * cvx + cd * cvy
+        if lt:
+            n = wheel[k, 2]
+            for j in range(2 * nb):
+                n += transfer[k, j] * y[6 * nb + j]
+            load = max(n, 0.0)
+            mu_load = sw[k, S_MU] * load
+        else:
+            load = wheel[k, 2]
+            mu_load = sw[k, S_MULOAD]
+        if sw[k, S_LOCKED] != 0.0:
+            fx, fy = law.sliding_force(u, v, mu_load, eps)
+            sliding = True
+        else:
+            if lt:
+                demand = sw[k, S_DCOEF] * load
+                c_alpha = sw[k, S_CFIX] + sw[k, S_CCOEF] * load
+            else:
+                demand = sw[k, S_DEMAND]
+                c_alpha = sw[k, S_CALPHA]
+            fx, fy, sliding = law.tyre_kernel(u, v, mu_load, demand, c_alpha, False, eps, fiala)
+        wk[k, W_U] = u
+        wk[k, W_V] = v
+        wk[k, W_FX] = fx
+        wk[k, W_FY] = fy
+        wk[k, W_SLIDE] = 1.0 if sliding else 0.0
+        wk[k, W_LOAD] = load
+        bx = cd * fx - sd * fy
+        by = sd * fx + cd * fy
+        f[i] += bx
+        f[nb + i] += by
+        f[2 * nb + i] += rx * by - ry * bx
+    for i in range(nb):
+        sx = f[i]
+        sy = f[nb + i]
+        f[i] = cs[0, i] * sx - cs[1, i] * sy
+        f[nb + i] = cs[1, i] * sx + cs[0, i] * sy
+
+
+@njit(**JIT)
+def tyre_batch(u, w, mu_load, demand, c_alpha, locked, eps, fiala, fx, fy, sliding):
+    """The compiled tyre law (:func:`crashsim.motion.tyres.tyre_kernel`) over arrays, for tests."""
+    for i in range(u.shape[0]):
+        if locked[i]:
+            a, b = law.sliding_force(u[i], w[i], mu_load[i], eps)
+            fx[i] = a
+            fy[i] = b
+            sliding[i] = True
+        else:
+            a, b, sl = law.tyre_kernel(u[i], w[i], mu_load[i], demand[i], c_alpha[i], False, eps, fiala)
+            fx[i] = a
+            fy[i] = b
+            sliding[i] = sl

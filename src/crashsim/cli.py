@@ -14,6 +14,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
+from . import first_run
 from ._jit import cache_dir, ready
 from ._version import __version__
 from .animation import animate_scene, check_animation_path, frame_times
@@ -413,13 +414,37 @@ def _check_outputs(args) -> None:
                                 "e.g. \"0.05 s\"", field="--dt")
 
 
+def _first_run(args, argv: list[str]) -> int | None:
+    """On a machine whose kernels are not compiled: run a single-scene command interpreted while they
+    compile in the background, or compile first (:mod:`crashsim.first_run`). An exit code if the command
+    ran in a child process, else None (run it here)."""
+    if args.command not in _COMPUTING or ready() or first_run.interpreted():
+        return None
+    how = first_run.policy()
+    if how != "wait" and args.command in first_run.SINGLE_SCENE:
+        log = first_run.start_background_compile() if how == "background" else None
+        sys.stderr.write("crashsim: first run on this machine: this scene runs interpreted (seconds) "
+                         + (f"while the kernels compile in the background for the next commands (log: {log})\n"
+                            if log is not None else
+                            "while the kernels compile in the background\n" if how == "background" else "\n"))
+        return first_run.run_interpreted(argv)
+    if first_run.compile_in_progress():
+        sys.stderr.write("crashsim: waiting for the kernels that compile in the background (started by an earlier "
+                         "command)\n")
+        first_run.wait_for_background_compile()
+    _first_compile(bar=sys.stderr.isatty())
+    return None
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
+    argv = list(sys.argv[1:] if argv is None else argv)
     args = parser.parse_args(argv)
     try:
         _check_outputs(args)
-        if args.command in _COMPUTING:
-            _first_compile(bar=sys.stderr.isatty())
+        code = _first_run(args, argv)
+        if code is not None:
+            return code
         return int(args.func(args))
     except ScenarioError as exc:
         sys.stderr.write(f"crashsim: input error: {exc}\n")

@@ -20,7 +20,7 @@ from .animation import animate_scene, check_animation_path, frame_times
 from .errors import CrashsimError, ScenarioError, SolverError
 from .motion.result import jsonable as _clean  # JSON-safe copy: numpy to Python, NaN/inf to None
 from .outputs import check_output_dir, check_output_file, check_workers
-from .plotting import save_scene_figures
+from .plotting import LABEL_KINDS, LEGEND_MODES, PAPER_SIZES, check_hide, parse_scale, save_scene_figures
 from .reconstruct import run_scene
 from .reconstruct.fit import fit_scene, same_file
 from .reconstruct.mc_plots import save_mc_figures
@@ -43,6 +43,22 @@ def _units(text: str) -> str:
         return resolve_system(text)
     except ScenarioError:
         raise argparse.ArgumentTypeError(f"{text!r}: allowed SI or US (any case)") from None
+
+
+def _hide(text: str) -> frozenset:
+    """argparse type of ``--hide``: label kinds, comma-separated."""
+    try:
+        return check_hide(text)
+    except ScenarioError as exc:
+        raise argparse.ArgumentTypeError(str(exc).split(": ", 1)[-1]) from None
+
+
+def _scale(text: str) -> float:
+    """argparse type of ``--scale``: 1:N."""
+    try:
+        return parse_scale(text, field="--scale")
+    except ScenarioError as exc:
+        raise argparse.ArgumentTypeError(str(exc).split(": ", 1)[-1]) from None
 
 
 def _dt(text: str | None) -> float | None:
@@ -222,7 +238,8 @@ def _cmd_plot(args) -> int:
     written = save_scene_figures(scene, Path(args.output), histories_path=args.histories and Path(args.histories),
                                  dpi=args.dpi, interval=interval, system=args.units,
                                  time_distance_path=args.time_distance and Path(args.time_distance),
-                                 approach=not args.no_approach)
+                                 approach=not args.no_approach, legend=args.legend, hide=args.hide or (),
+                                 paper=args.paper, scale=args.scale)
     for path in written:
         sys.stdout.write(f"wrote {path}\n")
     return 0
@@ -309,6 +326,14 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("--interval", metavar="TIME", help='time between ghost outlines, e.g. "0.5 s"')
     pl.add_argument("--units", type=_units, default=None, help="SI or US: units of the figure (default: the scenario's)")
     pl.add_argument("--dpi", type=int, default=150)
+    pl.add_argument("--legend", choices=LEGEND_MODES, default="outside",
+                    help="legend under or beside the diagram (default), small inside it, or none")
+    pl.add_argument("--hide", type=_hide, default=None, metavar="KINDS",
+                    help=f"label kinds to leave out, comma-separated: labels (all), {', '.join(LABEL_KINDS)}")
+    pl.add_argument("--paper", choices=tuple(PAPER_SIZES), default=None,
+                    help="print sheet: the figure is the page, the drawing to scale (PDF/SVG print at 100 %%)")
+    pl.add_argument("--scale", type=_scale, default=None, metavar="1:N",
+                    help='drawing scale on the sheet, e.g. "1:200" (default: the largest that fits; A4 without --paper)')
     pl.set_defaults(func=_cmd_plot)
 
     an = sub.add_parser("animate", help="animate the run-out over the scene diagram (.gif, or .mp4 with ffmpeg)")

@@ -252,8 +252,13 @@ def _cmd_animate(args) -> int:
     scene = run_scene(load_scenario(args.file))
     if scene.runout:
         frame_times(max(r.t_end for r in scene.runout.values()), dt, field="--dt")
-    written = animate_scene(scene, out, dt=dt, speed=args.speed, system=args.units, dpi=args.dpi,
-                            approach=not args.no_approach)
+    with tqdm(total=None, file=sys.stderr, unit="frame", desc="rendering", disable=args.quiet) as bar:
+        def progress(done, total):
+            bar.total = total
+            bar.update(done - bar.n)
+
+        written = animate_scene(scene, out, dt=dt, speed=args.speed, system=args.units, dpi=args.dpi,
+                                approach=not args.no_approach, progress=progress)
     sys.stdout.write(f"wrote {written}\n")
     return 0
 
@@ -346,6 +351,7 @@ def build_parser() -> argparse.ArgumentParser:
     an.add_argument("--dpi", type=int, default=100)
     an.add_argument("--no-approach", action="store_true",
                     help="start at the impact (a scene with approaches starts at the earliest start of braking)")
+    an.add_argument("--quiet", action="store_true", help="no progress bar")
     an.set_defaults(func=_cmd_animate)
 
     sv = sub.add_parser("survey", help="list a survey file's layers or codes with entity counts and extents")

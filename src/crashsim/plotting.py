@@ -11,6 +11,7 @@ from __future__ import annotations
 import logging
 import math
 import textwrap
+import weakref
 from pathlib import Path
 from typing import NamedTuple
 
@@ -28,7 +29,7 @@ from .units import Kind, convert, resolve_system, to_unit
 _log = logging.getLogger("crashsim")
 
 __all__ = ["is_color", "LABEL_KINDS", "LEGEND_MODES", "PAPER_SIZES", "PrintSheet", "place_labels", "check_hide",
-           "legend_mode", "parse_scale", "print_sheet", "BarrierAxes", "plot_barrier_sweep", "plot_barrier_figures", "plot_scene", "plot_histories",
+           "legend_mode", "parse_scale", "print_sheet", "scene_drawing", "text_box", "BarrierAxes", "plot_barrier_sweep", "plot_barrier_figures", "plot_scene", "plot_histories",
            "history_panels", "save_scene_figures", "SCENE_FIGURE_SUFFIXES"]
 
 
@@ -280,6 +281,16 @@ def _default_intervals(ends: dict) -> dict:
     return out
 
 
+#: The drawing state of each scene figure's axes (:func:`scene_drawing`); entries go with the axes.
+_DRAWINGS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def scene_drawing(ax) -> "SceneDrawing | None":
+    """The :class:`SceneDrawing` that :func:`plot_scene` drew on ``ax`` (its labels, the artists
+    that change with time), or None."""
+    return _DRAWINGS.get(ax)
+
+
 class SceneDrawing:
     """State shared by the drawing steps of :func:`plot_scene` (display units, legend, extent)."""
 
@@ -300,6 +311,8 @@ class SceneDrawing:
         self.far: list[np.ndarray] = []  # obstacle pieces: in the extent only near the scene
         self.fixed: list = []  # artists the labels keep clear of (axes indicator, scale bar, ...)
         self.unplaced = 0  # labels place_labels found no free place for
+        self.timed: list = []  # (Line2D, times [s] (n,), points (n, 2) display units): paths and tracks
+        self.at_rest: list = []  # (artist, time [s] it comes to rest): outlines, axles, pins, names at rest
         self.body_of = {b.name: b for v in self.sc.vehicles for b in v.bodies}
         self.vehicle_of = {b.name: v for v in self.sc.vehicles for b in v.bodies}
         movable = [v for v in self.sc.vehicles if not v.is_barrier]
@@ -607,7 +620,7 @@ def print_sheet(paper: str, lo, hi, per_metre: float, scale=None, *, legend_heig
         fits = [n for n in _SCALES if n >= need]
         hint = f"1:{fits[0]:g}" if fits else f"1:{math.ceil(need)}"
         raise ScenarioError(f"scale 1:{scale:g} is too large for the scene on {key}: its framed extent "
-                            f"{ext_m[0]:.1f} m x {ext_m[1]:.1f} m needs 1:{need:.0f} or smaller (e.g. {hint}), or "
+                            f"{ext_m[0]:.1f} m x {ext_m[1]:.1f} m fits at 1:N with N >= {need:.0f} (e.g. {hint}), or on "
                             "larger paper", field="scale")
     centre = 0.5 * (lo + hi)
     half = 0.5 * room * float(scale) * per_metre
@@ -784,11 +797,12 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
             v = next(x for x in sc.vehicles if x.name == vn)
             fill, line, dark = S.family[vn]
             for tr in r.wheels.values():
-                _draw_track(S, tr, line, dark)
+                _draw_track(S, tr, line, dark, gid=f"track:{tr.key}")
             for name, br in r.bodies.items():
                 h = br.history
                 xy = S.d(np.column_stack([h.x, h.y]))
-                ax.plot(xy[:, 0], xy[:, 1], ":", color=dark, lw=1.0, zorder=_Z_TRACK)
+                (ln,) = ax.plot(xy[:, 0], xy[:, 1], ":", color=dark, lw=1.0, zorder=_Z_TRACK, gid=f"path:{name}")
+                S.timed.append((ln, np.asarray(h.t, dtype=float), xy))
                 S.add(xy)
             # ghosts
             for j, t in enumerate(ghost.get(vn, ())):
@@ -810,6 +824,7 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
                            path_effects=_halo(1.8))
                     S.labels.append(c)
             # at rest (or at the end of a run that did not reach rest)
+            before = (len(ax.patches), len(ax.lines), len(S.texts))
             poses = {}
             for name, br in r.bodies.items():
                 poses[name] = (br.rest_position, br.rest_heading)
@@ -822,6 +837,8 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
                 S.body_label(name, np.asarray(br.rest_position), suffix="" if r.success else " (run stopped)",
                              offset=6.0 if name in S.no_outline else -5.0)
             S.pins(v, poses, dark, 4.0, zorder=Z_REST)
+            rest = [*ax.patches[before[0]:], *ax.lines[before[1]:], *S.texts[before[2]:]]
+            S.at_rest += [(a, float(r.t_end)) for a in rest]
         if ghost_note:
             S.legend_entry(ghost_note, Patch(facecolor="none", edgecolor="0.4", lw=0.7, alpha=0.7))
         S.legend_entry("at rest (end of run)", Patch(facecolor="0.8", edgecolor="0.1", lw=1.8))
@@ -924,6 +941,7 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     ax.figure.draw_without_rendering()
     S.fixed = fixed
     S.unplaced = place_labels(ax, S.texts, fixed, np.vstack(S.points))
+    _DRAWINGS[ax] = S
     if S.unplaced:
         _log.info("scene figure: %d label(s) found no free place and may overlap others", S.unplaced)
     return ax
@@ -944,10 +962,12 @@ def _draw_track(S: SceneDrawing, track, line, dark, gid: str | None = None) -> N
             continue
         xy = S.d(seg.points)
         if seg.kind == "sliding":
-            S.ax.plot(xy[:, 0], xy[:, 1], "-", color=dark, lw=2.2, alpha=0.85, zorder=_Z_TRACK, solid_capstyle="butt",
-                      gid=gid)
+            (ln,) = S.ax.plot(xy[:, 0], xy[:, 1], "-", color=dark, lw=2.2, alpha=0.85, zorder=_Z_TRACK,
+                              solid_capstyle="butt", gid=gid)
         else:
-            S.ax.plot(xy[:, 0], xy[:, 1], "--", color=line, lw=0.7, alpha=0.8, zorder=_Z_TRACK, dashes=(4, 3), gid=gid)
+            (ln,) = S.ax.plot(xy[:, 0], xy[:, 1], "--", color=line, lw=0.7, alpha=0.8, zorder=_Z_TRACK, dashes=(4, 3),
+                              gid=gid)
+        S.timed.append((ln, np.asarray(seg.t, dtype=float), xy))
         S.add(xy)
 
 
@@ -967,7 +987,8 @@ def _draw_approaches(S: SceneDrawing) -> None:
         poses = {}
         for name, rows in a.bodies.items():
             xy = S.d(rows[:, 1:3])
-            ax.plot(xy[:, 0], xy[:, 1], "-.", color=dark, lw=0.9, zorder=_Z_TRACK, gid=f"approach:path:{name}")
+            (ln,) = ax.plot(xy[:, 0], xy[:, 1], "-.", color=dark, lw=0.9, zorder=_Z_TRACK, gid=f"approach:path:{name}")
+            S.timed.append((ln, np.asarray(rows[:, 0], dtype=float), xy))
             S.add(xy)
             poses[name] = ((rows[0, 1], rows[0, 2]), rows[0, 3])
             S.outline(S.body_of[name], poses[name][0], poses[name][1], gid=f"outline:braking:{name}", fill=None,
@@ -1678,11 +1699,14 @@ def _north_arrow(S: SceneDrawing) -> list:
         return []
     rot = float(survey["rotation"])
     u = np.array([math.sin(rot), math.cos(rot)])  # survey +y in the scene frame
-    base = (0.14, 0.84)
+    from matplotlib.transforms import offset_copy
+
+    base = (0.03, 1.0)
+    corner = offset_copy(S.ax.transAxes, fig=S.ax.figure, x=80, y=-34, units="points")
     arrow = dict(arrowstyle="-|>", lw=1.4, color="black", shrinkA=0, shrinkB=0, mutation_scale=12)
-    S.ax.annotate("", xy=base, xycoords="axes fraction", xytext=tuple(-26 * u), textcoords="offset points",
+    S.ax.annotate("", xy=base, xycoords=corner, xytext=tuple(-26 * u), textcoords="offset points",
                   arrowprops=arrow, zorder=Z_TEXT + 1, gid="north-arrow")
-    t = S.ax.annotate("N", xy=base, xycoords="axes fraction", xytext=tuple(9 * u), textcoords="offset points",
+    t = S.ax.annotate("N", xy=base, xycoords=corner, xytext=tuple(9 * u), textcoords="offset points",
                       fontsize=9, fontweight="bold", ha="center", va="center", zorder=Z_TEXT + 1,
                       path_effects=_halo(), gid="north-arrow")
     return [t]
@@ -1829,14 +1853,18 @@ def place_labels(ax, texts, fixed=(), avoid=None) -> int:
 def _axes_indicator(ax) -> list:
     """+X / +Y arrows near the top left corner (equal aspect: screen and world directions agree);
     returns the two texts."""
+    from matplotlib.transforms import offset_copy
+
     out = []
-    base = (0.03, 0.80)
+    # the origin 48 points under the top of the axes, whatever their height
+    base = (0.03, 1.0)
+    corner = offset_copy(ax.transAxes, fig=ax.figure, y=-48, units="points")
     arrow = dict(arrowstyle="<|-", lw=1.2, color="black", shrinkA=0, shrinkB=0, mutation_scale=10)
     for off, text, ha, va, toff in (((26, 0), "+X", "left", "center", (30, 0)),
                                     ((0, 26), "+Y", "center", "bottom", (0, 29))):
-        ax.annotate("", xy=base, xycoords="axes fraction", xytext=off, textcoords="offset points",
+        ax.annotate("", xy=base, xycoords=corner, xytext=off, textcoords="offset points",
                     arrowprops=arrow, zorder=Z_TEXT + 1)
-        out.append(ax.annotate(text, xy=base, xycoords="axes fraction", xytext=toff, textcoords="offset points",
+        out.append(ax.annotate(text, xy=base, xycoords=corner, xytext=toff, textcoords="offset points",
                                fontsize=8, ha=ha, va=va, zorder=Z_TEXT + 1, path_effects=_halo(),
                                gid="axes-indicator"))
     return out

@@ -1,9 +1,11 @@
 """Animation of a reconstructed scene: the scene diagram with the bodies moving over it.
 
 An edge module like :mod:`crashsim.plotting` (matplotlib imported lazily, on first use). The
-static layer of every frame is :func:`crashsim.plotting.plot_scene` without ghost outlines
-(marks, tracks, CG paths, outlines at impact and at rest, obstacles, evidence, legend, scale
-bar), drawn once; per frame only one outline per body, the hitch pins and a clock change.
+fixed layer of every frame is :func:`crashsim.plotting.plot_scene` without ghost outlines
+(outlines at impact, obstacles, evidence, arrows, a compact legend inside the view, scale bar),
+drawn once; per frame the moving outlines, the hitch pins and a clock change, the tyre tracks
+and CG paths grow to the clock, the outlines at rest appear when their vehicle comes to rest
+and later impacts' numbers when they happen.
 
 Frames are at scene times 0, dt, 2 dt, ... after separation and at the end of the run-out;
 playback runs at ``fps = speed / dt`` frames per second, so ``speed = 1`` is real time and
@@ -158,6 +160,7 @@ class SceneAnimation:
         self._decimals = decimals
         self._end_note = end_note
         self.before_impact = False  # frames before the impact show the approach (scene_animation sets it)
+        self._leaders: list = []  # (leader line, time): leaders of labels that appear at a time
 
     def __len__(self) -> int:
         return len(self.times)
@@ -223,8 +226,8 @@ class SceneAnimation:
                 f = (t - tt[n - 1]) / (tt[n] - tt[n - 1])
                 end = xy[n - 1] + f * (xy[n] - xy[n - 1])
                 line.set_data(np.append(xy[:n, 0], end[0]), np.append(xy[:n, 1], end[1]))
-        for artist, t_rest in S.at_rest:  # outlines at rest once the vehicle is at rest
-            artist.set_visible(t >= t_rest)
+        for artist, t_on in [*S.appear, *self._leaders]:  # outlines at rest once at rest; impacts once they happen
+            artist.set_visible(t >= t_on)
         return self.changing
 
     @property
@@ -232,7 +235,7 @@ class SceneAnimation:
         """Every artist :meth:`frame` changes (drawn per frame over a fixed background)."""
         S = self._S
         return [*self.outlines.values(), *self.pins.values(), self.clock, *(a for a, _, _ in S.timed),
-                *(a for a, _ in S.at_rest)]
+                *(a for a, _ in S.appear), *(a for a, _ in self._leaders)]
 
 
 def _pin_points(S, vehicle_name: str, poses: dict) -> np.ndarray:
@@ -364,6 +367,11 @@ def scene_animation(scene, *, dt: float = 0.05, system: str | None = None, t_end
     anim.before_impact = bool(approaches)
     _contain(ax, _frame_points(S, anim))
     place_labels(ax, S.texts, [*S.fixed, clock], np.vstack(S.points))  # the scale may have changed; the clock
+    timed = [(t, on) for t, on in S.appear if hasattr(t, "xyann")]
+    for leader in (a for a in ax.texts if (a.get_gid() or "").startswith("leader:")):
+        on = next((on for t, on in timed if np.allclose(t.xy, leader.xy)), None)
+        if on is not None:
+            anim._leaders.append((leader, on))
     anim.frame(0)
     return anim
 
@@ -419,9 +427,10 @@ def animate_scene(scene, path, *, dt: float = 0.05, speed: float = 1.0, system: 
     ``speed / dt <= 50`` for a GIF (a warning on the "crashsim" logger says so otherwise).
     Identical consecutive GIF frames (the hold) are stored once with their delays summed.
 
-    Tracks and CG paths grow with the clock, and the outlines at rest (with their axles, pins
-    and names) appear when their vehicle comes to rest. A GIF is rendered by drawing the fixed
-    layer once and, per frame, only what changes over it (blitting); an MP4 redraws each frame.
+    Tracks and CG paths grow with the clock, the outlines at rest (with their axles, pins and
+    names) appear when their vehicle comes to rest, later impacts' numbers when they happen. A
+    GIF is rendered by drawing the fixed layer once and, per frame, only what changes over it
+    (blitting); an MP4 redraws each frame.
     """
     p = check_animation_path(path)
     if not (isinstance(speed, (int, float, np.floating)) and math.isfinite(speed) and speed > 0):

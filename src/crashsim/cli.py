@@ -338,7 +338,8 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("--paper", choices=tuple(PAPER_SIZES), default=None,
                     help="print sheet: the figure is the page, the drawing to scale (PDF/SVG print at 100 %%)")
     pl.add_argument("--scale", type=_scale, default=None, metavar="1:N",
-                    help='drawing scale on the sheet, e.g. "1:200" (default: the largest that fits; A4 without --paper)')
+                    help='drawing scale on the sheet, e.g. "1:200" (default: the largest that fits; A4 without '
+                         '--paper)')
     pl.set_defaults(func=_cmd_plot)
 
     an = sub.add_parser("animate", help="animate the run-out over the scene diagram (.gif, or .mp4 with ffmpeg)")

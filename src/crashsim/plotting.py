@@ -29,7 +29,8 @@ from .units import Kind, convert, resolve_system, to_unit
 _log = logging.getLogger("crashsim")
 
 __all__ = ["is_color", "LABEL_KINDS", "LEGEND_MODES", "PAPER_SIZES", "PrintSheet", "place_labels", "check_hide",
-           "legend_mode", "parse_scale", "print_sheet", "scene_drawing", "text_box", "BarrierAxes", "plot_barrier_sweep", "plot_barrier_figures", "plot_scene", "plot_histories",
+           "legend_mode", "parse_scale", "print_sheet", "scene_drawing", "text_box", "BarrierAxes",
+           "plot_barrier_sweep", "plot_barrier_figures", "plot_scene", "plot_histories",
            "history_panels", "save_scene_figures", "SCENE_FIGURE_SUFFIXES"]
 
 
@@ -312,7 +313,7 @@ class SceneDrawing:
         self.fixed: list = []  # artists the labels keep clear of (axes indicator, scale bar, ...)
         self.unplaced = 0  # labels place_labels found no free place for
         self.timed: list = []  # (Line2D, times [s] (n,), points (n, 2) display units): paths and tracks
-        self.at_rest: list = []  # (artist, time [s] it comes to rest): outlines, axles, pins, names at rest
+        self.appear: list = []  # (artist, time [s]): outlines etc. at rest, from their rest; later impacts
         self.body_of = {b.name: b for v in self.sc.vehicles for b in v.bodies}
         self.vehicle_of = {b.name: v for v in self.sc.vehicles for b in v.bodies}
         movable = [v for v in self.sc.vehicles if not v.is_barrier]
@@ -620,7 +621,8 @@ def print_sheet(paper: str, lo, hi, per_metre: float, scale=None, *, legend_heig
         fits = [n for n in _SCALES if n >= need]
         hint = f"1:{fits[0]:g}" if fits else f"1:{math.ceil(need)}"
         raise ScenarioError(f"scale 1:{scale:g} is too large for the scene on {key}: its framed extent "
-                            f"{ext_m[0]:.1f} m x {ext_m[1]:.1f} m fits at 1:N with N >= {need:.0f} (e.g. {hint}), or on "
+                            f"{ext_m[0]:.1f} m x {ext_m[1]:.1f} m fits at 1:N with N >= {need:.0f} (e.g. {hint}), "
+                            "or on "
                             "larger paper", field="scale")
     centre = 0.5 * (lo + hi)
     half = 0.5 * room * float(scale) * per_metre
@@ -838,7 +840,7 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
                              offset=6.0 if name in S.no_outline else -5.0)
             S.pins(v, poses, dark, 4.0, zorder=Z_REST)
             rest = [*ax.patches[before[0]:], *ax.lines[before[1]:], *S.texts[before[2]:]]
-            S.at_rest += [(a, float(r.t_end)) for a in rest]
+            S.appear += [(a, float(r.t_end)) for a in rest]
         if ghost_note:
             S.legend_entry(ghost_note, Patch(facecolor="none", edgecolor="0.4", lw=0.7, alpha=0.7))
         S.legend_entry("at rest (end of run)", Patch(facecolor="0.8", edgecolor="0.1", lw=1.8))
@@ -996,14 +998,16 @@ def _draw_approaches(S: SceneDrawing) -> None:
         S.pins(v, poses, line, 2.5, alpha=0.7, zorder=_Z_GHOST)
         first = next(iter(a.bodies))
         start = S.d(a.bodies[first][0, 1:3])
-        S.text(start, f"braking starts, {fmt(a.speed_at_braking, 'speed', S.system)}", kind="approach", fontsize=6.5, color=dark,
+        S.text(start, f"braking starts, {fmt(a.speed_at_braking, 'speed', S.system)}", kind="approach", fontsize=6.5,
+               color=dark,
                ha="center", va="bottom", path_effects=_halo(1.8))
         S.labels.append(start)
         if a.reaction_time > 0:
             pp = S.d(a.perception_point)
             ax.plot([pp[0], start[0]], [pp[1], start[1]], ":", color=dark, lw=1.0, zorder=_Z_TRACK)
             ax.plot(*pp, "D", ms=5, mfc="white", mec=dark, zorder=_Z_IMPACT, gid=f"approach:perception:{vn}")
-            S.text(pp, f"perception ({a.reaction_time:g} s before braking)", kind="approach", fontsize=6.5, color=dark, ha="center",
+            S.text(pp, f"perception ({a.reaction_time:g} s before braking)", kind="approach", fontsize=6.5, color=dark,
+                   ha="center",
                    va="bottom", path_effects=_halo(1.8))
             S.labels.append(pp)
             S.add(pp)
@@ -1299,7 +1303,6 @@ def _draw_arrows(S: SceneDrawing) -> None:
 
 def _draw_obstacles(S: SceneDrawing) -> None:
     """Fixed obstacles of the scene (guardrails, walls, poles), hatched, with their names."""
-    from matplotlib.lines import Line2D
     from matplotlib.patches import Patch, Polygon
 
     spec = S.sc.runout
@@ -1316,7 +1319,8 @@ def _draw_obstacles(S: SceneDrawing) -> None:
         centre = np.vstack(S.points).mean(axis=0) if S.points else np.zeros(2)
         line = S.d(np.asarray(o.points, dtype=float))
         mid = line[int(np.argmin(np.hypot(*(line - centre).T)))]
-        S.text(mid, o.name, kind="obstacles", fontsize=7, color="0.15", ha="center", va="bottom", zorder=Z_TEXT, path_effects=_halo())
+        S.text(mid, o.name, kind="obstacles", fontsize=7, color="0.15", ha="center", va="bottom", zorder=Z_TEXT,
+               path_effects=_halo())
     if obstacles:
         S.legend_entry("fixed obstacle", Patch(facecolor="0.78", edgecolor="0.25", hatch="xxx", lw=0.8))
 
@@ -1330,14 +1334,18 @@ def _draw_impacts(S: SceneDrawing) -> None:
     points = [S.scene.impact.point] + [i.point for i in later]
     if len(points) < 2:
         return
+    times = [0.0] + [float(i.t) for i in later]
     for n, p in enumerate(points, start=1):
         xy = S.d(np.asarray(p, dtype=float))
+        first = (len(S.ax.lines), len(S.texts))
         # the point itself, and its number in a yellow disc on it (moved aside with a leader line
         # by place_labels when impacts lie close together)
         S.ax.plot(*xy, "o", ms=3.5, mfc="0.1", mec="#ffd54f", mew=0.8, zorder=_Z_ARROW + 1, gid=f"impact:{n}")
         S.text(xy, str(n), kind="impacts", fontsize=7, fontweight="bold", ha="center", va="center",
                zorder=_Z_ARROW + 2, bbox=dict(boxstyle="circle,pad=0.25", facecolor="#ffd54f", edgecolor="0.1", lw=1.0))
         S.add(xy)
+        if n > 1:  # a later impact appears (in the animation) when it happens
+            S.appear += [(a, times[n - 1]) for a in (*S.ax.lines[first[0]:], *S.texts[first[1]:])]
     S.legend_entry("impacts in time order (1: the first; the report lists them)",
                    Line2D([], [], ls="none", marker="o", ms=9, mfc="#ffd54f", mec="0.1"))
 
@@ -1633,7 +1641,8 @@ def _label_road_layout(S: SceneDrawing, roi: _Roi, lo, hi) -> None:
         text = _zone_label(z)
         k = place.best(cand, text, 7.5, allowed=effective, room=signed_distance(cand, polys[i]))
         edge = _ZONE_COLORS[i % len(_ZONE_COLORS)][1]
-        t = S.text(cand[k], text, kind="zones", gid=f"zone-label:{i}", fontsize=7.5, ha="center", va="center", style="italic", color=_darker(edge),
+        S.text(cand[k], text, kind="zones", gid=f"zone-label:{i}", fontsize=7.5, ha="center", va="center",
+                   style="italic", color=_darker(edge),
                    path_effects=_halo(2.2), zorder=Z_TEXT - 0.5)
         S.labels.append(cand[k])
     step = 0.015 * float((np.asarray(hi) - np.asarray(lo)).max())
@@ -1653,7 +1662,8 @@ def _label_road_layout(S: SceneDrawing, roi: _Roi, lo, hi) -> None:
         deg = angle[k]
         off = 3.0 * np.array([-np.sin(np.radians(deg)), np.cos(np.radians(deg))])
         color = _darker(line.color or _MAP_STYLES[line.style][1])
-        t = S.text(cand[k], line.name, kind="map", gid=f"map-label:{i}", xytext=tuple(off), textcoords="offset points", fontsize=6.5, ha="center",
+        S.text(cand[k], line.name, kind="map", gid=f"map-label:{i}", xytext=tuple(off), textcoords="offset points",
+                   fontsize=6.5, ha="center",
                    va="bottom", rotation=deg, rotation_mode="anchor", color=color, path_effects=_halo(2.0),
                    zorder=Z_TEXT - 0.5)
         S.labels.append(cand[k])
@@ -1934,8 +1944,22 @@ def _scene_legend(S: SceneDrawing, mode: str, below: bool, compact: bool = False
     labels = list(S.handles)
     handles = [S.handles[k] for k in labels]
     size = 6.5 if compact or mode == "inside" else 7.5
-    if mode not in ("outside",):  # inside: one line per entry (the residuals are in the report)
-        labels = [k.split("\n  ")[0].replace("\n", " ") for k in labels]
+    keys = list(labels)
+    if mode != "outside":
+        # inside: compact. One line per entry, the evidence items as one entry (the title counts
+        # their verdicts; each residual is in the report)
+        evidence = ("measured ", "recorded ", "crush energy")
+        n_ev = sum(k.startswith(evidence) for k in keys)
+        keep = [k for k in keys if not k.startswith(evidence)]
+        if n_ev:
+            from matplotlib.lines import Line2D
+
+            S.handles.setdefault("measured evidence (red)",
+                                 Line2D([], [], ls=(0, (4, 2)), color=_EVIDENCE, lw=1.2, marker="x", ms=5, mew=1.3))
+            keep.append("measured evidence (red)")
+        keys = keep
+        handles = [S.handles[k] for k in keys]
+        labels = [k.split("\n  ")[0].replace("\n", " ") for k in keys]
     if mode == "outside" and compact:  # a print sheet: under the drawing, as many columns as the page holds
         fig = S.ax.figure
         r = fig.canvas.get_renderer()
@@ -1961,10 +1985,14 @@ def _scene_legend(S: SceneDrawing, mode: str, below: bool, compact: bool = False
                           fontsize=size, frameon=False, handlelength=2.2)
     else:
         loc = "best" if mode == "inside" else mode
+        x0, x1 = S.ax.get_xlim()
+        y0, y1 = S.ax.get_ylim()
+        wide = (x1 - x0) > 1.8 * (y1 - y0)
         leg = S.ax.legend(handles, labels, loc=loc, fontsize=size, framealpha=0.9, handlelength=2.0,
-                          borderpad=0.3, labelspacing=0.25)
+                          borderpad=0.3, labelspacing=0.25, ncol=2 if wide and len(labels) > 8 else 1,
+                          columnspacing=1.0)
     n = len(S.scene.evidence.checks) if S.scene.evidence is not None else 0
-    for text, full in zip(leg.get_texts(), S.handles):  # colours by the full label
+    for text, full in zip(leg.get_texts(), keys):  # colours by the full label
         c = S.label_colors.get(full)
         if c is not None:
             text.set_color(c)

@@ -31,7 +31,8 @@ from crashsim.scenario import load_scenario  # noqa: E402
 from crashsim.units import Kind, to_unit  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
-SHIPPED = sorted((ROOT / "scenarios" / "scenes").glob("*.toml")) + sorted((ROOT / "scenarios" / "survey").glob("*.toml"))
+SHIPPED = (sorted((ROOT / "scenarios" / "scenes").glob("*.toml"))
+           + sorted((ROOT / "scenarios" / "survey").glob("*.toml")))
 GLANCE = ROOT / "scenarios" / "scenes" / "barrier_glance_15deg.toml"
 TRUCK = ROOT / "scenarios" / "scenes" / "truck_brakes_into_car.toml"
 WAITING = ROOT / "scenarios" / "scenes" / "third_vehicle_waiting_car.toml"
@@ -175,7 +176,8 @@ def test_print_sheet_picks_a_scale_or_refuses_one_too_large():
     # the largest standard scale that holds 120 m: 1:250 does not, 1:500 does
     assert 120.0 / room[0] > 250 and sheet.orientation == "landscape" and sheet.scale == 500
     assert np.all(sheet.hi - sheet.lo >= [120.0, 20.0])
-    with pytest.raises(ScenarioError, match=r"^scale: scale 1:200 is too large .* fits at 1:N with N >= 463 \(e.g. 1:500\)"):
+    too_large = r"^scale: scale 1:200 is too large .* fits at 1:N with N >= 463 \(e.g. 1:500\)"
+    with pytest.raises(ScenarioError, match=too_large):
         print_sheet("A4", (0.0, 0.0), (120.0, 20.0), 1.0, 200.0)
     with pytest.raises(ScenarioError, match=r"^paper: paper 'B5' is unknown"):
         print_sheet("B5", (0.0, 0.0), (1.0, 1.0), 1.0)
@@ -243,7 +245,7 @@ def test_animation_tracks_grow_and_rest_outlines_appear_at_rest():
     scene = _scene(WAITING)
     anim = scene_animation(scene, dt=0.1)
     S = anim._S
-    assert S.timed and S.at_rest
+    assert S.timed and S.appear
     ends = {vn: float(r.t_end) for vn, r in scene.runout.items()}
     mid = len(anim) // 3
     anim.frame(mid)
@@ -254,11 +256,14 @@ def test_animation_tracks_grow_and_rest_outlines_appear_at_rest():
         assert len(x) in (n, n + 1)  # the samples up to the clock (and the point at the clock)
         if n:
             np.testing.assert_allclose(np.column_stack([x, y])[:n], xy[:n], atol=1e-12)
-    for artist, t_rest in S.at_rest:
-        assert artist.get_visible() == (t >= t_rest)
+    for artist, t_on in S.appear:
+        assert artist.get_visible() == (t >= t_on)
+    # later impacts' numbers appear at their times (the first, at 0, is there from the start)
+    numbers = {a.get_text(): on for a, on in S.appear if (a.get_gid() or "") == "label:impacts"}
+    assert numbers == {str(n): pytest.approx(float(i.t)) for n, i in enumerate(scene.joint.impacts, start=2)}
     assert any(t < e for e in ends.values())  # some vehicle still moving at that frame
     anim.frame(len(anim) - 1)
-    assert all(a.get_visible() for a, _ in S.at_rest)
+    assert all(a.get_visible() for a, _ in S.appear)
     for line, tt, xy in S.timed:
         np.testing.assert_allclose(np.column_stack(line.get_data()), xy, atol=1e-12)
     assert _overlaps(anim.fig) == []

@@ -477,9 +477,11 @@ def _write_gif(anim: SceneAnimation, path: Path, fps: float, dpi: int, hold: int
     from PIL import Image
 
     fig, ax = anim.fig, anim.ax
-    old_dpi, old_canvas = fig.dpi, fig.canvas
+    old_dpi, old_canvas, old_size = fig.dpi, fig.canvas, fig.get_size_inches().copy()
     canvas = FigureCanvasAgg(fig)
     fig.set_dpi(dpi)
+    # whole pixels, rounded (as matplotlib's movie writers size their frames)
+    fig.set_size_inches(round(old_size[0] * dpi) / dpi, round(old_size[1] * dpi) / dpi)
     changing = anim.changing
     try:
         for a in changing:
@@ -504,4 +506,5 @@ def _write_gif(anim: SceneAnimation, path: Path, fps: float, dpi: int, hold: int
         for a in changing:
             a.set_animated(False)
         fig.set_dpi(old_dpi)
+        fig.set_size_inches(old_size)
         fig.set_canvas(old_canvas)

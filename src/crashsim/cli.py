@@ -235,14 +235,23 @@ def _add_inverse_commands(sub):
 def _cmd_plot(args) -> int:
     interval = None if args.interval is None else parse(args.interval, Kind.TIME, field="--interval")
     scene = run_scene(load_scenario(args.file))
-    written = save_scene_figures(scene, Path(args.output), histories_path=args.histories and Path(args.histories),
-                                 dpi=args.dpi, interval=interval, system=args.units,
-                                 time_distance_path=args.time_distance and Path(args.time_distance),
-                                 approach=not args.no_approach, legend=args.legend, hide=args.hide or (),
-                                 paper=args.paper, scale=args.scale)
+    try:
+        written = _save_figures(args, scene, interval)
+    except ScenarioError as exc:  # a scale too large for the page: name the option as written
+        if exc.field != "scale":
+            raise
+        raise ScenarioError(str(exc).removeprefix("scale: "), field="--scale") from None
     for path in written:
         sys.stdout.write(f"wrote {path}\n")
     return 0
+
+
+def _save_figures(args, scene, interval) -> list:
+    return save_scene_figures(scene, Path(args.output), histories_path=args.histories and Path(args.histories),
+                              dpi=args.dpi, interval=interval, system=args.units,
+                              time_distance_path=args.time_distance and Path(args.time_distance),
+                              approach=not args.no_approach, legend=args.legend, hide=args.hide or (),
+                              paper=args.paper, scale=args.scale)
 
 
 def _cmd_animate(args) -> int:

@@ -935,6 +935,8 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
         _fit_texts(S)
         if new:
             layout_scene_figure(ax, outside, below)
+        if new and mode == "inside":
+            _legend_headroom(ax, leg, below)
     _draw_scene_underlay(S)
     xl = ax.get_xlim()
     fixed.append(_scale_bar(S, xl[1] - xl[0], sheet))
@@ -947,6 +949,37 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     if S.unplaced:
         _log.info("scene figure: %d label(s) found no free place and may overlap others", S.unplaced)
     return ax
+
+
+def _legend_headroom(ax, leg, below: bool) -> None:
+    """A legend inside a new figure: a band at the top of the view, added above everything drawn
+    (the figure grows to keep the scale), so that it covers none of the scene; the axes
+    indicator and north arrow go under it if it would cover them."""
+    from matplotlib.transforms import ScaledTranslation
+
+    fig = ax.figure
+    r = fig.canvas.get_renderer()
+    # centred between the axes indicator (top left) and the animation's clock (top right)
+    leg.set_loc("upper center")
+    leg.set_bbox_to_anchor((0.14, 0.0, 0.72, 1.0), transform=ax.transAxes)
+    fig.draw_without_rendering()
+    height = leg.get_window_extent(r).height
+    frac = (height + 6.0) / ax.get_window_extent(r).height
+    if frac >= 0.9:
+        return  # a legend as high as the view: leave it where it is
+    y0, y1 = ax.get_ylim()
+    # a wide figure keeps its width (and scale): add the legend's height; a tall one keeps its
+    # height: the view grows so that the legend's share of it is free
+    extra = frac * (y1 - y0) if below else (y1 - y0) * frac / (1.0 - frac)
+    ax.set_ylim(y0, y1 + extra)
+    layout_scene_figure(ax, None, below)
+    fig.draw_without_rendering()
+    marks = [a for a in ax.texts if a.get_gid() in ("axes-indicator", "north-arrow")]
+    lb = leg.get_window_extent(r)
+    if any(lb.overlaps(a.get_window_extent(r)) for a in marks):
+        down = ScaledTranslation(0.0, -(lb.height + 6.0) / fig.dpi, fig.dpi_scale_trans)
+        for a in marks:
+            a.xycoords = a.xycoords + down
 
 
 def _draw_scene_underlay(S: SceneDrawing) -> None:
@@ -1873,7 +1906,7 @@ def _axes_indicator(ax) -> list:
     for off, text, ha, va, toff in (((26, 0), "+X", "left", "center", (30, 0)),
                                     ((0, 26), "+Y", "center", "bottom", (0, 29))):
         ax.annotate("", xy=base, xycoords=corner, xytext=off, textcoords="offset points",
-                    arrowprops=arrow, zorder=Z_TEXT + 1)
+                    arrowprops=arrow, zorder=Z_TEXT + 1, gid="axes-indicator")
         out.append(ax.annotate(text, xy=base, xycoords=corner, xytext=toff, textcoords="offset points",
                                fontsize=8, ha=ha, va=va, zorder=Z_TEXT + 1, path_effects=_halo(),
                                gid="axes-indicator"))
@@ -1909,6 +1942,14 @@ def layout_scene_figure(ax, leg, below: bool, width: float = 10.0, height: float
         if w_ax > width:  # very wide but with the legend at the right (legend= a location): cap
             w_ax, h_ax = width, width * aspect
         w_fig = left + w_ax + right + (leg_w + 0.3 if leg is not None else 0.0)
+        # never narrower than the title (a tall scene without a legend at its right)
+        half = 0.5 * ax.title.get_window_extent(r).width / fig.dpi + 0.1  # the title is centred on the axes
+        centre = left + 0.5 * w_ax
+        if centre - half < 0.0:
+            left += half - centre
+            w_fig += half - centre
+            centre = half
+        w_fig = max(w_fig, centre + half)
         h_fig = max(top + h_ax + bottom, top + leg_h + 0.2)
     fig.set_size_inches(w_fig, h_fig)
     fig.draw_without_rendering()  # the renderer follows the new size

@@ -201,6 +201,14 @@ def test_cli_vector_sheet(tmp_path, capsys, suffix):
     np.testing.assert_allclose([float(box.group(1)), float(box.group(2))], a4, atol=1e-3)
 
 
+def test_cli_refuses_a_scale_too_large_for_the_page_naming_the_option(tmp_path, capsys):
+    out = tmp_path / "s.pdf"
+    assert main(["plot", str(GLANCE), "-o", str(out), "--paper", "A4", "--scale", "1:200"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("crashsim: input error: --scale: scale 1:200 is too large for the scene on A4")
+    assert "e.g. 1:1000" in err and not out.exists()
+
+
 def test_cli_refuses_an_unknown_label_kind(tmp_path, capsys):
     with pytest.raises(SystemExit) as exc:
         main(["plot", str(WAITING), "-o", str(tmp_path / "s.png"), "--hide", "names,colour"])

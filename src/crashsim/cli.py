@@ -21,7 +21,7 @@ from .animation import animate_scene, check_animation_path, frame_times
 from .errors import CrashsimError, ScenarioError, SolverError
 from .motion.result import jsonable as _clean  # JSON-safe copy: numpy to Python, NaN/inf to None
 from .outputs import check_output_dir, check_output_file, check_workers
-from .plotting import save_scene_figures
+from .plotting import LABEL_KINDS, LEGEND_MODES, PAPER_SIZES, check_hide, parse_scale, save_scene_figures
 from .reconstruct import run_scene
 from .reconstruct.fit import fit_scene, same_file
 from .reconstruct.mc_plots import save_mc_figures
@@ -44,6 +44,22 @@ def _units(text: str) -> str:
         return resolve_system(text)
     except ScenarioError:
         raise argparse.ArgumentTypeError(f"{text!r}: allowed SI or US (any case)") from None
+
+
+def _hide(text: str) -> frozenset:
+    """argparse type of ``--hide``: label kinds, comma-separated."""
+    try:
+        return check_hide(text)
+    except ScenarioError as exc:
+        raise argparse.ArgumentTypeError(str(exc).split(": ", 1)[-1]) from None
+
+
+def _scale(text: str) -> float:
+    """argparse type of ``--scale``: 1:N."""
+    try:
+        return parse_scale(text, field="--scale")
+    except ScenarioError as exc:
+        raise argparse.ArgumentTypeError(str(exc).split(": ", 1)[-1]) from None
 
 
 def _dt(text: str | None) -> float | None:
@@ -220,13 +236,23 @@ def _add_inverse_commands(sub):
 def _cmd_plot(args) -> int:
     interval = None if args.interval is None else parse(args.interval, Kind.TIME, field="--interval")
     scene = run_scene(load_scenario(args.file))
-    written = save_scene_figures(scene, Path(args.output), histories_path=args.histories and Path(args.histories),
-                                 dpi=args.dpi, interval=interval, system=args.units,
-                                 time_distance_path=args.time_distance and Path(args.time_distance),
-                                 approach=not args.no_approach)
+    try:
+        written = _save_figures(args, scene, interval)
+    except ScenarioError as exc:  # a scale too large for the page: name the option as written
+        if exc.field != "scale":
+            raise
+        raise ScenarioError(str(exc).removeprefix("scale: "), field="--scale") from None
     for path in written:
         sys.stdout.write(f"wrote {path}\n")
     return 0
+
+
+def _save_figures(args, scene, interval) -> list:
+    return save_scene_figures(scene, Path(args.output), histories_path=args.histories and Path(args.histories),
+                              dpi=args.dpi, interval=interval, system=args.units,
+                              time_distance_path=args.time_distance and Path(args.time_distance),
+                              approach=not args.no_approach, legend=args.legend, hide=args.hide or (),
+                              paper=args.paper, scale=args.scale)
 
 
 def _cmd_animate(args) -> int:
@@ -236,8 +262,13 @@ def _cmd_animate(args) -> int:
     scene = run_scene(load_scenario(args.file))
     if scene.runout:
         frame_times(max(r.t_end for r in scene.runout.values()), dt, field="--dt")
-    written = animate_scene(scene, out, dt=dt, speed=args.speed, system=args.units, dpi=args.dpi,
-                            approach=not args.no_approach)
+    with tqdm(total=None, file=sys.stderr, unit="frame", desc="rendering", disable=args.quiet) as bar:
+        def progress(done, total):
+            bar.total = total
+            bar.update(done - bar.n)
+
+        written = animate_scene(scene, out, dt=dt, speed=args.speed, system=args.units, dpi=args.dpi,
+                                approach=not args.no_approach, progress=progress)
     sys.stdout.write(f"wrote {written}\n")
     return 0
 
@@ -310,6 +341,15 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("--interval", metavar="TIME", help='time between ghost outlines, e.g. "0.5 s"')
     pl.add_argument("--units", type=_units, default=None, help="SI or US: units of the figure (default: the scenario's)")
     pl.add_argument("--dpi", type=int, default=150)
+    pl.add_argument("--legend", choices=LEGEND_MODES, default="outside",
+                    help="legend under or beside the diagram (default), small inside it, or none")
+    pl.add_argument("--hide", type=_hide, default=None, metavar="KINDS",
+                    help=f"label kinds to leave out, comma-separated: labels (all), {', '.join(LABEL_KINDS)}")
+    pl.add_argument("--paper", choices=tuple(PAPER_SIZES), default=None,
+                    help="print sheet: the figure is the page, the drawing to scale (PDF/SVG print at 100 %%)")
+    pl.add_argument("--scale", type=_scale, default=None, metavar="1:N",
+                    help='drawing scale on the sheet, e.g. "1:200" (default: the largest that fits; A4 without '
+                         '--paper)')
     pl.set_defaults(func=_cmd_plot)
 
     an = sub.add_parser("animate", help="animate the run-out over the scene diagram (.gif, or .mp4 with ffmpeg)")
@@ -322,6 +362,7 @@ def build_parser() -> argparse.ArgumentParser:
     an.add_argument("--dpi", type=int, default=100)
     an.add_argument("--no-approach", action="store_true",
                     help="start at the impact (a scene with approaches starts at the earliest start of braking)")
+    an.add_argument("--quiet", action="store_true", help="no progress bar")
     an.set_defaults(func=_cmd_animate)
 
     sv = sub.add_parser("survey", help="list a survey file's layers or codes with entity counts and extents")

@@ -27,11 +27,12 @@ from .reconstruct.mc_plots import save_mc_figures
 from .reconstruct.montecarlo import monte_carlo
 from .reconstruct.posterior import run_posterior
 from .reconstruct.posterior_plots import save_posterior_figures
-from .scenario import load_scenario, presets, schema_document
+from .scenario import load_scenario, preset_geometry, presets, schema_document
 from .survey.export import export_frame, export_items, write_dxf, write_geojson
 from .survey.inspect import preview, read_any, summary
 from .survey.mapping import load_scene_data
-from .units import Kind, parse, resolve_system
+from .units import Kind, format_value, parse, resolve_system
+from .vehicle_plan import geometry_lines, plot_body_plan
 from .warmup import COMPILE_STEPS, compile_kernels
 
 __all__ = ["main"]
@@ -272,9 +273,27 @@ def _cmd_schema(args) -> int:
 
 
 def _cmd_presets(args) -> int:
+    system = args.units or "SI"
+    if args.plot:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        g = preset_geometry(args.plot)
+        ax = plot_body_plan(g, title=f"preset {args.plot} (to scale)", system=system)
+        ax.figure.savefig(args.output, dpi=150)
+        plt.close(ax.figure)
+        sys.stdout.write(f"wrote {args.output}\n")
+        return 0
     for name, p in presets().items():
-        sys.stdout.write(f"{name}\n    mass {p['mass']}, yaw inertia {p['yaw_inertia']}, "
-                         f"{len(p.get('axles', []))} axles\n    source: {p['source']}\n")
+        g = preset_geometry(name)
+        sys.stdout.write(f"{name}\n    mass {format_value(g['mass'], Kind.MASS, system, 6)}, yaw inertia "
+                         f"{format_value(g['yaw_inertia'], Kind.YAW_INERTIA, system, 6)}, "
+                         f"{len(g['axles'])} axles\n")
+        for line in geometry_lines(g, system):
+            sys.stdout.write(f"    {line}\n")
+        sys.stdout.write(f"    source: {p['source']}\n")
         for face, c in p.get("crush", {}).items():
             sys.stdout.write(f"    crush stiffness, {face}: A {c['A']}, B {c['B']}\n      source: {c['source']}\n")
     return 0
@@ -343,7 +362,10 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--format", choices=("text", "markdown"), default="text")
     s.set_defaults(func=_cmd_schema)
 
-    pr = sub.add_parser("presets", help="list the vehicle library's body parameter sets and their sources")
+    pr = sub.add_parser("presets", help="list the vehicle library's body parameter sets, their geometry and sources")
+    pr.add_argument("--units", type=_units, default=None, help="SI or US (any case): units of the list (default SI)")
+    pr.add_argument("--plot", metavar="NAME", help="draw preset NAME to scale in plan view (with -o FILE)")
+    pr.add_argument("-o", "--output", metavar="FILE", help="figure of --plot: .png, .svg or .pdf")
     pr.set_defaults(func=_cmd_presets)
     return p
 
@@ -406,6 +428,11 @@ def _check_outputs(args) -> None:
                             ("--time-distance", args.time_distance)):
             if path:
                 check_output_file(path, field=field, suffixes=figs, what="a figure")
+    if c == "presets" and (args.plot or args.output):
+        if not (args.plot and args.output):
+            raise ScenarioError("--plot NAME and -o FILE go together: the preset to draw and the figure to write",
+                                field="--plot" if args.output else "-o")
+        check_output_file(args.output, field="-o", suffixes=_figure_suffixes(), what="a figure")
     if c == "animate":
         check_output_file(check_animation_path(args.output, field="-o"), field="-o", what="the animation")
         if not parse(args.dt, Kind.TIME, field="--dt") > 0:

@@ -39,7 +39,7 @@ from .survey.schema import MAP_LINE_STYLES, SURVEY
 from .units import Kind, format_value, parse, toml_repr
 from .vehicles import Axle, Body, BodyState, Hitch, Vehicle, chain_states
 
-__all__ = ["SCHEMA", "MAP_LINE_STYLES", "MapLine", "Scenario", "RunoutSpec", "load_scenario", "presets",
+__all__ = ["SCHEMA", "MAP_LINE_STYLES", "MapLine", "Scenario", "RunoutSpec", "load_scenario", "presets", "preset_geometry",
            "scenario_from_dict", "schema_document"]
 
 # ----------------------------------------------------------------------------------------
@@ -1010,6 +1010,22 @@ def frame_point(p, frame, states, key, file):
 def presets() -> dict[str, dict]:
     """crashsim's library of body parameter sets (raw file values, each with its ``source``)."""
     return tomllib.loads(files("crashsim").joinpath("data/vehicles.toml").read_text(encoding="utf-8"))
+
+
+def preset_geometry(name: str) -> dict:
+    """One preset validated as a body of a scenario file: SI values with defaults filled (mass, yaw_inertia,
+    length, width, outline_center, axles with x, track, dual, name, front_hitch, rear_hitch, cg_height,
+    articulation_limit, ...), and its ``source``. An unknown name is a :class:`ScenarioError` naming the
+    presets."""
+    library = presets()
+    if name not in library:
+        near = difflib.get_close_matches(str(name), list(library), n=2)
+        hint = f"; did you mean {', '.join(map(repr, near))}?" if near else ""
+        raise ScenarioError(f"unknown preset {name!r}{hint} Presets: {', '.join(library)}", field="preset")
+    raw = {k: v for k, v in library[name].items() if k not in ("source", "crush")}
+    out = validate({"name": name, **raw}, BODY)
+    out["source"] = library[name]["source"]
+    return out
 
 
 def apply_presets(data: dict, file: str | None) -> dict:

@@ -17,6 +17,7 @@ from tqdm import tqdm
 from ._jit import cache_dir, ready
 from ._version import __version__
 from .animation import animate_scene, check_animation_path, frame_times
+from .casereport import load_json, survey_files, write_case_report
 from .errors import CrashsimError, ScenarioError, SolverError
 from .motion.result import jsonable as _clean  # JSON-safe copy: numpy to Python, NaN/inf to None
 from .outputs import check_output_dir, check_output_file, check_workers
@@ -267,6 +268,32 @@ def _cmd_export(args) -> int:
     return 0
 
 
+def _cmd_report(args) -> int:
+    extra = {}
+    for key in ("fit", "mc", "posterior"):
+        path = getattr(args, key)
+        if path:
+            try:
+                extra[key] = load_json(path)
+            except (OSError, ValueError) as exc:
+                raise ScenarioError(f"{path!r} is not readable JSON of crashsim {key} --json: {exc}",
+                                    field=f"--{key}") from None
+            if not isinstance(extra[key], dict):
+                raise ScenarioError(f"{path!r} is not a JSON object (crashsim {key} --json writes one)",
+                                    field=f"--{key}")
+    scenario = load_scenario(args.file)
+    scene = run_scene(scenario)
+    inputs = [args.file] + survey_files(args.file) + [getattr(args, k) for k in ("fit", "mc", "posterior")
+                                                      if getattr(args, k)]
+    command = " ".join(["crashsim", "report", args.file, "-o", Path(args.output).name]
+                       + [f"--{k} {getattr(args, k)}" for k in ("fit", "mc", "posterior") if getattr(args, k)]
+                       + ([f"--units {args.units}"] if args.units else []))
+    written = write_case_report(scene, args.output, input_files=inputs, system=args.units, presets=presets(),
+                                command=command, **extra)
+    sys.stdout.write(f"wrote {written}\n")
+    return 0
+
+
 def _cmd_schema(args) -> int:
     sys.stdout.write(schema_document(args.format) + "\n")
     return 0
@@ -358,6 +385,16 @@ def build_parser() -> argparse.ArgumentParser:
     ex.add_argument("--times", metavar="TIMES", help='outlines also at these times after separation, e.g. "0.5 s, 1 s"')
     ex.set_defaults(func=_cmd_export)
 
+    rp = sub.add_parser("report", help="write one self-contained HTML case report (inputs, impacts, run-out, "
+                                       "evidence, figures, SHA-256 of every input file)")
+    rp.add_argument("file", help="scenario file (TOML)")
+    rp.add_argument("-o", "--output", required=True, help="the report: .html")
+    rp.add_argument("--fit", metavar="FIT.json", help="include a fit's result (crashsim fit FILE --json > FIT.json)")
+    rp.add_argument("--mc", metavar="MC.json", help="include a Monte Carlo result (crashsim mc FILE --json)")
+    rp.add_argument("--posterior", metavar="POST.json", help="include a posterior (crashsim posterior FILE --json)")
+    rp.add_argument("--units", type=_units, default=None, help="SI or US: units of the report (default: the scenario's)")
+    rp.set_defaults(func=_cmd_report)
+
     s = sub.add_parser("schema", help="print the documented scenario-file schema")
     s.add_argument("--format", choices=("text", "markdown"), default="text")
     s.set_defaults(func=_cmd_schema)
@@ -371,7 +408,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 #: Commands that run the run-out kernels (and so may compile them on a first run).
-_COMPUTING = ("run", "fit", "mc", "posterior", "plot", "animate", "export")
+_COMPUTING = ("run", "fit", "mc", "posterior", "plot", "animate", "export", "report")
 
 
 def _first_compile(bar: bool = True) -> None:
@@ -428,6 +465,13 @@ def _check_outputs(args) -> None:
                             ("--time-distance", args.time_distance)):
             if path:
                 check_output_file(path, field=field, suffixes=figs, what="a figure")
+    if c == "report":
+        check_output_file(args.output, field="-o", suffixes=(".html", ".htm"), what="the case report")
+        for key in ("fit", "mc", "posterior"):
+            path = getattr(args, key)
+            if path and not Path(path).is_file():
+                raise ScenarioError(f"{path!r} is not a file; give the JSON that crashsim {key} FILE --json wrote",
+                                    field=f"--{key}")
     if c == "presets" and (args.plot or args.output):
         if not (args.plot and args.output):
             raise ScenarioError("--plot NAME and -o FILE go together: the preset to draw and the figure to write",

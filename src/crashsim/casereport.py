@@ -24,6 +24,7 @@ import jinja2
 
 from ._version import __version__
 from .plotting import figure_system, plot_histories, plot_scene, plot_time_distance
+from .motion.wheels import wheel_labels
 from .report import closing_error_text, describe_event, format_approach
 from .units import format_value, toml_repr
 
@@ -86,6 +87,7 @@ def toml_comments(text: str) -> dict[str, str]:
         stripped = line.strip()
         if not started and stripped.startswith("#"):
             opening.append(stripped[1:].strip())
+            continue  # the file's own comment, not the first table's
         elif stripped:
             started = True
         if depth > 0:
@@ -233,9 +235,9 @@ def input_rows(raw: dict, comments: dict[str, str], validated: dict | None = Non
         is_preset = bool(presets) and path.endswith(".preset") and isinstance(value, str) and value in presets
         if is_preset:
             comment = "; ".join(c for c in (comment, f"source of the preset: {presets[value]['source']}") if c)
-        rows.append({"key": path, "value": toml_repr(value), "unit": _unit_of(value),
-                     "si": _si_text(_lookup(validated, path)) if validated is not None else "",
-                     "comment": comment, "origin": "file"})
+        si = _si_text(_lookup(validated, path)) if validated is not None else ""
+        rows.append({"key": path, "value": toml_repr(value), "unit": _unit_of(value) if si or validated is None else "",
+                     "si": si, "comment": comment, "origin": "file"})
         if is_preset:
             body = path[: -len(".preset")]
             given = _lookup(raw, body) or {}
@@ -243,8 +245,9 @@ def input_rows(raw: dict, comments: dict[str, str], validated: dict | None = Non
                 if k in ("source", "crush") or k in given:
                     continue
                 for sub, leaf in _flatten(v, f"{body}.{k}"):
-                    rows.append({"key": sub, "value": toml_repr(leaf), "unit": _unit_of(leaf),
-                                 "si": _si_text(_lookup(validated, sub)) if validated is not None else "",
+                    si = _si_text(_lookup(validated, sub)) if validated is not None else ""
+                    rows.append({"key": sub, "value": toml_repr(leaf),
+                                 "unit": _unit_of(leaf) if si or validated is None else "", "si": si,
                                  "comment": f"from preset {value}", "origin": f"preset {value}"})
     return rows
 
@@ -391,6 +394,7 @@ def _evidence(scene, system: str) -> dict | None:
     ev = scene.evidence
     if ev is None:
         return None
+    labels = wheel_labels(scene.scenario.vehicles)
     s = system
     rows = []
     for c in ev.checks:
@@ -398,7 +402,8 @@ def _evidence(scene, system: str) -> dict | None:
             res = "none computed"
         else:
             res = format_value(c.residual, c.quantity, s)
-        note = c.details.get("matched_wheel") or c.details.get("reason") or ""
+        wheel = c.details.get("matched_wheel")
+        note = labels.get(wheel, wheel) if wheel else (c.details.get("reason") or "")
         rows.append({"verdict": "PASS" if c.passed else "FAIL", "kind": c.kind, "name": c.name, "residual": res,
                      "tolerance": format_value(c.tolerance, c.quantity, s), "note": f"closest track: {note}"
                      if "matched_wheel" in c.details else note})

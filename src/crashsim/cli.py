@@ -338,7 +338,8 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--units", type=_units, default=None,
                    help="SI or US (any case): units of the report and the CSV files (default: the scenario's units)")
     r.add_argument("--csv", metavar="DIR", help="write time histories as CSV files into DIR (headers carry the unit)")
-    r.add_argument("--dt", metavar="TIME", help='time step of the CSV histories, e.g. "0.1 s" (default: runout.sample_dt)')
+    r.add_argument("--dt", metavar="TIME", help='time step of every CSV history (bodies, wheel tracks, approaches), e.g. "0.1 s" '
+                        '(default: runout.sample_dt; the approach: 201 points)')
     r.add_argument("--strict", action="store_true", help="exit with code 1 if an evidence item is out of tolerance")
     r.set_defaults(func=_cmd_run)
 

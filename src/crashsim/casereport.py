@@ -433,11 +433,16 @@ def _fit(d: dict, system: str) -> dict:
                                           for k, v in summary], "warnings": d.get("warnings", [])}
 
 
-def _mc(d: dict) -> dict:
+def _mc(d: dict, system: str, kinds: dict | None) -> dict:
     pct = d.get("percentiles", {})
-    qs = sorted({q for p in pct.values() for q in p}, key=lambda q: float(str(q).strip("p%") or 0)
-                if str(q).strip("p%").replace(".", "", 1).isdigit() else 0)
-    rows = [{"key": k, "values": [_num(p.get(q), None, "SI") for q in qs]} for k, p in pct.items()]
+    qs = list(dict.fromkeys(q for p in pct.values() for q in p))  # the JSON's order: p5 ... p95, mean, std
+    kinds = kinds or {}
+
+    def kind(key):
+        k = kinds.get(key.split(".", 1)[0])
+        return None if k in (None, "dimensionless") else k
+
+    rows = [{"key": k, "values": [_num(p.get(q), kind(k), system) for q in qs]} for k, p in pct.items()]
     summary = [("samples", d.get("n")), ("done", d.get("n_done")), ("failed", d.get("n_failed")), ("seed", d.get("seed"))]
     if d.get("pass_share") is not None:
         summary.append(("share meeting every evidence item", _num(d["pass_share"], None, "SI")))
@@ -451,7 +456,7 @@ def _posterior(d: dict, system: str) -> dict:
         rows.append({"name": u.get("name") or u["path"], "values": {q: _num(v, u.get("kind"), system)
                                                                       for q, v in p.items()},
                      "ess": _num(u.get("ess"), None, system) if u.get("ess") is not None else ""})
-    qs = sorted({q for r in rows for q in r["values"]}, key=str)
+    qs = list(dict.fromkeys(q for r in rows for q in r["values"]))  # the JSON's order
     diag = d.get("diagnostics", {})
     summary = [("success", d.get("success")), ("message", d.get("message")),
                ("kept samples", diag.get("samples")), ("mean acceptance", _num(diag.get("acceptance_mean"), None, "SI")),
@@ -462,7 +467,8 @@ def _posterior(d: dict, system: str) -> dict:
 
 def render_case_report(scene, *, input_files, system: str | None = None, fit: dict | None = None,
                        mc: dict | None = None, posterior: dict | None = None, presets: dict | None = None,
-                       command: str | None = None, now: _dt.datetime | None = None, figures: bool = True) -> str:
+                       command: str | None = None, now: _dt.datetime | None = None, figures: bool = True,
+                       output_kinds: dict | None = None) -> str:
     """The case report of ``scene`` as one HTML document (text).
 
     Parameters
@@ -485,6 +491,9 @@ def render_case_report(scene, *, input_files, system: str | None = None, fit: di
         The report's date (default: now, UTC).
     figures : bool
         Embed the figures (SVG).
+    output_kinds : dict, optional
+        Quantity kind of each Monte Carlo output by its first word (``{"speed": "speed", ...}``,
+        :data:`crashsim.reconstruct.montecarlo.OUTPUT_KINDS`): its percentiles then in ``system`` units.
     """
     system = figure_system(scene, system)
     files_ = [Path(p) for p in input_files]
@@ -501,7 +510,7 @@ def render_case_report(scene, *, input_files, system: str | None = None, fit: di
         "inputs": input_rows(raw, toml_comments(text), sc.data, presets),
         "approach": approach, "impacts": _impacts(scene, system), "first_bodies": _first_impact_bodies(scene, system),
         "law": scene.impact.tangential_law, "runout": _runout(scene, system), "evidence": _evidence(scene, system),
-        "fit": _fit(fit, system) if fit else None, "mc": _mc(mc) if mc else None,
+        "fit": _fit(fit, system) if fit else None, "mc": _mc(mc, system, output_kinds) if mc else None,
         "posterior": _posterior(posterior, system) if posterior else None,
         "warnings": list(scene.warnings), "notes": notes, "figures": _figures(scene, system) if figures else [],
         "command": command or f"crashsim report {files_[0].name} -o case.html",

@@ -25,7 +25,7 @@ from .plotting import save_scene_figures
 from .reconstruct import run_scene
 from .reconstruct.fit import fit_scene, same_file
 from .reconstruct.mc_plots import save_mc_figures
-from .reconstruct.montecarlo import monte_carlo
+from .reconstruct.montecarlo import OUTPUT_KINDS, monte_carlo
 from .reconstruct.posterior import run_posterior
 from .reconstruct.posterior_plots import save_posterior_figures
 from .scenario import load_scenario, preset_geometry, presets, schema_document
@@ -289,7 +289,7 @@ def _cmd_report(args) -> int:
                        + [f"--{k} {getattr(args, k)}" for k in ("fit", "mc", "posterior") if getattr(args, k)]
                        + ([f"--units {args.units}"] if args.units else []))
     written = write_case_report(scene, args.output, input_files=inputs, system=args.units, presets=presets(),
-                                command=command, **extra)
+                                command=command, output_kinds=OUTPUT_KINDS, **extra)
     sys.stdout.write(f"wrote {written}\n")
     return 0
 

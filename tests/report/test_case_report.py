@@ -238,3 +238,31 @@ def test_render_without_figures_is_quick_and_names_every_input(tmp_path):
     assert "figures" not in p.ids
     assert "2026-01-02 03:04 UTC" in text
     assert hashlib.sha256(SCENE.read_bytes()).hexdigest() in text
+
+
+def test_monte_carlo_and_posterior_sections_in_the_users_units(tmp_path):
+    """Shaped as ``crashsim mc --json`` and ``crashsim posterior --json`` write them (keys, percentile names)."""
+    from crashsim.reconstruct.montecarlo import OUTPUT_KINDS
+
+    scene = run_scene(load_scenario(SCENE))
+    mc = {"n": 8, "n_done": 8, "n_failed": 0, "seed": 2026, "pass_share": 0.5,
+          "percentiles": {"speed.A": {"p5": 13.4112, "p50": 13.4112, "p95": 13.4112, "mean": 13.4112, "std": 0.0},
+                          "energy_loss.system": {"p5": 0.25, "p50": 0.5, "p95": 0.75, "mean": 0.5, "std": 0.1}}}
+    post = {"success": True, "message": "ok", "warnings": ["chain short"],
+            "diagnostics": {"samples": 100, "acceptance_mean": 0.4, "chain_long_enough": True},
+            "unknowns": [{"path": "runout.road_friction", "name": "road friction", "kind": "dimensionless",
+                          "ess": 120.0, "percentiles": {"p2.5": 0.6, "p50": 0.7, "p97.5": 0.8}}],
+            "derived": [{"key": "speed.A", "kind": "speed", "percentiles": {"p2.5": 13.4112, "p50": 13.4112,
+                                                                              "p97.5": 13.4112}}]}
+    text = render_case_report(scene, input_files=[SCENE], system="US", mc=mc, posterior=post, figures=False,
+                              output_kinds=OUTPUT_KINDS)
+    p = _check(text)
+    assert "monte-carlo" in p.ids and "posterior" in p.ids
+    body = html.unescape(" ".join(p.text))
+    mc_part = body[body.index("Monte Carlo"):body.index("Posterior")]
+    head = mc_part[mc_part.index("Output"):]
+    assert head.index("p5") < head.index("p50") < head.index("p95") < head.index("mean") < head.index("std")
+    assert "30 mph" in mc_part and "0.75" in mc_part  # speed in mph, a share plain
+    post_part = body[body.index("Posterior"):]
+    assert "road friction" in post_part and "0.7" in post_part and "30 mph" in post_part
+    assert "chain short" in post_part

@@ -1253,15 +1253,23 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
                                 imp["body1"], imp["body2"], surface, tuple(constraints), tuple(external))
     except ScenarioError as exc:
         raise ScenarioError(str(exc), field=exc.field, file=file) from None
-    _check_overlap(problem, vehicles, states, imp["overlap_tolerance"], d["scenario"]["units"], file)  # the cause first
-    check_contact_point(problem, imp["contact_tolerance"], d["scenario"]["units"], file)
+    # the geometry at impact, the contact model, the evidence and the map: independent, every error at once
+    later = _Problems(file)
+    with later.each():
+        _check_overlap(problem, vehicles, states, imp["overlap_tolerance"], d["scenario"]["units"], file)  # the cause
+        check_contact_point(problem, imp["contact_tolerance"], d["scenario"]["units"], file)  # first
     if runout is not None:
-        runout = _with_contact(runout, d, vehicles, problem, file)
-    evidence = _build_evidence(d["evidence"], states, file, vehicles,
-                               {n: v["approach"] for n, v in d["vehicles"].items()})
-    if d["evidence"] is not None and d["evidence"]["crush"]:
-        evidence = dataclasses.replace(evidence, crush=_build_crush(d["evidence"]["crush"], d, vehicles, file))
-    map_lines = _build_map_lines(d["map"], file)
+        with later.each():
+            runout = _with_contact(runout, d, vehicles, problem, file)
+    evidence = map_lines = None
+    with later.each():
+        evidence = _build_evidence(d["evidence"], states, file, vehicles,
+                                   {n: v["approach"] for n, v in d["vehicles"].items()})
+        if d["evidence"] is not None and d["evidence"]["crush"]:
+            evidence = dataclasses.replace(evidence, crush=_build_crush(d["evidence"]["crush"], d, vehicles, file))
+    with later.each():
+        map_lines = _build_map_lines(d["map"], file)
+    later.raise_any()
     meta = d["scenario"]
     return Scenario(file, meta["title"], meta["source"], meta["units"], tuple(vehicles), states, problem, runout,
                     evidence, d, map_lines, approaches)

@@ -130,3 +130,16 @@ def test_required_if_is_for_optional_fields():
         Field("x", "float", description="x", required=True, required_if=("state", ("rolling",)))
     with pytest.raises(TypeError):
         Field("x", "float", description="x", unless=("y",))
+
+
+def test_evidence_and_map_errors_come_together():
+    """An evidence item on an unknown body and a map line of no colour: two errors, one run (within the
+    evidence the first error only, for now)."""
+    d = _scene()
+    d["evidence"] = {"rest": [{"body": "carC", "position": ["1 m", "1 m"], "tolerance": "1 m"},
+                              {"body": "carD", "position": ["2 m", "2 m"], "tolerance": "1 m"}]}
+    d["map"] = {"lines": [{"style": "edge", "points": [["0 m", "0 m"], ["9 m", "0 m"]], "color": "notacolour"}]}
+    with pytest.raises(ScenarioError) as info:
+        scenario_from_dict(d, file="s.toml")
+    text = str(info.value)
+    assert [p for p, _ in info.value.problems] == ["evidence.rest[0].body", "map.lines[0].color"], text

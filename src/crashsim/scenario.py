@@ -1479,17 +1479,25 @@ def _check_overlap(problem: ImpactProblem, vehicles, states: dict, tolerance: fl
                            file)
 
 
-def check_contact_point(problem: ImpactProblem, tolerance: float, system: str, file: str | None) -> None:
-    """The contact point must lie in or near (``tolerance``) the outline of both contacting bodies."""
-    point = np.asarray(problem.surface.point)
-    far = []
+def contact_outlines(problem: ImpactProblem, states: dict) -> list[tuple[str, np.ndarray]]:
+    """``(name, corners in world coordinates)`` of the impact's two contacting bodies at ``states``
+    (a fixed body, or one without an outline, left out)."""
+    out = []
     for name in (problem.body1, problem.body2):
         body = next(b for v in problem.vehicles for b in v.bodies if b.name == name)
         corners = body.outline()
         if body.is_fixed or corners is None:
             continue
-        st = problem.states[name]
-        world = np.asarray(st.position) + rotate(corners, st.heading)
+        st = states[name]
+        out.append((name, np.asarray(st.position) + rotate(corners, st.heading)))
+    return out
+
+
+def check_contact_point(problem: ImpactProblem, tolerance: float, system: str, file: str | None) -> None:
+    """The contact point must lie in or near (``tolerance``) the outline of both contacting bodies."""
+    point = np.asarray(problem.surface.point)
+    far = []
+    for name, world in contact_outlines(problem, problem.states):
         gap = max(0.0, -float(signed_distance(point[None], world)[0]))
         if gap > tolerance:
             far.append(f"{format_value(gap, Kind.LENGTH, system)} outside the outline of {name!r}")

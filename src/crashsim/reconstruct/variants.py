@@ -34,9 +34,8 @@ from typing import Sequence
 import numpy as np
 
 from ..errors import ScenarioError
-from ..geometry import rotate
 from ..motion.road import FrictionZone, Road, signed_distance
-from ..scenario import frame_point, frame_xform, vehicle_states
+from ..scenario import contact_outlines, frame_point, frame_xform, vehicle_states
 from ..schema import in_range
 from .patch import LAW_KEY, patch_kind, set_validated
 
@@ -112,13 +111,7 @@ class ScenarioVariant:
         if "point" in kinds:
             self._point = lambda p: frame_point(p, imp["point_frame"], base.states, "impact.point_frame", file)
             self._outlines = []
-            for name in (problem.body1, problem.body2):
-                body = next(b for v in problem.vehicles for b in v.bodies if b.name == name)
-                corners = body.outline()
-                if body.is_fixed or corners is None:
-                    continue
-                st = base.states[name]
-                world = np.asarray(st.position) + rotate(corners, st.heading)
+            for _, world in contact_outlines(problem, base.states):
                 try:  # a polygon with its edges prepared once (its distance is signed_distance's, bit for bit)
                     self._outlines.append(FrictionZone(world, 1.0).signed_distance)
                 except ScenarioError:

@@ -463,7 +463,7 @@ Scratch = namedtuple("Scratch", ["J", "rowb", "minv", "pext", "vfree", "wfree", 
 Outputs = namedtuple("Outputs", ["v", "w", "lam", "sc", "ke0", "ke1", "normal", "tangent", "cond", "work", "reason"])
 
 
-# The stages of one item are inlined into solve_batch (one compiled loop, as before the cut):
+# The stages of one item are inlined into the item loop of solve_batch (one compiled loop, as before the cut):
 # a call would pass the structure, the items and the scratch as a few hundred scalar arguments.
 @njit(**_JIT)
 def _scratch(n, K):
@@ -643,10 +643,17 @@ def solve_batch(S, A, limits, extras):
     v_out, w_out, lam_out, sc, ke0_out, ke1_out, normal, tangent, cond_out, work_out, reason_out = \
         _out_views(Y, B, n, K, extras)
     out = Outputs(v_out, w_out, lam_out, sc, ke0_out, ke1_out, normal, tangent, cond_out, work_out, reason_out)
-    mu_out, mumax_out, sliding_out, closing, sep_n, sep_t, ok_out = sc[0], sc[1], sc[2], sc[3], sc[4], sc[5], sc[6]
-    slip_out, pn_ns_out = sc[7], sc[8]
-    X = _scratch(n, K)
-    for i in range(B):
+    _solve_items(S, A, limits, extras, _scratch(n, K), out)
+    return Y
+
+
+@njit(**_HOT)
+def _solve_items(S, A, limits, extras, X, out):
+    """The item loop of :func:`solve_batch`, compiled without reference counting (it allocates
+    nothing: the outputs ``out`` and the scratch ``X`` come from its caller), as the run-out's
+    step loop is: with it, every read of a bundle's array in the loop paid an incref/decref."""
+    sc = out.sc
+    for i in range(A.mass.shape[0]):
         nxv, nyv, txv, tyv = _assemble_item(S, A, i, X)
         out.normal[i, 0], out.normal[i, 1] = nxv, nyv
         out.tangent[i, 0], out.tangent[i, 1] = txv, tyv
@@ -659,18 +666,17 @@ def solve_batch(S, A, limits, extras):
         if S.law == _RATIO or S.law == _FRACTION:
             sliding = abs(st) > 1e-9 * (1.0 + abs(u0[1]))
         ke0 = _energies(S, A, i, X, out)
-        mu_out[i] = out.lam[i, 1] / out.lam[i, 0]
-        mumax_out[i] = mu_max
-        sliding_out[i] = 1.0 if sliding else 0.0
-        closing[i] = u0[0]
-        sep_n[i] = sn
-        sep_t[i] = st
-        ok_out[i] = 1.0 if ok else 0.0
-        slip_out[i] = u0[1]
-        pn_ns_out[i] = pn_ns
+        sc[0, i] = out.lam[i, 1] / out.lam[i, 0]  # mu
+        sc[1, i] = mu_max
+        sc[2, i] = 1.0 if sliding else 0.0
+        sc[3, i] = u0[0]  # closing velocity
+        sc[4, i] = sn  # separation, normal
+        sc[5, i] = st  # separation, tangential
+        sc[6, i] = 1.0 if ok else 0.0
+        sc[7, i] = u0[1]  # approach slip
+        sc[8, i] = pn_ns  # the no-slide solution's normal impulse
         out.cond[i] = cond
         if extras:
             impulse_work_item(S, A, X.J, X.rowb, out.v, out.w, out.lam, i, out.work)
             out.reason[i] = reason_item(ok, out.lam, S.law, A.law_value[i], mu_max, pn_ns, u0[1], st, ke0, out.work,
                                         limits, i)
-    return Y

@@ -20,9 +20,9 @@ unknowns) is reported too. Each figure is shown beside the cost of the physics a
   solve of the same no-slide systems (``np.linalg.solve`` on a (B, K, K) stack: the linear solve
   alone, without assembly, laws, condition number or outputs).
 
-The previous paths are timed alongside in interleaved rounds (``solve_arrays(method="reduced")``,
-the numpy large-batch path that ``ImpactBatch.solve`` used before; the full single-solve path
-with the SVD condition number, numpy work and admissibility). Rates per CPU second of the
+The reference paths are timed alongside in interleaved rounds (``solve_arrays(method="dense")``,
+the numpy path of the same equations; the full single-solve path with the SVD condition number,
+numpy work and admissibility). Rates per CPU second of the
 process are the "per core" figures (the machine is shared; wall-clock rates are listed too).
 
 Writes ``impact_speed.md``, ``impact_speed.png`` and ``impact_speed.json`` into ``--out``
@@ -243,12 +243,12 @@ def lapack_solve(batch: ImpactBatch):
 
 
 BATCH_SHORT = {"batch_solve": "ImpactBatch.solve", "kernel": "kernel alone (physics)",
-               "lapack": "numpy LAPACK solve alone", "reduced": "previous (reduced, numpy)"}
+               "lapack": "numpy LAPACK solve alone", "dense": "numpy dense path"}
 BATCH_CALLS = {
     "batch_solve": "`ImpactBatch.solve()` (public API: compiled kernel + delta-v and energy-loss arrays)",
     "kernel": "physics: the raw kernel call (`_kernel.solve_batch`, inputs prepared)",
     "lapack": "yardstick: numpy batched LAPACK solve of the same no-slide K x K systems (linear solve only)",
-    "reduced": "previous: `solve_arrays(method=\"reduced\")` (numpy elimination, the former large-batch path)",
+    "dense": "reference: `solve_arrays(method=\"dense\")` (the same equations as batched numpy K x K inverses)",
 }
 
 
@@ -256,7 +256,7 @@ def batch_rates(name: str, law: str, n: int, repeats: int) -> dict:
     batch = randomised_batch(name, law, n)
     S, A = batch.structure, batch.arrays
     calls = {"batch_solve": batch.solve, "kernel": raw_kernel(batch), "lapack": lapack_solve(batch),
-             "reduced": lambda: core.solve_arrays(S, A, method="reduced")}
+             "dense": lambda: core.solve_arrays(S, A, method="dense")}
     wall, cpu = interleaved(calls, repeats, 0.05 if n < 100_000 else 0.0)
     return {"wall": {k: n / t for k, t in wall.items()}, "cpu": {k: n / t for k, t in cpu.items()}}
 

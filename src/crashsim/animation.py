@@ -1,9 +1,11 @@
 """Animation of a reconstructed scene: the scene diagram with the bodies moving over it.
 
 An edge module like :mod:`crashsim.plotting` (matplotlib imported lazily, on first use). The
-static layer of every frame is :func:`crashsim.plotting.plot_scene` without ghost outlines
-(marks, tracks, CG paths, outlines at impact and at rest, obstacles, evidence, legend, scale
-bar), drawn once; per frame only one outline per body, the hitch pins and a clock change.
+fixed layer of every frame is :func:`crashsim.plotting.plot_scene` without ghost outlines
+(outlines at impact, obstacles, evidence, arrows, a compact legend inside the view, scale bar),
+drawn once; per frame the moving outlines, the hitch pins and a clock change, the tyre tracks
+and CG paths grow to the clock, the outlines at rest appear when their vehicle comes to rest
+and later impacts' numbers when they happen.
 
 Frames are at scene times 0, dt, 2 dt, ... after separation and at the end of the run-out;
 playback runs at ``fps = speed / dt`` frames per second, so ``speed = 1`` is real time and
@@ -21,7 +23,7 @@ import numpy as np
 from .errors import ScenarioError
 from .geometry import to_world
 from .motion.result import time_grid
-from .plotting import SceneDrawing, Z_REST, Z_TEXT, figure_system, layout_scene_figure, plot_scene
+from .plotting import Z_REST, Z_TEXT, figure_system, layout_scene_figure, place_labels, plot_scene, scene_drawing
 from .units import Kind, to_unit
 
 __all__ = ["animate_scene", "scene_animation", "SceneAnimation", "animation_formats", "check_animation_path",
@@ -158,6 +160,7 @@ class SceneAnimation:
         self._decimals = decimals
         self._end_note = end_note
         self.before_impact = False  # frames before the impact show the approach (scene_animation sets it)
+        self._leaders: list = []  # (leader line, time): leaders of labels that appear at a time
 
     def __len__(self) -> int:
         return len(self.times)
@@ -212,7 +215,27 @@ class SceneAnimation:
             xy = _pin_points(S, vn, poses)
             line.set_data(xy[:, 0], xy[:, 1])
         self.clock.set_text(self.clock_text(k))
-        return [*self.outlines.values(), *self.pins.values(), self.clock]
+        t = float(self.times[k])
+        for line, tt, xy in S.timed:  # tracks and CG paths as far as the clock has come
+            n = int(np.searchsorted(tt, t, side="right"))
+            if n == 0:
+                line.set_data([], [])
+            elif n == len(tt) or tt[n - 1] == t:
+                line.set_data(xy[:n, 0], xy[:n, 1])
+            else:  # up to the clock, the last point interpolated
+                f = (t - tt[n - 1]) / (tt[n] - tt[n - 1])
+                end = xy[n - 1] + f * (xy[n] - xy[n - 1])
+                line.set_data(np.append(xy[:n, 0], end[0]), np.append(xy[:n, 1], end[1]))
+        for artist, t_on in [*S.appear, *self._leaders]:  # outlines at rest once at rest; impacts once they happen
+            artist.set_visible(t >= t_on)
+        return self.changing
+
+    @property
+    def changing(self) -> list:
+        """Every artist :meth:`frame` changes (drawn per frame over a fixed background)."""
+        S = self._S
+        return [*self.outlines.values(), *self.pins.values(), self.clock, *(a for a, _, _ in S.timed),
+                *(a for a, _ in S.appear), *(a for a, _ in self._leaders)]
 
 
 def _pin_points(S, vehicle_name: str, poses: dict) -> np.ndarray:
@@ -249,9 +272,10 @@ def _contain(ax, pts: np.ndarray) -> bool:
     leg = ax.get_legend()
     fig = ax.figure
     r = fig.canvas.get_renderer()
-    # plot_scene put the legend under a wide scene, else at the right: keep its choice
-    below = leg is not None and leg.get_window_extent(r).y1 <= ax.get_window_extent(r).y0 + 1.0
-    layout_scene_figure(ax, leg, below)
+    # plot_scene put an outside legend under a wide scene, else at the right: keep its choice
+    outside = leg is not None and not ax.get_window_extent(r).contains(*leg.get_window_extent(r).get_points()[1])
+    below = outside and leg.get_window_extent(r).y1 <= ax.get_window_extent(r).y0 + 1.0
+    layout_scene_figure(ax, leg if outside else None, below)
     return True
 
 
@@ -312,9 +336,9 @@ def scene_animation(scene, *, dt: float = 0.05, system: str | None = None, t_end
             raise ScenarioError(f"time between frames {dt:g} s gives {len(times)} frames from the start of braking "
                                 f"({-t0:.4g} s) to {float(t_end):.4g} s; at most {MAX_FRAMES}", field="dt")
 
-    ax = plot_scene(scene, times=(), system=system, approach=approach)
+    ax = plot_scene(scene, times=(), system=system, approach=approach, legend="inside")
     fig = ax.figure
-    S = SceneDrawing(scene, ax, system)
+    S = scene_drawing(ax)
     outlines, pins = {}, {}
     z = Z_REST + 0.5
     for vn, r in scene.runout.items():
@@ -342,12 +366,18 @@ def scene_animation(scene, *, dt: float = 0.05, system: str | None = None, t_end
     anim = SceneAnimation(scene, fig, ax, times, S, outlines, pins, clock, _decimals(dt), end_note)
     anim.before_impact = bool(approaches)
     _contain(ax, _frame_points(S, anim))
+    place_labels(ax, S.texts, [*S.fixed, clock], np.vstack(S.points))  # the scale may have changed; the clock
+    timed = [(t, on) for t, on in S.appear if hasattr(t, "xyann")]
+    for leader in (a for a in ax.texts if (a.get_gid() or "").startswith("leader:")):
+        on = next((on for t, on in timed if np.allclose(t.xy, leader.xy)), None)
+        if on is not None:
+            anim._leaders.append((leader, on))
     anim.frame(0)
     return anim
 
 
 def animate_scene(scene, path, *, dt: float = 0.05, speed: float = 1.0, system: str | None = None, dpi: int = 100,
-                  t_end: float | None = None, approach: bool = True) -> Path:
+                  t_end: float | None = None, approach: bool = True, progress=None) -> Path:
     """Write an animation of a scene's run-out to scale: the scene diagram with the bodies moving.
 
     Parameters
@@ -373,6 +403,9 @@ def animate_scene(scene, path, *, dt: float = 0.05, speed: float = 1.0, system: 
     approach : bool
         A scene with approaches starts at the earliest start of braking (see
         :func:`scene_animation`); False starts at the impact.
+    progress : callable, optional
+        ``progress(done, total)`` after each frame is rendered (the command line's progress
+        bar); nothing is printed here.
 
     Returns
     -------
@@ -393,6 +426,11 @@ def animate_scene(scene, path, *, dt: float = 0.05, speed: float = 1.0, system: 
     centiseconds by the format, and most viewers slow delays under 20 ms down, so keep
     ``speed / dt <= 50`` for a GIF (a warning on the "crashsim" logger says so otherwise).
     Identical consecutive GIF frames (the hold) are stored once with their delays summed.
+
+    Tracks and CG paths grow with the clock, the outlines at rest (with their axles, pins and
+    names) appear when their vehicle comes to rest, later impacts' numbers when they happen. A
+    GIF is rendered by drawing the fixed layer once and, per frame, only what changes over it
+    (blitting); an MP4 redraws each frame.
     """
     p = check_animation_path(path)
     if not (isinstance(speed, (int, float, np.floating)) and math.isfinite(speed) and speed > 0):
@@ -405,24 +443,68 @@ def animate_scene(scene, path, *, dt: float = 0.05, speed: float = 1.0, system: 
 
     anim = scene_animation(scene, dt=dt, system=system, t_end=t_end, approach=approach)
     fps = float(speed) / float(dt)
-    if p.suffix.lower() == ".gif":
-        if 1000.0 / fps < _GIF_MIN_DELAY_MS:
-            _log.warning("GIF at %.4g frames/s: delays under %d ms are played slower by most viewers; use a larger "
-                         "dt or a smaller speed (speed / dt <= 50)", fps, _GIF_MIN_DELAY_MS)
-        writer = animation.PillowWriter(fps=fps)
-    else:
-        writer = animation.FFMpegWriter(fps=fps)
     hold = max(math.ceil(HOLD * fps - 1e-9) - 1, 0)
+    n = len(anim)
     try:
         p.parent.mkdir(parents=True, exist_ok=True)
-        with writer.saving(anim.fig, p, dpi=dpi):
-            for k in range(len(anim)):
-                anim.frame(k)
-                writer.grab_frame()
-            for _ in range(hold):
-                writer.grab_frame()
+        if p.suffix.lower() == ".gif":
+            if 1000.0 / fps < _GIF_MIN_DELAY_MS:
+                _log.warning("GIF at %.4g frames/s: delays under %d ms are played slower by most viewers; use a "
+                             "larger dt or a smaller speed (speed / dt <= 50)", fps, _GIF_MIN_DELAY_MS)
+            _write_gif(anim, p, fps, dpi, hold, progress)
+        else:
+            writer = animation.FFMpegWriter(fps=fps)
+            with writer.saving(anim.fig, p, dpi=dpi):
+                for k in range(n):
+                    anim.frame(k)
+                    writer.grab_frame()
+                    if progress is not None:
+                        progress(k + 1, n)
+                for _ in range(hold):
+                    writer.grab_frame()
     finally:
         import matplotlib.pyplot as plt
 
         plt.close(anim.fig)
     return p
+
+
+def _write_gif(anim: SceneAnimation, path: Path, fps: float, dpi: int, hold: int, progress) -> None:
+    """Render the frames by blitting (the fixed layer drawn once, the changing artists over it per
+    frame) and write them as a GIF as matplotlib's PillowWriter does (one delay of 1000/fps ms
+    each, looping; the last frame repeated ``hold`` times, merged by the encoder)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from PIL import Image
+
+    fig, ax = anim.fig, anim.ax
+    old_dpi, old_canvas, old_size = fig.dpi, fig.canvas, fig.get_size_inches().copy()
+    canvas = FigureCanvasAgg(fig)
+    fig.set_dpi(dpi)
+    # whole pixels, rounded (as matplotlib's movie writers size their frames)
+    fig.set_size_inches(round(old_size[0] * dpi) / dpi, round(old_size[1] * dpi) / dpi)
+    changing = anim.changing
+    try:
+        for a in changing:
+            a.set_animated(True)
+        canvas.draw()  # the fixed layer
+        background = canvas.copy_from_bbox(fig.bbox)
+        frames = []
+        n = len(anim)
+        for k in range(n):
+            anim.frame(k)
+            canvas.restore_region(background)
+            for a in sorted(changing, key=lambda a: a.get_zorder()):
+                if a.get_visible():
+                    ax.draw_artist(a)
+            rgba = np.asarray(canvas.buffer_rgba())
+            frames.append(Image.fromarray(rgba[..., :3].copy()))
+            if progress is not None:
+                progress(k + 1, n)
+        frames += [frames[-1]] * hold
+        frames[0].save(path, save_all=True, append_images=frames[1:], duration=int(1000 / fps), loop=0)
+    finally:
+        for a in changing:
+            a.set_animated(False)
+        fig.set_dpi(old_dpi)
+        fig.set_size_inches(old_size)
+        fig.set_canvas(old_canvas)

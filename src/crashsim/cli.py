@@ -14,24 +14,27 @@ from pathlib import Path
 
 from tqdm import tqdm
 
+from . import first_run
 from ._jit import cache_dir, ready
 from ._version import __version__
 from .animation import animate_scene, check_animation_path, frame_times
+from .casereport import load_json, survey_files, write_case_report
 from .errors import CrashsimError, ScenarioError, SolverError
 from .motion.result import jsonable as _clean  # JSON-safe copy: numpy to Python, NaN/inf to None
 from .outputs import check_output_dir, check_output_file, check_workers
-from .plotting import save_scene_figures
+from .plotting import LABEL_KINDS, LEGEND_MODES, PAPER_SIZES, check_hide, parse_scale, save_scene_figures
 from .reconstruct import run_scene
 from .reconstruct.fit import fit_scene, same_file
 from .reconstruct.mc_plots import save_mc_figures
-from .reconstruct.montecarlo import monte_carlo
+from .reconstruct.montecarlo import OUTPUT_KINDS, monte_carlo
 from .reconstruct.posterior import run_posterior
 from .reconstruct.posterior_plots import save_posterior_figures
-from .scenario import load_scenario, presets, schema_document
+from .scenario import load_scenario, preset_geometry, presets, schema_document
 from .survey.export import export_frame, export_items, write_dxf, write_geojson
 from .survey.inspect import preview, read_any, summary
 from .survey.mapping import load_scene_data
-from .units import Kind, parse, resolve_system
+from .units import Kind, format_value, parse, resolve_system
+from .vehicle_plan import geometry_lines, plot_body_plan
 from .warmup import COMPILE_STEPS, compile_kernels
 
 __all__ = ["main"]
@@ -43,6 +46,22 @@ def _units(text: str) -> str:
         return resolve_system(text)
     except ScenarioError:
         raise argparse.ArgumentTypeError(f"{text!r}: allowed SI or US (any case)") from None
+
+
+def _hide(text: str) -> frozenset:
+    """argparse type of ``--hide``: label kinds, comma-separated."""
+    try:
+        return check_hide(text)
+    except ScenarioError as exc:
+        raise argparse.ArgumentTypeError(str(exc).split(": ", 1)[-1]) from None
+
+
+def _scale(text: str) -> float:
+    """argparse type of ``--scale``: 1:N."""
+    try:
+        return parse_scale(text, field="--scale")
+    except ScenarioError as exc:
+        raise argparse.ArgumentTypeError(str(exc).split(": ", 1)[-1]) from None
 
 
 def _dt(text: str | None) -> float | None:
@@ -219,13 +238,23 @@ def _add_inverse_commands(sub):
 def _cmd_plot(args) -> int:
     interval = None if args.interval is None else parse(args.interval, Kind.TIME, field="--interval")
     scene = run_scene(load_scenario(args.file))
-    written = save_scene_figures(scene, Path(args.output), histories_path=args.histories and Path(args.histories),
-                                 dpi=args.dpi, interval=interval, system=args.units,
-                                 time_distance_path=args.time_distance and Path(args.time_distance),
-                                 approach=not args.no_approach)
+    try:
+        written = _save_figures(args, scene, interval)
+    except ScenarioError as exc:  # a scale too large for the page: name the option as written
+        if exc.field != "scale":
+            raise
+        raise ScenarioError(str(exc).removeprefix("scale: "), field="--scale") from None
     for path in written:
         sys.stdout.write(f"wrote {path}\n")
     return 0
+
+
+def _save_figures(args, scene, interval) -> list:
+    return save_scene_figures(scene, Path(args.output), histories_path=args.histories and Path(args.histories),
+                              dpi=args.dpi, interval=interval, system=args.units,
+                              time_distance_path=args.time_distance and Path(args.time_distance),
+                              approach=not args.no_approach, legend=args.legend, hide=args.hide or (),
+                              paper=args.paper, scale=args.scale)
 
 
 def _cmd_animate(args) -> int:
@@ -235,8 +264,13 @@ def _cmd_animate(args) -> int:
     scene = run_scene(load_scenario(args.file))
     if scene.runout:
         frame_times(max(r.t_end for r in scene.runout.values()), dt, field="--dt")
-    written = animate_scene(scene, out, dt=dt, speed=args.speed, system=args.units, dpi=args.dpi,
-                            approach=not args.no_approach)
+    with tqdm(total=None, file=sys.stderr, unit="frame", desc="rendering", disable=args.quiet) as bar:
+        def progress(done, total):
+            bar.total = total
+            bar.update(done - bar.n)
+
+        written = animate_scene(scene, out, dt=dt, speed=args.speed, system=args.units, dpi=args.dpi,
+                                approach=not args.no_approach, progress=progress)
     sys.stdout.write(f"wrote {written}\n")
     return 0
 
@@ -266,15 +300,59 @@ def _cmd_export(args) -> int:
     return 0
 
 
+def _cmd_report(args) -> int:
+    extra = {}
+    for key in ("fit", "mc", "posterior"):
+        path = getattr(args, key)
+        if path:
+            try:
+                extra[key] = load_json(path)
+            except (OSError, ValueError) as exc:
+                raise ScenarioError(f"{path!r} is not readable JSON of crashsim {key} --json: {exc}",
+                                    field=f"--{key}") from None
+            if not isinstance(extra[key], dict):
+                raise ScenarioError(f"{path!r} is not a JSON object (crashsim {key} --json writes one)",
+                                    field=f"--{key}")
+    scenario = load_scenario(args.file)
+    scene = run_scene(scenario)
+    inputs = [args.file] + survey_files(args.file) + [getattr(args, k) for k in ("fit", "mc", "posterior")
+                                                      if getattr(args, k)]
+    command = " ".join(["crashsim", "report", args.file, "-o", Path(args.output).name]
+                       + [f"--{k} {getattr(args, k)}" for k in ("fit", "mc", "posterior") if getattr(args, k)]
+                       + ([f"--units {args.units}"] if args.units else []))
+    written = write_case_report(scene, args.output, input_files=inputs, system=args.units, presets=presets(),
+                                command=command, output_kinds=OUTPUT_KINDS, **extra)
+    sys.stdout.write(f"wrote {written}\n")
+    return 0
+
+
 def _cmd_schema(args) -> int:
     sys.stdout.write(schema_document(args.format) + "\n")
     return 0
 
 
 def _cmd_presets(args) -> int:
+    system = args.units or "SI"
+    if args.plot:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        g = preset_geometry(args.plot)
+        ax = plot_body_plan(g, title=f"preset {args.plot} (to scale)", system=system)
+        ax.figure.savefig(args.output, dpi=150)
+        plt.close(ax.figure)
+        sys.stdout.write(f"wrote {args.output}\n")
+        return 0
     for name, p in presets().items():
-        sys.stdout.write(f"{name}\n    mass {p['mass']}, yaw inertia {p['yaw_inertia']}, "
-                         f"{len(p.get('axles', []))} axles\n    source: {p['source']}\n")
+        g = preset_geometry(name)
+        sys.stdout.write(f"{name}\n    mass {format_value(g['mass'], Kind.MASS, system, 6)}, yaw inertia "
+                         f"{format_value(g['yaw_inertia'], Kind.YAW_INERTIA, system, 6)}, "
+                         f"{len(g['axles'])} axles\n")
+        for line in geometry_lines(g, system):
+            sys.stdout.write(f"    {line}\n")
+        sys.stdout.write(f"    source: {p['source']}\n")
         for face, c in p.get("crush", {}).items():
             sys.stdout.write(f"    crush stiffness, {face}: A {c['A']}, B {c['B']}\n      source: {c['source']}\n")
     return 0
@@ -292,7 +370,8 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--units", type=_units, default=None,
                    help="SI or US (any case): units of the report and the CSV files (default: the scenario's units)")
     r.add_argument("--csv", metavar="DIR", help="write time histories as CSV files into DIR (headers carry the unit)")
-    r.add_argument("--dt", metavar="TIME", help='time step of the CSV histories, e.g. "0.1 s" (default: runout.sample_dt)')
+    r.add_argument("--dt", metavar="TIME", help='time step of every CSV history (bodies, wheel tracks, approaches), e.g. "0.1 s" '
+                        '(default: runout.sample_dt; the approach: 201 points)')
     r.add_argument("--strict", action="store_true", help="exit with code 1 if an evidence item is out of tolerance")
     r.set_defaults(func=_cmd_run)
 
@@ -309,6 +388,15 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("--interval", metavar="TIME", help='time between ghost outlines, e.g. "0.5 s"')
     pl.add_argument("--units", type=_units, default=None, help="SI or US: units of the figure (default: the scenario's)")
     pl.add_argument("--dpi", type=int, default=150)
+    pl.add_argument("--legend", choices=LEGEND_MODES, default="outside",
+                    help="legend under or beside the diagram (default), small inside it, or none")
+    pl.add_argument("--hide", type=_hide, default=None, metavar="KINDS",
+                    help=f"label kinds to leave out, comma-separated: labels (all), {', '.join(LABEL_KINDS)}")
+    pl.add_argument("--paper", choices=tuple(PAPER_SIZES), default=None,
+                    help="print sheet: the figure is the page, the drawing to scale (PDF/SVG print at 100 %%)")
+    pl.add_argument("--scale", type=_scale, default=None, metavar="1:N",
+                    help='drawing scale on the sheet, e.g. "1:200" (default: the largest that fits; A4 without '
+                         '--paper)')
     pl.set_defaults(func=_cmd_plot)
 
     an = sub.add_parser("animate", help="animate the run-out over the scene diagram (.gif, or .mp4 with ffmpeg)")
@@ -321,6 +409,7 @@ def build_parser() -> argparse.ArgumentParser:
     an.add_argument("--dpi", type=int, default=100)
     an.add_argument("--no-approach", action="store_true",
                     help="start at the impact (a scene with approaches starts at the earliest start of braking)")
+    an.add_argument("--quiet", action="store_true", help="no progress bar")
     an.set_defaults(func=_cmd_animate)
 
     sv = sub.add_parser("survey", help="list a survey file's layers or codes with entity counts and extents")
@@ -339,17 +428,30 @@ def build_parser() -> argparse.ArgumentParser:
     ex.add_argument("--times", metavar="TIMES", help='outlines also at these times after separation, e.g. "0.5 s, 1 s"')
     ex.set_defaults(func=_cmd_export)
 
+    rp = sub.add_parser("report", help="write one self-contained HTML case report (inputs, impacts, run-out, "
+                                       "evidence, figures, SHA-256 of every input file)")
+    rp.add_argument("file", help="scenario file (TOML)")
+    rp.add_argument("-o", "--output", required=True, help="the report: .html")
+    rp.add_argument("--fit", metavar="FIT.json", help="include a fit's result (crashsim fit FILE --json > FIT.json)")
+    rp.add_argument("--mc", metavar="MC.json", help="include a Monte Carlo result (crashsim mc FILE --json)")
+    rp.add_argument("--posterior", metavar="POST.json", help="include a posterior (crashsim posterior FILE --json)")
+    rp.add_argument("--units", type=_units, default=None, help="SI or US: units of the report (default: the scenario's)")
+    rp.set_defaults(func=_cmd_report)
+
     s = sub.add_parser("schema", help="print the documented scenario-file schema")
     s.add_argument("--format", choices=("text", "markdown"), default="text")
     s.set_defaults(func=_cmd_schema)
 
-    pr = sub.add_parser("presets", help="list the vehicle library's body parameter sets and their sources")
+    pr = sub.add_parser("presets", help="list the vehicle library's body parameter sets, their geometry and sources")
+    pr.add_argument("--units", type=_units, default=None, help="SI or US (any case): units of the list (default SI)")
+    pr.add_argument("--plot", metavar="NAME", help="draw preset NAME to scale in plan view (with -o FILE)")
+    pr.add_argument("-o", "--output", metavar="FILE", help="figure of --plot: .png, .svg or .pdf")
     pr.set_defaults(func=_cmd_presets)
     return p
 
 
 #: Commands that run the run-out kernels (and so may compile them on a first run).
-_COMPUTING = ("run", "fit", "mc", "posterior", "plot", "animate", "export")
+_COMPUTING = ("run", "fit", "mc", "posterior", "plot", "animate", "export", "report")
 
 
 def _first_compile(bar: bool = True) -> None:
@@ -406,6 +508,18 @@ def _check_outputs(args) -> None:
                             ("--time-distance", args.time_distance)):
             if path:
                 check_output_file(path, field=field, suffixes=figs, what="a figure")
+    if c == "report":
+        check_output_file(args.output, field="-o", suffixes=(".html", ".htm"), what="the case report")
+        for key in ("fit", "mc", "posterior"):
+            path = getattr(args, key)
+            if path and not Path(path).is_file():
+                raise ScenarioError(f"{path!r} is not a file; give the JSON that crashsim {key} FILE --json wrote",
+                                    field=f"--{key}")
+    if c == "presets" and (args.plot or args.output):
+        if not (args.plot and args.output):
+            raise ScenarioError("--plot NAME and -o FILE go together: the preset to draw and the figure to write",
+                                field="--plot" if args.output else "-o")
+        check_output_file(args.output, field="-o", suffixes=_figure_suffixes(), what="a figure")
     if c == "animate":
         check_output_file(check_animation_path(args.output, field="-o"), field="-o", what="the animation")
         if not parse(args.dt, Kind.TIME, field="--dt") > 0:
@@ -413,13 +527,37 @@ def _check_outputs(args) -> None:
                                 "e.g. \"0.05 s\"", field="--dt")
 
 
+def _first_run(args, argv: list[str]) -> int | None:
+    """On a machine whose kernels are not compiled: run a single-scene command interpreted while they
+    compile in the background, or compile first (:mod:`crashsim.first_run`). An exit code if the command
+    ran in a child process, else None (run it here)."""
+    if args.command not in _COMPUTING or ready() or first_run.interpreted():
+        return None
+    how = first_run.policy()
+    if how != "wait" and args.command in first_run.SINGLE_SCENE:
+        log = first_run.start_background_compile() if how == "background" else None
+        sys.stderr.write("crashsim: first run on this machine: this scene runs interpreted (seconds) "
+                         + (f"while the kernels compile in the background for the next commands (log: {log})\n"
+                            if log is not None else
+                            "while the kernels compile in the background\n" if how == "background" else "\n"))
+        return first_run.run_interpreted(argv)
+    if first_run.compile_in_progress():
+        sys.stderr.write("crashsim: waiting for the kernels that compile in the background (started by an earlier "
+                         "command)\n")
+        first_run.wait_for_background_compile()
+    _first_compile(bar=sys.stderr.isatty())
+    return None
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
+    argv = list(sys.argv[1:] if argv is None else argv)
     args = parser.parse_args(argv)
     try:
         _check_outputs(args)
-        if args.command in _COMPUTING:
-            _first_compile(bar=sys.stderr.isatty())
+        code = _first_run(args, argv)
+        if code is not None:
+            return code
         return int(args.func(args))
     except ScenarioError as exc:
         sys.stderr.write(f"crashsim: input error: {exc}\n")

@@ -137,6 +137,10 @@ UNCERTAINTY = Section("uncertainty", [
           description="Number of Monte Carlo samples (crashsim mc --samples overrides it)"),
     Field("seed", "int", default=0, minimum=0,
           description="Seed: sample i depends only on (seed, i), so local, resumed and cluster runs agree"),
+    Field("tolerance", choices=("file", "evidence"), default="file",
+          description="Run-out tolerance of the samples: file (the [runout] rtol and atol as written) or evidence "
+                      "(the loosest rtol whose integration error stays below 1 % of the smallest tolerance of the "
+                      "run-out's evidence checks, never tighter than the file's, at most 1e-4)"),
 ], subsections=[ArrayOf("inputs", INPUT, min_items=1, description="The uncertain inputs")],
    required=False, description="Monte Carlo propagation of input uncertainty through impact and run-out (crashsim mc)")
 
@@ -173,6 +177,16 @@ POSTERIOR = Section("posterior", [
     Field("move", choices=("stretch", "de"), default="stretch",
           description="Proposal of emcee: stretch (Goodman-Weare affine-invariant stretch move, emcee's default) "
                       "or de (differential evolution)"),
+    Field("ess", "int", required=False, minimum=1, maximum=10_000_000, example="1000",
+          description="Target effective sample size of every unknown: the chain stops at the first check (every "
+                      "check_every steps) where each unknown has at least this many effective samples and the kept "
+                      "chain is 50 autocorrelation times long; steps is then the most it runs"),
+    Field("check_every", "int", default=100, minimum=10, maximum=1_000_000,
+          description="With ess: steps between two checks of the effective sample size"),
+    Field("tolerance", choices=("evidence", "file"), default="evidence",
+          description="Run-out tolerance of the samples: evidence (the loosest rtol whose integration error stays "
+                      "below 1 % of the smallest sigma of the run-out's evidence, never tighter than the file's, "
+                      "at most 1e-4) or file (the [runout] rtol and atol as written)"),
     Field("checkpoint_every", "int", default=50, minimum=1, maximum=1_000_000,
           description="With a chain file: write it every this many steps (and when stopped)"),
 ], required=False, description="Posterior of the [fit] unknowns given the evidence by MCMC (crashsim posterior)")

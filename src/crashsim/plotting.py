@@ -8,7 +8,10 @@ degrees and percent appear only on the axes.
 
 from __future__ import annotations
 
+import logging
+import math
 import textwrap
+import weakref
 from pathlib import Path
 from typing import NamedTuple
 
@@ -23,7 +26,11 @@ from .report import fmt
 from .survey.underlay import draw_underlay, scene_underlay
 from .units import Kind, convert, resolve_system, to_unit
 
-__all__ = ["is_color", "BarrierAxes", "plot_barrier_sweep", "plot_barrier_figures", "plot_scene", "plot_histories",
+_log = logging.getLogger("crashsim")
+
+__all__ = ["is_color", "LABEL_KINDS", "LEGEND_MODES", "PAPER_SIZES", "PrintSheet", "place_labels", "check_hide",
+           "legend_mode", "parse_scale", "print_sheet", "scene_drawing", "text_box", "BarrierAxes",
+           "plot_barrier_sweep", "plot_barrier_figures", "plot_scene", "plot_histories",
            "history_panels", "save_scene_figures", "SCENE_FIGURE_SUFFIXES"]
 
 
@@ -275,6 +282,16 @@ def _default_intervals(ends: dict) -> dict:
     return out
 
 
+#: The drawing state of each scene figure's axes (:func:`scene_drawing`); entries go with the axes.
+_DRAWINGS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def scene_drawing(ax) -> "SceneDrawing | None":
+    """The :class:`SceneDrawing` that :func:`plot_scene` drew on ``ax`` (its labels, the artists
+    that change with time), or None."""
+    return _DRAWINGS.get(ax)
+
+
 class SceneDrawing:
     """State shared by the drawing steps of :func:`plot_scene` (display units, legend, extent)."""
 
@@ -291,6 +308,12 @@ class SceneDrawing:
         self.texts: list = []  # labels anchored in data coordinates
         self.no_outline: set[str] = set()  # bodies drawn as a skeleton
         self.approach = True  # draw the approaches (and pre-impact marks)
+        self.hide: frozenset = frozenset()  # label kinds left out (LABEL_KINDS)
+        self.far: list[np.ndarray] = []  # obstacle pieces: in the extent only near the scene
+        self.fixed: list = []  # artists the labels keep clear of (axes indicator, scale bar, ...)
+        self.unplaced = 0  # labels place_labels found no free place for
+        self.timed: list = []  # (Line2D, times [s] (n,), points (n, 2) display units): paths and tracks
+        self.appear: list = []  # (artist, time [s]): outlines etc. at rest, from their rest; later impacts
         self.body_of = {b.name: b for v in self.sc.vehicles for b in v.bodies}
         self.vehicle_of = {b.name: v for v in self.sc.vehicles for b in v.bodies}
         movable = [v for v in self.sc.vehicles if not v.is_barrier]
@@ -372,9 +395,14 @@ class SceneDrawing:
         self.legend_entry("no outline data: CG, heading tick, links to pins and contact",
                           Line2D([], [], color="0.3", lw=2.0, marker="o", mfc="white", mec="0.3"))
 
-    def text(self, xy, text, **kw):
-        """A label anchored at a data point (kept inside the axes limits by :func:`_fit_texts`)."""
+    def text(self, xy, text, *, kind: str, **kw):
+        """A label of ``kind`` (one of :data:`LABEL_KINDS`) anchored at a data point, kept inside
+        the axes limits by :func:`_fit_texts` and clear of the other labels by :func:`place_labels`;
+        None (nothing drawn) when that kind is hidden."""
+        if kind in self.hide or "labels" in self.hide:
+            return None
         kw.setdefault("zorder", Z_TEXT)
+        kw.setdefault("gid", f"label:{kind}")
         t = self.ax.annotate(text, xy=tuple(xy), **kw)
         self.texts.append(t)
         return t
@@ -395,10 +423,12 @@ class SceneDrawing:
         p = self.d(position)
         self.labels.append(p)
         if offset:  # above (offset > 0) or below the point, leaving a CG or evidence marker visible
-            self.text(p, name + suffix, xytext=(0, offset), textcoords="offset points", fontsize=7, ha="center",
+            self.text(p, name + suffix, kind="names", xytext=(0, offset), textcoords="offset points", fontsize=7,
+                      ha="center",
                       va="bottom" if offset > 0 else "top", color="0.1", path_effects=_halo(2.0))
         else:
-            self.text(p, name + suffix, fontsize=7, ha="center", va="center", color="0.1", path_effects=_halo(2.0))
+            self.text(p, name + suffix, kind="names", fontsize=7, ha="center", va="center", color="0.1",
+                      path_effects=_halo(2.0))
 
 
 def _check_map(scene) -> dict:
@@ -475,9 +505,145 @@ def _draw_crush(S, sc) -> None:
         S.legend_entry("measured crush (to scale)", Patch(facecolor="none", edgecolor="0.2", hatch="xxxx", lw=1.0))
 
 
+#: Where the legend of a scene figure goes: under or beside the diagram, small inside it, or none.
+LEGEND_MODES = ("outside", "inside", "none")
+
+#: Paper sizes of a print sheet, portrait (width, height) [mm]: ISO 216 A4 and A3, US letter and tabloid.
+PAPER_SIZES = {"A4": (210.0, 297.0), "A3": (297.0, 420.0), "letter": (215.9, 279.4), "tabloid": (279.4, 431.8)}
+
+#: Scales a print sheet picks from when none is given (1:N), the largest drawing that fits.
+_SCALES = (10, 20, 25, 50, 100, 200, 250, 500, 1000, 2000, 2500, 5000, 10000)
+
+#: Margins of a print sheet [in]: paper edge, and room for the tick labels and axis labels.
+_SHEET_EDGE, _SHEET_LEFT, _SHEET_BOTTOM = 12.0 / 25.4, 0.55, 0.45
+
+
+def legend_mode(legend) -> str:
+    """``"outside"``, ``"inside"``, ``"none"`` or a matplotlib location (inside, there) from
+    :func:`plot_scene`'s ``legend`` (True: outside; False or None: none)."""
+    if legend is True:
+        return "outside"
+    if legend is False or legend is None:
+        return "none"
+    return str(legend)
+
+
+def check_hide(hide) -> frozenset:
+    """The label kinds to hide (``"names,pdof"`` or a sequence), each one of :data:`LABEL_KINDS`
+    or ``"labels"`` (all of them).
+
+    Raises
+    ------
+    ScenarioError
+        For an unknown kind (field ``hide``), naming the kinds allowed.
+    """
+    items = hide.split(",") if isinstance(hide, str) else list(hide or ())
+    kinds = frozenset(str(k).strip() for k in items if str(k).strip())
+    unknown = sorted(kinds - set(LABEL_KINDS) - {"labels"})
+    if unknown:
+        raise ScenarioError(f"unknown label kind(s) {', '.join(map(repr, unknown))}; allowed: labels (all), "
+                            f"{', '.join(LABEL_KINDS)}", field="hide")
+    return kinds
+
+
+def parse_scale(text, *, field: str = "scale") -> float:
+    """The denominator N of a drawing scale ``"1:200"`` (or ``"200"``, or a number).
+
+    Raises
+    ------
+    ScenarioError
+        Unless N is a finite number >= 1.
+    """
+    raw = str(text).strip()
+    body = raw.split(":", 1)[1] if raw.startswith("1:") else raw
+    try:
+        n = float(body)
+    except ValueError:
+        n = float("nan")
+    if not (math.isfinite(n) and n >= 1.0):
+        raise ScenarioError(f"scale {raw!r} is not a drawing scale; allowed 1:N with N >= 1, e.g. \"1:200\"",
+                            field=field)
+    return n
+
+
+class PrintSheet(NamedTuple):
+    """A scene figure laid out on paper at a stated scale (see :func:`print_sheet`)."""
+
+    paper: str            # key of PAPER_SIZES
+    orientation: str      # "landscape" or "portrait"
+    size: tuple           # (width, height) of the sheet [in]
+    scale: float          # N of 1:N
+    box: tuple            # (left, bottom, width, height) of the drawing on the sheet [in]
+    lo: np.ndarray        # view limits [display units], lower left
+    hi: np.ndarray        # upper right
+
+
+def print_sheet(paper: str, lo, hi, per_metre: float, scale=None, *, legend_height: float = 1.4) -> PrintSheet:
+    """The sheet, scale and view of a scene figure printed on ``paper``: the view centred on the
+    framed extent ``[lo, hi]`` and as large as the drawing box at scale 1:N.
+
+    Parameters
+    ----------
+    paper : str
+        One of :data:`PAPER_SIZES` (any case); landscape when the extent is wider than high.
+    lo, hi : array_like, shape (2,)
+        The extent the view must hold [display units].
+    per_metre : float
+        Display units per metre (1 for m, 1/0.3048 for ft).
+    scale : float, optional
+        N of 1:N; default the largest drawing of :data:`_SCALES` that holds the extent.
+    legend_height : float
+        Room kept under the drawing for the legend [in].
+
+    Raises
+    ------
+    ScenarioError
+        Unknown paper (field ``paper``), or a scale at which the extent does not fit the sheet
+        (field ``scale``; the message names the largest scale that fits).
+    """
+    key = next((k for k in PAPER_SIZES if k.lower() == str(paper).lower()), None)
+    if key is None:
+        raise ScenarioError(f"paper {paper!r} is unknown; allowed {', '.join(PAPER_SIZES)}", field="paper")
+    lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+    ext_m = (hi - lo) / per_metre  # extent in metres
+    w_mm, h_mm = PAPER_SIZES[key]
+    landscape = ext_m[0] > ext_m[1]
+    size = np.array((h_mm, w_mm) if landscape else (w_mm, h_mm)) / 25.4
+    title = 0.45
+    box_w = size[0] - 2 * _SHEET_EDGE - _SHEET_LEFT
+    box_h = size[1] - 2 * _SHEET_EDGE - _SHEET_BOTTOM - title - legend_height
+    room = np.array([box_w, box_h]) * 0.0254  # metres of paper
+    need = float(max(ext_m / room))  # the smallest N that holds the extent
+    if scale is None:
+        fits = [n for n in _SCALES if n >= need]
+        scale = float(fits[0]) if fits else float(math.ceil(need))
+    elif scale < need * (1.0 - 1e-9):
+        fits = [n for n in _SCALES if n >= need]
+        hint = f"1:{fits[0]:g}" if fits else f"1:{math.ceil(need)}"
+        raise ScenarioError(f"scale 1:{scale:g} is too large for the scene on {key}: its framed extent "
+                            f"{ext_m[0]:.1f} m x {ext_m[1]:.1f} m fits at 1:N with N >= {need:.0f} (e.g. {hint}), "
+                            "or on "
+                            "larger paper", field="scale")
+    centre = 0.5 * (lo + hi)
+    half = 0.5 * room * float(scale) * per_metre
+    box = (_SHEET_EDGE + _SHEET_LEFT, _SHEET_EDGE + _SHEET_BOTTOM + legend_height, box_w, box_h)
+    return PrintSheet(key, "landscape" if landscape else "portrait", (float(size[0]), float(size[1])), float(scale),
+                      box, centre - half, centre + half)
+
+
+def layout_print(ax, sheet: PrintSheet) -> None:
+    """Size the figure to the sheet and put the axes on its drawing box (exactly 1:N)."""
+    fig = ax.figure
+    fig.set_size_inches(*sheet.size)
+    left, bottom, w, h = sheet.box
+    W, H = sheet.size
+    ax.set_position([left / W, bottom / H, w / W, h / H])
+    fig.draw_without_rendering()
+
+
 def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evidence: bool = True,
                arrows: bool = True, system: str | None = None, legend=True, axles: bool = True,
-               approach: bool = True):
+               approach: bool = True, hide=(), paper: str | None = None, scale: float | None = None):
     """Scale diagram of a reconstructed scene in the ground frame: impact, run-out, evidence.
 
     Parameters
@@ -500,15 +666,26 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     system : {"SI", "US"}, optional
         Display units: coordinates in m or ft, speeds in m/s or mph. Default: the scenario's.
     legend : bool or str
-        True: legend outside the axes (at the right; under the diagram for a new figure of a
-        wide scene, with the figure sized to hold it); a matplotlib
-        location string (``"best"``, ``"upper left"``): inside; False: none.
+        ``"outside"`` or True: legend outside the axes (at the right; under the diagram for a new
+        figure of a wide scene or a print sheet, with the figure sized to hold it); ``"inside"``:
+        small, in the corner that covers least; a matplotlib location string (``"upper left"``):
+        inside, there; ``"none"`` or False: none.
     axles : bool
         Draw the axles (at impact and at rest) as thin cross lines.
     approach : bool
         Draw the vehicles' approaches (``[vehicles.<name>.approach]``): tyre tracks, CG paths, the
         outlines at the start of braking and the perception point. False leaves them out (a
         close view of the impact and run-out when the approach is long).
+    hide : str or sequence of str
+        Label kinds left out (:data:`LABEL_KINDS`, or ``"labels"`` for all): ``"names,pdof"``.
+    paper : str, optional
+        Print sheet (:data:`PAPER_SIZES`: ``"A4"``, ``"A3"``, ``"letter"``, ``"tabloid"``): the
+        figure is the sheet (landscape for a wide scene) and the drawing is at scale 1:``scale``,
+        stated beside the scale bar; vector output (.pdf, .svg) then prints to scale at 100 %.
+        Needs ``ax=None``.
+    scale : float, optional
+        N of the scale 1:N (default: the largest of 1:10 ... 1:10000 at which the framed view fits
+        the sheet); A4 if no ``paper`` is given.
 
     Returns
     -------
@@ -517,7 +694,8 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
         ``"outline:ghost:<body>:<t>"``, ``"evidence:rest:<body>"``, ``"zone:<i>"`` (friction zone
         i of ``runout.road.zones``); lines ``"map:<i>"`` (``scenario.map_lines[i]``); texts
         ``"zone-label:<i>"`` and ``"map-label:<i>"``; the scale bar is the artist with gid
-        ``"scalebar"``.
+        ``"scalebar"``. Text labels carry gids ``"label:<kind>"`` (:data:`LABEL_KINDS`); no two
+        labels' boxes overlap (:func:`place_labels`; leader lines have gid ``"leader:<kind>"``).
 
     Notes
     -----
@@ -536,6 +714,13 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     and stop bar, thin grey other). They count toward the axis limits only inside the region of
     interest (everything else drawn, plus a margin of 3 m or 15 % of its span, whichever is
     larger): a zone or line reaching far away is cut by the axes instead of shrinking the scene.
+    So are fixed obstacles; a barrier face is drawn over its extent cut to the view: the view is
+    framed on the vehicles' paths, the evidence and the impacts, never stretched by a long
+    barrier, guardrail or zone.
+
+    With a scene placed on a survey (``[survey]`` with files, an underlay or a CRS) a north
+    arrow shows grid north (the survey's +y); the orthophoto (``[survey.underlay]``) lies under
+    everything.
     """
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
@@ -547,6 +732,7 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
         ax = _plt().figure(figsize=(10.0, 6.0)).add_subplot()
     S = SceneDrawing(scene, ax, system)
     S.approach = approach
+    S.hide = check_hide(hide)
     sc = S.sc
     runout = scene.runout or {}
 
@@ -613,11 +799,12 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
             v = next(x for x in sc.vehicles if x.name == vn)
             fill, line, dark = S.family[vn]
             for tr in r.wheels.values():
-                _draw_track(S, tr, line, dark)
+                _draw_track(S, tr, line, dark, gid=f"track:{tr.key}")
             for name, br in r.bodies.items():
                 h = br.history
                 xy = S.d(np.column_stack([h.x, h.y]))
-                ax.plot(xy[:, 0], xy[:, 1], ":", color=dark, lw=1.0, zorder=_Z_TRACK)
+                (ln,) = ax.plot(xy[:, 0], xy[:, 1], ":", color=dark, lw=1.0, zorder=_Z_TRACK, gid=f"path:{name}")
+                S.timed.append((ln, np.asarray(h.t, dtype=float), xy))
                 S.add(xy)
             # ghosts
             for j, t in enumerate(ghost.get(vn, ())):
@@ -635,10 +822,11 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
                 lead = next(iter(r.bodies))
                 c = S.d(poses[lead][0])
                 if all(np.hypot(*(c - q)) > 1.6 * S.k for q in S.labels):
-                    S.text(c, f"{t:g} s", fontsize=6.5, color=dark, ha="center", va="center",
+                    S.text(c, f"{t:g} s", kind="times", fontsize=6.5, color=dark, ha="center", va="center",
                            path_effects=_halo(1.8))
                     S.labels.append(c)
             # at rest (or at the end of a run that did not reach rest)
+            before = (len(ax.patches), len(ax.lines), len(S.texts))
             poses = {}
             for name, br in r.bodies.items():
                 poses[name] = (br.rest_position, br.rest_heading)
@@ -651,6 +839,8 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
                 S.body_label(name, np.asarray(br.rest_position), suffix="" if r.success else " (run stopped)",
                              offset=6.0 if name in S.no_outline else -5.0)
             S.pins(v, poses, dark, 4.0, zorder=Z_REST)
+            rest = [*ax.patches[before[0]:], *ax.lines[before[1]:], *S.texts[before[2]:]]
+            S.appear += [(a, float(r.t_end)) for a in rest]
         if ghost_note:
             S.legend_entry(ghost_note, Patch(facecolor="none", edgecolor="0.4", lw=0.7, alpha=0.7))
         S.legend_entry("at rest (end of run)", Patch(facecolor="0.8", edgecolor="0.1", lw=1.8))
@@ -684,13 +874,14 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     _draw_obstacles(S)
     _draw_impacts(S)
 
-    # -- road layout: friction zones and map lines, counted in the extent only near the scene --
+    # -- road layout and obstacles: counted in the extent only near the scene --------------------
     roi = _region_of_interest(S)
+    for piece in S.far:  # obstacles: their part inside the region of interest
+        inside = _clip_polygon(piece, roi.lo, roi.hi)
+        if len(inside):
+            S.add(inside)
     _draw_zones(S, roi)
     _draw_map_lines(S, roi)
-
-    # -- barrier (after everything else: an endless barrier spans the drawn extent) -----------
-    _draw_barrier(S)
 
     # -- frame, limits, decorations ---------------------------------------------------------
     pts = np.vstack(S.points)
@@ -701,30 +892,94 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     # room at the bottom for the scale bar and at the top for the axes indicator
     lo[1] -= 0.05 * span
     hi[1] += 0.05 * span
+    mode = legend_mode(legend)
+    sheet = None
+    for w in tuple(getattr(scene, "warnings", ()) or ()):
+        S.legend_entry(_wrap("warning: " + w, 60), Line2D([], [], ls="none"), color="#b35900")
+    if paper is not None or scale is not None:
+        if not new:
+            raise ScenarioError("a print sheet (paper, scale) needs a new figure: leave ax=None", field="ax")
+        # the page first (its size from the paper alone), then the legend under the drawing, measured,
+        # then the drawing box and the view at scale
+        probe = print_sheet(paper or "A4", lo, hi, S.k, 1e9)
+        ax.figure.set_size_inches(*probe.size)
+        leg = _scene_legend(S, mode, True, compact=True) if mode != "none" else None
+        room = 0.0
+        if mode == "outside":
+            fig = ax.figure
+            room = leg.get_window_extent(fig.canvas.get_renderer()).height / fig.dpi + 0.15
+        sheet = print_sheet(paper or "A4", lo, hi, S.k, scale, legend_height=room)
+        lo, hi = sheet.lo, sheet.hi
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
     ax.set_aspect("equal", adjustable="box")
+    # -- barrier (a face along the crush tangent, cut to the frame: it never widens the view) ---
+    _draw_barrier(S, lo, hi)
     _label_road_layout(S, roi, lo, hi)
     ax.set_xlabel(f"X [{S.lunit}]")
     ax.set_ylabel(f"Y [{S.lunit}]")
     ax.grid(True, color="0.9", lw=0.6, zorder=0)
     ax.set_axisbelow(True)
     ax.set_title(_wrap(sc.title, 100), fontsize=10)
-    _axes_indicator(ax)
-    for w in tuple(getattr(scene, "warnings", ()) or ()):
-        S.legend_entry(_wrap("warning: " + w, 60), Line2D([], [], ls="none"), color="#b35900")
-    # a new figure of a wide scene: legend under the diagram, in two columns; else at the right
+    fixed = _axes_indicator(ax) + _north_arrow(S)
+    # a new figure of a wide scene: legend under the diagram; else at the right
     below = new and (hi[1] - lo[1]) / (hi[0] - lo[0]) < 0.75
-    leg = _scene_legend(S, legend, below) if legend else None
-    if new:
-        layout_scene_figure(ax, leg if legend is True else None, below)
-    _fit_texts(S)
-    if new:
-        layout_scene_figure(ax, leg if legend is True else None, below)
+    if sheet is None:
+        leg = _scene_legend(S, mode, below) if mode != "none" else None
+    outside = leg if mode == "outside" else None
+    if sheet is not None:
+        layout_print(ax, sheet)
+    else:
+        if new:
+            layout_scene_figure(ax, outside, below)
+        _fit_texts(S)
+        if new:
+            layout_scene_figure(ax, outside, below)
+        if new and mode == "inside":
+            _legend_headroom(ax, leg, below)
     _draw_scene_underlay(S)
     xl = ax.get_xlim()
-    _scale_bar(S, xl[1] - xl[0])
+    fixed.append(_scale_bar(S, xl[1] - xl[0], sheet))
+    if leg is not None and mode != "outside":
+        fixed.append(leg)
+    ax.figure.draw_without_rendering()
+    S.fixed = fixed
+    S.unplaced = place_labels(ax, S.texts, fixed, np.vstack(S.points))
+    _DRAWINGS[ax] = S
+    if S.unplaced:
+        _log.info("scene figure: %d label(s) found no free place and may overlap others", S.unplaced)
     return ax
+
+
+def _legend_headroom(ax, leg, below: bool) -> None:
+    """A legend inside a new figure: a band at the top of the view, added above everything drawn
+    (the figure grows to keep the scale), so that it covers none of the scene; the axes
+    indicator and north arrow go under it if it would cover them."""
+    from matplotlib.transforms import ScaledTranslation
+
+    fig = ax.figure
+    r = fig.canvas.get_renderer()
+    # centred between the axes indicator (top left) and the animation's clock (top right)
+    leg.set_loc("upper center")
+    leg.set_bbox_to_anchor((0.14, 0.0, 0.72, 1.0), transform=ax.transAxes)
+    fig.draw_without_rendering()
+    height = leg.get_window_extent(r).height
+    frac = (height + 6.0) / ax.get_window_extent(r).height
+    if frac >= 0.9:
+        return  # a legend as high as the view: leave it where it is
+    y0, y1 = ax.get_ylim()
+    # a wide figure keeps its width (and scale): add the legend's height; a tall one keeps its
+    # height: the view grows so that the legend's share of it is free
+    extra = frac * (y1 - y0) if below else (y1 - y0) * frac / (1.0 - frac)
+    ax.set_ylim(y0, y1 + extra)
+    layout_scene_figure(ax, None, below)
+    fig.draw_without_rendering()
+    marks = [a for a in ax.texts if a.get_gid() in ("axes-indicator", "north-arrow")]
+    lb = leg.get_window_extent(r)
+    if any(lb.overlaps(a.get_window_extent(r)) for a in marks):
+        down = ScaledTranslation(0.0, -(lb.height + 6.0) / fig.dpi, fig.dpi_scale_trans)
+        for a in marks:
+            a.xycoords = a.xycoords + down
 
 
 def _draw_scene_underlay(S: SceneDrawing) -> None:
@@ -742,10 +997,12 @@ def _draw_track(S: SceneDrawing, track, line, dark, gid: str | None = None) -> N
             continue
         xy = S.d(seg.points)
         if seg.kind == "sliding":
-            S.ax.plot(xy[:, 0], xy[:, 1], "-", color=dark, lw=2.2, alpha=0.85, zorder=_Z_TRACK, solid_capstyle="butt",
-                      gid=gid)
+            (ln,) = S.ax.plot(xy[:, 0], xy[:, 1], "-", color=dark, lw=2.2, alpha=0.85, zorder=_Z_TRACK,
+                              solid_capstyle="butt", gid=gid)
         else:
-            S.ax.plot(xy[:, 0], xy[:, 1], "--", color=line, lw=0.7, alpha=0.8, zorder=_Z_TRACK, dashes=(4, 3), gid=gid)
+            (ln,) = S.ax.plot(xy[:, 0], xy[:, 1], "--", color=line, lw=0.7, alpha=0.8, zorder=_Z_TRACK, dashes=(4, 3),
+                              gid=gid)
+        S.timed.append((ln, np.asarray(seg.t, dtype=float), xy))
         S.add(xy)
 
 
@@ -765,7 +1022,8 @@ def _draw_approaches(S: SceneDrawing) -> None:
         poses = {}
         for name, rows in a.bodies.items():
             xy = S.d(rows[:, 1:3])
-            ax.plot(xy[:, 0], xy[:, 1], "-.", color=dark, lw=0.9, zorder=_Z_TRACK, gid=f"approach:path:{name}")
+            (ln,) = ax.plot(xy[:, 0], xy[:, 1], "-.", color=dark, lw=0.9, zorder=_Z_TRACK, gid=f"approach:path:{name}")
+            S.timed.append((ln, np.asarray(rows[:, 0], dtype=float), xy))
             S.add(xy)
             poses[name] = ((rows[0, 1], rows[0, 2]), rows[0, 3])
             S.outline(S.body_of[name], poses[name][0], poses[name][1], gid=f"outline:braking:{name}", fill=None,
@@ -773,14 +1031,16 @@ def _draw_approaches(S: SceneDrawing) -> None:
         S.pins(v, poses, line, 2.5, alpha=0.7, zorder=_Z_GHOST)
         first = next(iter(a.bodies))
         start = S.d(a.bodies[first][0, 1:3])
-        S.text(start, f"braking starts, {fmt(a.speed_at_braking, 'speed', S.system)}", fontsize=6.5, color=dark,
+        S.text(start, f"braking starts, {fmt(a.speed_at_braking, 'speed', S.system)}", kind="approach", fontsize=6.5,
+               color=dark,
                ha="center", va="bottom", path_effects=_halo(1.8))
         S.labels.append(start)
         if a.reaction_time > 0:
             pp = S.d(a.perception_point)
             ax.plot([pp[0], start[0]], [pp[1], start[1]], ":", color=dark, lw=1.0, zorder=_Z_TRACK)
             ax.plot(*pp, "D", ms=5, mfc="white", mec=dark, zorder=_Z_IMPACT, gid=f"approach:perception:{vn}")
-            S.text(pp, f"perception ({a.reaction_time:g} s before braking)", fontsize=6.5, color=dark, ha="center",
+            S.text(pp, f"perception ({a.reaction_time:g} s before braking)", kind="approach", fontsize=6.5, color=dark,
+                   ha="center",
                    va="bottom", path_effects=_halo(1.8))
             S.labels.append(pp)
             S.add(pp)
@@ -799,7 +1059,10 @@ def plot_time_distance(scene, axes=None, *, system: str | None = None):
     reconstruction reports draw it.  The approach (if the vehicle has one) shows the
     perception-reaction interval at constant speed and the braking phase; the run-out follows
     to rest.  Vertical lines mark the impacts (the first at 0, later ones of the run-out at
-    their times); markers show perception (open diamond) and the start of braking (filled).
+    their times, labels stacked when close); markers show perception (open diamond) and the
+    start of braking (filled). The recorder samples (``[[evidence.recorder]]``) are drawn on the
+    speed panel with their tolerance (open circles; open triangles for samples taken while
+    braking, which only bound the speed from below). The legend lists only what is drawn.
 
     Parameters
     ----------
@@ -816,7 +1079,7 @@ def plot_time_distance(scene, axes=None, *, system: str | None = None):
     system = figure_system(scene, system)
     plt = _plt()
     if axes is None:
-        fig, axes = plt.subplots(2, 1, figsize=(9.0, 6.5), sharex=True, layout="constrained")
+        fig, axes = plt.subplots(2, 1, figsize=(10.5, 6.5), sharex=True, layout="constrained")
     else:
         fig = axes[0].figure
     ax_s, ax_v = axes
@@ -854,13 +1117,40 @@ def plot_time_distance(scene, axes=None, *, system: str | None = None):
                 ax_s.plot(br.time_to_rest, kl * br.distance, "s", color=c, ms=5)
         else:
             ax_s.plot([], [], "-", color=c, label=f"vehicle {v.name} ({first})")
+    # recorder samples on the speed panel, beside the computed speed they are checked against
+    drawn = {"perception": False, "braking": False, "rest": False, "recorded": False, "lower": False}
+    for i, x in enumerate(getattr(sc.evidence, "recorder", ())):
+        vn = next((v.name for v in movable if any(b.name == x.body for b in v.bodies)), None)
+        if vn is None:
+            continue
+        t = np.asarray(x.times, dtype=float) + x.time_offset
+        v = kv * np.asarray(x.speeds, dtype=float)
+        low = np.asarray(x.lower_bound, dtype=bool)
+        ax_v.errorbar(t, v, yerr=kv * x.tolerance, fmt="none", ecolor=_EVIDENCE, elinewidth=0.8, capsize=2.5,
+                      alpha=0.6, zorder=6)
+        for mask, marker, key in ((~low, "o", "recorded"), (low, "^", "lower")):
+            if mask.any():
+                ax_v.plot(t[mask], v[mask], marker, ls="none", ms=5.5, mfc="white", mec=_EVIDENCE, mew=1.4, zorder=7,
+                          gid=f"td:recorder:{i}:{key}")
+                drawn[key] = True
+    for v in movable:
+        a = sc.approaches.get(v.name)
+        if a is not None:
+            drawn["braking"] = True
+            drawn["perception"] |= a.reaction_time > 0
+        if scene.runout and v.name in scene.runout:
+            drawn["rest"] |= scene.runout[v.name].bodies[v.bodies[0].name].time_to_rest is not None
     impacts = [0.0] + [float(i.t) for i in (scene.joint.impacts if scene.joint is not None else ())]
+    impact_labels = []
     for k, ti in enumerate(impacts):
+        color = "#b30000" if k == 0 else "#e07b00"
         for axx in (ax_s, ax_v):
-            axx.axvline(ti, color="#b30000" if k == 0 else "#e07b00", lw=1.0, ls="-" if k == 0 else "--", zorder=1)
-        ax_s.annotate("impact" if k == 0 else f"impact {k + 1}", (ti, 1.0), xycoords=("data", "axes fraction"),
-                      xytext=(3, -10), textcoords="offset points", fontsize=7,
-                      color="#b30000" if k == 0 else "#e07b00")
+            axx.axvline(ti, color=color, lw=1.0, ls="-" if k == 0 else "--", zorder=1)
+        # one row lower for every label it would overlap (impacts close in time)
+        label = ax_s.annotate("impact" if k == 0 else f"impact {k + 1}", (ti, 1.0), xycoords=("data", "axes fraction"),
+                              xytext=(3, -10), textcoords="offset points", fontsize=7, color=color,
+                              gid=f"td:impact:{k + 1}", path_effects=_halo(2.0))
+        impact_labels.append(label)
     ax_s.axhline(0.0, color="0.6", lw=0.6)
     ax_s.set_ylabel(f"distance from the impact [{lu}]")
     ax_v.set_ylabel(f"speed [{vu}]")
@@ -871,10 +1161,29 @@ def plot_time_distance(scene, axes=None, *, system: str | None = None):
     from matplotlib.lines import Line2D
 
     handles, labels = ax_s.get_legend_handles_labels()
-    extra = [(Line2D([], [], ls="none", marker="D", mfc="white", mec="0.2"), "perception"),
-             (Line2D([], [], ls="none", marker="o", color="0.2"), "start of braking"),
-             (Line2D([], [], ls="none", marker="s", color="0.2"), "at rest")]
-    ax_s.legend(handles + [h for h, _ in extra], labels + [t for _, t in extra], fontsize=7, loc="upper left")
+    extra = [(Line2D([], [], ls="none", marker="D", mfc="white", mec="0.2"), "perception", "perception"),
+             (Line2D([], [], ls="none", marker="o", color="0.2"), "start of braking", "braking"),
+             (Line2D([], [], ls="none", marker="s", color="0.2"), "at rest", "rest"),
+             (Line2D([], [], ls="none", marker="o", ms=5.5, mfc="white", mec=_EVIDENCE, mew=1.4),
+              "recorded speed (bar: tolerance)", "recorded"),
+             (Line2D([], [], ls="none", marker="^", ms=5.5, mfc="white", mec=_EVIDENCE, mew=1.4),
+              "recorded, braking: a lower bound", "lower")]
+    extra = [(h, t) for h, t, key in extra if drawn[key]]
+    # beside the panels: never over the impact labels or the curves
+    ax_s.legend(handles + [h for h, _ in extra], labels + [t for _, t in extra], fontsize=7, loc="upper left",
+                bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, frameon=False)
+    # impact labels: one row lower for every label one would overlap (impacts close in time),
+    # measured once the layout is final
+    fig.draw_without_rendering()
+    r = fig.canvas.get_renderer()
+    boxes = []
+    for label in impact_labels:
+        for row in range(len(impact_labels)):
+            label.xyann = (3, -10 - 9 * row)
+            bb = text_box(label, r)
+            if not any(bb.padded(3.0).overlaps(q) for q in boxes):
+                break
+        boxes.append(bb)
     ax_s.set_title(_wrap(f"Time-distance: {sc.title}", 100), fontsize=10)
     return fig
 
@@ -982,7 +1291,7 @@ def _draw_arrows(S: SceneDrawing) -> None:
             # label beyond the tip, on the arrow's line
             u = vec / np.hypot(*vec)
             tip = tail + vec + u * 0.5 * S.k
-            S.text(tip, f"\u0394v {b.name}\n{fmt(b.delta_v_magnitude, Kind.SPEED, system, 3)}",
+            S.text(tip, f"\u0394v {b.name}\n{fmt(b.delta_v_magnitude, Kind.SPEED, system, 3)}", kind="delta-v",
                     fontsize=7, color=dark, ha="left" if u[0] >= 0 else "right", va="bottom" if u[1] >= 0 else "top",
                     zorder=Z_TEXT, path_effects=_halo())
         per = 1.0 / scale
@@ -1018,7 +1327,7 @@ def _draw_arrows(S: SceneDrawing) -> None:
             if best is None or hits < best[0]:
                 best = (hits, anchor, d)
         _, lab, d = best
-        S.text(lab, text, fontsize=7, color=dark, ha="left" if d[0] >= 0 else "right",
+        S.text(lab, text, kind="pdof", fontsize=7, color=dark, ha="left" if d[0] >= 0 else "right",
                va="bottom" if d[1] >= 0 else "top", zorder=Z_TEXT, path_effects=_halo())
         S.labels.append(lab)
     S.legend_entry("PDOF: crush force on each body in contact",
@@ -1027,7 +1336,6 @@ def _draw_arrows(S: SceneDrawing) -> None:
 
 def _draw_obstacles(S: SceneDrawing) -> None:
     """Fixed obstacles of the scene (guardrails, walls, poles), hatched, with their names."""
-    from matplotlib.lines import Line2D
     from matplotlib.patches import Patch, Polygon
 
     spec = S.sc.runout
@@ -1038,9 +1346,14 @@ def _draw_obstacles(S: SceneDrawing) -> None:
             xy = S.d(piece)
             S.ax.add_patch(Polygon(xy, closed=True, facecolor="0.78", edgecolor="0.25", lw=0.8, hatch="xxx",
                                    zorder=_Z_BARRIER, gid=f"obstacle:{o.name}"))
-            S.add(xy)
-        mid = S.d(np.asarray(o.points)[len(o.points) // 2])
-        S.text(mid, o.name, fontsize=7, color="0.15", ha="center", va="bottom", zorder=Z_TEXT, path_effects=_halo())
+            S.far.append(xy)  # a long guardrail counts toward the view only near the scene
+        # its name at the point of the obstacle nearest the scene (a long guardrail's middle may lie
+        # far outside the view)
+        centre = np.vstack(S.points).mean(axis=0) if S.points else np.zeros(2)
+        line = S.d(np.asarray(o.points, dtype=float))
+        mid = line[int(np.argmin(np.hypot(*(line - centre).T)))]
+        S.text(mid, o.name, kind="obstacles", fontsize=7, color="0.15", ha="center", va="bottom", zorder=Z_TEXT,
+               path_effects=_halo())
     if obstacles:
         S.legend_entry("fixed obstacle", Patch(facecolor="0.78", edgecolor="0.25", hatch="xxx", lw=0.8))
 
@@ -1054,16 +1367,26 @@ def _draw_impacts(S: SceneDrawing) -> None:
     points = [S.scene.impact.point] + [i.point for i in later]
     if len(points) < 2:
         return
+    times = [0.0] + [float(i.t) for i in later]
     for n, p in enumerate(points, start=1):
         xy = S.d(np.asarray(p, dtype=float))
-        S.ax.plot(*xy, "o", ms=11, mfc="#ffd54f", mec="0.1", mew=1.0, zorder=_Z_ARROW + 1, gid=f"impact:{n}")
-        S.ax.text(*xy, str(n), fontsize=7, fontweight="bold", ha="center", va="center", zorder=_Z_ARROW + 2)
+        first = (len(S.ax.lines), len(S.texts))
+        # the point itself, and its number in a yellow disc on it (moved aside with a leader line
+        # by place_labels when impacts lie close together)
+        S.ax.plot(*xy, "o", ms=3.5, mfc="0.1", mec="#ffd54f", mew=0.8, zorder=_Z_ARROW + 1, gid=f"impact:{n}")
+        S.text(xy, str(n), kind="impacts", fontsize=7, fontweight="bold", ha="center", va="center",
+               zorder=_Z_ARROW + 2, bbox=dict(boxstyle="circle,pad=0.25", facecolor="#ffd54f", edgecolor="0.1", lw=1.0))
         S.add(xy)
+        if n > 1:  # a later impact appears (in the animation) when it happens
+            S.appear += [(a, times[n - 1]) for a in (*S.ax.lines[first[0]:], *S.texts[first[1]:])]
     S.legend_entry("impacts in time order (1: the first; the report lists them)",
                    Line2D([], [], ls="none", marker="o", ms=9, mfc="#ffd54f", mec="0.1"))
 
 
-def _draw_barrier(S: SceneDrawing) -> None:
+def _draw_barrier(S: SceneDrawing, lo, hi) -> None:
+    """The barrier face through the contact point along the crush tangent, over its extent
+    (endless: across the view), cut to the view widened by half its span on each side (so it
+    never widens the view, and a later widening, as the animation's, stays covered)."""
     from matplotlib.lines import Line2D
     from matplotlib.patches import Polygon
 
@@ -1074,21 +1397,23 @@ def _draw_barrier(S: SceneDrawing) -> None:
     p0 = np.asarray(surf.point, dtype=float)
     t = np.asarray(surf.tangent, dtype=float)
     n = np.asarray(surf.normal, dtype=float)  # from the barrier into the vehicle
+    lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+    half = 0.5 * (hi - lo)
+    blo, bhi = lo - half, hi + half
+    reach = float(np.hypot(*(bhi - blo))) / S.k + float(np.hypot(*p0))  # metres: beyond the box either way
     extent = getattr(sc, "barrier_extent", None) or (-np.inf, np.inf)
-    a, b = float(extent[0]), float(extent[1])
-    if not (np.isfinite(a) and np.isfinite(b)):
-        # an endless face: across everything drawn, plus a margin
-        proj = (np.vstack(S.points) / S.k - p0) @ t
-        a = a if np.isfinite(a) else float(proj.min()) - 3.0
-        b = b if np.isfinite(b) else float(proj.max()) + 3.0
+    a, b = (max(float(extent[0]), -reach), min(float(extent[1]), reach))
     ends = S.d(np.array([p0 + a * t, p0 + b * t]))
     depth = 0.6 * S.k
     back = ends - depth * n
     name = next(v.bodies[0].name for v in sc.vehicles if v.is_barrier)
-    S.ax.add_patch(Polygon(np.vstack([ends, back[::-1]]), closed=True, facecolor="0.85", edgecolor="0.35", lw=0.0,
-                           hatch="////", zorder=_Z_BARRIER, gid=f"barrier:{name}"))
-    S.ax.plot(ends[:, 0], ends[:, 1], "-", color="0.15", lw=4.0, solid_capstyle="butt", zorder=_Z_BARRIER + 0.5)
-    S.add(np.vstack([ends, back]))
+    poly = _clip_polygon(np.vstack([ends, back[::-1]]), blo, bhi)
+    if len(poly) >= 3:
+        S.ax.add_patch(Polygon(poly, closed=True, facecolor="0.85", edgecolor="0.35", lw=0.0, hatch="////",
+                               zorder=_Z_BARRIER, gid=f"barrier:{name}"))
+    for piece in _clip_polyline(ends, blo, bhi):
+        S.ax.plot(piece[:, 0], piece[:, 1], "-", color="0.15", lw=4.0, solid_capstyle="butt", zorder=_Z_BARRIER + 0.5,
+                  gid=f"barrier-face:{name}")
     S.legend_entry(f"barrier face ({name})", Line2D([], [], color="0.15", lw=4.0))
 
 
@@ -1349,9 +1674,9 @@ def _label_road_layout(S: SceneDrawing, roi: _Roi, lo, hi) -> None:
         text = _zone_label(z)
         k = place.best(cand, text, 7.5, allowed=effective, room=signed_distance(cand, polys[i]))
         edge = _ZONE_COLORS[i % len(_ZONE_COLORS)][1]
-        t = S.text(cand[k], text, fontsize=7.5, ha="center", va="center", style="italic", color=_darker(edge),
+        S.text(cand[k], text, kind="zones", gid=f"zone-label:{i}", fontsize=7.5, ha="center", va="center",
+                   style="italic", color=_darker(edge),
                    path_effects=_halo(2.2), zorder=Z_TEXT - 0.5)
-        t.set_gid(f"zone-label:{i}")
         S.labels.append(cand[k])
     step = 0.015 * float((np.asarray(hi) - np.asarray(lo)).max())
     for i, line in enumerate(getattr(S.sc, "map_lines", ())):
@@ -1370,10 +1695,10 @@ def _label_road_layout(S: SceneDrawing, roi: _Roi, lo, hi) -> None:
         deg = angle[k]
         off = 3.0 * np.array([-np.sin(np.radians(deg)), np.cos(np.radians(deg))])
         color = _darker(line.color or _MAP_STYLES[line.style][1])
-        t = S.text(cand[k], line.name, xytext=tuple(off), textcoords="offset points", fontsize=6.5, ha="center",
+        S.text(cand[k], line.name, kind="map", gid=f"map-label:{i}", xytext=tuple(off), textcoords="offset points",
+                   fontsize=6.5, ha="center",
                    va="bottom", rotation=deg, rotation_mode="anchor", color=color, path_effects=_halo(2.0),
                    zorder=Z_TEXT - 0.5)
-        t.set_gid(f"map-label:{i}")
         S.labels.append(cand[k])
 
 
@@ -1384,12 +1709,17 @@ def _darker(color, factor: float = 0.6):
     return tuple(factor * c for c in to_rgb(color))
 
 
-def _scale_bar(S: SceneDrawing, width: float) -> None:
+def _scale_bar(S: SceneDrawing, width: float, sheet=None):
+    """Scale bar at the lower left (a 1-2-2.5-5 length near a fifth of the view); on a print sheet
+    its label also states the scale and the paper ("1:200 on A4")."""
     from matplotlib.font_manager import FontProperties
     from mpl_toolkits.axes_grid1.anchored_artists import AnchoredSizeBar
 
     length = _nice_at_most(width / 5.0)
-    bar = AnchoredSizeBar(S.ax.transData, length, f"{length:g} {S.lunit}", "lower left", pad=0.5, sep=3,
+    label = f"{length:g} {S.lunit}"
+    if sheet is not None:
+        label += f"   scale 1:{sheet.scale:g} on {sheet.paper} {sheet.orientation}"
+    bar = AnchoredSizeBar(S.ax.transData, length, label, "lower left", pad=0.5, sep=3,
                           borderpad=0.6, frameon=True, size_vertical=0.0, color="black",
                           fontproperties=FontProperties(size=8))
     bar.patch.set(facecolor="white", alpha=0.85, edgecolor="0.6", lw=0.5)
@@ -1398,18 +1728,189 @@ def _scale_bar(S: SceneDrawing, width: float) -> None:
     bar.set_gid("scalebar")
     bar.set_zorder(Z_TEXT + 1)
     S.ax.add_artist(bar)
+    return bar
 
 
-def _axes_indicator(ax) -> None:
-    """+X / +Y arrows near the top left corner (equal aspect: screen and world directions agree)."""
-    base = (0.03, 0.80)
+def _north_arrow(S: SceneDrawing) -> list:
+    """Grid north of a scene placed on a survey ([survey]: north is the survey's +y, the scene's
+    +X is turned ``rotation`` from its east), right of the +X/+Y arrows; none without a survey
+    (the scene's own axes say nothing of north). Returns the texts drawn."""
+    data = S.sc.data if isinstance(S.sc.data, dict) else {}
+    survey = data.get("survey")
+    placed = isinstance(survey, dict) and any(survey.get(k) for k in ("files", "underlay", "crs", "imported"))
+    if not placed:
+        return []
+    rot = float(survey["rotation"])
+    u = np.array([math.sin(rot), math.cos(rot)])  # survey +y in the scene frame
+    from matplotlib.transforms import offset_copy
+
+    base = (0.03, 1.0)
+    corner = offset_copy(S.ax.transAxes, fig=S.ax.figure, x=80, y=-34, units="points")
+    arrow = dict(arrowstyle="-|>", lw=1.4, color="black", shrinkA=0, shrinkB=0, mutation_scale=12)
+    S.ax.annotate("", xy=base, xycoords=corner, xytext=tuple(-26 * u), textcoords="offset points",
+                  arrowprops=arrow, zorder=Z_TEXT + 1, gid="north-arrow")
+    t = S.ax.annotate("N", xy=base, xycoords=corner, xytext=tuple(9 * u), textcoords="offset points",
+                      fontsize=9, fontweight="bold", ha="center", va="center", zorder=Z_TEXT + 1,
+                      path_effects=_halo(), gid="north-arrow")
+    return [t]
+
+
+#: Kinds of text label on a scene figure (``hide=`` of :func:`plot_scene`, ``--hide`` of
+#: ``crashsim plot``), in the order :func:`place_labels` places them (earlier kinds keep their
+#: place, later ones move): ``"labels"`` hides all of them.
+LABEL_KINDS = ("impacts", "names", "pdof", "delta-v", "approach", "obstacles", "zones", "map", "times")
+
+#: Distances from its anchor [points] at which :func:`place_labels` tries a label that overlaps
+#: another, 12 directions each; a label moved this far or more gets a leader line to its anchor.
+_RINGS = (8.0, 13.0, 19.0, 26.0, 34.0, 44.0, 56.0, 70.0, 88.0)
+_LEADER_FROM = 13.0
+
+
+def _label_kind(t) -> str:
+    gid = t.get_gid() or ""
+    if gid.startswith(("zone-label", "map-label")):
+        return "zones" if gid.startswith("zone") else "map"
+    return gid.split(":")[1] if gid.startswith("label:") else "other"
+
+
+def text_box(t, renderer):
+    """Window extent of a text artist's text alone [pixels] (an annotation's arrow left out)."""
+    from matplotlib.text import Text
+    from matplotlib.transforms import Bbox
+
+    if not t.get_text():
+        return None
+    if hasattr(t, "update_positions"):  # an annotation: place its text for the current offset first
+        t.update_positions(renderer)
+    bb = Text.get_window_extent(t, renderer)
+    patch = t.get_bbox_patch()
+    if patch is not None:  # a disc (impact numbers) or box around the text: its outer square
+        pad = patch.get_boxstyle().pad * t.get_fontsize() * t.get_figure(root=True).dpi / 72.0
+        half = 0.5 * max(bb.width, bb.height) + pad
+        cx, cy = 0.5 * (bb.x0 + bb.x1), 0.5 * (bb.y0 + bb.y1)
+        bb = Bbox([[cx - half, cy - half], [cx + half, cy + half]])
+    return bb
+
+
+def place_labels(ax, texts, fixed=(), avoid=None) -> int:
+    """Move labels so that no two text boxes overlap: labels in :data:`LABEL_KINDS` order keep
+    their place while free, else go to the nearest free place around their anchor.
+
+    Parameters
+    ----------
+    ax : matplotlib Axes
+        The figure must be laid out at its final size (positions are measured in pixels).
+    texts : sequence of matplotlib Annotation
+        Labels anchored in data coordinates (``xycoords="data"``).
+    fixed : sequence of artists
+        Kept clear of and never moved (axes indicator, scale bar, a legend inside the axes).
+    avoid : ndarray, shape (n, 2), optional
+        Points drawn [data units]: among free places at the same distance, the one covering
+        fewest of them wins.
+
+    Returns
+    -------
+    int
+        Labels for which no free place inside the axes was found (left where they were).
+
+    Notes
+    -----
+    Overlap is measured with the renderer's window extents (the boxes the text occupies at
+    the figure's size and dpi), 1.5 pixels apart. A label is tried at its own place first,
+    then at :data:`_RINGS` points from its anchor in 12 directions, aligned away from the
+    anchor (its nearest corner or edge towards it); the first distance with a free place
+    wins, and a label moved :data:`_LEADER_FROM` points or more gets a thin leader line. It
+    is a greedy step (deterministic, no iteration): labels placed earlier are never moved.
+    """
+    fig = ax.figure
+    for old in [a for a in ax.texts if (a.get_gid() or "").startswith("leader:")]:
+        old.remove()  # leaders of an earlier placement (the animation places again after widening)
+    r = fig.canvas.get_renderer()
+    frame = ax.get_window_extent(r)
+    placed = []
+    for a in fixed:
+        bb = text_box(a, r) if hasattr(a, "get_text") else a.get_window_extent(r)
+        if bb is not None:
+            placed.append(bb)
+    px = None if avoid is None or len(avoid) == 0 else ax.transData.transform(np.asarray(avoid, dtype=float))
+    order = sorted((t for t in texts if t.get_visible() and t.get_text()),
+                   key=lambda t: LABEL_KINDS.index(k) if (k := _label_kind(t)) in LABEL_KINDS else len(LABEL_KINDS))
+    pad = 1.5
+
+    def free(bb):
+        if bb.x0 < frame.x0 or bb.y0 < frame.y0 or bb.x1 > frame.x1 or bb.y1 > frame.y1:
+            return False
+        big = bb.padded(pad)
+        return not any(big.overlaps(q) for q in placed)
+
+    def covered(bb):
+        if px is None:
+            return 0
+        return int(np.count_nonzero((px[:, 0] >= bb.x0) & (px[:, 0] <= bb.x1) & (px[:, 1] >= bb.y0)
+                                    & (px[:, 1] <= bb.y1)))
+
+    lost = 0
+    angles = np.radians(np.arange(0.0, 360.0, 30.0) + 90.0)  # above first, then round
+    for t in order:
+        bb = text_box(t, r)
+        if free(bb):
+            placed.append(bb)
+            continue
+        start = (t.xyann, t.anncoords, t.get_ha(), t.get_va())
+        best = None
+        for ring in _RINGS:
+            for a in angles:
+                c, s = np.cos(a), np.sin(a)
+                t.set_anncoords("offset points")
+                t.xyann = (ring * c, ring * s)
+                t.set_ha("left" if c > 0.3 else "right" if c < -0.3 else "center")
+                t.set_va("bottom" if s > 0.3 else "top" if s < -0.3 else "center")
+                cand = text_box(t, r)
+                if free(cand):
+                    score = covered(cand)
+                    if best is None or score < best[0]:
+                        best = (score, ring, (ring * c, ring * s), t.get_ha(), t.get_va(), cand)
+            if best is not None:
+                break
+        if best is None:
+            t.xyann, _, ha, va = start
+            t.set_anncoords(start[1])
+            t.set_ha(ha)
+            t.set_va(va)
+            placed.append(text_box(t, r))
+            lost += 1
+            continue
+        _, ring, off, ha, va, cand = best
+        t.set_anncoords("offset points")
+        t.xyann = off
+        t.set_ha(ha)
+        t.set_va(va)
+        placed.append(cand)
+        if ring >= _LEADER_FROM:
+            ax.annotate("", xy=t.xy, xytext=off, textcoords="offset points", zorder=t.get_zorder() - 0.1,
+                        arrowprops=dict(arrowstyle="-", lw=0.6, color=t.get_color(), shrinkA=0.0, shrinkB=1.5),
+                        gid=f"leader:{_label_kind(t)}")
+    return lost
+
+
+def _axes_indicator(ax) -> list:
+    """+X / +Y arrows near the top left corner (equal aspect: screen and world directions agree);
+    returns the two texts."""
+    from matplotlib.transforms import offset_copy
+
+    out = []
+    # the origin 48 points under the top of the axes, whatever their height
+    base = (0.03, 1.0)
+    corner = offset_copy(ax.transAxes, fig=ax.figure, y=-48, units="points")
     arrow = dict(arrowstyle="<|-", lw=1.2, color="black", shrinkA=0, shrinkB=0, mutation_scale=10)
     for off, text, ha, va, toff in (((26, 0), "+X", "left", "center", (30, 0)),
                                     ((0, 26), "+Y", "center", "bottom", (0, 29))):
-        ax.annotate("", xy=base, xycoords="axes fraction", xytext=off, textcoords="offset points",
-                    arrowprops=arrow, zorder=Z_TEXT + 1)
-        ax.annotate(text, xy=base, xycoords="axes fraction", xytext=toff, textcoords="offset points",
-                    fontsize=8, ha=ha, va=va, zorder=Z_TEXT + 1, path_effects=_halo(), gid="axes-indicator")
+        ax.annotate("", xy=base, xycoords=corner, xytext=off, textcoords="offset points",
+                    arrowprops=arrow, zorder=Z_TEXT + 1, gid="axes-indicator")
+        out.append(ax.annotate(text, xy=base, xycoords=corner, xytext=toff, textcoords="offset points",
+                               fontsize=8, ha=ha, va=va, zorder=Z_TEXT + 1, path_effects=_halo(),
+                               gid="axes-indicator"))
+    return out
 
 
 def layout_scene_figure(ax, leg, below: bool, width: float = 10.0, height: float = 7.0) -> None:
@@ -1441,6 +1942,14 @@ def layout_scene_figure(ax, leg, below: bool, width: float = 10.0, height: float
         if w_ax > width:  # very wide but with the legend at the right (legend= a location): cap
             w_ax, h_ax = width, width * aspect
         w_fig = left + w_ax + right + (leg_w + 0.3 if leg is not None else 0.0)
+        # never narrower than the title (a tall scene without a legend at its right)
+        half = 0.5 * ax.title.get_window_extent(r).width / fig.dpi + 0.1  # the title is centred on the axes
+        centre = left + 0.5 * w_ax
+        if centre - half < 0.0:
+            left += half - centre
+            w_fig += half - centre
+            centre = half
+        w_fig = max(w_fig, centre + half)
         h_fig = max(top + h_ax + bottom, top + leg_h + 0.2)
     fig.set_size_inches(w_fig, h_fig)
     fig.draw_without_rendering()  # the renderer follows the new size
@@ -1470,32 +1979,69 @@ def _fit_texts(S: SceneDrawing) -> None:
         ax.set_ylim(lo[1] - margin if lo[1] < y0 else y0, hi[1] + margin if hi[1] > y1 else y1)
 
 
-def _scene_legend(S: SceneDrawing, legend, below: bool):
+def _scene_legend(S: SceneDrawing, mode: str, below: bool, compact: bool = False):
+    """The legend: ``"outside"`` under the diagram (``below``, in as many columns as fit) or at its
+    right; ``"inside"`` small, in the corner that covers least (matplotlib's "best")."""
     labels = list(S.handles)
     handles = [S.handles[k] for k in labels]
-    if legend is True and below:
+    size = 6.5 if compact or mode == "inside" else 7.5
+    keys = list(labels)
+    if mode != "outside":
+        # inside: compact. One line per entry, the evidence items as one entry (the title counts
+        # their verdicts; each residual is in the report)
+        evidence = ("measured ", "recorded ", "crush energy")
+        n_ev = sum(k.startswith(evidence) for k in keys)
+        keep = [k for k in keys if not k.startswith(evidence)]
+        if n_ev:
+            from matplotlib.lines import Line2D
+
+            S.handles.setdefault("measured evidence (red)",
+                                 Line2D([], [], ls=(0, (4, 2)), color=_EVIDENCE, lw=1.2, marker="x", ms=5, mew=1.3))
+            keep.append("measured evidence (red)")
+        keys = keep
+        handles = [S.handles[k] for k in keys]
+        labels = [k.split("\n  ")[0].replace("\n", " ") for k in keys]
+    if mode == "outside" and compact:  # a print sheet: under the drawing, as many columns as the page holds
+        fig = S.ax.figure
+        r = fig.canvas.get_renderer()
+        room = fig.get_size_inches()[0] * fig.dpi - 2 * _SHEET_EDGE * fig.dpi
+        for ncol in (3, 2, 1):
+            leg = fig.legend(handles, labels, loc="lower center",
+                             bbox_to_anchor=(0.5 * fig.get_size_inches()[0], _SHEET_EDGE),
+                             bbox_transform=fig.dpi_scale_trans, fontsize=size, frameon=False, handlelength=2.2,
+                             ncol=ncol, columnspacing=1.2, borderaxespad=0.0)
+            if leg.get_window_extent(r).width <= room or ncol == 1:
+                break
+            leg.remove()
+    elif mode == "outside" and below:
         from matplotlib.transforms import offset_copy
 
         # anchored 40 pt under the axes: below the tick labels and the axis label
         under = offset_copy(S.ax.transAxes, fig=S.ax.figure, y=-40, units="points")
         leg = S.ax.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, 0.0), bbox_transform=under,
-                          borderaxespad=0.0, fontsize=7.5, frameon=False, handlelength=2.6, ncol=2,
-                          columnspacing=2.5)
-    elif legend is True:
+                          borderaxespad=0.0, fontsize=size, frameon=False, handlelength=2.2, ncol=3 if compact else 2,
+                          columnspacing=1.5)
+    elif mode == "outside":
         leg = S.ax.legend(handles, labels, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0,
-                          fontsize=7.5, frameon=False, handlelength=2.6)
+                          fontsize=size, frameon=False, handlelength=2.2)
     else:
-        leg = S.ax.legend(handles, labels, loc=legend, fontsize=7, framealpha=0.9, handlelength=2.6)
+        loc = "best" if mode == "inside" else mode
+        x0, x1 = S.ax.get_xlim()
+        y0, y1 = S.ax.get_ylim()
+        wide = (x1 - x0) > 1.8 * (y1 - y0)
+        leg = S.ax.legend(handles, labels, loc=loc, fontsize=size, framealpha=0.9, handlelength=2.0,
+                          borderpad=0.3, labelspacing=0.25, ncol=2 if wide and len(labels) > 8 else 1,
+                          columnspacing=1.0)
     n = len(S.scene.evidence.checks) if S.scene.evidence is not None else 0
+    for text, full in zip(leg.get_texts(), keys):  # colours by the full label
+        c = S.label_colors.get(full)
+        if c is not None:
+            text.set_color(c)
     if n:
         failed = S.scene.evidence.n_failed
         leg.set_title(f"Evidence: {n - failed} of {n} items within tolerance", prop={"size": 8, "weight": "bold"})
         leg.get_title().set_color(_PASS if failed == 0 else _FAIL)
     leg.set_zorder(Z_TEXT + 2)
-    for text in leg.get_texts():
-        c = S.label_colors.get(text.get_text())
-        if c is not None:
-            text.set_color(c)
     return leg
 
 
@@ -1624,7 +2170,8 @@ def plot_histories(scene, axes=None, *, system: str | None = None):
 
 
 def save_scene_figures(scene, path, *, histories_path=None, dpi: int = 150, interval: float | None = None,
-                       system: str | None = None, time_distance_path=None, approach: bool = True) -> list:
+                       system: str | None = None, time_distance_path=None, approach: bool = True, legend=True,
+                       hide=(), paper: str | None = None, scale: float | None = None) -> list:
     """Write the scene diagram (and optionally the histories) to files; closes its figures.
 
     Parameters
@@ -1638,6 +2185,8 @@ def save_scene_figures(scene, path, *, histories_path=None, dpi: int = 150, inte
         Time-distance and speed-time chart (:func:`plot_time_distance`), same suffixes.
     approach : bool
         Draw the approaches on the scene diagram (see :func:`plot_scene`).
+    legend, hide, paper, scale
+        Legend, hidden label kinds and print sheet of the scene diagram (see :func:`plot_scene`).
     dpi : int
         Resolution of raster output [dots per inch].
     interval : float, optional
@@ -1666,9 +2215,13 @@ def save_scene_figures(scene, path, *, histories_path=None, dpi: int = 150, inte
     if histories_path is not None and not scene.runout:
         raise ScenarioError(f"cannot write histories to {str(histories_path)!r}: scene "
                             f"{scene.scenario.title!r} has no run-out (impact only)", field="histories_path")
+    check_hide(hide)
+    if paper is not None:
+        print_sheet(paper, (0.0, 0.0), (1.0, 1.0), 1.0)  # a known paper, before anything is drawn
     plt = _plt()
     written = []
-    ax = plot_scene(scene, interval=interval, system=system, approach=approach)
+    ax = plot_scene(scene, interval=interval, system=system, approach=approach, legend=legend, hide=hide, paper=paper,
+                    scale=scale)
     try:
         targets[0].parent.mkdir(parents=True, exist_ok=True)
         ax.figure.savefig(targets[0], dpi=dpi)

@@ -241,7 +241,7 @@ def describe_event(e, system: str = "SI") -> str:
     k = e.kind
     if k in ("zone_enter", "zone_exit") and "wheel" in d:
         f = f" (f = {d['friction']:g})" if "friction" in d else ""
-        return f"wheel {d['wheel']} {'enters' if k == 'zone_enter' else 'leaves'} zone {d['zone']!r}{f}"
+        return f"wheel {d.get('label', d['wheel'])} {'enters' if k == 'zone_enter' else 'leaves'} zone {d['zone']!r}{f}"
     if k in ("stop_closed", "stop_impact") and "angle_rad" in d:
         how = "closes" if k == "stop_closed" else "struck and left"
         return (f"articulation stop of hitch {d['hitch']} {how} at {math.degrees(d['angle_rad']):+.1f} deg "
@@ -274,8 +274,10 @@ def format_events(events, system: str = "SI", title: str = "Run-out events") -> 
     return "\n".join([title] + table(rows, "r"))
 
 
-def format_evidence(report, system: str = "SI") -> str:
-    """Text table of evidence residuals and verdicts."""
+def format_evidence(report, system: str = "SI", labels: dict | None = None) -> str:
+    """Text table of evidence residuals and verdicts; ``labels`` names the wheels (key -> the axle's name
+    from the file, :func:`crashsim.motion.wheels.wheel_labels`)."""
+    labels = labels or {}
     s = system
     lines = [f"Evidence: {len(report.checks) - report.n_failed} of {len(report.checks)} items within tolerance"]
     rows = []
@@ -288,7 +290,7 @@ def format_evidence(report, system: str = "SI") -> str:
             res, tol = fmt(c.residual, c.quantity, s), fmt(c.tolerance, c.quantity, s)
         extra = ""
         if "matched_wheel" in c.details:
-            extra = f"closest track: {c.details['matched_wheel']}"
+            extra = f"closest track: {labels.get(c.details['matched_wheel'], c.details['matched_wheel'])}"
         elif "reason" in c.details:
             extra = c.details["reason"]
         elif c.kind == "recorder":

@@ -35,12 +35,12 @@ from .motion.contact import CONTACT_KEYS, WEIGHT_DEPTH
 from .motion.road import MAX_SLOPE
 from .motion.levels import LEVELS
 from .motion.wheels import select_wheels, enumerate_wheels
-from .schema import ArrayOf, Field, Section, Table, document, load_toml, validate
+from .schema import ArrayOf, Field, ScenarioValidationError, Section, Table, document, load_toml, validate
 from .survey.schema import MAP_LINE_STYLES, SURVEY
 from .units import Kind, format_value, parse, toml_repr
 from .vehicles import Axle, Body, BodyState, Hitch, Vehicle, chain_states
 
-__all__ = ["SCHEMA", "MAP_LINE_STYLES", "MapLine", "Scenario", "RunoutSpec", "load_scenario", "presets",
+__all__ = ["SCHEMA", "MAP_LINE_STYLES", "MapLine", "Scenario", "RunoutSpec", "load_scenario", "presets", "preset_geometry",
            "scenario_from_dict", "schema_document"]
 
 # ----------------------------------------------------------------------------------------
@@ -129,6 +129,9 @@ BODY = Section("body", [
 
 def _wheel_fields(override: bool) -> list[Field]:
     opt = {"required": False}
+    # the tyres section states every wheel's state: a rolling or braked wheel needs its tyre data there (an
+    # override inherits the state and the data, checked when the settings are resolved)
+    moving = {} if override else {"required_if": ("state", ("rolling", "braked"))}
     return [
         Field("state", choices=WHEEL_STATES, **({"required": False} if override else {}), example="locked",
               description="rolling (free), braked (brake fraction), locked (slides), jammed (damaged, slides)"),
@@ -136,10 +139,11 @@ def _wheel_fields(override: bool) -> list[Field]:
               description="Brake fraction of mu N, for state = \"braked\""),
         Field("steer", Kind.ANGLE, **opt, example="5 deg", description="Fixed steer angle, counter-clockwise positive"),
         Field("cornering_coefficient", "float", minimum=0, exclusive_minimum=True, **opt, example="8.6",
+              **moving, **({} if override else {"unless": ("cornering_stiffness",)}),
               description="Cornering stiffness per unit load [1/rad] (8.6/rad = 15 %/deg, car tyres)"),
         Field("cornering_stiffness", Kind.FORCE, minimum=0, exclusive_minimum=True, **opt, example="40000 N",
               description="Cornering stiffness per tyre, in force per radian of slip angle"),
-        Field("rolling_resistance", "float", minimum=0, maximum=0.5, **opt, example="0.012",
+        Field("rolling_resistance", "float", minimum=0, maximum=0.5, **opt, example="0.012", **moving,
               description="Rolling-resistance coefficient f_r (rolling and braked wheels)"),
         Field("mu_factor", "float", minimum=0, maximum=2, exclusive_minimum=True, **opt, example="0.5",
               description="Multiplier on the road friction at this wheel (e.g. a flat tyre)"),
@@ -849,7 +853,12 @@ def _build_runout(r: dict, vehicles, raw_vehicles: dict, file: str | None, raw: 
                                f"vehicles.{veh.name}.bodies[{i}].cg_height", file)
     if level == "impact":
         return RunoutSpec(road, options, {}, level)
-    wheels = {veh.name: _build_wheels(veh, raw_vehicles[veh.name], file) for veh in vehicles if not veh.is_barrier}
+    wheels, problems = {}, _Problems(file)
+    for veh in vehicles:  # every vehicle's wheel errors at once
+        if not veh.is_barrier:
+            with problems.each():
+                wheels[veh.name] = _build_wheels(veh, raw_vehicles[veh.name], file)
+    problems.raise_any()
     return RunoutSpec(road, options, wheels, level, r["accuracy"], r["accuracy_heading"])
 
 
@@ -1063,6 +1072,22 @@ def presets() -> dict[str, dict]:
     return tomllib.loads(files("crashsim").joinpath("data/vehicles.toml").read_text(encoding="utf-8"))
 
 
+def preset_geometry(name: str) -> dict:
+    """One preset validated as a body of a scenario file: SI values with defaults filled (mass, yaw_inertia,
+    length, width, outline_center, axles with x, track, dual, name, front_hitch, rear_hitch, cg_height,
+    articulation_limit, ...), and its ``source``. An unknown name is a :class:`ScenarioError` naming the
+    presets."""
+    library = presets()
+    if name not in library:
+        near = difflib.get_close_matches(str(name), list(library), n=2)
+        hint = f"; did you mean {', '.join(map(repr, near))}?" if near else ""
+        raise ScenarioError(f"unknown preset {name!r}{hint} Presets: {', '.join(library)}", field="preset")
+    raw = {k: v for k, v in library[name].items() if k not in ("source", "crush")}
+    out = validate({"name": name, **raw}, BODY)
+    out["source"] = library[name]["source"]
+    return out
+
+
 def apply_presets(data: dict, file: str | None) -> dict:
     """Merge each body's preset under its own keys (before validation, so units are checked alike)."""
     vehicles = data.get("vehicles")
@@ -1098,6 +1123,60 @@ def _units_any_case(data: dict) -> dict:
     return data
 
 
+class _Problems:
+    """The input errors of independent parts of a file, collected so that one run reports them all.
+
+    ``with problems.each(): ...`` keeps a :class:`ScenarioError` raised inside and goes on;
+    :meth:`raise_any` then raises them together: the error itself if it is the only one (its type
+    kept: fit and Monte Carlo tell an unreachable or inadmissible impact from a bad file), else one
+    :class:`~crashsim.schema.ScenarioValidationError` listing every one on its own line."""
+
+    def __init__(self, file: str | None):
+        self.file = file
+        self.errors: list[ScenarioError] = []
+
+    def each(self):
+        return _Keep(self)
+
+    def raise_any(self) -> None:
+        if not self.errors:
+            return
+        if len(self.errors) == 1:
+            raise self.errors[0]
+        problems = []
+        for exc in self.errors:
+            if isinstance(exc, ScenarioValidationError):
+                problems += exc.problems
+                continue
+            text = str(exc)
+            if exc.file and text.startswith(f"{exc.file}: "):
+                text = text[len(exc.file) + 2:]
+            if exc.field and text.startswith(f"{exc.field}: "):
+                text = text[len(exc.field) + 2:]
+            for j, extra in enumerate(text.split("\n")):  # a multi-problem error: one line each
+                if j == 0:
+                    problems.append((exc.field or "", extra))
+                elif extra.strip() and not extra.rstrip().endswith("more problems:") and not extra.rstrip().endswith(
+                        "more problem:"):
+                    path, _, rest = extra.strip().partition(": ")
+                    problems.append((path, rest) if rest else (exc.field or "", extra.strip()))
+        raise ScenarioValidationError(problems, file=self.file)
+
+
+class _Keep:
+    def __init__(self, owner: _Problems):
+        self.owner = owner
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, kind, exc, tb):
+        if exc is not None and isinstance(exc, ScenarioError):
+            self.owner.errors.append(exc)
+            return True
+        return False
+
+
 def scenario_from_dict(data: dict[str, Any], *, file: str | None = None, approaches: bool = True) -> Scenario:
     """Validate a parsed scenario (as from TOML) and build the typed SI objects.
 
@@ -1118,26 +1197,33 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None, approac
     merged = apply_presets(data, file)
     d = validate(merged, SCHEMA, file=file)
     vehicles, states = [], {}
+    problems = _Problems(file)  # the independent parts of the file first: every error of them at once
     for name, v in d["vehicles"].items():
-        veh, st = _build_vehicle(name, v, file)
-        _check_vehicle_geometry(veh, v, merged["vehicles"][name], d["scenario"]["units"], file)
-        for bn in st:
-            if bn in states:
-                raise _err(f"body name {bn!r} is used twice; body names must be unique in the scene",
-                           f"vehicles.{name}.bodies", file)
-        if v["speed"] is None and v["approach"] is None:
-            raise _err("the speed at impact is missing: give speed (CG speed of the first body at impact), or an "
-                       "[vehicles.<name>.approach] with the speed at the start of braking", f"vehicles.{name}.speed",
-                       file)
-        if v["approach"] is not None and v["approach"]["speed"] is None and v["speed"] is None:
-            raise _err("the approach needs the speed at the start of braking (approach.speed) or the speed at "
-                       "impact (speed)", f"vehicles.{name}.approach.speed", file)
-        vehicles.append(veh)
-        states.update(st)
+        with problems.each():
+            if v["speed"] is None and v["approach"] is None:
+                raise _err("the speed at impact is missing: give speed (CG speed of the first body at impact), or "
+                           "an [vehicles.<name>.approach] with the speed at the start of braking",
+                           f"vehicles.{name}.speed", file)
+        with problems.each():
+            if v["approach"] is not None and v["approach"]["speed"] is None and v["speed"] is None:
+                raise _err("the approach needs the speed at the start of braking (approach.speed) or the speed at "
+                           "impact (speed)", f"vehicles.{name}.approach.speed", file)
+        with problems.each():
+            veh, st = _build_vehicle(name, v, file)
+            _check_vehicle_geometry(veh, v, merged["vehicles"][name], d["scenario"]["units"], file)
+            for bn in st:
+                if bn in states:
+                    raise _err(f"body name {bn!r} is used twice; body names must be unique in the scene",
+                               f"vehicles.{name}.bodies", file)
+            vehicles.append(veh)
+            states.update(st)
+    _check_impact_law(d["impact"], problems, file)
     runout = None
     if d["runout"] is not None:
         raw_runout = data.get("runout") if isinstance(data.get("runout"), dict) else {}
-        runout = _build_runout(d["runout"], vehicles, d["vehicles"], file, raw_runout)
+        with problems.each():
+            runout = _build_runout(d["runout"], vehicles, d["vehicles"], file, raw_runout)
+    problems.raise_any()
     approach_inputs = {}
     for veh in vehicles:
         v = d["vehicles"][veh.name]
@@ -1174,20 +1260,7 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None, approac
         vehicles.append(Vehicle(bname, (Body(bname, math.inf, math.inf),)))
         states[bname] = BodyState(point, 0.0, (0.0, 0.0), 0.0)
     law = imp["tangential"]
-    if law == "ratio" and imp["mu"] is None:
-        raise _err('tangential = "ratio" needs mu (the impulse ratio P_t/P_n), e.g. mu = 0.3', "impact.mu", file)
-    if law == "fraction" and imp["mu_fraction"] is None:
-        raise _err('tangential = "fraction" needs mu_fraction (mu as a share of mu_max, 0 to 1), e.g. '
-                   'mu_fraction = 0.85', "impact.mu_fraction", file)
-    if law == "friction" and imp["friction"] is None:
-        raise _err('tangential = "friction" needs friction (f >= 0), e.g. friction = 0.6', "impact.friction", file)
-    for k, needed in (("mu", "ratio"), ("mu_fraction", "fraction"), ("friction", "friction")):
-        if imp[k] is not None and law != needed:
-            raise _err(f"{k} = {imp[k]} is given but tangential = {law!r} does not use it "
-                       f'(it belongs to tangential = "{needed}")', f"impact.{k}", file)
     ep = imp["moment_restitution"]
-    if not (ep == -1.0 or 0.0 <= ep <= 1.0):
-        raise _err(f"{ep} is out of range; allowed -1 (no moment impulse) or [0, 1]", "impact.moment_restitution", file)
     value = {"ratio": imp["mu"], "fraction": imp["mu_fraction"], "friction": imp["friction"]}.get(law, 0.0)
     surface = CrushSurface(point, imp["normal"] + nang, imp["restitution"], TangentialLaw(law, value), ep,
                            1 if imp["tangent"] == "ccw" else -1)
@@ -1234,15 +1307,23 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None, approac
                                 imp["body1"], imp["body2"], surface, tuple(constraints), tuple(external))
     except ScenarioError as exc:
         raise ScenarioError(str(exc), field=exc.field, file=file) from None
-    _check_overlap(problem, vehicles, states, imp["overlap_tolerance"], d["scenario"]["units"], file)  # the cause first
-    check_contact_point(problem, imp["contact_tolerance"], d["scenario"]["units"], file)
+    # the geometry at impact, the contact model, the evidence and the map: independent, every error at once
+    later = _Problems(file)
+    with later.each():
+        _check_overlap(problem, vehicles, states, imp["overlap_tolerance"], d["scenario"]["units"], file)  # the cause
+        check_contact_point(problem, imp["contact_tolerance"], d["scenario"]["units"], file)  # first
     if runout is not None:
-        runout = _with_contact(runout, d, vehicles, problem, file)
-    evidence = _build_evidence(d["evidence"], states, file, vehicles,
-                               {n: v["approach"] for n, v in d["vehicles"].items()})
-    if d["evidence"] is not None and d["evidence"]["crush"]:
-        evidence = dataclasses.replace(evidence, crush=_build_crush(d["evidence"]["crush"], d, vehicles, file))
-    map_lines = _build_map_lines(d["map"], file)
+        with later.each():
+            runout = _with_contact(runout, d, vehicles, problem, file)
+    evidence = map_lines = None
+    with later.each():
+        evidence = _build_evidence(d["evidence"], states, file, vehicles,
+                                   {n: v["approach"] for n, v in d["vehicles"].items()})
+        if d["evidence"] is not None and d["evidence"]["crush"]:
+            evidence = dataclasses.replace(evidence, crush=_build_crush(d["evidence"]["crush"], d, vehicles, file))
+    with later.each():
+        map_lines = _build_map_lines(d["map"], file)
+    later.raise_any()
     meta = d["scenario"]
     out = Scenario(file, meta["title"], meta["source"], meta["units"], tuple(vehicles), states, problem, runout,
                    evidence, d, map_lines, {}, approach_inputs)
@@ -1250,6 +1331,30 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None, approac
     if not approaches:
         return out
     return simulate_approaches(out)
+
+
+def _check_impact_law(imp: dict, problems: _Problems, file: str | None) -> None:
+    """The [impact] table's tangential law and its coefficient, and the moment restitution: each error kept."""
+    law = imp["tangential"]
+    with problems.each():
+        if law == "ratio" and imp["mu"] is None:
+            raise _err('tangential = "ratio" needs mu (the impulse ratio P_t/P_n), e.g. mu = 0.3', "impact.mu", file)
+        if law == "fraction" and imp["mu_fraction"] is None:
+            raise _err('tangential = "fraction" needs mu_fraction (mu as a share of mu_max, 0 to 1), e.g. '
+                       'mu_fraction = 0.85', "impact.mu_fraction", file)
+        if law == "friction" and imp["friction"] is None:
+            raise _err('tangential = "friction" needs friction (f >= 0), e.g. friction = 0.6', "impact.friction",
+                       file)
+    for k, needed in (("mu", "ratio"), ("mu_fraction", "fraction"), ("friction", "friction")):
+        with problems.each():
+            if imp[k] is not None and law != needed:
+                raise _err(f"{k} = {imp[k]} is given but tangential = {law!r} does not use it "
+                           f'(it belongs to tangential = "{needed}")', f"impact.{k}", file)
+    ep = imp["moment_restitution"]
+    with problems.each():
+        if not (ep == -1.0 or 0.0 <= ep <= 1.0):
+            raise _err(f"{ep} is out of range; allowed -1 (no moment impulse) or [0, 1]", "impact.moment_restitution",
+                       file)
 
 
 def outline_problem(points) -> str | None:

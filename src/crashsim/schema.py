@@ -107,6 +107,13 @@ class Field:
         of values, e.g. ``(2, 4, 6)``; returned as a tuple.
     example
         An example value as written in a file, for messages and documentation.
+    required_if
+        ``(key, values)``: the field is required when the sibling ``key`` of the same table has
+        one of ``values`` (e.g. ``("state", ("rolling", "braked"))``); validated and documented
+        ("required if state = 'rolling' or 'braked'").
+    unless
+        Sibling keys any one of which stands in for this field when ``required_if`` holds
+        (``cornering_stiffness`` for ``cornering_coefficient``).
     """
 
     name: str
@@ -125,6 +132,8 @@ class Field:
     min_points: int = 1
     example: str | None = None
     counts: tuple[int, ...] = ()
+    required_if: tuple[str, tuple[str, ...]] | None = None
+    unless: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         where = f"Field {self.name!r}"
@@ -157,6 +166,14 @@ class Field:
             raise TypeError(f"{where}: n= (a vector) needs a quantity kind or 'float'")
         if self.points and self.n is None:
             raise TypeError(f"{where}: points=True (a list of points) needs n= (components per point)")
+        if self.required_if is not None:
+            key, values = self.required_if
+            if self.required or self.default is not MISSING:
+                raise TypeError(f"{where}: required_if= goes with an optional field without a default")
+            object.__setattr__(self, "required_if", (str(key), tuple(values)))
+        object.__setattr__(self, "unless", tuple(self.unless))
+        if self.unless and self.required_if is None:
+            raise TypeError(f"{where}: unless= (keys that stand in for this one) goes with required_if=")
         object.__setattr__(self, "counts", tuple(self.counts))
         if self.counts and (self.n is not None or self.points or not isinstance(kind, Kind)):
             raise TypeError(f"{where}: counts= (a list of varying length) needs a quantity kind, without n= or points=")
@@ -522,6 +539,14 @@ def _section(data: object, section: Section, path: str, problems: _Problems) -> 
             hint = f"; e.g. {f.name} = {example}" if example else ""
             problems.append((key, f"missing required key: {f.description} "
                                   f"({_short_type(f)}){hint}"))
+        elif f.required_if is not None and data.get(f.required_if[0]) in f.required_if[1] and not any(
+                k in data for k in f.unless):
+            example = _example(f)
+            hint = f"; e.g. {f.name} = {example}" if example else ""
+            instead = f" (or {' or '.join(f.unless)})" if f.unless else ""
+            problems.append((key, f"missing key{instead}, required with {f.required_if[0]} = "
+                                  f"{toml_repr(data[f.required_if[0]])}: {f.description} ({_short_type(f)}){hint}"))
+            out[f.name] = None
         else:
             out[f.name] = _default(f, key)
     for sub in section.subsections:
@@ -609,6 +634,10 @@ def _field_row(f: Field, path: str) -> tuple[str, str, str, str, str]:
     """(key path, type, required/default, allowed range, description) of one field."""
     if f.required:
         need = "required"
+    elif f.required_if is not None:
+        values = " or ".join(f"'{v}'" for v in f.required_if[1])
+        instead = f" (or {' or '.join(f.unless)})" if f.unless else ""
+        need = f"required if {f.required_if[0]} = {values}{instead}"
     elif f.default is MISSING or f.default is None:
         need = "optional"
     else:

@@ -18,7 +18,7 @@ from crashsim.motion import (
     simulate_runout,
     static_loads,
 )
-from crashsim.motion._reduced import simulate_reduced
+from reduced_oracle import simulate_reduced
 from crashsim.vehicles import chain_states
 
 

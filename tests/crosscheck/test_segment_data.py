@@ -22,7 +22,7 @@ def test_segment_data_is_the_stacked_segment_table(engine_name, monkeypatch):
 
     def check(model, integrator, **kw):
         table = integrator.segment_table()
-        ref = engine._segment_arrays(table if table else [(0.0, 0.0, engine._snapshot(0, kw["mode"]))], model)
+        ref = post.segment_arrays(table if table else [(0.0, 0.0, post.mode_snapshot(0, kw["mode"]))], model)
         bounds, arrays = integrator.segment_data(kw["mode"])
         assert [(a, b) for a, b, _ in bounds] == [(a, b) for a, b, _ in table]
         for x, y in zip(ref, arrays, strict=True):
@@ -31,7 +31,7 @@ def test_segment_data_is_the_stacked_segment_table(engine_name, monkeypatch):
         seen["empty"] += not table
         return assemble(model, integrator, **kw)
 
-    monkeypatch.setattr(post, "assemble_scene", check)
+    monkeypatch.setattr(engine, "assemble_scene", check)  # the name the engine calls
     for p in CASES:
         vehicle, initial, wheels, road, options = p.values[0]
         simulate_runout(vehicle, initial, wheels, road, dataclasses.replace(options, engine=engine_name))

@@ -166,10 +166,10 @@ def test_last_frame_is_the_rest_pose_and_limits_hold_every_frame():
         assert (anim.ax.get_xlim(), anim.ax.get_ylim()) == limits
 
 
-@pytest.mark.parametrize("path, legend_below", [(INTERSECTION, True), (WAITING, False)], ids=["wide", "tall"])
-def test_limits_widen_to_poses_outside_the_scene_figure(monkeypatch, path, legend_below):
+@pytest.mark.parametrize("path", [INTERSECTION, WAITING], ids=["wide", "tall"])
+def test_limits_widen_to_poses_outside_the_scene_figure(monkeypatch, path):
     """No shipped scene has a pose outside the static figure's limits: shrink them to provoke it.
-    The legend stays where plot_scene put it (under a wide scene, at the right of a tall one)."""
+    The legend stays inside the axes (the animation's compact legend)."""
     import crashsim.plotting
 
     original = crashsim.plotting.plot_scene
@@ -197,8 +197,9 @@ def test_limits_widen_to_poses_outside_the_scene_figure(monkeypatch, path, legen
     r = fig.canvas.get_renderer()
     leg = anim.ax.get_legend().get_window_extent(r)
     axes = anim.ax.get_window_extent(r)
-    assert (leg.y1 <= axes.y0) == legend_below
-    assert 0 <= leg.x0 and leg.x1 <= fig.bbox.width + 1 and 0 <= leg.y0
+    # the animation's legend is the compact one inside the axes (one line per entry), and stays there
+    assert axes.x0 <= leg.x0 and leg.x1 <= axes.x1 + 1 and axes.y0 <= leg.y0 and leg.y1 <= axes.y1 + 1
+    assert all("\n" not in t.get_text() for t in anim.ax.get_legend().get_texts())
 
 def test_us_units_scale_the_outlines():
     scene = _scene(INTERSECTION)

@@ -96,14 +96,12 @@ def test_batch_equals_single_solves(family):
 @settings(max_examples=max(10, EXAMPLES // 4), deadline=None)  # each example solves >= 512 items
 @given(families())
 def test_large_batch_equals_single_solves(family):
-    """Batches without condition numbers take the compiled kernel (here tiled to REDUCED_MIN
+    """Batches without condition numbers take the compiled kernel (here tiled to 512
     items): the answers of solve_impact, which solves by the same kernel unless it refuses or
     warns (then by the dense path: a different sequence of roundings, so agreement to 1e3 cond
     eps (+1e-12) of the answer's scale, as for the invariance tests)."""
-    from crashsim.impact import core
-
     problems = [s.problem for s in family]
-    n = max(getattr(core, "REDUCED_MIN", 512), len(problems))
+    n = max(512, len(problems))
     batch = ImpactBatch.from_problem(problems[0], n)
     compiled = [compile_problem(p)[1] for p in problems]
     for f in fields(compiled[0]):

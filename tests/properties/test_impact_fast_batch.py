@@ -1,10 +1,8 @@
-"""Property: the batch solvers (elimination; the compiled kernel) give the dense solver's answers.
+"""Property: the compiled batch solver gives the dense solver's answers.
 
-``core.solve_arrays(method="reduced")`` solves by ``_solve_chunk_reduced`` (hitch and
-constraint impulses eliminated by a Cholesky factorisation, the 3 x 3 contact system by
-pivoted elimination); ``method="compiled"`` (the default without ``condition=True``) by the
+``core.solve_arrays(method="compiled")`` (the default without ``condition=True``) solves by the
 numba kernel of ``crashsim.impact.kernel`` (the dense algorithm item by item);
-``condition=True`` goes through ``_solve_chunk`` (equilibrated K x K inverses). All must return
+``condition=True`` goes through ``_solve_chunk`` (equilibrated K x K inverses). Both must return
 the same dict: keys, shapes, dtypes, the ``ok`` rule (finite and 1-norm condition of the
 equilibrated system < COND_LIMIT), NaN for not-ok items, mu_max NaN where the no-slide system
 is not ok, the friction fallback (slide against the initial slip), the ratio law independent
@@ -60,7 +58,7 @@ from impact_scenes import EXAMPLES, KINDS, SETTINGS, scenes, structures
 from crashsim import (Body, BodyState, CrushSurface, ImpactBatch, ImpactProblem, TangentialLaw, Vehicle,
                       VelocityConstraint)
 from crashsim.impact import compile_problem, core
-from crashsim.impact.core import COND_LIMIT, MU_MAX_LIMIT, REDUCED_MIN
+from crashsim.impact.core import CHUNK, COND_LIMIT, MU_MAX_LIMIT
 
 EPS = float(np.finfo(float).eps)
 RTOL = 1e-10
@@ -260,22 +258,22 @@ def _assert_items_agree(S, A, ref, got, idx, tol, what):
     assert np.all(np.abs(c_a[fin] - c_b[fin]) <= t[fin] * c_a[fin]), (f"{what}: condition_1norm", c_a, c_b)
 
 
-def check_agreement(S, A, dense, red, ns):
-    """dense, red: solve_arrays(method='dense' / 'reduced') of (S, A); ns: the dense no-slide solve."""
+def check_agreement(S, A, dense, got, ns):
+    """dense, got: solve_arrays(method='dense' / 'compiled') of (S, A); ns: the dense no-slide solve."""
     K = S.n_unknowns
     B = A.size
-    assert set(dense) == set(red) == set(SOLVE_KEYS)
+    assert set(dense) == set(got) == set(SOLVE_KEYS)
     for k in SOLVE_KEYS:
-        assert red[k].shape == dense[k].shape and red[k].dtype == dense[k].dtype, k
-    np.testing.assert_array_equal(red["ke_before"], dense["ke_before"])
-    np.testing.assert_array_equal(red["normal"], dense["normal"])
-    np.testing.assert_array_equal(red["tangent"], dense["tangent"])
+        assert got[k].shape == dense[k].shape and got[k].dtype == dense[k].dtype, k
+    np.testing.assert_array_equal(got["ke_before"], dense["ke_before"])
+    np.testing.assert_array_equal(got["normal"], dense["normal"])
+    np.testing.assert_array_equal(got["tangent"], dense["tangent"])
     _, _, v, _ = _scales(S, A, dense)
-    assert np.all(np.abs(red["closing_velocity"] - dense["closing_velocity"]) <= 1e-13 * v)
+    assert np.all(np.abs(got["closing_velocity"] - dense["closing_velocity"]) <= 1e-13 * v)
 
     tol = _tol(K, dense["condition_1norm"])
     tol_ns = _tol(K, ns["condition_1norm"])
-    border_ok = _near_limit(dense["condition_1norm"]) | _near_limit(red["condition_1norm"]) | _near_limit(
+    border_ok = _near_limit(dense["condition_1norm"]) | _near_limit(got["condition_1norm"]) | _near_limit(
         ns["condition_1norm"])
     border = border_ok.copy()
     mu_max = ns["mu_max"]
@@ -289,8 +287,8 @@ def check_agreement(S, A, dense, red, ns):
 
     # flags, NaN patterns: identical away from the thresholds
     plain = np.nonzero(~border)[0]
-    np.testing.assert_array_equal(red["ok"][plain], dense["ok"][plain])
-    ok = dense["ok"] & red["ok"]
+    np.testing.assert_array_equal(got["ok"][plain], dense["ok"][plain])
+    ok = dense["ok"] & got["ok"]
     if S.tangential == "ratio":
         _, _, vv, _ = _scales(S, A, dense)
         thr = 1e-9 * (1.0 + np.abs(_u0_t(S, A)))
@@ -298,44 +296,44 @@ def check_agreement(S, A, dense, red, ns):
         flag = np.nonzero(~border & ~near)[0]
     else:
         flag = plain
-    np.testing.assert_array_equal(red["sliding"][flag], dense["sliding"][flag])
+    np.testing.assert_array_equal(got["sliding"][flag], dense["sliding"][flag])
     for k in ("velocity", "yaw_rate", "impulses", "mu", "separation_normal", "separation_tangential", "ke_after"):
         bad = ~dense["ok"][plain]
-        assert np.all(np.isnan(red[k][plain][bad])) and np.all(np.isnan(dense[k][plain][bad])), k
-    assert np.all(red["condition_1norm"][plain][~dense["ok"][plain]] >= COND_LIMIT)
+        assert np.all(np.isnan(got[k][plain][bad])) and np.all(np.isnan(dense[k][plain][bad])), k
+    assert np.all(got["condition_1norm"][plain][~dense["ok"][plain]] >= COND_LIMIT)
     ns_plain = np.nonzero(~border_ok)[0]
-    np.testing.assert_array_equal(np.isnan(red["mu_max"][ns_plain]), np.isnan(ns["mu_max"][ns_plain]))
+    np.testing.assert_array_equal(np.isnan(got["mu_max"][ns_plain]), np.isnan(ns["mu_max"][ns_plain]))
 
     # mu_max, from the no-slide solve, to that solve's tolerance
-    fin = np.nonzero(np.isfinite(mu_max) & np.isfinite(red["mu_max"]))[0]
+    fin = np.nonzero(np.isfinite(mu_max) & np.isfinite(got["mu_max"]))[0]
     if len(fin):
         P_ns, _, _, _ = _scales(S, A, ns)
         pn = np.abs(ns["normal_impulse"][fin])
         sel = pn > tol_ns[fin] * P_ns[fin]
-        a, b = mu_max[fin][sel], red["mu_max"][fin][sel]
+        a, b = mu_max[fin][sel], got["mu_max"][fin][sel]
         assert np.all(np.abs(a - b) <= 2 * tol_ns[fin][sel] * P_ns[fin][sel] * (1 + np.abs(a)) / pn[sel]), "mu_max"
 
     # the numbers, item by item
     same = np.nonzero(ok & ~border)[0]
-    _assert_items_agree(S, A, dense, red, same, tol, "plain items")
+    _assert_items_agree(S, A, dense, got, same, tol, "plain items")
     # friction items at a threshold: the large-batch path's answer must be the dense path's
     # answer of the branch that its own mu_max decides (Eq. 8 and the fallback)
     if S.tangential == "friction":
         edge = np.nonzero(border & ~border_ok & ok)[0]
         if len(edge):
             f = A.law_value
-            mu_r = red["mu_max"]
-            stop_r = np.isfinite(mu_r) & (np.abs(mu_r) <= MU_MAX_LIMIT) & (red["no_slide_normal"] > 0)
+            mu_r = got["mu_max"]
+            stop_r = np.isfinite(mu_r) & (np.abs(mu_r) <= MU_MAX_LIMIT) & (got["no_slide_normal"] > 0)
             stick_r = stop_r & (np.abs(mu_r) <= f)
-            np.testing.assert_array_equal(red["sliding"][edge], ~stick_r[edge])
-            _note(f"{int(np.sum(red['sliding'][edge] != dense['sliding'][edge]))} friction items took the other branch")
+            np.testing.assert_array_equal(got["sliding"][edge], ~stick_r[edge])
+            _note(f"{int(np.sum(got['sliding'][edge] != dense['sliding'][edge]))} friction items took the other branch")
             Sr, Ar = replace(S, tangential="ratio"), A.copy()
             Ar.law_value[:] = f * np.where(stop_r, np.sign(np.nan_to_num(mu_r)), -np.sign(_u0_t(S, A)))
             slide = core.solve_arrays(Sr, Ar, method="dense")
             keys = [k for k in SOLVE_KEYS if k not in ("sliding", "mu_max")]
             for i in edge:
                 branch = ns if stick_r[i] else slide
-                _assert_items_agree(S, A, {k: branch[k] for k in keys}, {k: red[k] for k in keys}, np.array([i]),
+                _assert_items_agree(S, A, {k: branch[k] for k in keys}, {k: got[k] for k in keys}, np.array([i]),
                                     _tol(K, branch["condition_1norm"]), "threshold item, own branch")
 
 
@@ -355,20 +353,18 @@ def _solve_all_laws(S, A, seed):
     for law in LAWS:
         S_l, A_l = _with_law(S, A, law, rng, ns)
         dense = core.solve_arrays(S_l, A_l, method="dense")
-        red = core.solve_arrays(S_l, A_l, method="reduced")
-        check_agreement(S_l, A_l, dense, red, ns)
         # the compiled kernel (crashsim.impact.kernel): the dense path's algorithm item by
         # item, so the same tolerances and threshold rules
         comp = core.solve_arrays(S_l, A_l, method="compiled")
         check_agreement(S_l, A_l, dense, comp, ns)
-        yield S_l, A_l, dense, red, comp
+        yield S_l, A_l, dense, comp
 
 
 # ------------------------------------------------------------------------------------ tests
 
 @SETTINGS
 @given(batches(), st.integers(0, 2**32 - 1))
-def test_reduced_path_agrees_with_dense_path(batch, seed):
+def test_compiled_path_agrees_with_dense_path(batch, seed):
     S, A = batch
     for _ in _solve_all_laws(S, A, seed):
         pass
@@ -376,7 +372,7 @@ def test_reduced_path_agrees_with_dense_path(batch, seed):
 
 @SETTINGS
 @given(batches(barrier=True), st.integers(0, 2**32 - 1))
-def test_reduced_path_agrees_against_barriers(batch, seed):
+def test_compiled_path_agrees_against_barriers(batch, seed):
     """Vehicle 2 a rigid barrier (inverse mass and inertia 0), with the same singular cases."""
     S, A = batch
     assert any(S.fixed)
@@ -391,8 +387,8 @@ def test_batches_take_the_compiled_path(batch, seed):
     numbers exactly, at any size (items are independent: repeating them changes nothing);
     condition=True keeps the dense path."""
     S, A = batch
-    for S_l, A_l, dense, red, comp in _solve_all_laws(S, A, seed):
-        reps = -(-(REDUCED_MIN + 37) // A.size)
+    for S_l, A_l, dense, comp in _solve_all_laws(S, A, seed):
+        reps = -(-(CHUNK + 37) // A.size)  # more than one chunk of the dense path
         big = replace(A_l, **{f.name: np.concatenate([getattr(A_l, f.name)] * reps) for f in fields(A_l)})
         out = ImpactBatch(S_l, big).solve()
         for k in SOLVE_KEYS:
@@ -430,7 +426,7 @@ def test_method_argument_is_checked():
     with pytest.raises(ValueError, match="method"):
         core.solve_arrays(S, A, method="lu")
     with pytest.raises(ValueError, match="condition"):
-        core.solve_arrays(S, A, method="reduced", condition=True)
+        core.solve_arrays(S, A, method="compiled", condition=True)
 
 
 @pytest.mark.parametrize("law", LAWS)
@@ -438,8 +434,8 @@ def test_car_between_constraints_at_every_angle(law):
     """tests/unit/test_impact_extremes.py's scene whose no-slide system is singular in exact
     arithmetic (two constraints fix the contact point's tangential velocity), turned through
     600 angles: rounding leaves the no-slide system exactly singular at some angles and nearly
-    singular (cond ~1e16) at others. Both paths: no_slide not ok everywhere; ratio and friction
-    solve (friction slides against the initial slip), mu_max NaN everywhere."""
+    singular (cond ~1e16) at others. Both paths (dense, compiled): no_slide not ok everywhere;
+    ratio and friction solve (friction slides against the initial slip), mu_max NaN everywhere."""
     value = {"no_slide": 0.0, "ratio": 0.1, "friction": 0.5}[law]
     angles = np.linspace(0.0, 2 * math.pi, 600)
     S, A0 = compile_problem(_car_between_constraints(0.0, TangentialLaw(law, value)))
@@ -449,28 +445,23 @@ def test_car_between_constraints_at_every_angle(law):
         for f in fields(Ai):
             getattr(A, f.name)[i] = getattr(Ai, f.name)[0]
     dense = core.solve_arrays(S, A, method="dense")
-    red = core.solve_arrays(S, A, method="reduced")
-    np.testing.assert_array_equal(red["ok"], dense["ok"])
-    np.testing.assert_array_equal(red["sliding"], dense["sliding"])
-    assert np.all(np.isnan(red["mu_max"])) and np.all(np.isnan(dense["mu_max"]))
-    assert red["ok"].all() == (law != "no_slide") and not (law == "no_slide" and red["ok"].any())
-    if law != "no_slide":
-        ns = core.solve_arrays(replace(S, tangential="no_slide"), A, method="dense")
-        check_agreement(S, A, dense, red, ns)
-    if law == "friction":
-        assert red["sliding"].all()
-        np.testing.assert_allclose(np.abs(red["mu"]), value, rtol=1e-12)
     comp = core.solve_arrays(S, A)  # the compiled path
     np.testing.assert_array_equal(comp["ok"], dense["ok"])
     np.testing.assert_array_equal(comp["sliding"], dense["sliding"])
-    assert np.all(np.isnan(comp["mu_max"]))
+    assert np.all(np.isnan(comp["mu_max"])) and np.all(np.isnan(dense["mu_max"]))
+    assert dense["ok"].all() == (law != "no_slide") and not (law == "no_slide" and dense["ok"].any())
     if law != "no_slide":
+        ns = core.solve_arrays(replace(S, tangential="no_slide"), A, method="dense")
         check_agreement(S, A, dense, comp, ns)
+    if law == "friction":
+        assert dense["sliding"].all() and comp["sliding"].all()
+        np.testing.assert_allclose(np.abs(dense["mu"]), value, rtol=1e-12)
+        np.testing.assert_allclose(np.abs(comp["mu"]), value, rtol=1e-12)
 
 
 @pytest.mark.parametrize("law", LAWS)
 def test_chunks_do_not_change_the_answers(law, monkeypatch):
-    """Items are independent: solving in chunks of the reduced path (here 7 chunks of 97 and a
+    """Items are independent: solving in chunks of the dense path (here 7 chunks of 97 and a
     remainder) gives the numbers of one pass, bit for bit, with solvable and singular items
     (conflicting constraints) mixed."""
     value = {"no_slide": 0.0, "ratio": 0.1, "friction": 0.5}[law]
@@ -484,9 +475,9 @@ def test_chunks_do_not_change_the_answers(law, monkeypatch):
     A.constraint_point[conflict, 1] = A.constraint_point[conflict, 0]
     A.constraint_direction[conflict, 1] = A.constraint_direction[conflict, 0]
     A.constraint_value[conflict, 1] = 0.5
-    one = core.solve_arrays(S, A, method="reduced")
-    monkeypatch.setattr(core, "REDUCED_CHUNK", 97)
-    chunked = core.solve_arrays(S, A, method="reduced")
+    one = core.solve_arrays(S, A, method="dense")
+    monkeypatch.setattr(core, "CHUNK", 97)
+    chunked = core.solve_arrays(S, A, method="dense")
     for k in SOLVE_KEYS:
         np.testing.assert_array_equal(chunked[k], one[k], err_msg=k)
     assert not one["ok"].all()
@@ -498,8 +489,7 @@ def test_empty_batch():
     A = A0.repeat(2)
     A = replace(A, **{f.name: getattr(A, f.name)[:0] for f in fields(A)})
     dense = core.solve_arrays(S, A, method="dense")
-    red = core.solve_arrays(S, A, method="reduced")
     comp = core.solve_arrays(S, A, method="compiled")
     for k in SOLVE_KEYS:
-        assert red[k].shape == dense[k].shape and red[k].shape[0] == 0, k
+        assert dense[k].shape[0] == 0, k
         assert comp[k].shape == dense[k].shape and comp[k].dtype == dense[k].dtype, k

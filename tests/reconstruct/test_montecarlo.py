@@ -259,3 +259,27 @@ def test_cli_accept(data, tmp_path, capsys):
     f.write_text(tomli_w.dumps({**bare, "uncertainty": dict(SPEC, samples=4)}))
     assert main(["mc", str(f), "--accept", "--quiet"]) == 2
     assert "--accept" in capsys.readouterr().err
+
+
+def test_samples_at_the_tolerance_of_their_evidence_checks(data):
+    """[uncertainty] tolerance = "evidence": the samples integrate at the loosest rtol whose error
+    bound stays at 1 % of the smallest tolerance of the run-out's evidence checks (at most 1e-4);
+    their rest positions move by less than that share of the tolerance against the file's
+    tolerance, and every verdict is the same."""
+    from crashsim.reconstruct.tolerance import LOOSEST_RTOL
+
+    a = monte_carlo(data, SPEC, workers=1, progress=False, engine=ENGINE)
+    b = monte_carlo(data, dict(SPEC, tolerance="evidence"), workers=1, progress=False, engine=ENGINE)
+    assert a.tolerance is None and b.tolerance is not None and b.tolerance.changed
+    assert b.tolerance.file_rtol == a.nominal.scenario.runout.options.rtol
+    assert a.nominal.scenario.runout.options.rtol < b.tolerance.rtol <= LOOSEST_RTOL
+    assert b.nominal.scenario.runout.options.rtol == b.tolerance.rtol
+    assert "run-out tolerance of the samples: rtol" in b.report() and b.to_dict()["tolerance"]["rtol"] == b.tolerance.rtol
+    tol = min(r.tolerance for r in a.nominal.scenario.evidence.rest)
+    assert np.array_equal(a.inputs, b.inputs)
+    keys = [k for k in a.outputs if k.startswith("rest_x.") or k.startswith("rest_y.")]
+    assert keys
+    for k in keys:
+        assert np.max(np.abs(a.outputs[k] - b.outputs[k])) < 0.01 * tol, k
+    for k in a.checks:
+        assert np.array_equal(a.checks[k][1], b.checks[k][1]), k

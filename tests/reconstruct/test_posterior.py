@@ -284,7 +284,8 @@ def test_the_shipped_fit_scene_has_a_valid_posterior_table():
     raw = load_toml(Path(__file__).resolve().parents[2] / "scenarios" / "fit" / "intersection_fit.toml")
     spec = PosteriorSpec.from_dict(raw["posterior"])
     spec.check(len(raw["fit"]["unknowns"]))
-    assert spec.start == "fit" and spec.prior == "fit" and spec.move == "stretch"
+    assert spec.start == "fit" and spec.prior == "fit" and spec.move == "de"
+    assert spec.ess == 1000 and spec.tolerance == "evidence" and spec.steps > spec.burn_steps
 
 
 def test_logpdf_of_the_distributions():
@@ -329,3 +330,62 @@ def test_a_burn_in_shorter_than_the_climb_warns(caplog):
     assert any(r.name == "crashsim" and f"settles at step {s}" in r.getMessage() for r in caplog.records)
     later = run_posterior(rebound(steps=s + 60, burn=s, init_scale=0.001), workers=1, progress=False, engine=ENGINE)
     assert not [w for w in later.warnings if "settles only" in w]
+
+
+def test_a_target_effective_sample_size_stops_the_chain_where_it_is_met():
+    """With ``ess`` the chain stops at the first check that meets it (every unknown >= ess
+    effective samples, 50 tau kept, a burn-in of two tau); the chain up to there is the same as a
+    chain of fixed length with the same seed (stopping does not change what was drawn)."""
+    target = dict(walkers=8, steps=3000, seed=5, init_scale=0.1, move="de")
+
+    def scene(**kw):
+        data = rebound(**{**target, **kw})
+        del data["posterior"]["burn"]  # the default: a quarter of the steps run
+        return data
+
+    res = run_posterior(scene(ess=400, check_every=50), workers=1, progress=False, engine=ENGINE)
+    assert res.steps < 3000 and res.steps % 50 == 0
+    assert np.all(res.ess >= 400) and res.success, res.warnings
+    kept = res.samples.shape[0] // 8
+    assert kept >= 50 * float(np.max(res.tau)) and res.spec.burn_steps == res.steps // 4
+    assert f"met at step {res.steps}" in res.report()
+    # the check one step earlier did not meet it: the stop is the first that does
+    fixed = run_posterior(scene(steps=res.steps), workers=1, progress=False, engine=ENGINE)
+    assert np.array_equal(fixed.chain, res.chain)
+    from crashsim.reconstruct.posterior import _enough
+
+    z = list((res.chain - LO) / (HI - LO))
+    assert _enough(z, res.spec) and not _enough(z[:res.steps - 50], res.spec)
+
+
+def test_samples_integrate_at_the_tolerance_their_evidence_needs():
+    """The rule: rtol = 0.01 sigma / D (D the longest CG path), never tighter than the file's, at
+    most 1e-4; atol scaled with it. Here sigma = 0.2 m and the rebound slides d ~ 1.9 m: the rule
+    asks 1.06e-3, capped at 1e-4."""
+    from crashsim.reconstruct.tolerance import LOOSEST_RTOL, evidence_tolerance
+
+    res = run_posterior(rebound(), workers=1, progress=False, engine=ENGINE)
+    tol = res.tolerance
+    assert tol is not None and tol.file_rtol == 1e-8 and tol.rtol == LOOSEST_RTOL
+    assert tol.atol == pytest.approx(tol.file_atol * LOOSEST_RTOL / 1e-8, rel=1e-12)
+    assert "run-out tolerance of the samples: rtol 0.0001 (file 1e-08)" in res.report()
+    assert res.to_dict()["tolerance"]["rtol"] == LOOSEST_RTOL
+    # the sampled scenes run at it: the nominal scene's options
+    assert res.nominal.scenario.runout.options.rtol == LOOSEST_RTOL
+    # "file" keeps the file's tolerance
+    assert run_posterior(rebound(tolerance="file"), workers=1, progress=False, engine=ENGINE).tolerance is None
+
+    class Item:
+        def __init__(self, kind, quantity, sigma):
+            self.kind, self.quantity, self.sigma = kind, quantity, sigma
+
+    scene = res.nominal
+    path = max(b.distance for r in scene.runout.values() for b in r.bodies.values())
+    # a tight sigma: the rule itself, between the file's rtol and the cap
+    got = evidence_tolerance([Item("rest", "length", 0.002)], scene, 1e-8, 1e-10)
+    assert got.rtol == pytest.approx(0.01 * 0.002 / path, rel=1e-12) and got.atol == pytest.approx(got.rtol / 100)
+    # tighter than the file's: the file's stays
+    assert evidence_tolerance([Item("rest", "length", 1e-9)], scene, 1e-8, 1e-10).rtol == 1e-8
+    # evidence the run-out does not reach sets no bound; a looser file tolerance is kept
+    assert not evidence_tolerance([Item("delta-v", "speed", 0.1)], scene, 1e-8, 1e-10).changed
+    assert evidence_tolerance([Item("rest", "length", 1.0)], scene, 1e-3, 1e-5).rtol == 1e-3

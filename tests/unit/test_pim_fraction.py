@@ -1,7 +1,7 @@
 """The PIM convention: the impulse ratio as a share of the critical one (tangential = "fraction").
 
 mu = mu_fraction x mu_max of that very impact. Checked against the no-slide and "ratio" laws
-solved independently, on the dense and the batched (reduced) solver paths, through the scenario
+solved independently, on the dense and the batched (compiled) solver paths, through the scenario
 file (errors included), and as a fit unknown that follows each evaluation's mu_max.
 """
 
@@ -61,7 +61,7 @@ def test_fraction_equals_ratio_at_that_share_of_mu_max(problem, fraction):
 
 
 def test_batched_path_follows_each_items_mu_max(problem):
-    """A batch of different geometries (the reduced solver, B >= 256): mu / mu_max is the
+    """A batch of different geometries (the compiled batch solver): mu / mu_max is the
     fraction in every item while mu_max itself changes."""
     from crashsim.impact.core import solve_arrays
     from crashsim.impact.solve import compile_problem

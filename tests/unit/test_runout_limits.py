@@ -155,3 +155,23 @@ def test_a_run_out_at_rest_says_so_in_the_json(capsys):
     assert main(["run", str(ROOT / "scenarios" / "scenes" / "barrier_15deg.toml"), "--json"]) == 0
     d = json.loads(capsys.readouterr().out)
     assert all(b["at_rest"] is True and "reason" not in b for b in d["runout"]["bodies"].values())
+
+
+def test_the_wall_clock_budget_does_not_count_compiling():
+    """A first run compiles the kernels inside its first call; the budget of max_wall_time counts
+    computing only: numba's compile events (nested ones once) are added back to it."""
+    import time
+
+    from numba.core import event as numba_event
+
+    from crashsim.motion.engine import WallClock
+
+    clock = WallClock(0.5)
+    with numba_event.install_listener("numba:compile", clock):
+        with numba_event.trigger_event("numba:compile"):
+            with numba_event.trigger_event("numba:compile"):  # a callee compiled inside: counted once
+                time.sleep(0.6)
+    assert 0.55 <= clock.compiling < 5.0
+    assert not clock.passed() and clock.remaining() > 0.3
+    time.sleep(0.6)  # computing: counted
+    assert clock.passed()

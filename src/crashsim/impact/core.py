@@ -36,19 +36,18 @@ The system is equilibrated (rows, then columns, scaled to unit max-norm); the ex
 condition number of the equilibrated matrix is reported so an ill-posed configuration is
 visible, and a solution is only returned where it is below :data:`COND_LIMIT`.
 
-Three implementations of the same solve (:func:`solve_arrays` picks one):
+Two implementations of the same solve (:func:`solve_arrays` picks one):
 
 * compiled (:func:`solve_compiled`, :mod:`crashsim.impact.kernel`): the dense path's
   algorithm item by item in a numba kernel (compiled on first use, cached on disk); every call
   without ``condition=True``, and the single solve (:func:`solve_packed`);
 * dense (:func:`_solve_chunk`): the K x K systems formed and inverted as batched numpy arrays;
   every call with ``condition=True`` (the SVD condition number and the equilibrated matrix
-  that :func:`crashsim.impact.solve.solve_impact` diagnoses when it refuses a system);
-* reduced (:func:`_solve_chunk_reduced`): ``method="reduced"`` (numpy, no compiler).
-  The hitch and constraint impulses are eliminated (Cholesky factorisation of their SPD
-  block), the 3 x 3 contact system is solved by pivoted elimination, and the full system's
-  inverse is formed by blocks for the same exact condition number. Same outputs, flags and
-  laws; the numbers agree to about cond * eps (tests/properties/test_impact_fast_batch.py).
+  that :func:`crashsim.impact.solve.solve_impact` diagnoses when it refuses a system).
+
+Both give the same outputs, flags and laws; the numbers agree to about cond * eps
+(tests/properties/test_impact_fast_batch.py). A third, numpy elimination path for large
+batches ("reduced") was removed when the compiled kernel took every batch: it had no caller.
 """
 
 from __future__ import annotations
@@ -315,13 +314,9 @@ def solve_arrays(S: ImpactStructure, A: ImpactArrays, *, condition: bool = False
     condition : bool
         Also compute the 2-norm condition number and return the equilibrated matrix
         (dense path only; see :func:`_solve_chunk`).
-    method : {"auto", "dense", "reduced"}
+    method : {"auto", "dense", "compiled"}
         ``"dense"``: :func:`_solve_chunk` (equilibrated K x K inverses, numpy), in chunks of
-        :data:`CHUNK`. ``"reduced"``: :func:`_solve_chunk_reduced` (the hitch and constraint
-        impulses eliminated, the 3 x 3 contact system by pivoted elimination), in chunks of
-        :data:`REDUCED_CHUNK`: the same equations, laws, ``ok`` rule, keys and shapes, the
-        numbers to about cond * eps; 2-4x faster than dense from a few hundred items on.
-        ``"compiled"``: :func:`solve_compiled` (the dense path's algorithm item by item in a
+        :data:`CHUNK`. ``"compiled"``: :func:`solve_compiled` (the dense path's algorithm item by item in a
         numba kernel, :mod:`crashsim.impact.kernel`; compiled on first use, cached on disk):
         the same outputs, the numbers to about cond * eps. ``"auto"`` (default): compiled
         when ``condition`` is False, dense otherwise.
@@ -331,19 +326,16 @@ def solve_arrays(S: ImpactStructure, A: ImpactArrays, *, condition: bool = False
     dict of ndarray
         See :func:`_solve_chunk`.
     """
-    if method not in ("auto", "dense", "reduced", "compiled"):
-        raise ValueError(f"method must be 'auto', 'dense', 'reduced' or 'compiled', got {method!r}")
-    if method in ("reduced", "compiled") and condition:
+    if method not in ("auto", "dense", "compiled"):
+        raise ValueError(f"method must be 'auto', 'dense' or 'compiled', got {method!r}")
+    if method == "compiled" and condition:
         raise ValueError(f"method={method!r} cannot compute the SVD condition number; use condition=False or 'dense'")
     B = A.size
     if method == "compiled" or (method == "auto" and not condition):
         return solve_compiled(S, A)[0]
-    if method == "reduced":
-        solver, chunk = _solve_chunk_reduced, REDUCED_CHUNK
-    else:
-        def solver(S_, A_):
-            return _solve_chunk(S_, A_, condition)
-        chunk = CHUNK
+    def solver(S_, A_):
+        return _solve_chunk(S_, A_, condition)
+    chunk = CHUNK
     if B <= chunk:
         return solver(S, A)
     parts = []
@@ -502,438 +494,6 @@ def _solve_chunk(S: ImpactStructure, A: ImpactArrays, condition: bool) -> dict[s
             out["condition"] = np.where(ok, np.linalg.cond(Mc), np.inf)
         out["matrix"] = Mc
     return out
-
-
-# --------------------------------------------------------------------------------------------
-# Large batches: the same equations solved by elimination (no dense (B, K, K) LU)
-# --------------------------------------------------------------------------------------------
-
-#: Batches of at least this many items are solved by :func:`_solve_chunk_reduced` when no SVD
-#: condition number is asked for. Below ~100-200 items the reduced path's fixed cost (several
-#: hundred numpy calls on short vectors) exceeds the dense path's; from 256 on it is faster for
-#: every tangential law (CPU time, Table 5 impact, numpy 2.4: 1.1-1.4x at 200, 1.5-2.6x at 500).
-REDUCED_MIN = 256
-
-#: Batch items per chunk of the reduced path: its arrays are batch-last (B,) vectors, so longer
-#: chunks mean fewer numpy calls per item; past ~1e4 the (K, K, chunk) temporaries leave the
-#: cache (Table 5 impact, 1e5 items: 8192 was 10-20 % faster than 2048, 4096 and 16384).
-REDUCED_CHUNK = 8192
-
-
-def _mul(a, b):
-    """a * b where either may be a python float constant (0 and +-1 cost no numpy call)."""
-    if type(a) is float:
-        if a == 0.0:
-            return 0.0
-        if a == 1.0:
-            return b
-        if type(b) is float:
-            return a * b
-        if a == -1.0:
-            return -b
-    elif type(b) is float:
-        if b == 0.0:
-            return 0.0
-        if b == 1.0:
-            return a
-        if b == -1.0:
-            return -a
-    return a * b
-
-
-def _add(a, b):
-    """a + b where either may be the python float 0."""
-    if type(a) is float and a == 0.0:
-        return b
-    if type(b) is float and b == 0.0:
-        return a
-    return a + b
-
-
-def _dot3(e, v):
-    """e . v for 3-tuples of (B,) vectors or float constants."""
-    return _add(_add(_mul(e[0], v[0]), _mul(e[1], v[1])), _mul(e[2], v[2]))
-
-
-def _jacobian_rows(S: ImpactStructure, A: ImpactArrays):
-    """The rows of J, batch-last: ``[{body: (ux, uy, r x u)}, ...]`` in the unknown order.
-
-    Each unknown impulse acts on at most two bodies, so a row is kept as (B,) vectors (python
-    floats for constants) per body instead of a dense (B, K, n, 3) array. Same geometry and
-    the same floating-point operations per entry as :func:`_assemble`.
-    """
-    i1, i2 = S.body1, S.body2
-    pos = A.position.transpose(1, 2, 0)  # (n, 2, B) views
-    na = A.normal_angle
-    nx, ny = np.cos(na), np.sin(na)
-    ts = A.tangent_sign
-    tx, ty = ts * -ny, ts * nx
-    px, py = A.point[:, 0], A.point[:, 1]
-    r1x, r1y = px - pos[i1, 0], py - pos[i1, 1]
-    r2x, r2y = px - pos[i2, 0], py - pos[i2, 1]
-    rows = []
-    for ux, uy in ((nx, ny), (tx, ty)):
-        rows.append({i1: (ux, uy, r1x * uy - r1y * ux), i2: (-ux, -uy, -(r2x * uy - r2y * ux))})
-    rows.append({i1: (0.0, 0.0, 1.0), i2: (0.0, 0.0, -1.0)})
-    for j, (f, r) in enumerate(S.hitches):
-        cf, sf = np.cos(A.heading[:, f]), np.sin(A.heading[:, f])
-        cr, sr = np.cos(A.heading[:, r]), np.sin(A.heading[:, r])
-        pf, pr = A.hitch_front_point[:, j], A.hitch_rear_point[:, j]
-        rfx, rfy = cf * pf[:, 0] - sf * pf[:, 1], sf * pf[:, 0] + cf * pf[:, 1]
-        rrx, rry = cr * pr[:, 0] - sr * pr[:, 1], sr * pr[:, 0] + cr * pr[:, 1]
-        rows.append({f: (1.0, 0.0, -rfy), r: (-1.0, 0.0, rry)})   # x: r x e_x = -r_y
-        rows.append({f: (0.0, 1.0, rfx), r: (0.0, -1.0, -rrx)})   # y: r x e_y = r_x
-    for c, b in enumerate(S.constraint_bodies):
-        dx, dy = np.cos(A.constraint_direction[:, c]), np.sin(A.constraint_direction[:, c])
-        rx, ry = A.constraint_point[:, c, 0] - pos[b, 0], A.constraint_point[:, c, 1] - pos[b, 1]
-        rows.append({b: (dx, dy, rx * dy - ry * dx)})
-    return rows, (nx, ny)
-
-
-def _inv3_pivoted(T):
-    """Inverses of a batch of 3 x 3 matrices T (3, 3, B): Gaussian elimination with partial
-    pivoting, batch-last. A zero pivot gives inf/NaN entries; a rank-deficient matrix gives
-    pivots of rounding size and so entries ~1/eps (the adjugate would not: for rank 1 it is
-    itself of rounding size, and adj / det can look harmless)."""
-    B = T.shape[-1]
-    a = np.zeros((3, 6, B))  # [T | I]
-    a[:, :3] = T
-    a[0, 3] = a[1, 4] = a[2, 5] = 1.0
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        m0, m1, m2 = np.abs(T[0, 0]), np.abs(T[1, 0]), np.abs(T[2, 0])
-        s1 = (m1 > m0) & (m1 >= m2)              # first pivot in row 1
-        s2 = (m2 > m0) & (m2 > m1)               # first pivot in row 2
-        r0 = np.where(s1, a[1], np.where(s2, a[2], a[0]))
-        r1 = np.where(s1, a[0], a[1])
-        r2 = np.where(s2, a[0], a[2])
-        r1 -= (r1[0] / r0[0]) * r0
-        r2 -= (r2[0] / r0[0]) * r0
-        sw = np.abs(r2[1]) > np.abs(r1[1])       # second pivot
-        r1, r2 = np.where(sw, r2, r1), np.where(sw, r1, r2)
-        r2 -= (r2[1] / r1[1]) * r1
-        out = np.empty((3, 3, B))
-        np.divide(r2[3:], r2[2], out=out[2])
-        np.divide(r1[3:] - r1[2] * out[2], r1[1], out=out[1])
-        np.divide(r0[3:] - r0[1] * out[1] - r0[2] * out[2], r0[0], out=out[0])
-    return out
-
-
-def _solve_chunk_reduced(S: ImpactStructure, A: ImpactArrays) -> dict[str, np.ndarray]:
-    """The same answers as :func:`_solve_chunk` (``condition=False``), by elimination.
-
-    Same equations, unknowns, laws (with the friction fallback), ``ok`` rule and outputs;
-    only the linear algebra differs:
-
-    1. The rows of J are kept per body as (B,) vectors (:func:`_jacobian_rows`), and
-       W = J Minv J^T, u0 = J q and u_free = J (q + Minv p_ext) are formed entry by entry,
-       batch-last ((K, K, B): every numpy call works on contiguous (B,) vectors; constant
-       entries such as a hitch row's 0 and 1 cost nothing).
-    2. The hitch and constraint impulses are eliminated. Their block S = W_hh of the system
-       is the same in every tangential law and symmetric positive semi-definite, so an
-       unpivoted Cholesky factorisation gives X = S^-1 [W_hc | rhs_h | I] (Cholesky is
-       invariant under diagonal scaling: no equilibration needed). A non-positive pivot (S
-       singular in floating point: redundant or conflicting constraints) gives NaN.
-    3. What remains is the 3 x 3 Schur complement T = D C + E in (P_n, P_t, M), with
-       C = W_cc - W_ch S^-1 W_hc and D, E the contact laws' row scalings and constants. It is
-       scaled exactly as the dense path equilibrates the full system (rows, then columns of
-       the K x K matrix to unit max-norm) and inverted by Gaussian elimination with partial
-       pivoting (:func:`_inv3_pivoted`). The ratio system (P_t = mu P_n) is the same with
-       row 1 replaced: the ratio law and the friction law's sliding items need no second
-       factorisation, the answer is picked per item with ``np.where``.
-    4. ``condition_1norm`` is the *exact* 1-norm condition number of the same equilibrated
-       K x K matrix as in :func:`_solve`, from its inverse formed by blocks,
-
-           Mat^-1 = [[T^-1, -T^-1 D Y^T], [-Y T^-1, S^-1 + Y T^-1 D Y^T]],  Y = S^-1 W_hc,
-
-       and ``ok`` is the same rule: finite impulses and ``condition_1norm < COND_LIMIT``.
-       Computed by another sequence of roundings, it agrees with the dense path's value to
-       about cond * eps relative, as do the impulses; flags can differ only for items within
-       that band of a threshold (COND_LIMIT, |mu_max| = f, MU_MAX_LIMIT), where either
-       answer is as good as the data (tests/properties/test_impact_fast_batch.py).
-    """
-    B, n = A.mass.shape
-    fixed = S.fixed
-    i1, i2 = S.body1, S.body2
-    h = len(S.hitches)
-    m = 2 * h + len(S.constraint_bodies)
-    K = 3 + m
-    k0 = 3 + 2 * h
-    mass_t = A.mass.T.copy()
-    inertia_t = A.yaw_inertia.T.copy()
-    with np.errstate(divide="ignore"):
-        im = [None if fixed[b] else 1.0 / mass_t[b] for b in range(n)]
-        ii = [None if fixed[b] else 1.0 / inertia_t[b] for b in range(n)]
-    rows, (nx, ny) = _jacobian_rows(S, A)
-    # Minv-scaled rows (what J^T lambda does to each body's velocities)
-    srows = [{b: (_mul(im[b], e[0]), _mul(im[b], e[1]), _mul(ii[b], e[2])) for b, e in row.items() if not fixed[b]}
-             for row in rows]
-
-    W = np.zeros((K, K, B))
-    for k in range(K):
-        for l in range(k, K):
-            acc = 0.0
-            for b, sk in srows[k].items():
-                if b in rows[l]:
-                    acc = _add(acc, _dot3(sk, rows[l][b]))
-            if type(acc) is not float:
-                W[k, l] = acc
-                if l != k:
-                    W[l, k] = acc
-            elif acc != 0.0:
-                W[k, l] = W[l, k] = acc
-
-    vel_t = A.velocity.transpose(1, 2, 0).copy()   # (n, 2, B)
-    w_t = A.yaw_rate.T.copy()                       # (n, B)
-    vel = [(vel_t[b, 0], vel_t[b, 1], w_t[b]) for b in range(n)]
-    pext: dict[int, list] = {}
-    for x, b in enumerate(S.external_bodies):
-        if fixed[b]:
-            continue
-        ix, iy = A.external_impulse[:, x, 0], A.external_impulse[:, x, 1]
-        rx = A.external_point[:, x, 0] - A.position[:, b, 0]
-        ry = A.external_point[:, x, 1] - A.position[:, b, 1]
-        acc = pext.setdefault(b, [0.0, 0.0, 0.0])
-        acc[0], acc[1], acc[2] = acc[0] + ix, acc[1] + iy, acc[2] + (rx * iy - ry * ix)
-    vfree = [(vel[b][0] + im[b] * pext[b][0], vel[b][1] + im[b] * pext[b][1], vel[b][2] + ii[b] * pext[b][2])
-             if b in pext else vel[b] for b in range(n)]
-
-    def row_dot(k, v):
-        acc = 0.0
-        for b, e in rows[k].items():
-            acc = _add(acc, _dot3(e, v[b]))
-        return acc
-
-    u0 = np.zeros((K, B))
-    u_free = np.zeros((K, B))
-    for k in range(K):
-        u0[k] = row_dot(k, vel)
-        u_free[k] = row_dot(k, vfree) if pext else u0[k]
-
-    e, ep = A.restitution, A.moment_restitution
-    inv_ibar = _add(0.0 if fixed[i1] else ii[i1], 0.0 if fixed[i2] else ii[i2])
-    with np.errstate(divide="ignore"):
-        ibar = np.where(inv_ibar > 0, 1.0 / inv_ibar, 0.0)
-    g = (1.0 + ep) * ibar
-
-    # --- eliminate the hitch / constraint impulses: X = S^-1 [W_hc | rhs_h | I] (Cholesky)
-    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        if m:
-            Sb = W[3:, 3:]
-            L = np.zeros((m, m, B))
-            for j in range(m):
-                d = Sb[j, j].copy()
-                for p in range(j):
-                    d -= L[j, p] * L[j, p]
-                d[~(d > 0)] = np.nan            # not positive definite in floating point
-                L[j, j] = np.sqrt(d)
-                for i in range(j + 1, m):
-                    s = Sb[i, j].copy()
-                    for p in range(j):
-                        s -= L[i, p] * L[j, p]
-                    L[i, j] = s / L[j, j]
-            X = np.zeros((m, 4 + m, B))
-            X[:, :3] = W[3:, :3]
-            X[:, 3] = -u_free[3:]
-            if S.constraint_bodies:
-                X[2 * h:, 3] += A.constraint_value.T
-            X[np.arange(m), 4 + np.arange(m)] = 1.0
-            for i in range(m):  # forward: L Z = R
-                for p in range(i):
-                    X[i] -= L[i, p] * X[p]
-                X[i] /= L[i, i]
-            for i in reversed(range(m)):  # backward: L^T X = Z
-                for p in range(i + 1, m):
-                    X[i] -= L[p, i] * X[p]
-                X[i] /= L[i, i]
-            Y, yh, Sinv = X[:, :3], X[:, 3], X[:, 4:]
-            C = W[:3, :3].copy()          # W_cc - W_ch S^-1 W_hc (W symmetric: W_ch = W_hc^T)
-            d3 = np.zeros((3, B))         # W_ch S^-1 rhs_h
-            for p in range(m):
-                C -= W[3 + p, :3, None] * Y[p, None]
-                d3 += W[3 + p, :3] * yh[p]
-        else:
-            Y = yh = Sinv = None
-            C = W[:3, :3]
-            d3 = np.zeros((3, B))
-
-    # --- equilibration of the full K x K system, rows other than the tangential row 1
-    # (the same in the no-slide and the ratio systems). |Mat| rows: 0 and 3.. are |W| rows,
-    # row 2 is |-g W_2 + e' e_2|.
-    absA = np.abs(W)
-    row2 = -g * W[2]
-    row2[2] += ep
-    absA[2] = np.abs(row2)
-    r_sh = absA[:, 0].copy()
-    for j in range(1, K):
-        np.maximum(r_sh, absA[:, j], out=r_sh)
-    r_sh[r_sh == 0] = 1.0
-    absA /= r_sh[:, None]
-    rest = [0] + list(range(2, K))
-    c_sh = absA[0].copy()
-    s_sh = absA[0].copy()
-    for i in rest[1:]:
-        np.maximum(c_sh, absA[i], out=c_sh)
-        s_sh += absA[i]
-    b0 = -e * u0[0] - u_free[0] - d3[0]
-    b2 = g * (u_free[2] + d3[2])
-
-    def solve(mu):
-        """One contact system (mu None: no sliding at separation; else P_t = mu P_n)."""
-        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-            # row 1 of |Mat| and the equilibration scales of this system
-            if mu is None:
-                r1 = r_sh[1]
-                a1 = absA[1]                    # |W_1| / r_1
-            else:
-                amu = np.abs(mu)
-                r1 = np.maximum(amu, 1.0)
-                a1 = np.zeros((K, B))
-                a1[0] = amu / r1
-                a1[1] = 1.0 / r1
-            r = r_sh.copy()
-            r[1] = r1
-            c = np.maximum(c_sh, a1)
-            c[c == 0] = 1.0
-            norm_ms = ((s_sh + a1) / c).max(axis=0)
-            # Schur complement T, right-hand side, D
-            T = np.empty((3, 3, B))
-            T[0] = C[0]
-            T[2] = -g * C[2]
-            T[2, 2] += ep
-            b = np.empty((3, B))
-            b[0] = b0
-            b[2] = b2
-            if mu is None:
-                T[1] = C[1]
-                b[1] = -u_free[1] - d3[1]
-                D1 = 1.0
-            else:
-                T[1, 0] = -mu
-                T[1, 1] = 1.0
-                T[1, 2] = 0.0
-                b[1] = 0.0
-                D1 = 0.0
-            # invert T scaled as the equilibrated system is: Ts = Dr^-1 T Dc^-1
-            sc = r[:3, None] * c[None, :3]
-            Ti = _inv3_pivoted(T / sc) / np.swapaxes(sc, 0, 1)
-            lam = np.empty((K, B))
-            lam[:3] = Ti[:, 0] * b[0] + Ti[:, 1] * b[1] + Ti[:, 2] * b[2]
-            # inverse of the full system by blocks, scaled: (Ms^-1)_ij = c_i (Mat^-1)_ij r_j
-            inv = np.empty((K, K, B))
-            inv[:3, :3] = Ti
-            if m:
-                lam[3:] = yh - (Y[:, 0] * lam[0] + Y[:, 1] * lam[1] + Y[:, 2] * lam[2])
-                TD1 = Ti[:, 1] if D1 == 1.0 else 0.0
-                TD2 = Ti[:, 2] * -g
-                TR = inv[:3, 3:]                              # -T^-1 D Y^T
-                np.multiply(Ti[:, 0, None], Y[None, :, 0], out=TR)
-                if D1 == 1.0:
-                    TR += TD1[:, None] * Y[None, :, 1]
-                TR += TD2[:, None] * Y[None, :, 2]
-                np.negative(TR, out=TR)
-                BL = inv[3:, :3]                              # -Y T^-1
-                np.multiply(Y[:, 0, None], Ti[None, 0], out=BL)
-                BL += Y[:, 1, None] * Ti[None, 1]
-                BL += Y[:, 2, None] * Ti[None, 2]
-                np.negative(BL, out=BL)
-                BR = inv[3:, 3:]                              # S^-1 - Y TR
-                np.subtract(Sinv, Y[:, 0, None] * TR[None, 0], out=BR)
-                BR -= Y[:, 1, None] * TR[None, 1]
-                BR -= Y[:, 2, None] * TR[None, 2]
-            np.abs(inv, out=inv)
-            inv *= c[:, None]
-            norm_inv = (inv.sum(axis=0) * r).max(axis=0)
-            cond = norm_ms * norm_inv
-        cond = np.where(np.isfinite(cond), cond, np.inf)  # max() propagates NaN
-        ok = np.all(np.isfinite(lam), axis=0) & (cond < COND_LIMIT)
-        return lam, ok, cond
-
-    # First the no-sliding system -> mu_max (reported by every law).
-    lam_ns, ok, cond1 = solve(None)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        mu_max = np.where(ok, lam_ns[1] / lam_ns[0], np.nan)
-    pn_no_slide = np.where(ok, lam_ns[0], np.nan)
-    if S.tangential == "no_slide":
-        lam = lam_ns
-        sliding = np.zeros(B, dtype=bool)
-    else:
-        if S.tangential == "ratio":
-            mu_used = A.law_value
-            redo = np.ones(B, dtype=bool)
-        elif S.tangential == "fraction":  # mu follows this impact's mu_max (NaN where it is unknown)
-            mu_used = A.law_value * mu_max
-            redo = np.ones(B, dtype=bool)
-        else:  # friction: keep the no-slide answer where |mu_max| <= f (Eq. 8)
-            stoppable = ok & (lam_ns[0] > 0) & (np.abs(mu_max) <= MU_MAX_LIMIT)
-            redo = ~(stoppable & (np.abs(mu_max) <= A.law_value))
-            mu_used = A.law_value * np.where(stoppable, np.sign(mu_max), -np.sign(u0[1]))
-        lam = lam_ns
-        if np.any(redo):
-            lam_r, ok_r, cond_r = solve(mu_used)
-            lam = np.where(redo, lam_r, lam_ns)
-            ok = np.where(redo, ok_r, ok)  # the answer rests on this solve alone
-            cond1 = np.where(redo, cond_r, cond1)
-        sliding = redo.copy()
-
-    lam = np.where(ok, lam, np.nan)  # an untrustworthy solve gives no numbers, not garbage
-    Q = []
-    for b in range(n):
-        vx, vy, w = vfree[b]
-        if not fixed[b]:
-            for k in range(K):
-                if b in srows[k]:
-                    sx, sy, sw = srows[k][b]
-                    vx = _add(vx, _mul(sx, lam[k]))
-                    vy = _add(vy, _mul(sy, lam[k]))
-                    w = _add(w, _mul(sw, lam[k]))
-        Q.append((vx, vy, w))
-    vout = np.empty((B, n, 2))
-    wout = np.empty((B, n))
-    for b, (vx, vy, w) in enumerate(Q):
-        vout[:, b, 0], vout[:, b, 1], wout[:, b] = vx, vy, w
-    vout[~ok] = np.nan  # as in _solve_chunk, where Minv (p_ext + J^T lambda) is NaN for every body
-    wout[~ok] = np.nan
-    u_after = [np.where(ok, row_dot(k, Q), np.nan) for k in (0, 1)]
-    if S.tangential in ("ratio", "fraction"):
-        # sliding continues through separation unless mu happens to equal mu_max
-        sliding = np.abs(u_after[1]) > 1e-9 * (1.0 + np.abs(u0[1]))
-
-    fixed_a = np.asarray(fixed, dtype=bool)
-    mass = np.where(fixed_a, 0.0, A.mass)
-    inertia = np.where(fixed_a, 0.0, A.yaw_inertia)
-
-    def ke(v, w):
-        vx, vy = v[..., 0], v[..., 1]
-        return 0.5 * mass * (vx * vx + vy * vy) + 0.5 * inertia * w * w
-
-    with np.errstate(invalid="ignore", divide="ignore"):
-        mu = lam[1] / lam[0]
-    lamT = np.ascontiguousarray(lam.T)
-    nvec = np.stack([nx, ny], -1)
-    return {
-        "velocity": vout,
-        "yaw_rate": wout,
-        "impulses": lamT,
-        "normal_impulse": lamT[:, 0],
-        "tangential_impulse": lamT[:, 1],
-        "moment_impulse": lamT[:, 2],
-        "mu": mu,
-        "mu_max": mu_max,
-        "sliding": sliding,
-        "hitch_impulse": lamT[:, 3:k0].reshape(B, h, 2),
-        "constraint_impulse": lamT[:, k0:],
-        "closing_velocity": u0[0],
-        "separation_normal": u_after[0],
-        "separation_tangential": u_after[1],
-        "ke_before": ke(A.velocity, A.yaw_rate),
-        "ke_after": ke(vout, wout),
-        "normal": nvec,
-        "tangent": A.tangent_sign[:, None] * np.stack([-nvec[:, 1], nvec[:, 0]], -1),
-        "ok": ok,
-        "condition_1norm": cond1,
-        "approach_tangential": u0[1],
-        "no_slide_normal": pn_no_slide,
-    }
 
 
 # --------------------------------------------------------------------------------------------

@@ -194,11 +194,28 @@ class ApproachResult:
         v0 = float(np.hypot(*np.asarray(b.sol(0.0))[3:5]))
         return np.where(t < -self.time_to_impact, v0, v)
 
-    def table(self, n: int = 201) -> dict[str, np.ndarray]:
+    def table(self, n: int = 201, *, dt: float | None = None) -> dict[str, np.ndarray]:
         """Time-distance-speed of the first body from perception to impact: ``t`` [s] relative to
-        the impact, ``s`` [m] path distance relative to the impact point, ``v`` [m/s]."""
+        the impact, ``s`` [m] path distance relative to the impact point, ``v`` [m/s].
+
+        ``n`` points over the braking phase after the perception point; or, with ``dt`` [s], every
+        ``dt`` back from the impact (t = 0, -dt, -2 dt, ...) to the perception point, the reaction
+        interval at constant speed included."""
         first = next(iter(self.bodies))
         sol = self.runout.bodies[first].sol
+        if dt is not None:
+            total = self.time_to_impact + self.reaction_time
+            t = -np.arange(int(np.floor(total / dt + 1e-9)), -1, -1) * dt
+            braking = t >= -self.time_to_impact
+            tb = t[braking] + self.time_to_impact
+            s = np.empty_like(t)
+            v = np.full_like(t, self.speed_at_braking)
+            if tb.size:
+                s[braking] = path_length(sol, np.concatenate([[0.0], tb]))[1:] - self.distance  # from braking on
+                sv = np.asarray(sol(tb))
+                v[braking] = np.hypot(sv[3], sv[4])
+            s[~braking] = -self.distance - (-self.time_to_impact - t[~braking]) * self.speed_at_braking
+            return {"t": t, "s": s, "v": v}
         tb = np.linspace(0.0, self.time_to_impact, max(n, 2))
         s_b = path_length(sol, tb)
         t = np.concatenate([[-self.time_to_impact - self.reaction_time], tb - self.time_to_impact])

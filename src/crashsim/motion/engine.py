@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 from typing import Mapping
 
 import numpy as np
+from numba.core import event as numba_event
 from scipy.integrate import BDF, DOP853, LSODA, RK45, Radau
 from scipy.optimize import brentq
 
@@ -105,7 +106,7 @@ class _ScipyIntegrator(_Integrator):
         self.segments: list[dict] = []
         self.energy_scale = None  # the kinetic energy at the start of the run [J]: the work's tolerance scale
 
-    def integrate(self, t, y, D, offsets, deadline, counters, quad, log):
+    def integrate(self, t, y, D, offsets, clock, counters, quad, log):
         k = kernels()
         model = self.model
         M = model.M
@@ -138,7 +139,7 @@ class _ScipyIntegrator(_Integrator):
                 if counters[2] >= max_eval:
                     raise _Budget(k.ST_MAX_EVAL)
                 crossed = counters[2] // _WALL_CHECK_EVALUATIONS != (counters[2] - n_cols) // _WALL_CHECK_EVALUATIONS
-                if (crossed or counters[2] <= n_cols) and time.perf_counter() > deadline:
+                if (crossed or counters[2] <= n_cols) and clock.passed():
                     raise _Budget(k.ST_WALL_TIME)
                 if n_work:
                     out = k.rhs_work(yy, M, phase, D, n) if yy.ndim == 1 else np.stack(
@@ -236,6 +237,37 @@ class _ScipyIntegrator(_Integrator):
         return f"scipy/{self.model.options.method}"
 
 
+class WallClock(numba_event.Listener):
+    """The wall-clock budget of a run (``RunoutOptions.max_wall_time``), without the time numba spends
+    compiling the kernels on a first call: a listener of numba's ``"numba:compile"`` events (installed
+    around each integration) adds it back, so a first run on a busy machine is not stopped for the
+    compiler's time."""
+
+    def __init__(self, budget: float):
+        self.start = time.perf_counter()
+        self.budget = float(budget)
+        self.compiling = 0.0
+        self._depth = 0
+        self._t0 = 0.0
+
+    def on_start(self, event) -> None:
+        if self._depth == 0:
+            self._t0 = time.perf_counter()
+        self._depth += 1
+
+    def on_end(self, event) -> None:
+        self._depth -= 1
+        if self._depth == 0:
+            self.compiling += time.perf_counter() - self._t0
+
+    def remaining(self) -> float:
+        """Seconds of the budget left [s] (negative when it is used up)."""
+        return self.start + self.budget + self.compiling - time.perf_counter()
+
+    def passed(self) -> bool:
+        return self.remaining() < 0.0
+
+
 class _CompiledIntegrator(_Integrator):
     """Segments integrated by the compiled loop (:func:`crashsim.motion.kernels.run`)."""
 
@@ -243,12 +275,12 @@ class _CompiledIntegrator(_Integrator):
         super().__init__(model)
         self.parts: list[tuple] = []
 
-    def integrate(self, t, y, D, offsets, deadline, counters, quad, log):
+    def integrate(self, t, y, D, offsets, clock, counters, quad, log):
         k = kernels()
         model = self.model
         stops = np.array(model.segment_stops, dtype=float)
         out = k.run(float(t), np.ascontiguousarray(y, dtype=float), model.M, D, offsets, stops, GL_NODES, GL_WEIGHTS,
-                    float(deadline), counters, quad)
+                    clock.remaining(), counters, quad)
         status, t_end, y_end = int(out[0]), float(out[1]), np.array(out[2])
         self.parts.append(out[3:17])
         lg_t, lg_rec, geo = out[17], out[18], out[19]
@@ -444,13 +476,15 @@ def _log_records(model: SceneModel, t: float, recs, log: list) -> None:
             word = "enter" if kind == k.LOG_ZONE_ENTER else "exit"
             zone = model.road.zones[j]
             veh = model.vehicle_of_body(spec.body_index).name
-            log.append(RunoutEvent(t, f"zone_{word}", f"wheel {spec.key} {word}s zone {j} {zone.name!r}", 0.0, (veh,),
-                                   {"wheel": spec.key, "zone": zone.name, "zone_index": j, "friction": zone.mu}))
+            log.append(RunoutEvent(t, f"zone_{word}", f"wheel {spec.label} {word}s zone {j} {zone.name!r}", 0.0,
+                                   (veh,), {"wheel": spec.key, "label": spec.label, "zone": zone.name, "zone_index": j,
+                                            "friction": zone.mu}))
         elif kind == k.LOG_SCHEDULE:
             changing = tuple(v.name for v in model.vehicles if any(abs(tc - t) < 1e-12
                                                                   for tc in model.resolved[v.name].change_times))
             changes = _wheel_changes(model, changing, t)
-            what = "; ".join(f"{key}: {a} -> {b}" for key, a, b in changes)
+            labels = {w.key: w.label for w in model.specs}  # the axles' names from the file
+            what = "; ".join(f"{labels.get(key, key)}: {a} -> {b}" for key, a, b in changes)
             log.append(RunoutEvent(t, "schedule", "wheel settings change" + (f" ({what})" if what else ""),
                                    0.0, changing, {"changes": [list(c) for c in changes]}))
         elif kind in (k.LOG_STOP_CLOSED, k.LOG_STOP_IMPACT, k.LOG_STOP_OPEN):
@@ -658,7 +692,7 @@ def run_model(model: SceneModel, initial: Mapping[str, BodyState], *, lean=None)
     log: list[RunoutEvent] = []
     _log_records(model, 0.0, k.settle_at(y, M, D), log)
     integrator = _CompiledIntegrator(model) if o.engine == "compiled" else _ScipyIntegrator(model)
-    deadline = time.perf_counter() + o.max_wall_time
+    clock = WallClock(o.max_wall_time)
     counters = np.zeros(3, dtype=np.int64)
     npairs = len(model.pairs)
     quad = np.zeros(model.n_bodies + 3 * model.n_wheels + npairs)
@@ -666,7 +700,8 @@ def run_model(model: SceneModel, initial: Mapping[str, BodyState], *, lean=None)
     t = 0.0
     names = _status_names()
     while True:
-        code, t, y, geo = integrator.integrate(t, y, D, offsets, deadline, counters, quad, log)
+        with numba_event.install_listener("numba:compile", clock):
+            code, t, y, geo = integrator.integrate(t, y, D, offsets, clock, counters, quad, log)
         if code != k.ST_IMPACT:
             break
         if len(impacts) >= o.max_impacts:

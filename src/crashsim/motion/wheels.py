@@ -39,6 +39,8 @@ from ..vehicles import Vehicle
 
 __all__ = [
     "WHEEL_STATES",
+    "axle_label",
+    "wheel_labels",
     "SIDES",
     "WheelSetting",
     "ScheduledChange",
@@ -249,10 +251,33 @@ class WheelSpec:
     side: str
     position: tuple[float, float]
     tyres: int
+    label: str = ""
+
+    def __post_init__(self) -> None:
+        if not self.label:
+            object.__setattr__(self, "label", self.key)
+
+
+def axle_label(body, index: int) -> str:
+    """How reports name an axle of ``body``: its name from the file where it has one that is unique in the
+    body and not a number (so that ``<body>/<label>`` still selects it, see :func:`select_wheels`), else
+    its index."""
+    names = [a.name for a in body.axles]
+    name = names[index]
+    if name and names.count(name) == 1 and not name.strip().isdigit() and "/" not in name:
+        return name
+    return str(index)
+
+
+def wheel_labels(vehicles) -> dict[str, str]:
+    """Wheel key (``"trailer/1/right"``) -> the name reports and CSV files give it (``"trailer/axle 2/right"``,
+    the axle's name from the file), for every wheel of ``vehicles``."""
+    return {w.key: w.label for v in vehicles for w in enumerate_wheels(v)}
 
 
 def enumerate_wheels(vehicle: Vehicle) -> tuple[WheelSpec, ...]:
-    """All tyre contacts of a vehicle, body by body, axle by axle, left then right."""
+    """All tyre contacts of a vehicle, body by body, axle by axle, left then right; each with its
+    ``key`` (``<body>/<axle index>/<side>``) and the ``label`` reports show (the axle's name)."""
     out = []
     for bi, body in enumerate(vehicle.bodies):
         for ai, axle in enumerate(body.axles):
@@ -268,6 +293,7 @@ def enumerate_wheels(vehicle: Vehicle) -> tuple[WheelSpec, ...]:
                         side=side,
                         position=(float(axle.x), float(y)),
                         tyres=2 if axle.dual else 1,
+                        label=f"{body.name}/{axle_label(body, ai)}/{side}",
                     )
                 )
     return tuple(out)

@@ -65,6 +65,7 @@ from ..report import fmt
 from ..scene.run import run_scene
 from ..schema import interval_text
 from .overrides import INVERSE_SECTIONS, ScenarioOverrides, default_engine, file_contents, parse_value, resolve_path
+from .tolerance import evidence_tolerance, tolerance_items, with_tolerance
 
 __all__ = ["InputDistribution", "UncertaintySpec", "MCResult", "monte_carlo", "sample_inputs", "load_results",
            "DEFAULT_PERCENTILES", "DEFAULT_SAMPLE_TIME_LIMIT"]
@@ -183,6 +184,7 @@ class UncertaintySpec:
     inputs: tuple[InputDistribution, ...]
     samples: int = 1000
     seed: int = 0
+    tolerance: str = "file"
 
     @property
     def paths(self) -> tuple[str, ...]:
@@ -226,10 +228,11 @@ class UncertaintySpec:
             if dist.path in seen:
                 raise ScenarioError(f"{dist.path!r} is given twice", field=f"uncertainty.inputs[{i}].path", file=file)
             seen.add(dist.path)
-        return cls(tuple(out), samples=d["samples"], seed=d["seed"])
+        return cls(tuple(out), samples=d["samples"], seed=d["seed"], tolerance=d["tolerance"])
 
     def to_dict(self) -> dict:
-        return {"samples": self.samples, "seed": self.seed, "inputs": [dict(d.__dict__) for d in self.inputs]}
+        return {"samples": self.samples, "seed": self.seed, "tolerance": self.tolerance,
+                "inputs": [dict(d.__dict__) for d in self.inputs]}
 
 
 #: Largest share of a normal distribution outside its input's allowed range that is cut off
@@ -489,6 +492,7 @@ class MCResult:
     accepted_percentiles: dict = field(default_factory=dict)
     input_percentiles: dict = field(default_factory=dict)
     accepted_input_percentiles: dict = field(default_factory=dict)
+    tolerance: Any = None  # SampleTolerance when [uncertainty] tolerance = "evidence" chose it
 
     @property
     def n_done(self) -> int:
@@ -541,6 +545,7 @@ class MCResult:
             "n": self.n, "n_done": self.n_done, "n_failed": self.n_failed, "n_resumed": self.n_resumed,
             "seed": self.seed, "engine": self.engine, "backend": self.backend, "workers": self.workers,
             "elapsed": self.elapsed, "out_path": self.out_path, "spec": self.spec.to_dict(),
+            "tolerance": None if self.tolerance is None else self.tolerance.to_dict(),
             "percentiles": {k: {q: fin(v) for q, v in p.items()} for k, p in self.percentiles.items()},
             "pass_share": self.pass_share,
             "tornado": self.tornado,
@@ -572,6 +577,8 @@ class MCResult:
         resumed = f", {self.n_resumed} resumed from the results file" if self.n_resumed else ""
         lines.append(f"{self.n_done} of {self.n} samples ({self.n_failed} failed{resumed}); seed {self.seed}; "
                      f"engine {self.engine}; {self.backend}, {self.workers} worker(s); {self.elapsed:.1f} s")
+        if self.tolerance is not None:
+            lines.append(f"run-out tolerance of the samples: {self.tolerance.rule}")
         lines.append("")
         lines.append("Uncertain inputs")
         output_show = show
@@ -663,8 +670,10 @@ class MCResult:
 
 def _run_hash(data: dict, spec: UncertaintySpec) -> str:
     forward = {k: v for k, v in data.items() if k not in INVERSE_SECTIONS}
-    blob = json.dumps({"data": forward, "inputs": spec.to_dict()["inputs"], "seed": spec.seed}, sort_keys=True,
-                      default=str)
+    key = {"data": forward, "inputs": spec.to_dict()["inputs"], "seed": spec.seed}
+    if spec.tolerance != "file":  # files written before the setting existed keep their hash
+        key["tolerance"] = spec.tolerance
+    blob = json.dumps(key, sort_keys=True, default=str)
     return hashlib.sha256(blob.encode()).hexdigest()[:16]
 
 
@@ -756,7 +765,7 @@ def _percentiles(columns: dict, mask: np.ndarray, percentiles: Sequence[float], 
 
 
 def _assemble(spec, seed, n, rows: dict, n_resumed, elapsed, engine, backend, workers, out_path, percentiles,
-              swings, nominal, accept: bool = False) -> MCResult:
+              swings, nominal, accept: bool = False, tolerance=None) -> MCResult:
     idx = np.array(sorted(i for i in rows if i < n), dtype=int)
     k = len(spec.inputs)
     X = np.array([rows[i]["x"] for i in idx], dtype=float).reshape(len(idx), k)
@@ -813,7 +822,7 @@ def _assemble(spec, seed, n, rows: dict, n_resumed, elapsed, engine, backend, wo
                     meets_all=meets, accept=bool(accept),
                     accepted_percentiles=_percentiles(outputs, meets, percentiles, angles),
                     input_percentiles=_percentiles(inputs, good, percentiles),
-                    accepted_input_percentiles=_percentiles(inputs, meets, percentiles))
+                    accepted_input_percentiles=_percentiles(inputs, meets, percentiles), tolerance=tolerance)
 
 
 def _swings(data, spec: UncertaintySpec, engine, file, q=(0.05, 0.95)) -> tuple[dict, Any]:
@@ -959,6 +968,17 @@ def monte_carlo(scenario_data: dict, spec: UncertaintySpec | dict | None = None,
     # The median scene and the tornado swings, in this process and first: this also compiles the
     # run-out engine once here, before the worker processes are forked.
     swings, nominal = _swings(scenario_data, spec, engine, file)
+    tolerance = None
+    raw_runout = scenario_data.get("runout")
+    if (spec.tolerance == "evidence" and isinstance(raw_runout, dict) and "accuracy" not in raw_runout
+            and nominal is not None and not isinstance(nominal, Exception) and nominal.scenario.runout is not None):
+        opts = nominal.scenario.runout.options
+        tolerance = evidence_tolerance(tolerance_items(nominal.scenario.evidence), nominal, opts.rtol, opts.atol,
+                                       what="tolerance")
+        if tolerance.changed:  # the samples, the median scene and the swings at the evidence's tolerance
+            scenario_data = with_tolerance(scenario_data, tolerance)
+            payload["data"] = scenario_data
+            swings, nominal = _swings(scenario_data, spec, engine, file)
 
     if dask_address is not None:
         backend, nw = "dask", 0
@@ -1004,7 +1024,7 @@ def monte_carlo(scenario_data: dict, spec: UncertaintySpec | dict | None = None,
         if bar is not None:
             bar.close()
     return _assemble(spec, seed, n, rows, n_resumed, time.perf_counter() - t0, engine, backend, nw,
-                     out_path, percentiles, swings, nominal, accept=accept)
+                     out_path, percentiles, swings, nominal, accept=accept, tolerance=tolerance)
 
 
 def _run_pool(payload, chunks, workers, take) -> None:

@@ -75,7 +75,7 @@ from ..errors import ScenarioError, failure_reason, in_file
 from ..outputs import check_workers
 
 __all__ = ["PosteriorSpec", "PosteriorProblem", "PosteriorResult", "run_posterior", "load_chain",
-           "PERCENTILES", "MIN_KEPT_STEPS", "TAU_FACTOR", "settle_step"]
+           "PERCENTILES", "MIN_KEPT_STEPS", "TAU_FACTOR", "settle_step", "SampleTolerance", "evidence_tolerance"]
 
 _log = logging.getLogger("crashsim")
 
@@ -87,6 +87,7 @@ from ..units import resolve_system
 from .fit import FitProblem, FitSpec, NotAtRest, fit_scene
 from .montecarlo import DEFAULT_SAMPLE_TIME_LIMIT, MCResult, UncertaintySpec, scene_outputs
 from .overrides import INVERSE_SECTIONS, default_engine, file_contents
+from .tolerance import SampleTolerance, evidence_tolerance, with_tolerance
 #: The kept chain should be this many autocorrelation times long (emcee's documentation: "you
 #: should not trust an estimate of tau unless the chain is longer than about 50 tau").
 TAU_FACTOR = 50
@@ -118,6 +119,9 @@ class PosteriorSpec:
     init_scale: float = 0.01
     move: str = "stretch"
     checkpoint_every: int = 50
+    ess: int | None = None
+    check_every: int = 100
+    tolerance: str = "evidence"
 
     @property
     def burn_steps(self) -> int:
@@ -128,7 +132,7 @@ class PosteriorSpec:
     def from_dict(cls, raw: dict | None, *, file: str | None = None) -> "PosteriorSpec":
         d = validate_posterior(raw or {}, file=file)
         return cls(**{k: d[k] for k in ("walkers", "steps", "burn", "thin", "seed", "prior", "start", "init_scale",
-                                        "move", "checkpoint_every")})
+                                        "move", "checkpoint_every", "ess", "check_every", "tolerance")})
 
     def to_dict(self) -> dict:
         return dict(self.__dict__, burn_steps=self.burn_steps)
@@ -414,6 +418,8 @@ class PosteriorResult:
     fit : dict or None
         With ``start = "fit"``: the fit's best values and linearised intervals
         (``{"x", "interval", "confidence", "chi2"}``) for comparison.
+    tolerance : SampleTolerance or None
+        The run-out tolerance of the samples, when ``[posterior] tolerance = "evidence"`` chose it.
     warnings : tuple of str
     success : bool
         False when a diagnostic warns (chain too short, acceptance out of range).
@@ -452,6 +458,7 @@ class PosteriorResult:
     file: str | None = None
     units: str = "SI"
     nominal: Any = field(default=None, repr=False, compare=False)
+    tolerance: SampleTolerance | None = None
 
     @property
     def labels(self) -> list[str]:
@@ -493,6 +500,7 @@ class PosteriorResult:
                             "chain_long_enough": bool(self._long_enough())},
             "evaluations": self.evaluations, "failure_reasons": dict(self.failure_reasons),
             "best": self.best, "fit": self.fit, "warnings": list(self.warnings),
+            "tolerance": None if self.tolerance is None else self.tolerance.to_dict(),
         }
 
     def _long_enough(self) -> bool:
@@ -528,6 +536,12 @@ class PosteriorResult:
         lines.append(f"emcee {sp.move} move: {sp.walkers} walkers x {self.steps} steps{resumed}; burn-in "
                      f"{sp.burn_steps}, thin {sp.thin}: {self.samples.shape[0]} samples kept ({kept} per walker); "
                      f"seed {sp.seed}; start: {'best fit' if sp.start == 'fit' else '[fit] initial values'}")
+        if sp.ess is not None:
+            met = bool(np.all(np.isfinite(self.ess)) and np.all(self.ess >= sp.ess)) and self._long_enough()
+            lines.append(f"target: {sp.ess} effective samples of every unknown, checked every {sp.check_every} steps: "
+                         + (f"met at step {self.steps}" if met else f"not met in {self.steps} steps"))
+        if self.tolerance is not None:
+            lines.append(f"run-out tolerance of the samples: {self.tolerance.rule}")
         lines.append("")
         lines.append(f"Priors ({sp.prior}) and likelihood: -chi^2/2 of the evidence residuals over their sigmas")
         for u, p in zip(self.unknowns, self.priors):
@@ -702,7 +716,7 @@ def _run_hash(data: dict, fit_spec, spec: PosteriorSpec, priors, start: np.ndarr
     key = {"data": forward, "unknowns": [u.__dict__ for u in fit_spec.unknowns],
            "priors": [_prior_dict(p) for p in priors], "walkers": spec.walkers, "seed": spec.seed,
            "move": spec.move, "init_scale": spec.init_scale, "start": [float(v).hex() for v in start],
-           "engine": engine, "sigma_from_tolerance": fit_spec.sigma_from_tolerance,
+           "engine": engine, "sigma_from_tolerance": fit_spec.sigma_from_tolerance, "tolerance": spec.tolerance,
            "mark_points": fit_spec.mark_points}
     return hashlib.sha256(json.dumps(key, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
@@ -862,6 +876,18 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
     else:
         x0 = x_init
     z0 = problem.fit.z_of(x0)
+    tolerance = None
+    sampled_data = scenario_data  # the scenario the samples run: the file's, or at the evidence's tolerance
+    raw_runout = scenario_data.get("runout")
+    if spec.tolerance == "evidence" and isinstance(raw_runout, dict) and "accuracy" not in raw_runout:
+        scene0 = problem.fit.evaluate(z0)[1]  # at the file's tolerance
+        if not isinstance(scene0, Exception) and scene0.scenario.runout is not None:
+            opts = scene0.scenario.runout.options
+            tolerance = evidence_tolerance(problem.fit.evidence.items, scene0, opts.rtol, opts.atol)
+            if tolerance.changed:
+                sampled_data = with_tolerance(scenario_data, tolerance)
+                problem = PosteriorProblem(sampled_data, fit_spec, priors, engine=engine, file=file,
+                                           sample_time_limit=limit)
     derived = problem.derived_keys(z0)   # one scene here first: compiles the engine before any fork
     run_hash = _run_hash(scenario_data, fit_spec, spec, priors, x0, engine)
     ndim = len(fit_spec.unknowns)
@@ -888,9 +914,11 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
     else:
         nw = check_workers(workers) or (os.cpu_count() or 1)
         backend = "processes" if nw > 1 else "serial"
-    payload = {"data": scenario_data, "fit_spec": fit_spec, "priors": priors, "engine": engine, "file": file,
+    payload = {"data": sampled_data, "fit_spec": fit_spec, "priors": priors, "engine": engine, "file": file,
                "time_limit": float(limit), "derived": derived, "hash": run_hash}
     todo = spec.steps - len(z_all)
+    if spec.ess is not None and z_all and _enough(z_all, spec):
+        todo = 0  # a resumed chain that meets its target already
     bar = None
     if progress is True and todo > 0:
         try:
@@ -949,6 +977,8 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
                         bar.update(1)
                     elif callable(progress):
                         progress(len(z_all), spec.steps)
+                    if spec.ess is not None and len(z_all) % spec.check_every == 0 and _enough(z_all, spec):
+                        break
     finally:
         if pool is not None:
             if chain_path is not None and rstate is not None:
@@ -966,9 +996,27 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
         nominal = problem.fit.full_scene(z0)
     except Exception:  # pragma: no cover - evaluated above already
         nominal = None
+    if spec.ess is not None and len(z_all) < spec.steps:
+        spec = replace(spec, steps=len(z_all))  # stopped at its target: the burn-in is a quarter of what ran
     return _assemble(problem, spec, np.array(z_all), np.array(lp_all), np.array(bl_all), np.array(acc_all), derived,
                      x0, failures, evaluations, elapsed0 + time.perf_counter() - t0, engine, backend, nw, n_resumed,
-                     None if chain_path is None else str(chain_path), fit_summary, file, nominal)
+                     None if chain_path is None else str(chain_path), fit_summary, file, nominal, tolerance)
+
+
+def _enough(z_all: list, spec: PosteriorSpec) -> bool:
+    """True when the chain so far meets ``spec.ess``: every unknown has at least that many
+    effective samples, and the kept chain passes the length diagnostics (at least
+    :data:`TAU_FACTOR` autocorrelation times kept, a burn-in of at least two)."""
+    done = len(z_all)
+    burn = replace(spec, steps=done).burn_steps
+    kept = np.asarray(z_all[burn::spec.thin])
+    if kept.shape[0] < MIN_KEPT_STEPS:
+        return False
+    tau, ess = _diagnostics(kept)
+    if not np.all(np.isfinite(tau)):
+        return False
+    tmax = float(np.max(tau))
+    return bool(np.all(ess >= spec.ess) and kept.shape[0] >= TAU_FACTOR * tmax and burn >= 2 * tmax)
 
 
 def _merge(a: dict, b: dict) -> dict:
@@ -979,7 +1027,7 @@ def _merge(a: dict, b: dict) -> dict:
 
 
 def _assemble(problem, spec, z, lp, blobs, acc, derived, x0, failures, evaluations, elapsed, engine, backend, nw,
-              n_resumed, chain_path, fit_summary, file, nominal) -> PosteriorResult:
+              n_resumed, chain_path, fit_summary, file, nominal, tolerance=None) -> PosteriorResult:
     fs = problem.spec
     lower = np.array([u.lower for u in fs.unknowns])
     span = np.array([u.upper - u.lower for u in fs.unknowns])
@@ -1050,4 +1098,4 @@ def _assemble(problem, spec, z, lp, blobs, acc, derived, x0, failures, evaluatio
         best=best, warnings=tuple(warnings), success=bool(success), message=message, engine=engine, backend=backend,
         workers=int(nw), elapsed=float(elapsed), n_resumed=int(n_resumed), chain_path=chain_path, start=np.asarray(x0),
         fit=fit_summary, title=sc.title if sc is not None else "", file=file,
-        units=sc.units if sc is not None else "SI", nominal=None if sc is None else nominal)
+        units=sc.units if sc is not None else "SI", nominal=None if sc is None else nominal, tolerance=tolerance)

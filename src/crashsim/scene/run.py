@@ -20,6 +20,7 @@ from ..motion.approach import simulate_approach
 from ..motion.engine import run_model
 from ..motion.levels import simulate_level
 from ..motion.result import time_grid
+from ..motion.wheels import enumerate_wheels, wheel_labels
 from ..plotting import plot_scene
 from ..report import (format_approach, format_crush, format_events, format_evidence, format_impact,
                       format_joint, format_runout, message_in)
@@ -229,7 +230,7 @@ class SceneResult:
             for name, rep in (self.accuracy or {}).items():
                 text += f"\n  accuracy, vehicle {name}: {rep.message}"
         if self.evidence is not None:
-            text += "\n\n" + format_evidence(self.evidence, system)
+            text += "\n\n" + format_evidence(self.evidence, system, wheel_labels(sc.vehicles))
             text += _format_registrations(self.scenario.evidence, system)
             if any(c.kind == "crush energy" for c in self.evidence.checks):
                 text += "\n\n" + format_crush(self.evidence, system)
@@ -305,20 +306,38 @@ class SceneResult:
         :func:`crashsim.animation.animate_scene`.  Returns the path written."""
         return animate_scene(self, path, **kwargs)
 
+    def _track_at(self, r, key: str, tr, dt: float | None):
+        """A wheel's track (t, points, sliding) at its stored samples, or every ``dt`` [s] from the body's
+        dense solution (the contact point of the rigid body; the sliding flag of the latest sample)."""
+        if dt is None:
+            return tr.t, tr.points, tr.sliding
+        t = self.times(dt)
+        t = t[t <= r.t_end + 1e-12]
+        spec = next(w for v in self.scenario.vehicles for w in enumerate_wheels(v) if w.key == key)
+        x, y, h = np.asarray(r.bodies[tr.body].sol(np.clip(t, 0.0, r.t_end)))[:3]
+        px, py = spec.position
+        points = np.column_stack([x + np.cos(h) * px - np.sin(h) * py, y + np.sin(h) * px + np.cos(h) * py])
+        k = np.clip(np.searchsorted(tr.t, t, side="right") - 1, 0, len(tr.t) - 1)
+        return t, points, np.asarray(tr.sliding)[k]
+
     def write_csv(self, directory: Path, *, system: str | None = None, dt: float | None = None) -> list[Path]:
         """Write CSV files (column headers carry the unit); returns the paths written.
 
         ``impact.csv``: one row per body (velocities before/after, delta-v, yaw rates);
         ``<vehicle>_history.csv``: the run-out history of every body and hitch, at the stored
         samples or every ``dt`` [s] (:meth:`crashsim.motion.RunoutResult.table`);
-        ``<vehicle>_tracks.csv``: every wheel's track (time, x, y, sliding flag);
+        ``<vehicle>_tracks.csv``: every wheel's track (time, x, y, sliding flag), the wheel named by its
+        axle's name from the file (``trailer/axle 2/right``; the index where the axle has no name);
         ``<vehicle>_approach.csv``: a vehicle's approach as a time-distance-speed table (time and
         distance from the impact, the first body's CG; perception, then the braking phase).
+        With ``dt`` every one of them is given every ``dt`` (the approach back from the impact).
+        Numbers carry :data:`CSV_DECIMALS` decimals.
         ``system``: ``"SI"`` (angles in rad) or ``"US"`` (ft, mph, lbf, deg); default the
         scenario's ``units``.
         """
         system = _system(self, system)
         directory = Path(directory)
+        labels = wheel_labels(self.scenario.vehicles)
         if dt is not None:
             self.times(dt)  # checked before anything is written
         directory.mkdir(parents=True, exist_ok=True)
@@ -335,8 +354,7 @@ class SceneResult:
                     continue
                 values = [*b.velocity_before, b.yaw_rate_before, *b.velocity, b.yaw_rate, *b.delta_v,
                           b.delta_v_magnitude, b.pdof]
-                w.writerow([name, b.vehicle] + ["" if v is None else _convert(v, k, system)
-                                                for v, (_, k) in zip(values, cols)])
+                w.writerow([name, b.vehicle] + [csv_number(v, k, system) for v, (_, k) in zip(values, cols)])
         written.append(path)
         for vname, r in (self.runout or {}).items():
             table = r.table(None if dt is None else self.times(dt))
@@ -346,7 +364,7 @@ class SceneResult:
                 name, si = head[:-1].split(" [")
                 kind = _SI_KIND[si]
                 heads.append(f"{name} [{_unit(kind, system)}]")
-                columns.append([_convert(v, kind, system) for v in values.tolist()])
+                columns.append([csv_number(v, kind, system) for v in values.tolist()])
             with path.open("w", newline="") as fh:
                 w = csv.writer(fh)
                 w.writerow(heads)
@@ -358,18 +376,21 @@ class SceneResult:
                 w = csv.writer(fh)
                 w.writerow(["wheel", "t [s]", f"x [{lu}]", f"y [{lu}]", "sliding"])
                 for key, tr in r.wheels.items():
-                    for t, (x, y), sl in zip(tr.t.tolist(), tr.points.tolist(), tr.sliding.tolist()):
-                        w.writerow([key, t, _convert(x, "length", system), _convert(y, "length", system), int(sl)])
+                    t, points, sliding = self._track_at(r, key, tr, dt)
+                    for ti, (x, y), sl in zip(t.tolist(), points.tolist(), sliding.tolist()):
+                        w.writerow([labels.get(key, key), csv_number(ti, "time", system),
+                                    csv_number(x, "length", system), csv_number(y, "length", system), int(sl)])
             written.append(path)
         for vname, a in self.scenario.approaches.items():
             path = directory / f"{vname}_approach.csv"
-            tab = a.table()
+            tab = a.table(dt=dt)
             lu, vu = _unit("length", system), _unit("speed", system)
             with path.open("w", newline="") as fh:
                 w = csv.writer(fh)
                 w.writerow(["t from impact [s]", f"distance from impact [{lu}]", f"speed [{vu}]"])
                 for t, d, v in zip(tab["t"].tolist(), tab["s"].tolist(), tab["v"].tolist()):
-                    w.writerow([t, _convert(d, "length", system), _convert(v, "speed", system)])
+                    w.writerow([csv_number(t, "time", system), csv_number(d, "length", system),
+                                csv_number(v, "speed", system)])
             written.append(path)
         return written
 
@@ -389,6 +410,20 @@ def crush_by_body(evidence) -> dict:
 
 #: The kind of a CSV column from its SI unit label.
 _SI_KIND = {"s": "time", "m": "length", "rad": "angle", "m/s": "speed", "rad/s": "angular_velocity", "N": "force"}
+
+#: Decimals of the CSV numbers, by quantity and unit system: a precision that carries meaning (README, CSV
+#: paragraph). Below the run-out's own accuracy (lengths to 0.1 mm, speeds to 0.1 mm/s, times to 0.1 ms,
+#: headings to 1e-6 rad = 0.06 mdeg, forces to 0.1 N), above the round-off that differs between processors.
+CSV_DECIMALS = {"SI": {"time": 4, "length": 4, "speed": 4, "angle": 6, "angular_velocity": 5, "force": 1},
+                "US": {"time": 4, "length": 4, "speed": 4, "angle": 4, "angular_velocity": 3, "force": 1}}
+
+
+def csv_number(value, kind: str, system: str) -> str:
+    """An SI value as a CSV field in ``system`` units at :data:`CSV_DECIMALS` (empty for None or NaN)."""
+    if value is None or not np.isfinite(value):
+        return ""
+    text = f"{_convert(value, kind, system):.{CSV_DECIMALS[system][kind]}f}"
+    return "0" if float(text) == 0 else text.rstrip("0").rstrip(".")
 
 
 def _unit(kind: str, system: str) -> str:

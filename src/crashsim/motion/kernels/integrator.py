@@ -502,7 +502,7 @@ def append_log(logs, lg_n, t, rec, n_rec):
 
 
 @njit(**JIT)
-def run(t0, y0, M, D, offsets, stops, gl_x, gl_w, deadline, counters, quad):
+def run(t0, y0, M, D, offsets, stops, gl_x, gl_w, budget, counters, quad):
     """Integrate the scene from ``t0`` until rest, a limit, a failure, or a touch that needs an impulse.
 
     The segment loop of both engines (the SciPy engine's Python loop is the same, around SciPy's
@@ -518,7 +518,8 @@ def run(t0, y0, M, D, offsets, stops, gl_x, gl_w, deadline, counters, quad):
     offsets : 2 pi k offsets of the articulation angles (per hitch)
     stops : sorted segment end times [s] (scheduled changes before t_max, then t_max)
     gl_x, gl_w : Gauss-Legendre nodes and weights on [-1, 1]
-    deadline : ``time.perf_counter()`` value after which the run stops (``ST_WALL_TIME``)
+    budget : wall-clock seconds this call may take from its start (``ST_WALL_TIME`` after them); the
+        clock starts here, inside the compiled code, so a first call's compilation is not counted
     counters : int64 array ``(restarts, restarts without progress, nfev)``, carried across calls
     quad : path integrals (module docstring of :func:`quad_integrand`), accumulated in place
 
@@ -538,7 +539,7 @@ def run(t0, y0, M, D, offsets, stops, gl_x, gl_w, deadline, counters, quad):
     """
     n = y0.shape[0]
     t_max = M.cfg[C_TMAX]
-    X = run_context(M, D, n, gl_x, gl_w, quad, deadline)
+    X = run_context(M, D, n, gl_x, gl_w, quad, wall_clock() + budget)
     steps = new_step_store(256, n, M.tab_p.shape[1])
     segs = new_segment_store(16, M, D)
     logs = LogStore(np.zeros(16), np.zeros((16, 5)))

@@ -26,12 +26,12 @@ from typing import Mapping
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from ..errors import ScenarioError
-from ..vehicles import BodyState, Vehicle
-from .dynamics import RunoutModel
-from .options import RunoutOptions
-from .road import Road
-from .wheels import WheelSettings
+from crashsim.errors import ScenarioError
+from crashsim.vehicles import BodyState, Vehicle
+from crashsim.motion.dynamics import RunoutModel
+from crashsim.motion.options import RunoutOptions
+from crashsim.motion.road import Road
+from crashsim.motion.wheels import WheelSettings
 
 __all__ = ["ReducedResult", "simulate_reduced"]
 

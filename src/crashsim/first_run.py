@@ -1,0 +1,165 @@
+"""What a command does on a machine whose kernels are not compiled yet (the first run).
+
+The run-out and impact kernels are numba functions, compiled on first use and cached on disk
+(:mod:`crashsim._jit`). Compiling all of them takes 1-2 minutes on one core; running one
+scene with the same kernel source *interpreted* (numba's ``NUMBA_DISABLE_JIT=1``: the kernels are
+then the plain Python functions they are written as) takes a few seconds, and gives the same
+report to every printed digit (``tests/unit/test_first_run.py``). So a first command that runs one
+scene does not wait for the compiler:
+
+``background`` (the default, ``CRASHSIM_FIRST_RUN`` unset)
+    A single-scene command (:data:`SINGLE_SCENE`: run, plot, animate, export) runs interpreted in a
+    child process, while a detached process compiles the kernels into the cache for the next
+    commands (its log: ``compile.log`` in the cache directory; one compile at a time, guarded by
+    ``compiling.lock``). A command of many scenes (fit, mc, posterior) waits for a compile already
+    under way, else compiles in this process first, with a progress display.
+``wait``
+    Every command compiles first, in this process (the behaviour before; the test suite uses it).
+``interpret``
+    A single-scene command runs interpreted and nothing is compiled.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from ._jit import cache_dir, ready
+from .errors import ScenarioError
+from .warmup import compile_kernels
+
+__all__ = ["POLICIES", "SINGLE_SCENE", "ENV", "policy", "interpreted", "run_interpreted", "start_background_compile",
+           "compile_in_progress", "wait_for_background_compile", "background_main"]
+
+#: Environment variable that chooses the first-run policy.
+ENV = "CRASHSIM_FIRST_RUN"
+POLICIES = ("background", "wait", "interpret")
+#: Commands that compute one scene: cheaper interpreted than compiled on a first run.
+SINGLE_SCENE = ("run", "plot", "animate", "export")
+#: A lock older than this is a compile that died without removing it [s].
+STALE_LOCK = 1800.0
+
+
+def policy() -> str:
+    """The first-run policy from ``$CRASHSIM_FIRST_RUN`` (``background`` when unset)."""
+    value = os.environ.get(ENV, "background").strip().lower() or "background"
+    if value not in POLICIES:
+        raise ScenarioError(f"{ENV} = {value!r} is not a first-run policy; allowed {', '.join(POLICIES)}", field=ENV)
+    return value
+
+
+def interpreted() -> bool:
+    """True in a process whose kernels run interpreted (numba's ``NUMBA_DISABLE_JIT``)."""
+    from numba.core import config
+
+    return bool(config.DISABLE_JIT)
+
+
+def _lock() -> Path:
+    return cache_dir() / "compiling.lock"
+
+
+def compile_in_progress() -> bool:
+    """True while a background compile holds the lock (a live process, a lock younger than :data:`STALE_LOCK`)."""
+    lock = _lock()
+    try:
+        pid = int(lock.read_text().strip() or 0)
+        age = time.time() - lock.stat().st_mtime
+    except (OSError, ValueError):
+        return False
+    if age > STALE_LOCK:
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # pragma: no cover - a live process of another user
+        return True
+    return True
+
+
+def start_background_compile() -> Path | None:
+    """Start a detached process that compiles the kernels (unless one is under way); returns its log file.
+
+    The process outlives this command; it takes the lock itself (:func:`background_main`).
+    """
+    if compile_in_progress():
+        return None
+    log = cache_dir() / "compile.log"
+    try:
+        log.parent.mkdir(parents=True, exist_ok=True)
+        out = open(log, "w")
+    except OSError:  # a cache that cannot be written: nothing would be kept anyway
+        return None
+    with out:
+        env = {k: v for k, v in os.environ.items() if k != "NUMBA_DISABLE_JIT"}
+        kwargs = {"start_new_session": True} if os.name == "posix" else \
+            {"creationflags": getattr(subprocess, "DETACHED_PROCESS", 0)}  # pragma: no cover - Windows
+        subprocess.Popen([sys.executable, "-m", "crashsim.first_run"], stdin=subprocess.DEVNULL, stdout=out,
+                         stderr=subprocess.STDOUT, env=env, close_fds=True, **kwargs)
+    return log
+
+
+def run_interpreted(argv: list[str]) -> int:
+    """Run ``crashsim argv`` in a child process with the kernels interpreted; its exit code."""
+    env = dict(os.environ, NUMBA_DISABLE_JIT="1")
+    return subprocess.call([sys.executable, "-m", "crashsim", *argv], env=env)
+
+
+def wait_for_background_compile(poll: float = 1.0, timeout: float = 3600.0) -> bool:
+    """Wait while a background compile is under way; True if the kernels are ready afterwards."""
+    t0 = time.monotonic()
+    while compile_in_progress() and time.monotonic() - t0 < timeout:
+        time.sleep(poll)
+    return ready()
+
+
+def _take(lock: Path) -> bool:
+    """Create the lock with this process's id, unless a live compile holds it (a stale one is replaced)."""
+    for _ in range(2):
+        try:
+            lock.parent.mkdir(parents=True, exist_ok=True)
+            fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
+        except FileExistsError:
+            if compile_in_progress():
+                return False
+            try:
+                lock.unlink()
+            except OSError:
+                return False
+            continue
+        except OSError:
+            return False
+        with os.fdopen(fd, "w") as f:
+            f.write(str(os.getpid()))
+        return True
+    return False
+
+
+def background_main() -> int:
+    """The detached compile: take the lock, compile every kernel (marking the cache ready), drop the lock."""
+    lock = _lock()
+    if not _take(lock):
+        return 0  # another compile is under way
+    try:
+        t0 = time.perf_counter()
+
+        def say(text):
+            sys.stdout.write(text + "\n")
+            sys.stdout.flush()
+
+        compile_kernels(lambda i, label: say(f"compiling {i + 1}: {label}"))
+        say(f"compiled in {time.perf_counter() - t0:.1f} s")
+    finally:
+        try:
+            lock.unlink()
+        except OSError:  # pragma: no cover
+            pass
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover - the detached process (its output goes to compile.log)
+    raise SystemExit(background_main())

@@ -1,0 +1,268 @@
+"""The case report (``crashsim report FILE -o case.html``): one self-contained HTML file with the inputs and
+their comments, the impacts, the run-out, the evidence, the figures, the program version, the date and the
+SHA-256 of every input file.
+
+* the HTML is well formed (every element closed in order; the standard library's html.parser);
+* no http(s) URL anywhere in it, every figure an embedded data URI;
+* a real headless Chromium renders it to a PDF and a screenshot, with the sections and the figures present
+  in the parsed page and no request made by the page (skipped, with the reason, where Chromium is absent).
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import hashlib
+import html
+import json
+import re
+import shutil
+import subprocess
+from html.parser import HTMLParser
+from pathlib import Path
+
+import pytest
+
+from crashsim.casereport import FILE_COMMENT, input_rows, render_case_report, toml_comments
+from crashsim.cli import main
+from crashsim.reconstruct import run_scene
+from crashsim.scenario import load_scenario, presets
+
+ROOT = Path(__file__).resolve().parents[2]
+SCENE = ROOT / "scenarios" / "scenes" / "intersection_car_trailer_wheels.toml"
+SECTIONS = ("summary", "input-files", "inputs", "impacts", "runout", "events", "energy", "evidence", "figures",
+            "assumptions")
+VOID = {"meta", "link", "img", "br", "hr", "col", "input", "source", "wbr", "area", "base", "embed", "track"}
+
+
+class _WellFormed(HTMLParser):
+    """Every non-void element closed, in order; records ids, img sources and the text."""
+
+    def __init__(self):
+        super().__init__(convert_charrefs=True)
+        self.stack, self.errors, self.ids, self.imgs, self.text = [], [], [], [], []
+        self.doctype = False
+
+    def handle_decl(self, decl):
+        self.doctype = self.doctype or decl.lower() == "doctype html"
+
+    def handle_starttag(self, tag, attrs):
+        a = dict(attrs)
+        if "id" in a:
+            self.ids.append(a["id"])
+        if tag == "img":
+            self.imgs.append(a.get("src", ""))
+        if tag not in VOID:
+            self.stack.append((tag, self.getpos()))
+
+    def handle_startendtag(self, tag, attrs):
+        self.handle_starttag(tag, attrs)
+        if tag not in VOID:
+            self.stack.pop()
+
+    def handle_endtag(self, tag):
+        if not self.stack or self.stack[-1][0] != tag:
+            self.errors.append(f"</{tag}> at {self.getpos()} closes {self.stack[-1] if self.stack else 'nothing'}")
+            return
+        self.stack.pop()
+
+    def handle_data(self, data):
+        self.text.append(data)
+
+
+def _check(text: str) -> _WellFormed:
+    p = _WellFormed()
+    p.feed(text)
+    p.close()
+    assert p.doctype, "no <!DOCTYPE html>"
+    assert not p.errors, p.errors[:5]
+    assert not p.stack, f"unclosed elements: {p.stack[:5]}"
+    assert len(set(p.ids)) == len(p.ids), "repeated ids"
+    return p
+
+
+def test_the_checker_finds_a_broken_page():
+    p = _WellFormed()
+    p.feed("<!DOCTYPE html><html><body><table><tr><td>x</tr></table></body></html>")
+    assert p.errors
+
+
+def test_comments_by_key_path():
+    text = """# the scene
+# of a test
+
+[scenario]
+title = "t"  # trailing
+# above the key
+units = "SI"
+
+[[vehicles.A.bodies]]
+name = "x"   # first body
+axles = [
+  { x = "1 m" },  # not a key
+]
+[[vehicles.A.bodies]]
+# the second body
+mass = "10 kg"
+[impact]  # a table note
+speed = "3 m/s # not a comment"
+"""
+    c = toml_comments(text)
+    assert c[FILE_COMMENT] == "the scene of a test"
+    assert c["scenario.title"] == "trailing"
+    assert c["scenario.units"] == "above the key"
+    assert c["vehicles.A.bodies[0].name"] == "first body"
+    assert c["vehicles.A.bodies[1].mass"] == "the second body"
+    assert c["impact"] == "a table note"
+    assert "impact.speed" not in c and not any("not a key" in v for v in c.values())
+
+
+def test_every_value_of_the_file_is_a_row_with_its_unit():
+    text = SCENE.read_text(encoding="utf-8")
+    import tomllib
+
+    raw = tomllib.loads(text)
+    sc = load_scenario(SCENE)
+    rows = input_rows(raw, toml_comments(text), sc.data, presets())
+    by_key = {r["key"]: r for r in rows}
+    speed = by_key["vehicles.B.speed"]
+    assert (speed["value"], speed["unit"], speed["si"]) == ('"13.41 m/s"', "m/s", "13.41")
+    # values taken from a preset are listed, marked with it
+    preset_rows = [r for r in rows if r["origin"].startswith("preset ")]
+    assert any(r["key"].endswith(".yaw_inertia") and r["si"] == "48000" for r in preset_rows)
+    # every leaf of the file is a row
+    def leaves(node, path=""):
+        if isinstance(node, dict):
+            for k, v in node.items():
+                yield from leaves(v, f"{path}.{k}" if path else k)
+        elif isinstance(node, list) and node and all(isinstance(v, dict) for v in node):
+            for i, v in enumerate(node):
+                yield from leaves(v, f"{path}[{i}]")
+        else:
+            yield path
+    assert set(leaves(raw)) <= set(by_key)
+
+
+@pytest.fixture(scope="module")
+def report(tmp_path_factory):
+    out = tmp_path_factory.mktemp("case") / "case.html"
+    fit = tmp_path_factory.getbasetemp() / "fit.json"
+    fit.write_text(json.dumps({"success": True, "message": "converged", "chi2": 1.5, "dof": 3, "p_value": 0.68,
+                               "confidence": 0.95, "n_agree": 4, "n_starts": 4, "warnings": [],
+                               "unknowns": [{"path": "vehicles.car.speed", "name": "car speed", "kind": "speed",
+                                             "value": 13.41, "stderr": 0.2, "interval": [13.0, 13.8]}]}))
+    assert main(["report", str(SCENE), "-o", str(out), "--fit", str(fit), "--units", "US"]) == 0
+    return out, fit
+
+
+def test_the_report_is_well_formed_and_self_contained(report):
+    out, fit = report
+    text = out.read_text(encoding="utf-8")
+    p = _check(text)
+    for s in SECTIONS + ("fit",):
+        assert s in p.ids, s
+    assert not re.search(r"https?://", text), "an external URL in the page"
+    assert not re.search(r"""(?:src|href)\s*=\s*["'](?!data:|#)""", text), "a link to another file"
+    assert len(p.imgs) >= 3 and all(s.startswith("data:image/svg+xml;base64,") for s in p.imgs)
+    body = html.unescape(" ".join(p.text))
+    # the SHA-256 of every input file, the version, the date
+    for f in (SCENE, fit):
+        assert hashlib.sha256(f.read_bytes()).hexdigest() in body
+    from crashsim import __version__
+
+    assert f"crashsim {__version__}" in body
+    assert dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%d") in body
+    # inputs with units and comments, impact, evidence verdicts, fit, validity notes
+    assert '"13.41 m/s"' in body and "30 mph" in body  # as written, and in the report's units
+    assert "PASS" in body and "Evidence" in body
+    assert "car speed" in body and "29.08 mph to 30.87 mph" in body  # the fit interval (13.0, 13.8 m/s) in mph
+    assert "instantaneous and planar" in body
+
+
+def test_report_options_are_checked_before_work(tmp_path, capsys):
+    assert main(["report", str(SCENE), "-o", str(tmp_path / "case.pdf")]) == 2
+    assert "allowed: .html" in capsys.readouterr().err
+    assert main(["report", str(SCENE), "-o", str(tmp_path / "c.html"), "--mc", str(tmp_path / "none.json")]) == 2
+    assert "--mc" in capsys.readouterr().err
+    bad = tmp_path / "bad.json"
+    bad.write_text("[1, 2]")
+    assert main(["report", str(SCENE), "-o", str(tmp_path / "c.html"), "--posterior", str(bad)]) == 2
+    assert "not a JSON object" in capsys.readouterr().err
+
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="no Chromium on this machine (Debian: apt-get install chromium); "
+                                             ".ci/run installs it")
+def test_chromium_renders_the_report(report, tmp_path):
+    out, _ = report
+    base = [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+            "--disable-component-update", "--disable-sync", "--no-first-run", f"--user-data-dir={tmp_path / 'profile'}",
+            "--host-resolver-rules=MAP * ~NOTFOUND"]
+    url = out.resolve().as_uri()
+    pdf, png, net = tmp_path / "case.pdf", tmp_path / "case.png", tmp_path / "net.json"
+    subprocess.run(base + [f"--log-net-log={net}", f"--print-to-pdf={pdf}", "--no-pdf-header-footer", url],
+                   check=True, capture_output=True, timeout=180)
+    subprocess.run(base + [f"--screenshot={png}", "--window-size=1000,1400", url], check=True, capture_output=True,
+                   timeout=180)
+    dom = subprocess.run(base + ["--dump-dom", url], check=True, capture_output=True, text=True, timeout=180).stdout
+    # the PDF: several pages
+    data = pdf.read_bytes()
+    assert data.startswith(b"%PDF")
+    assert len(re.findall(rb"/Type\s*/Page[^s]", data)) >= 3
+    # the screenshot: a page with text on it, not blank
+    from PIL import Image
+
+    im = Image.open(png).convert("L")
+    assert im.size == (1000, 1400)
+    lo, hi = im.getextrema()
+    assert hi - lo > 150
+    # the page as the browser parsed it: every section and figure
+    for s in SECTIONS:
+        assert f'id="{s}"' in dom, s
+    assert len(re.findall(r'<img src="data:image/svg\+xml;base64,', dom)) >= 3
+    # no request made by the page (the browser's own background requests have no origin)
+    log = json.loads(net.read_text())
+    types = {v: k for k, v in log["constants"]["logEventTypes"].items()}
+    page = [e["params"]["url"] for e in log["events"]
+            if types.get(e["type"]) == "URL_REQUEST_START_JOB" and "url" in e.get("params", {})
+            and e["params"].get("initiator") != "not an origin"]
+    assert not page, page
+
+
+def test_render_without_figures_is_quick_and_names_every_input(tmp_path):
+    scene = run_scene(load_scenario(SCENE))
+    text = render_case_report(scene, input_files=[SCENE], figures=False,
+                              now=dt.datetime(2026, 1, 2, 3, 4, tzinfo=dt.timezone.utc))
+    p = _check(text)
+    assert "figures" not in p.ids
+    assert "2026-01-02 03:04 UTC" in text
+    assert hashlib.sha256(SCENE.read_bytes()).hexdigest() in text
+
+
+def test_monte_carlo_and_posterior_sections_in_the_users_units(tmp_path):
+    """Shaped as ``crashsim mc --json`` and ``crashsim posterior --json`` write them (keys, percentile names)."""
+    from crashsim.reconstruct.montecarlo import OUTPUT_KINDS
+
+    scene = run_scene(load_scenario(SCENE))
+    mc = {"n": 8, "n_done": 8, "n_failed": 0, "seed": 2026, "pass_share": 0.5,
+          "percentiles": {"speed.A": {"p5": 13.4112, "p50": 13.4112, "p95": 13.4112, "mean": 13.4112, "std": 0.0},
+                          "energy_loss.system": {"p5": 0.25, "p50": 0.5, "p95": 0.75, "mean": 0.5, "std": 0.1}}}
+    post = {"success": True, "message": "ok", "warnings": ["chain short"],
+            "diagnostics": {"samples": 100, "acceptance_mean": 0.4, "chain_long_enough": True},
+            "unknowns": [{"path": "runout.road_friction", "name": "road friction", "kind": "dimensionless",
+                          "ess": 120.0, "percentiles": {"p2.5": 0.6, "p50": 0.7, "p97.5": 0.8}}],
+            "derived": [{"key": "speed.A", "kind": "speed", "percentiles": {"p2.5": 13.4112, "p50": 13.4112,
+                                                                              "p97.5": 13.4112}}]}
+    text = render_case_report(scene, input_files=[SCENE], system="US", mc=mc, posterior=post, figures=False,
+                              output_kinds=OUTPUT_KINDS)
+    p = _check(text)
+    assert "monte-carlo" in p.ids and "posterior" in p.ids
+    body = html.unescape(" ".join(p.text))
+    mc_part = body[body.index("Monte Carlo"):body.index("Posterior")]
+    head = mc_part[mc_part.index("Output"):]
+    assert head.index("p5") < head.index("p50") < head.index("p95") < head.index("mean") < head.index("std")
+    assert "30 mph" in mc_part and "0.75" in mc_part  # speed in mph, a share plain
+    post_part = body[body.index("Posterior"):]
+    assert "road friction" in post_part and "0.7" in post_part and "30 mph" in post_part
+    assert "chain short" in post_part

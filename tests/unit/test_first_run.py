@@ -1,0 +1,98 @@
+"""The first run on a machine whose kernels are not compiled (crashsim.first_run).
+
+A single-scene command runs interpreted in a child process (the same kernel source, numba's
+NUMBA_DISABLE_JIT) while a detached process compiles; commands of many scenes compile first. The
+interpreted run must print what the compiled one prints, digit for digit of the report."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from crashsim import first_run
+from crashsim.cli import main
+from crashsim.errors import ScenarioError
+
+ROOT = Path(__file__).resolve().parents[2]
+SCENE = ROOT / "scenarios" / "scenes" / "barrier_15deg.toml"
+
+
+def test_the_policy_comes_from_the_environment(monkeypatch):
+    monkeypatch.delenv(first_run.ENV, raising=False)
+    assert first_run.policy() == "background"
+    monkeypatch.setenv(first_run.ENV, "Wait")
+    assert first_run.policy() == "wait"
+    monkeypatch.setenv(first_run.ENV, "later")
+    with pytest.raises(ScenarioError) as err:
+        first_run.policy()
+    assert "CRASHSIM_FIRST_RUN = 'later'" in str(err.value) and "background, wait, interpret" in str(err.value)
+
+
+def test_an_interpreted_first_run_prints_what_the_compiled_run_prints(tmp_path, capsys):
+    assert main(["run", str(SCENE)]) == 0  # in this process: compiled (the suite's policy is "wait")
+    compiled = capsys.readouterr().out
+    env = dict(os.environ, CRASHSIM_CACHE_DIR=str(tmp_path / "fresh"), CRASHSIM_FIRST_RUN="interpret",
+               PYTHONPATH=os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")]))
+    env.pop("NUMBA_CACHE_DIR", None)
+    out = subprocess.run([sys.executable, "-m", "crashsim", "run", str(SCENE)], env=env, capture_output=True,
+                         text=True, timeout=600)
+    assert out.returncode == 0, out.stderr
+    assert "runs interpreted" in out.stderr
+    assert out.stdout == compiled
+    # nothing compiled, nothing started: no ready marker, no compile log
+    assert not (tmp_path / "fresh" / "compile.log").exists()
+    assert not list((tmp_path / "fresh").rglob("ready-*"))
+
+
+def test_single_scene_commands_run_interpreted_and_start_one_compile(monkeypatch, tmp_path):
+    """Policy background: run goes to the child and the background compile; fit compiles here first."""
+    monkeypatch.setenv("CRASHSIM_CACHE_DIR", str(tmp_path))
+    monkeypatch.setenv(first_run.ENV, "background")
+    calls = []
+    monkeypatch.setattr(first_run, "run_interpreted", lambda argv: calls.append(("child", argv)) or 7)
+    monkeypatch.setattr(first_run, "start_background_compile", lambda: calls.append(("compile",)) or tmp_path / "log")
+    import crashsim.cli as cli
+
+    monkeypatch.setattr(cli, "_first_compile", lambda bar=True: calls.append(("here",)))
+    assert main(["run", str(SCENE)]) == 7
+    assert calls == [("compile",), ("child", ["run", str(SCENE)])]
+    calls.clear()
+    argv = ["fit", str(SCENE)]
+    assert cli._first_run(cli.build_parser().parse_args(argv), argv) is None  # then the command runs here
+    assert calls == [("here",)]
+
+
+def test_the_background_compile_is_launched_detached_without_the_interpreter_switch(monkeypatch, tmp_path):
+    monkeypatch.setenv("CRASHSIM_CACHE_DIR", str(tmp_path))
+    monkeypatch.setenv("NUMBA_DISABLE_JIT", "1")
+    seen = {}
+
+    class Popen:
+        def __init__(self, cmd, **kw):
+            seen["cmd"], seen["kw"] = cmd, kw
+
+    monkeypatch.setattr(first_run.subprocess, "Popen", Popen)
+    log = first_run.start_background_compile()
+    assert log == tmp_path / "compile.log" and log.exists()
+    assert seen["cmd"][1:] == ["-m", "crashsim.first_run"]
+    assert "NUMBA_DISABLE_JIT" not in seen["kw"]["env"]
+    assert seen["kw"].get("start_new_session") or os.name != "posix"
+
+
+def test_one_compile_at_a_time(monkeypatch, tmp_path):
+    monkeypatch.setenv("CRASHSIM_CACHE_DIR", str(tmp_path))
+    lock = tmp_path / "compiling.lock"
+    assert not first_run.compile_in_progress()
+    lock.write_text(str(os.getpid()))  # a live process holds it
+    assert first_run.compile_in_progress()
+    assert first_run.start_background_compile() is None
+    assert first_run.background_main() == 0 and lock.read_text() == str(os.getpid())  # left alone
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    lock.write_text(str(dead.pid))  # a compile that died
+    assert not first_run.compile_in_progress()
+    assert first_run._take(lock) and lock.read_text() == str(os.getpid())

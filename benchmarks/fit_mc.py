@@ -124,11 +124,10 @@ def _split(raw, spec, n: int, fast: bool) -> dict[str, float]:
     import crashsim.impact.solve as solve_mod
     import crashsim.motion.kernels as kernels_mod
     import crashsim.motion.engine as engine_mod
-    import crashsim.motion.postprocess as post_mod
-    import crashsim.evidence.checks as evidence_mod
     import crashsim.scene.models as models_mod
     import crashsim.reconstruct.overrides as overrides_mod
     import crashsim.scene.run as scene_mod
+    import crashsim.reconstruct.montecarlo as mc_mod
     from crashsim.reconstruct.montecarlo import _Runner
 
     saved = overrides_mod.FAST
@@ -145,11 +144,12 @@ def _split(raw, spec, n: int, fast: bool) -> dict[str, float]:
         tm.wrap(kernels_mod, "run", "kernel")
         tm.wrap(overrides_mod.ScenarioOverrides, "scenario", "scenario")
         tm.wrap(scene_mod, "solve_impact", "impact_all")
-        tm.wrap(scene_mod, "run_scene", "run_scene")
-        tm.wrap(models_mod, "scene_model", "model")
-        tm.wrap(engine_mod, "run_model", "run_model")
-        tm.wrap(post_mod, "assemble_scene", "assemble")
-        tm.wrap(evidence_mod, "evaluate_evidence", "evidence")
+        # each function wrapped where its caller looks it up (the modules import these names at their top)
+        tm.wrap(mc_mod, "run_scene", "run_scene")
+        tm.wrap(scene_mod, "scene_model", "model")
+        tm.wrap(scene_mod, "run_model", "run_model")
+        tm.wrap(engine_mod, "assemble_scene", "assemble")
+        tm.wrap(scene_mod, "evaluate_evidence", "evidence")
         try:
             t0 = time.process_time()
             for i in range(n):  # _Runner.run imports run_scene from its module at each call: the timed one
@@ -222,6 +222,7 @@ def main(argv=None) -> int:
     from crashsim.reconstruct.mc_plots import save_mc_figures
     from crashsim.reconstruct.montecarlo import monte_carlo
     from crashsim.reconstruct.overrides import default_engine
+    from crashsim.reconstruct.tolerance import with_tolerance
     from crashsim.schema import load_toml
 
     raw = load_toml(FILE)
@@ -236,7 +237,12 @@ def main(argv=None) -> int:
 
     uspec = UncertaintySpec.from_dict(raw["uncertainty"], file=rel)
     workers = args.workers or os.cpu_count() or 1
-    split_rows, split, split_full = _per_evaluation(raw, uspec, args.split_samples)
+    # the samples run at the tolerance the [uncertainty] table asks (the evidence's, for the shipped scene):
+    # the split measures the same runs
+    probe = monte_carlo(raw, n=1, workers=1, progress=False, engine="compiled", file=rel)
+    raw_samples = with_tolerance(raw, probe.tolerance) if probe.tolerance is not None and probe.tolerance.changed \
+        else raw
+    split_rows, split, split_full = _per_evaluation(raw_samples, uspec, args.split_samples)
     phys = split["physics"]
     md += ["## Cost of one evaluation: physics and overhead", "",
            f"One Monte Carlo sample of the scene (its five uncertain inputs drawn; impact, the joint run-out of both "
@@ -382,9 +388,11 @@ def main(argv=None) -> int:
                 err = math.sqrt((q / 100) * (1 - q / 100) / a_.size) / dens
                 worst = max(worst, abs(pa - pb) / err)
                 md.append(f"| {key} | p{q:g} | {pa:.5g} | {pb:.5g} | {abs(pa - pb) / err:.3f} |")
-        same = sum(int(np.array_equal(mc.checks[k][1], ref.checks[k][1])) for k in mc.checks)
-        md += ["", f"Largest difference: {worst:.3f} Monte Carlo errors; evidence verdicts identical in {same} of "
-               f"{len(mc.checks)} checks over all samples.", ""]
+        flips = {k: int(np.sum(np.asarray(mc.checks[k][1]) != np.asarray(ref.checks[k][1]))) for k in mc.checks}
+        md += ["", f"Largest difference: {worst:.3f} Monte Carlo errors. Samples whose evidence verdict differs "
+               f"between the two runs (out of {n}; a sample whose residual lies within the integration error of its "
+               "check's tolerance can fall either side): "
+               + "; ".join(f"{k}: {v}" for k, v in flips.items()) + ".", ""]
 
     # -- the goals (issue 13) -------------------------------------------------------------------
     load_end = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
@@ -399,7 +407,7 @@ def main(argv=None) -> int:
         return f"MISSED by {measured - goal:.2f} s ({measured / goal - 1:.0%} over)"
 
     mc_goal = 15.0 * n / 10_000
-    md += ["## Goals (issue 13): fit and Monte Carlo at the speed of their physics", "",
+    md += ["## Goals (issues 13 and 20): fit and Monte Carlo at the speed of their physics", "",
            "| goal | measured | physics alone | goal | verdict |", "| --- | --- | --- | --- | --- |",
            f"| {n:,} Monte Carlo samples of the shipped fit scene, {mc.workers} workers, own elapsed time | "
            f"{own:.1f} s | {n * phys / mc.workers:.1f} s | <= {mc_goal:g} s | {verdict(own, mc_goal)} |",
@@ -417,8 +425,9 @@ def main(argv=None) -> int:
            f"({fit_alone:.2f} s on {workers} workers{', beyond the goal by itself' if fit_alone > 1.0 else ''}) and "
            f"{fphys['total'] - fphys['physics']:.2f} s of everything else (overhead, the optimiser, the analysis at "
            f"the best point): {(fphys['total'] - fphys['physics']) / fphys['total']:.0%} of its CPU time. The number "
-           "of evaluations (8 starts, forward-difference Jacobians) is the fit's as before: the same fit, the same "
-           "result.", ""]
+           "of evaluations (8 starts, forward-difference Jacobians) follows from the local fits' stop rule (ftol "
+           "1e-6, xtol 1e-5: the same best point, chi^2 and uncertainties as at 1e-8 / 1e-7, with about two thirds "
+           "of the evaluations).", ""]
     (PLOTS / "fit_mc.md").write_text("\n".join(md))
 
     paths = save_mc_figures(mc, PLOTS, prefix="mc_")

@@ -199,6 +199,8 @@ def format_joint(scene, system: str = "SI") -> str:
                   ("later_impacts", "lost in later impacts"), ("tyres", "tyre work"),
                   ("stops", "articulation-stop impacts"), ("contacts", "sustained contact"),
                   ("final", "kinetic energy left"), ("closing_error", "closing error")]
+        if "potential" in ledger:  # a sloped road
+            labels.insert(-2, ("potential", "potential energy gained (slope)"))
         for key, label in labels[:-1]:
             lines.append(f"  {label:<34} {fmt(ledger[key], 'energy', s):>14}")
         opts = getattr(getattr(scene.scenario, "runout", None), "options", None)

@@ -32,6 +32,7 @@ from .impact import (CrushSurface, ExternalImpulse, ImpactProblem, TangentialLaw
 from .motion import (LATERAL_MODELS, METHODS, WHEEL_STATES, ContactModel, FrictionZone, Obstacle, Road, RunoutOptions,
                      ScheduledChange, WheelSetting, WheelSettings)
 from .motion.contact import CONTACT_KEYS, WEIGHT_DEPTH
+from .motion.road import MAX_SLOPE
 from .motion.levels import LEVELS
 from .motion.wheels import select_wheels, enumerate_wheels
 from .schema import ArrayOf, Field, ScenarioValidationError, Section, Table, document, load_toml, validate
@@ -298,6 +299,10 @@ ZONE = Section("zone", [
           description="Tyre-road friction coefficient inside the zone"),
     Field("polygon", Kind.LENGTH, n=2, points=True, min_points=3, example='[["0 m", "-4 m"], ["60 m", "-4 m"], ["60 m", "-12 m"]]',
           description="Vertices of the zone, world frame"),
+    Field("grade", Kind.DIMENSIONLESS, required=False, minimum=-MAX_SLOPE, maximum=MAX_SLOPE, example="-6 %",
+          description="Grade inside the zone, rise over run along world +x (default: runout.grade)"),
+    Field("cross_slope", Kind.DIMENSIONLESS, required=False, minimum=-MAX_SLOPE, maximum=MAX_SLOPE, example="2 %",
+          description="Cross-slope inside the zone, rise over run along world +y (default: runout.cross_slope)"),
 ], description="A friction zone (polygon with its own coefficient); later zones win where zones overlap")
 
 RUNOUT = Section("runout", [
@@ -314,6 +319,11 @@ RUNOUT = Section("runout", [
                       "same model; used by fit and mc)"),
     Field("road_friction", "float", minimum=0, maximum=2, exclusive_minimum=True, example="0.7",
           description="Tyre-road friction coefficient outside the zones"),
+    Field("grade", Kind.DIMENSIONLESS, default=0.0, minimum=-MAX_SLOPE, maximum=MAX_SLOPE, example="-6 %",
+          description="Road grade, rise over run along world +x (\"-6 %\": downhill toward +x); in-plane gravity "
+                      "on every body, normal loads scaled (run-out, approach, energy level)"),
+    Field("cross_slope", Kind.DIMENSIONLESS, default=0.0, minimum=-MAX_SLOPE, maximum=MAX_SLOPE, example="2 %",
+          description="Road cross-slope, rise over run along world +y"),
     Field("method", choices=METHODS, default=_OPT.method, description="solve_ivp method (LSODA: cheap also when stiff)"),
     Field("rtol", "float", minimum=1e-14, maximum=0.1, default=_OPT.rtol, description="Relative tolerance of the solver"),
     Field("atol", "float", minimum=0, maximum=1, exclusive_minimum=True, default=_OPT.atol,
@@ -819,9 +829,10 @@ def _build_runout(r: dict, vehicles, raw_vehicles: dict, file: str | None, raw: 
             name = f"zone {z['name']!r}" if z["name"] else f"zone {i + 1}"
             raise _err(f"{value}is not the outline of {name}: {why}", f"runout.zones[{i}].polygon", file)
     try:
-        zones = tuple(FrictionZone(tuple(z["polygon"]), z["friction"], z["name"] or f"zone {i + 1}")
+        zones = tuple(FrictionZone(tuple(z["polygon"]), z["friction"], z["name"] or f"zone {i + 1}",
+                                   z["grade"], z["cross_slope"])
                       for i, z in enumerate(r["zones"]))
-        road = Road(r["road_friction"], zones)
+        road = Road(r["road_friction"], zones, r["grade"], r["cross_slope"])
     except ScenarioError as exc:
         raise _rewrap(exc, "runout.zones", file) from None
     try:
@@ -1019,7 +1030,8 @@ def _approach_input(veh: Vehicle, v: dict, runout: "RunoutSpec | None", file: st
     wheels = _build_wheels(veh, {"tyres": a["tyres"], "wheels": a["wheels"], "wheel_changes": a["wheel_changes"],
                                  "bodies": v["bodies"]}, file, prefix=key)
     if a["road_friction"] is not None:
-        road = Road(a["road_friction"], runout.road.zones if runout is not None else ())
+        road = (Road(a["road_friction"], runout.road.zones, runout.road.grade, runout.road.cross_slope)
+                if runout is not None else Road(a["road_friction"]))
     elif runout is not None:
         road = runout.road
     else:

@@ -4,13 +4,17 @@
 Every case is a valid input: plausible masses, inertias and axle layouts of a car, a car with a
 trailer, a tractor-semitrailer or a tractor with two trailers; mixed wheel states (rolling,
 braked, locked, jammed, with steer and mu factors), scheduled wheel changes, friction zones
-placed across the expected path, load transfer on some cases, hitch-consistent initial states
+placed across the expected path, load transfer on some cases, a road slope on about a third of
+the single-vehicle cases (grade within 6 %, cross-slope within 4 %, half the zones with a grade
+of their own within 8 %; the scenes stay level, see ``random_scene``),
+hitch-consistent initial states
 with speeds up to 35 m/s, yaw rates, side slip and articulation (inside the articulation limit).
 Case ``i`` of seed ``s`` depends only on ``(s, i)``.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -156,6 +160,21 @@ def _road(rng, start, course, speed):
     return Road(_u(rng, 0.45, 0.9), tuple(zones))
 
 
+def _sloped(road: Road, seed: int, i: int) -> tuple[Road, str]:
+    """The road with a slope in about a third of the cases (whole road, and zones of their own).
+
+    Drawn from a generator of its own, so that the other draws of a case are those of a level
+    road (the level cases are the ones the fuzz drew before slopes existed).
+    """
+    rng = np.random.default_rng([seed, i, 22])
+    if rng.random() >= 0.35:
+        return road, ""
+    grade, cross = _u(rng, -0.06, 0.06), _u(rng, -0.04, 0.04)
+    zones = tuple(dataclasses.replace(z, grade=_u(rng, -0.08, 0.08)) if rng.random() < 0.5 else z
+                  for z in road.zones)
+    return Road(road.mu, zones, grade, cross), f", grade {100 * grade:.1f} %, cross-slope {100 * cross:.1f} %"
+
+
 def random_case(seed: int, i: int, *, engine: str = "scipy", kinds=KINDS) -> Case:
     """Random run-out ``i`` of ``seed`` (independent of every other case).
 
@@ -185,7 +204,9 @@ def random_case(seed: int, i: int, *, engine: str = "scipy", kinds=KINDS) -> Cas
     lt = nb > 0 and rng.random() < 0.25
     options = RunoutOptions(engine=engine, load_transfer=lt)
     label = f"seed {seed} case {i}: {kind}, {speed:.1f} m/s" + (", load transfer" if lt else "")
-    return Case(label, vehicle, initial, _wheels(rng, vehicle), _road(rng, np.zeros(2), course, speed), options)
+    wheels = _wheels(rng, vehicle)
+    road, slope = _sloped(_road(rng, np.zeros(2), course, speed), seed, i)
+    return Case(label + slope, vehicle, initial, wheels, road, options)
 
 
 @dataclass(frozen=True)
@@ -287,5 +308,8 @@ def random_scene(seed: int, i: int, *, engine: str = "scipy", kinds=KINDS, n_veh
     options = RunoutOptions(engine=engine, load_transfer=lt)
     label = (f"seed {seed} scene {i}: {nv} vehicles ({', '.join(str(len(v.bodies)) + ' bodies' for v in vehicles)}), "
              f"{len(obstacles)} obstacle(s), fastest {speed0:.1f} m/s" + (", load transfer" if lt else ""))
+    # level roads only: with the slope draws of the single cases, scene 2 of seed 20261124 shows the
+    # SciPy engine missing a strike (v0_pup into v1_car, 6.7 cm deep without an impact) that the
+    # compiled engine finds, at every rtol: an event-detection gap of that engine, reported on issue 22
     return SceneCase(label, tuple(vehicles), initial, wheels, _road(rng, np.zeros(2), 0.0, 10.0), options,
                      tuple(obstacles))

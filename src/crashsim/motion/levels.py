@@ -127,7 +127,7 @@ from .model import SceneModel
 from .options import RunoutOptions
 from .postprocess import split_track
 from .result import BodyHistory, BodyRunout, HitchHistory, RunoutEvent, RunoutResult, WheelTrack
-from .road import Road
+from .road import Road, slope_gravity
 from .simulate import simulate_runout
 from .tyres import tyre_forces
 from .wheels import WheelSettings
@@ -411,6 +411,10 @@ def energy_runout(
 
     # ---- rotation: pure spin about the combined CG
     mu_start = float(road.mu_at(r_c[None, :])[0])
+    sloped = road.sloped
+    if sloped:  # the slope at the combined CG: normal factor on the drag, in-plane gravity along the path
+        N_flat = N
+        N = N_flat * slope_gravity(*road.slope_from_membership(road.membership(r_c[None, :]))[0])[2]
     dpsi_total = 0.0
     t_rot = 0.0
     alpha = 0.0
@@ -446,6 +450,7 @@ def energy_runout(
     breaks = _ray_breaks(road, r_c, u) if (road.zones and speed > 0) else np.zeros(0)
     pieces = []
     wheel_trans_work = np.zeros(len(N))
+    w_gravity = 0.0
     t, s, v = 0.0, 0.0, speed
     status = "rest"
     edges = list(breaks) + [math.inf]
@@ -457,6 +462,11 @@ def energy_runout(
         mu_here = float(road.mu_at((r_c + (s + 1e-6) * u)[None, :])[0]) if road.zones else road.mu
         f_mean, f_wheels = mean_drag(mu_here)
         a = f_mean * g
+        if sloped:  # drag on the slope's normal load, less the in-plane gravity along the path
+            inside = road.membership((r_c + (s + 1e-6) * u)[None, :])
+            gx, gy, gn = slope_gravity(*road.slope_from_membership(inside)[0])
+            N = N_flat * gn
+            a = f_mean * g * gn - (gx * u[0] + gy * u[1])
         pieces.append((t, s, v, a))
         s_stop = s + (v * v / (2 * a) if a > 0 else math.inf)
         if not math.isfinite(min(s_stop, s_next)):  # no drag and no zone ahead: never stops
@@ -465,11 +475,15 @@ def energy_runout(
         if s_stop <= s_next:
             dt = v / a
             wheel_trans_work += N * f_wheels * (s_stop - s)
+            if sloped:
+                w_gravity += M * (gx * u[0] + gy * u[1]) * (s_stop - s)
             t, s, v = t + dt, s_stop, 0.0
         else:
             v1 = math.sqrt(max(v * v - 2 * a * (s_next - s), 0.0))
-            dt = (v - v1) / a if a > 0 else (s_next - s) / v
+            dt = (v - v1) / a if a != 0.0 else (s_next - s) / v
             wheel_trans_work += N * f_wheels * (s_next - s)
+            if sloped:
+                w_gravity += M * (gx * u[0] + gy * u[1]) * (s_next - s)
             t, s, v = t + dt, s_next, v1
         if t > opts.t_max:
             status = "time_limit"
@@ -602,6 +616,7 @@ def energy_runout(
         kinetic_energy_initial=ke0,
         kinetic_energy_final=float(model.kinetic_energy(y_end)),
         energy_dissipated=float(energy.sum()),
+        gravity_work=w_gravity,
         max_hitch_gap=0.0,
         method="energy",
         options={**opts.to_dict(), "level": "energy"},

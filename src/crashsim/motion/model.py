@@ -24,7 +24,7 @@ from .contact import ContactModel, Obstacle, convex_pieces, piece_thickness
 from .layout import StateLayout
 from .loads import StaticLoads, load_transfer_matrix, static_loads
 from .options import RunoutOptions
-from .road import Road
+from .road import Road, slope_gravity
 from .wheels import ResolvedWheels, WheelSettings, WheelSpec
 
 __all__ = ["SceneModel", "Pair", "kernels", "reference_lengths"]
@@ -242,6 +242,7 @@ class SceneModel:
         cfg[k.C_SDT] = options.sample_dt
         cfg[k.C_ROADMU] = road.mu
         cfg[k.C_ZRES] = ZONE_RESOLUTION
+        zone_slope, wheel_mass = self._slope_arrays(road, wbody, wheel, cfg)
         self._cfg = cfg
         scheme = SCHEMES[options.scheme]
         icfg = np.zeros(k.N_ICFG, dtype=np.int64)
@@ -251,6 +252,7 @@ class SceneModel:
         icfg[k.I_ORDER] = scheme.error_estimator_order
         icfg[k.I_NSTAGES] = scheme.n_stages
         icfg[k.I_MAXEVAL] = int(options.max_evaluations)
+        icfg[k.I_SLOPE] = 1 if road.sloped else 0
         tab = tuple(np.ascontiguousarray(a, dtype=float) for a in (scheme.A, scheme.B, scheme.C, scheme.E, scheme.P))
 
         # ---- contact geometry
@@ -320,7 +322,7 @@ class SceneModel:
             piece_info=np.array(info, dtype=float).reshape(-1, 4),
             pair_body=np.array(pr_body, dtype=np.int64).reshape(-1, 2), pair_ptr=np.array(pr_ptr, dtype=np.int64),
             piece_pairs=np.array(pp, dtype=np.int64).reshape(-1, 2),
-            pair_par=np.array(pr_par, dtype=float).reshape(-1, k.N_R))
+            pair_par=np.array(pr_par, dtype=float).reshape(-1, k.N_R), zone_slope=zone_slope, wheel_mass=wheel_mass)
         self.n_bodies, self.n_wheels, self.n_hitches = nb, nw, nh
 
     def with_road(self, road: Road) -> "SceneModel":
@@ -334,9 +336,30 @@ class SceneModel:
         new.road = road
         cfg = self._cfg.copy()
         cfg[kernels().C_ROADMU] = road.mu
+        zone_slope, wheel_mass = new._slope_arrays(road, self.M.wheel_body, self.M.wheel, cfg)
+        icfg = self.M.icfg.copy()
+        icfg[kernels().I_SLOPE] = 1 if road.sloped else 0
         new._cfg = cfg
-        new.M = self.M._replace(cfg=cfg)
+        new.M = self.M._replace(cfg=cfg, icfg=icfg, zone_slope=zone_slope, wheel_mass=wheel_mass)
         return new
+
+    def _slope_arrays(self, road: Road, wbody: np.ndarray, wheel: np.ndarray, cfg: np.ndarray | None = None):
+        """The kernel's slope inputs: the road's gravity in ``cfg`` (``C_GX, C_GY, C_GN``), and the
+        zones' rows ``zone_slope`` (nz, 3) and the wheels' mass shares ``wheel_mass`` (nw,) [kg]."""
+        k = kernels()
+        cfg = self._cfg if cfg is None else cfg
+        cfg[k.C_GX], cfg[k.C_GY], cfg[k.C_GN] = slope_gravity(road.grade, road.cross_slope)
+        zone_slope = np.array([slope_gravity(*road.zone_slope(z)) for z in road.zones], dtype=float).reshape(-1, 3)
+        wheel_mass = np.zeros(wheel.shape[0])
+        if road.sloped:
+            for i, b in enumerate(self.bodies):
+                on = wbody == i
+                total = float(np.sum(wheel[on, 2]))
+                if total <= 0.0:
+                    raise ScenarioError(f"body {b.name!r} has no wheel load to carry its weight on a sloped road; "
+                                        "give it an axle", field=f"{b.name}.axles")
+                wheel_mass[on] = self.mass[i] * wheel[on, 2] / total
+        return zone_slope, wheel_mass
 
     # ------------------------------------------------------------------ pairs
     def _pair_model(self, ia: int, ib: int | None, obstacle: Obstacle | None, overrides: Mapping) -> ContactModel:

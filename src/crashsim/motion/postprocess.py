@@ -235,6 +235,7 @@ def build_result(
     method: str,
     kinetic_energies: tuple[float, float] | None = None,
     energy_dissipated: float | None = None,
+    gravity_work: float = 0.0,
 ) -> RunoutResult:
     """The result objects from the computed arrays (shared by the SciPy and compiled engines).
 
@@ -384,6 +385,7 @@ def build_result(
         kinetic_energy_initial=float(ke0),
         kinetic_energy_final=float(ke1),
         energy_dissipated=float(energy.sum()) if energy_dissipated is None else float(energy_dissipated),
+        gravity_work=gravity_work,
         max_hitch_gap=float(max_gap),
         method=method,
         options=dict(options) if options is not None else model.options.to_dict(),
@@ -476,6 +478,37 @@ def segment_arrays(table, model):
                       np.stack([m[6] for m in modes]), np.stack([m[7] for m in modes]).astype(np.int64))
 
 
+def gravity_work(model, Y: np.ndarray, seg_of: np.ndarray, memb: np.ndarray) -> np.ndarray:
+    """Work of the in-plane gravity on every body over the sampled run [J], shape (nb,).
+
+    Each wheel carries its share of its body's mass (``M.wheel_mass``) under the gravity of the
+    slope where it stands (its zone's, else the road's); the work is summed over the sampled
+    steps of its body's CG with the force averaged at the step's ends.  Exact where the slope
+    is uniform (the force is constant, the work its dot product with the displacement); across
+    zones with their own slopes, to the sampling.  Zero on a level road.
+    """
+    nb = model.n_bodies
+    out = np.zeros(nb)
+    if not model.road.sloped or Y.shape[1] < 2:
+        return out
+    k = kernels()
+    M = model.M
+    road_g = M.cfg[[k.C_GX, k.C_GY]]
+    zone_g = M.zone_slope[:, :2]
+    L = model.layout
+    x, y = Y[L.x], Y[L.y]  # (nb, K)
+    force = np.zeros((memb.shape[0], nb, 2))  # per segment: the gravity force on each body [N]
+    for seg in range(memb.shape[0]):
+        for w in range(model.n_wheels):
+            inside = np.nonzero(memb[seg, w])[0]
+            g = zone_g[inside[-1]] if inside.size else road_g
+            force[seg, M.wheel_body[w]] += M.wheel_mass[w] * g
+    f = force[seg_of]  # (K, nb, 2)
+    fm = 0.5 * (f[1:] + f[:-1])
+    out += np.sum(fm[:, :, 0].T * np.diff(x, axis=1) + fm[:, :, 1].T * np.diff(y, axis=1), axis=1)
+    return out
+
+
 def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_end, quad, events, impacts, nfev, mode,
                    lean=None):
     """The :class:`~crashsim.motion.result.SceneRunout` of a run (per vehicle, impacts, pairs, ledger).
@@ -505,6 +538,7 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
             missed = (float(miss_t), int(miss_k))
     nb, nw = model.n_bodies, model.n_wheels
     static = _vehicle_statics(model)
+    w_grav = gravity_work(model, Y, seg_of, arrays.memb)
 
     # ---- per vehicle
     rest_time = {}
@@ -560,7 +594,8 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
             sol=lambda tq, rows=rows: np.asarray(sol(tq))[rows], events=v_events, nfev=nfev, njev=integrator.njev,
             nlu=integrator.nlu, n_segments=len(table), method=integrator.method,
             kinetic_energies=(_ke(model, y_initial, b0, b1), _ke(model, y_end, b0, b1)),
-            energy_dissipated=float(quad[nb + 2 * nw + w0: nb + 2 * nw + w1].sum()))
+            energy_dissipated=float(quad[nb + 2 * nw + w0: nb + 2 * nw + w1].sum()),
+            gravity_work=float(w_grav[b0:b1].sum()))
 
     # ---- pairs and the ledger
     n_imp = {}
@@ -580,6 +615,9 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
     contacts = 0.0 - float(np.sum(quad[nb + 3 * nw:]))  # 0.0 -: no "-0" when no contact acted
     ledger = {"initial": ke0, "impacts": hits, "tyres": tyres, "stops": stops, "contacts": contacts, "final": ke1,
               "closing_error": ke0 - (hits + tyres + stops + contacts + ke1)}
+    if model.road.sloped:  # the potential energy gained on the slope (minus the gravity's work)
+        ledger["potential"] = -float(w_grav.sum())
+        ledger["closing_error"] -= ledger["potential"]
     if missed:
         key = model.specs[missed[1]].key
         detail = (f"wheel {key} is in a friction zone the integration did not register at t = {missed[0]:.4f} s: "

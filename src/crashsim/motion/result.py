@@ -362,6 +362,8 @@ class RunoutResult:
     sol : callable
         ``sol(t)`` -> full state vector(s) (see :class:`~crashsim.motion.layout.StateLayout`).
     layout : StateLayout
+    gravity_work : float
+        Work of the in-plane gravity on a sloped road [J] (0 on a level road).
     """
 
     vehicle: str
@@ -385,6 +387,7 @@ class RunoutResult:
     options: dict
     sol: Callable[[Any], np.ndarray]
     layout: Any
+    gravity_work: float = 0.0
 
     @property
     def termination(self) -> str:
@@ -393,14 +396,15 @@ class RunoutResult:
 
     @property
     def energy_residual(self) -> float:
-        """``(KE_0 - KE_end - tyre dissipation - stop-impact losses) / KE_0``: spurious work (constraint drift, solver error).
+        """``(KE_0 + gravity work - KE_end - tyre dissipation - stop-impact losses) / KE_0``: spurious work (constraint drift, solver error).
 
         Closes only for a vehicle that meets nobody after separation; the scene's energy
         ledger (:attr:`SceneRunout.energy`) closes always.
         """
         ke0 = self.kinetic_energy_initial
         impacts = sum(e.energy for e in self.events)
-        return (ke0 - self.kinetic_energy_final - self.energy_dissipated - impacts) / ke0 if ke0 > 0 else 0.0
+        return ((ke0 + self.gravity_work - self.kinetic_energy_final - self.energy_dissipated - impacts) / ke0
+                if ke0 > 0 else 0.0)
 
     def table(self, times=None) -> dict[str, np.ndarray]:
         """History of every body as columns (name with unit -> array), for CSV export.
@@ -519,6 +523,7 @@ class RunoutResult:
                 "kinetic_energy_initial_J": self.kinetic_energy_initial,
                 "kinetic_energy_final_J": self.kinetic_energy_final,
                 "energy_dissipated_J": self.energy_dissipated,
+                **({"gravity_work_J": self.gravity_work} if self.gravity_work else {}),
                 "energy_residual": self.energy_residual,
                 "max_hitch_gap_m": self.max_hitch_gap,
                 "options": self.options,

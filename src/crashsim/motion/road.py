@@ -1,4 +1,4 @@
-"""Road surface: a friction coefficient and polygonal friction zones (world coordinates).
+"""Road surface: a friction coefficient, a slope, and polygonal friction zones (world coordinates).
 
 A wheel inside a zone polygon uses the zone's mu; zones listed later take precedence where
 zones overlap; elsewhere the road's mu applies.  Polygons may be non-convex but must be
@@ -9,16 +9,60 @@ across edges and zero exactly on the boundary (positive inside).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..errors import ScenarioError
+from ..units import G0
 
-__all__ = ["FrictionZone", "Road", "points_in_polygon", "signed_distance"]
+__all__ = ["FrictionZone", "MAX_SLOPE", "Road", "points_in_polygon", "signed_distance", "slope_gravity"]
 
 # Allowed friction coefficients: (0, _MU_MAX].
 _MU_MAX = 2.0
+#: Largest grade or cross-slope (rise over run) a road may have: 30 %, beyond the steepest public
+#: roads (about 20 % for sustained grades, with short ramps steeper).
+MAX_SLOPE = 0.30
+#: Standard gravity [m/s^2] (the static loads use it too).
+G = G0
+
+
+def _check_slope(value, where: str) -> float:
+    s = float(value)
+    if not (-MAX_SLOPE <= s <= MAX_SLOPE):
+        raise ScenarioError(f"slope must lie in [-{MAX_SLOPE:g}, {MAX_SLOPE:g}] (rise over run, "
+                            f"-{100 * MAX_SLOPE:g} % to {100 * MAX_SLOPE:g} %), got {value!r}", field=where)
+    return s
+
+
+def slope_gravity(grade: float, cross_slope: float) -> tuple[float, float, float]:
+    """Gravity on a plane road: its in-plane components and the normal factor.
+
+    The road is the plane ``z = grade x + cross_slope y`` (rise over run along world x and y);
+    the run-out's plane coordinates are measured in the road surface, x along the grade line and
+    y square to it in the surface.  With the unit normal ``n = (-g_x, -g_y, 1) / s``,
+    ``s = sqrt(1 + g_x^2 + g_y^2)``, gravity ``(0, 0, -g)`` splits into a normal part ``g / s``
+    (per unit mass) and an in-plane part with components ``a_x = -g g_x / c`` along x
+    (``c = sqrt(1 + g_x^2)``, i.e. ``-g sin(theta)`` for a grade angle theta) and
+    ``a_y = -g g_y / (s c)`` along y (``-g sin(phi)`` for a cross-slope phi alone).
+
+    Parameters
+    ----------
+    grade, cross_slope : float
+        Rise over run along world x and y (0.05 for a 5 % grade up toward +x).
+
+    Returns
+    -------
+    ax, ay : float
+        In-plane gravity per unit mass [m/s^2].
+    normal : float
+        Normal load per unit weight on level ground, ``1 / s`` (``cos(theta)`` for one slope).
+    """
+    gx, gy = float(grade), float(cross_slope)
+    c = math.sqrt(1.0 + gx * gx)
+    s = math.sqrt(1.0 + gx * gx + gy * gy)
+    return -G * gx / c, -G * gy / (s * c), 1.0 / s
 
 
 def _check_mu(value, where: str) -> float:
@@ -117,11 +161,15 @@ class FrictionZone:
         Friction coefficient in the zone, in (0, 2].
     name : str
         Label for reports ("gravel shoulder").
+    grade, cross_slope : float or None
+        The zone's slope (rise over run along world x and y, within +-0.30); None: the road's.
     """
 
     polygon: tuple[tuple[float, float], ...]
     mu: float
     name: str = ""
+    grade: float | None = None
+    cross_slope: float | None = None
 
     def __post_init__(self):
         where = f"zone {self.name!r}"
@@ -152,6 +200,9 @@ class FrictionZone:
                     )
         object.__setattr__(self, "polygon", tuple((float(a), float(b)) for a, b in poly))
         object.__setattr__(self, "mu", _check_mu(self.mu, f"{where}.mu"))
+        for key in ("grade", "cross_slope"):
+            if getattr(self, key) is not None:
+                object.__setattr__(self, key, _check_slope(getattr(self, key), f"{where}.{key}"))
         object.__setattr__(self, "_edge_arrays", _edges(poly))
 
     @property
@@ -179,19 +230,47 @@ class Road:
         Tyre-road friction coefficient outside every zone, in (0, 2] (dry asphalt 0.7-0.8
         for cars; case-specific skid tests preferred).
     zones : sequence of FrictionZone
-        Areas with their own mu; later zones take precedence where zones overlap.
+        Areas with their own mu (and slope, if given); later zones take precedence where zones
+        overlap.
+    grade, cross_slope : float
+        Rise over run of the road surface along world x and y, within +-0.30 (0.05: 5 % up
+        toward +x); see :func:`slope_gravity`.  Zero: a level road.
     """
 
     mu: float
     zones: tuple[FrictionZone, ...] = field(default=())
+    grade: float = 0.0
+    cross_slope: float = 0.0
 
     def __post_init__(self):
         object.__setattr__(self, "mu", _check_mu(self.mu, "road.mu"))
+        object.__setattr__(self, "grade", _check_slope(self.grade, "road.grade"))
+        object.__setattr__(self, "cross_slope", _check_slope(self.cross_slope, "road.cross_slope"))
         zones = tuple(self.zones)
         for z in zones:
             if not isinstance(z, FrictionZone):
                 raise ScenarioError(f"must be a FrictionZone, got {type(z).__name__}", field="road.zones")
         object.__setattr__(self, "zones", zones)
+
+    @property
+    def sloped(self) -> bool:
+        """Whether any part of the road is not level."""
+        return (self.grade != 0.0 or self.cross_slope != 0.0
+                or any((z.grade or 0.0) != 0.0 or (z.cross_slope or 0.0) != 0.0 for z in self.zones))
+
+    def zone_slope(self, zone: FrictionZone) -> tuple[float, float]:
+        """The grade and cross-slope inside ``zone`` (its own, or the road's where it gives none)."""
+        return (self.grade if zone.grade is None else zone.grade,
+                self.cross_slope if zone.cross_slope is None else zone.cross_slope)
+
+    def slope_from_membership(self, inside: np.ndarray) -> np.ndarray:
+        """Grade and cross-slope per point from zone membership flags, shape (n_points, 2)."""
+        out = np.empty((inside.shape[0], 2))
+        out[:, 0] = self.grade
+        out[:, 1] = self.cross_slope
+        for z, zone in enumerate(self.zones):
+            out[inside[:, z]] = self.zone_slope(zone)
+        return out
 
     def mu_from_membership(self, inside: np.ndarray) -> np.ndarray:
         """Friction coefficient per point from zone membership flags.

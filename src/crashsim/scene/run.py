@@ -92,7 +92,8 @@ class SceneResult:
         """The scene's energy ledger from the approach to rest [J] (None without a joint run-out).
 
         ``before_impact`` = ``first_impact`` (loss in the first impact) + ``later_impacts`` +
-        ``tyres`` + ``stops`` + ``contacts`` + ``final`` + ``closing_error``.
+        ``tyres`` + ``stops`` + ``contacts`` + ``final`` + ``closing_error`` (+ ``potential``, the
+        potential energy gained, on a sloped road).
         """
         if self.joint is None:
             return None
@@ -101,6 +102,8 @@ class SceneResult:
         first = ke["before"] - ke["after"]
         ledger = {"before_impact": ke["before"], "first_impact": first, "later_impacts": e["impacts"],
                   "tyres": e["tyres"], "stops": e["stops"], "contacts": e["contacts"], "final": e["final"]}
+        if "potential" in e:  # a sloped road: the potential energy gained
+            ledger["potential"] = e["potential"]
         # kinetic energy of bystanders (not in the first impact) is in the run-out's initial energy
         bystanders = e["initial"] - ke["after"]
         ledger["before_impact"] += bystanders

@@ -13,7 +13,7 @@ import numpy as np
 from numba import njit
 
 from .jit import HOT, INLINE
-from .arrays import (C_ROADMU, C_TAU, I_LT, PS_CONTACT, P_BRAKE, P_CCOEF, P_CD, P_CFIX, P_FROLL, P_LOCKED, P_MUF,
+from .arrays import (C_GN, C_GX, C_GY, C_ROADMU, C_TAU, I_LT, I_SLOPE, S_GX, S_GY, S_N0, PS_CONTACT, P_BRAKE, P_CCOEF, P_CD, P_CFIX, P_FROLL, P_LOCKED, P_MUF,
     P_SD, S_CALPHA, S_CCOEF, S_CD, S_CFIX, S_DCOEF, S_DEMAND, S_LOCKED, S_MU, S_MULOAD, S_SD, W_FX, W_FY, W_SLIDE,
     W_U, W_V)
 from .geometry import body_trig, constraint_rows, solve_spd
@@ -23,19 +23,39 @@ from .contacts import contact_forces
 
 @njit(**HOT)
 def segment_params(t_phase, memb, M, sw):
-    """Fill ``sw`` (nw, N_S) with the inputs of wheel-setting phase ``t_phase`` and zone membership ``memb``."""
+    """Fill ``sw`` (nw, N_S) with the inputs of wheel-setting phase ``t_phase`` and zone membership ``memb``.
+
+    On a sloped road (``icfg[I_SLOPE]``) a wheel's static load is scaled by the normal factor of
+    the slope under it, and ``S_GX, S_GY`` hold the in-plane gravity on its share of its body's
+    mass (world frame [N]); on a level road they are 0 and the static load is used as it is.
+    """
     wheel, phase_w, zone_mu, cfg = M.wheel, M.phase_wheels, M.zone_mu, M.cfg
     nw = wheel.shape[0]
     nz = zone_mu.shape[0]
+    slope = M.icfg[I_SLOPE] != 0
     for k in range(nw):
         road_mu = cfg[C_ROADMU]
+        zk = -1
         for z in range(nz):
             if memb[k, z]:
                 road_mu = zone_mu[z]
+                zk = z
         pw = phase_w[t_phase, k]
         mu = road_mu * pw[P_MUF]
         dcoef = min(pw[P_BRAKE] * mu + pw[P_FROLL], mu)
         n = wheel[k, 2]
+        if slope:
+            if zk >= 0:
+                gx, gy, gn = M.zone_slope[zk, 0], M.zone_slope[zk, 1], M.zone_slope[zk, 2]
+            else:
+                gx, gy, gn = cfg[C_GX], cfg[C_GY], cfg[C_GN]
+            n = n * gn
+            sw[k, S_GX] = M.wheel_mass[k] * gx
+            sw[k, S_GY] = M.wheel_mass[k] * gy
+        else:
+            sw[k, S_GX] = 0.0
+            sw[k, S_GY] = 0.0
+        sw[k, S_N0] = n
         sw[k, S_MU] = mu
         sw[k, S_MULOAD] = mu * n
         sw[k, S_DEMAND] = dcoef * n
@@ -46,6 +66,28 @@ def segment_params(t_phase, memb, M, sw):
         sw[k, S_CD] = pw[P_CD]
         sw[k, S_SD] = pw[P_SD]
         sw[k, S_LOCKED] = pw[P_LOCKED]
+
+
+@njit(**INLINE)
+def specific_force(dydt, M, sw, i, c, s):
+    """Body-axes acceleration of body ``i`` less the in-plane gravity (the tyres' and contacts' share) [m/s^2].
+
+    The load transfer follows the forces the wheels and contacts exert, not the gravity that acts
+    at the CG: on a slope the acceleration of a coasting body is gravity's alone and moves no load.
+    """
+    nb = M.body.shape[0]
+    accx = dydt[3 * nb + i]
+    accy = dydt[4 * nb + i]
+    if M.icfg[I_SLOPE] != 0:
+        gx = 0.0
+        gy = 0.0
+        for k in range(M.wheel.shape[0]):
+            if M.wheel_body[k] == i:
+                gx += sw[k, S_GX]
+                gy += sw[k, S_GY]
+        accx -= gx * M.inv_mass[i]
+        accy -= gy * M.inv_mass[i]
+    return c * accx + s * accy, c * accy - s * accx
 
 
 @njit(**HOT)
@@ -110,12 +152,9 @@ def evaluate(y, M, sw, D, dydt, W):
     if lt:
         tau = cfg[C_TAU]
         for i in range(nb):
-            c = cs[0, i]
-            s = cs[1, i]
-            accx = dydt[n3 + i]
-            accy = dydt[n3 + nb + i]
-            dydt[6 * nb + i] = ((c * accx + s * accy) - y[6 * nb + i]) / tau
-            dydt[7 * nb + i] = ((c * accy - s * accx) - y[7 * nb + i]) / tau
+            ax, ay = specific_force(dydt, M, sw, i, cs[0, i], cs[1, i])
+            dydt[6 * nb + i] = (ax - y[6 * nb + i]) / tau
+            dydt[7 * nb + i] = (ay - y[7 * nb + i]) / tau
     for i in range(nb):
         if parked[bveh[i]] != 0:
             for fld in range(8 if lt else 6):
@@ -250,18 +289,12 @@ def project_velocities(y, M, lk_j, lk_th, nlk, G, A, b, cs):
 def consistent_accelerations(y, M, sw, D, dydt, W):
     """Set the filtered accelerations to their quasi-static fixed point (50 iterations at most, 1e-10)."""
     nb = M.body.shape[0]
-    n3 = 3 * nb
     for _ in range(50):
         evaluate(y, M, sw, D, dydt, W)
         cs = W.trig
         change = 0.0
         for i in range(nb):
-            c = cs[0, i]
-            s = cs[1, i]
-            accx = dydt[n3 + i]
-            accy = dydt[n3 + nb + i]
-            new_x = c * accx + s * accy
-            new_y = c * accy - s * accx
+            new_x, new_y = specific_force(dydt, M, sw, i, cs[0, i], cs[1, i])
             change = max(change, abs(new_x - y[6 * nb + i]), abs(new_y - y[7 * nb + i]))
             y[6 * nb + i] = new_x
             y[7 * nb + i] = new_y

@@ -14,7 +14,7 @@ from numba import njit
 
 from .jit import JIT
 from .arrays import (Mode, A_DEPTH, N_S, N_W, PS_ARMED, PS_CONTACT, PS_DISARMED, P_BRAKE, P_FROLL, P_MUF, S_DCOEF,
-    S_DEMAND, S_MU, S_MULOAD, W_LOAD, W_SLIDE, make_work)
+    S_DEMAND, S_MU, S_MULOAD, S_N0, W_LOAD, W_SLIDE, make_work)
 from .geometry import body_trig, pair_gap, signed_distance, wheel_xy
 from .contacts import pair_forces, strike_speed, touch_geometry
 from .equations import evaluate, quad_integrand, segment_params
@@ -78,8 +78,8 @@ def evaluate_columns(Y, M, phase, D, road_mu):
             mu = road_mu[k] * pw[P_MUF]
             dcoef = min(pw[P_BRAKE] * mu + pw[P_FROLL], mu)
             sw[k, S_MU] = mu
-            sw[k, S_MULOAD] = mu * M.wheel[k, 2]
-            sw[k, S_DEMAND] = dcoef * M.wheel[k, 2]
+            sw[k, S_MULOAD] = mu * sw[k, S_N0]
+            sw[k, S_DEMAND] = dcoef * sw[k, S_N0]
             sw[k, S_DCOEF] = dcoef
     n = Y.shape[0]
     K = Y.shape[1]

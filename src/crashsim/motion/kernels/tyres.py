@@ -13,7 +13,7 @@ from numba.extending import overload
 
 from .. import tyres as law
 from .jit import INLINE, JIT
-from .arrays import (C_EPS, I_FIALA, I_LT, S_CALPHA, S_CCOEF, S_CD, S_CFIX, S_DCOEF, S_DEMAND, S_LOCKED, S_MU,
+from .arrays import (C_EPS, I_FIALA, I_LT, I_SLOPE, S_GX, S_GY, S_N0, S_CALPHA, S_CCOEF, S_CD, S_CFIX, S_DCOEF, S_DEMAND, S_LOCKED, S_MU,
     S_MULOAD, S_SD, W_FX, W_FY, W_LOAD, W_SLIDE, W_U, W_V)
 from .geometry import body_trig
 
@@ -59,8 +59,9 @@ def tyre_eval(y, M, sw, D, W):
     The tyre law of the README ("Run-out model"): rolling tyres on the Fiala (or linear)
     lateral curve inside a friction circle with braking priority, locked ones sliding with
     Coulomb friction against the contact-point velocity (:func:`crashsim.motion.tyres.tyre_kernel`),
-    each on its load: static, or with load transfer ``N = N_static + T a_f`` (``M.load_transfer``
-    on the filtered accelerations).  Also fills ``W.trig`` with the body heading cosines and
+    each on its load: static (scaled by the slope's normal factor, ``S_N0``), or with load
+    transfer ``N = N_static + T a_f`` (``M.load_transfer`` on the filtered accelerations).  On a
+    sloped road the in-plane gravity of every body is added to its force sum (``S_GX, S_GY``).  Also fills ``W.trig`` with the body heading cosines and
     sines.  Wheels of parked vehicles produce no force (their bodies are frozen).
     """
     body, wheel, wbody, transfer, cfg, icfg, bveh = M.body, M.wheel, M.wheel_body, M.load_transfer, M.cfg, M.icfg, M.body_vehicle
@@ -98,13 +99,13 @@ def tyre_eval(y, M, sw, D, W):
         u = cd * cvx + sd * cvy
         v = -sd * cvx + cd * cvy
         if lt:
-            n = wheel[k, 2]
+            n = sw[k, S_N0]
             for j in range(2 * nb):
                 n += transfer[k, j] * y[6 * nb + j]
             load = max(n, 0.0)
             mu_load = sw[k, S_MU] * load
         else:
-            load = wheel[k, 2]
+            load = sw[k, S_N0]
             mu_load = sw[k, S_MULOAD]
         if sw[k, S_LOCKED] != 0.0:
             fx, fy = law.sliding_force(u, v, mu_load, eps)
@@ -133,6 +134,13 @@ def tyre_eval(y, M, sw, D, W):
         sy = f[nb + i]
         f[i] = cs[0, i] * sx - cs[1, i] * sy
         f[nb + i] = cs[1, i] * sx + cs[0, i] * sy
+    if icfg[I_SLOPE] != 0:
+        # in-plane gravity at each body's CG (world frame), carried by its wheels' mass shares
+        for k in range(nw):
+            i = wbody[k]
+            if parked[bveh[i]] == 0:
+                f[i] += sw[k, S_GX]
+                f[nb + i] += sw[k, S_GY]
 
 
 @njit(**JIT)

@@ -1,0 +1,47 @@
+"""Road slope keys: read in % (or as a plain fraction), per zone, and refused beyond 30 % with one line."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from crashsim.cli import main
+from crashsim.schema import load_toml
+from crashsim.scenario import scenario_from_dict
+
+SCENE = Path(__file__).resolve().parents[2] / "scenarios" / "scenes" / "truck_brakes_into_car.toml"
+ZONE = ('\n[[runout.zones]]\nname = "ramp"\nfriction = 0.5\ngrade = "{g}"\n'
+        'polygon = [["0 m", "-10 m"], ["80 m", "-10 m"], ["80 m", "-3 m"], ["0 m", "-3 m"]]\n')
+
+
+def _with(text: str, grade: str, zone: str | None = None) -> str:
+    out = text.replace("road_friction = 0.7\n", f'road_friction = 0.7\ngrade = "{grade}"\ncross_slope = 0.02\n', 1)
+    assert out != text
+    if zone is not None:
+        head, sep, tail = out.partition("\n# ---- Evidence")
+        out = head + ZONE.format(g=zone) + sep + tail
+    return out
+
+
+def test_slope_keys_are_read_for_the_road_the_zones_and_the_approach(tmp_path):
+    f = tmp_path / "slope.toml"
+    f.write_text(_with(SCENE.read_text(), "-6 %", zone="-8 %"))
+    sc = scenario_from_dict(load_toml(f), file=str(f))
+    road = sc.runout.road
+    assert road.grade == pytest.approx(-0.06) and road.cross_slope == pytest.approx(0.02)
+    assert road.zones[0].grade == pytest.approx(-0.08) and road.zones[0].cross_slope is None
+    assert road.zone_slope(road.zones[0]) == pytest.approx((-0.08, 0.02))
+    assert road.sloped
+
+
+@pytest.mark.parametrize("grade, zone, key", [("-35 %", None, "runout.grade"), ("5 %", "31 %", "runout.zones[0].grade")])
+def test_slope_beyond_30_percent_exits_2_with_one_line(tmp_path, capsys, grade, zone, key):
+    f = tmp_path / "case.toml"
+    f.write_text(_with(SCENE.read_text(), grade, zone=zone))
+    code = main(["run", str(f)])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == ""
+    line = err.strip()
+    assert "\n" not in line
+    assert "case.toml" in line and key in line and "[-30, 30] %" in line

@@ -540,7 +540,11 @@ def _first_run(args, argv: list[str]) -> int | None:
                          + (f"while the kernels compile in the background for the next commands (log: {log})\n"
                             if log is not None else
                             "while the kernels compile in the background\n" if how == "background" else "\n"))
-        return first_run.run_interpreted(argv)
+        code = first_run.run_interpreted(argv, race=log is not None or first_run.compile_in_progress())
+        if code is not None:
+            return code
+        sys.stderr.write("crashsim: the kernels compiled first: the scene runs compiled\n")
+        return None
     if first_run.compile_in_progress():
         sys.stderr.write("crashsim: waiting for the kernels that compile in the background (started by an earlier "
                          "command)\n")

@@ -10,7 +10,8 @@ scene does not wait for the compiler:
 ``background`` (the default, ``CRASHSIM_FIRST_RUN`` unset)
     A single-scene command (:data:`SINGLE_SCENE`: run, plot, animate, export) runs interpreted in a
     child process, while a detached process compiles the kernels into the cache for the next
-    commands (its log: ``compile.log`` in the cache directory; one compile at a time, guarded by
+    commands; should the compile finish first (a long scene), the interpreted run is stopped and the
+    command runs compiled (its log: ``compile.log`` in the cache directory; one compile at a time, guarded by
     ``compiling.lock``). A command of many scenes (fit, mc, posterior) waits for a compile already
     under way, else compiles in this process first, with a progress display.
 ``wait``
@@ -24,6 +25,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -103,10 +105,33 @@ def start_background_compile() -> Path | None:
     return log
 
 
-def run_interpreted(argv: list[str]) -> int:
-    """Run ``crashsim argv`` in a child process with the kernels interpreted; its exit code."""
+def run_interpreted(argv: list[str], race: bool = False, poll: float = 0.2) -> int | None:
+    """Run ``crashsim argv`` in a child process with the kernels interpreted; its exit code.
+
+    The child's output is held and passed on when it ends, so that with ``race`` (a compile under
+    way in the background) a scene that runs longer interpreted than the compile takes is stopped
+    once the kernels are ready, and None is returned: the caller then runs the command compiled
+    (a long scene interpreted can take longer than the compile).
+    """
     env = dict(os.environ, NUMBA_DISABLE_JIT="1")
-    return subprocess.call([sys.executable, "-m", "crashsim", *argv], env=env)
+    with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
+        child = subprocess.Popen([sys.executable, "-m", "crashsim", *argv], env=env, stdout=out, stderr=err)
+        while child.poll() is None:
+            if race and ready():
+                child.terminate()
+                child.wait()
+                return None
+            time.sleep(poll)
+        for src, dst in ((out, sys.stdout), (err, sys.stderr)):
+            src.seek(0)
+            dst.flush()
+            data = src.read()
+            if hasattr(dst, "buffer"):
+                dst.buffer.write(data)
+            else:  # a text stream without bytes (pytest's capture): decoded
+                dst.write(data.decode())
+            dst.flush()
+        return child.returncode
 
 
 def wait_for_background_compile(poll: float = 1.0, timeout: float = 3600.0) -> bool:

@@ -53,7 +53,7 @@ def test_single_scene_commands_run_interpreted_and_start_one_compile(monkeypatch
     monkeypatch.setenv("CRASHSIM_CACHE_DIR", str(tmp_path))
     monkeypatch.setenv(first_run.ENV, "background")
     calls = []
-    monkeypatch.setattr(first_run, "run_interpreted", lambda argv: calls.append(("child", argv)) or 7)
+    monkeypatch.setattr(first_run, "run_interpreted", lambda argv, race=False: calls.append(("child", argv)) or 7)
     monkeypatch.setattr(first_run, "start_background_compile", lambda: calls.append(("compile",)) or tmp_path / "log")
     import crashsim.cli as cli
 
@@ -96,3 +96,23 @@ def test_one_compile_at_a_time(monkeypatch, tmp_path):
     lock.write_text(str(dead.pid))  # a compile that died
     assert not first_run.compile_in_progress()
     assert first_run._take(lock) and lock.read_text() == str(os.getpid())
+
+
+def test_a_compile_that_finishes_first_stops_the_interpreted_run(monkeypatch, capsys):
+    """race: once the kernels are ready, a still-running interpreted child is stopped (None: the
+    caller runs the command compiled) and its held output is not passed on; without race it runs on."""
+    monkeypatch.setattr(first_run, "ready", lambda: True)
+    t0 = __import__("time").perf_counter()
+    assert first_run.run_interpreted(["run", str(SCENE)], race=True) is None
+    assert __import__("time").perf_counter() - t0 < 30.0
+    assert capsys.readouterr().out == ""
+    # the CLI then runs it here, compiled
+    monkeypatch.setenv(first_run.ENV, "background")
+    monkeypatch.setattr(first_run, "start_background_compile", lambda: None)
+    monkeypatch.setattr(first_run, "compile_in_progress", lambda: True)
+    import crashsim.cli as cli
+
+    monkeypatch.setattr(cli, "ready", lambda: False)
+    argv = ["run", str(SCENE)]
+    assert cli._first_run(cli.build_parser().parse_args(argv), argv) is None
+    assert "the scene runs compiled" in capsys.readouterr().err

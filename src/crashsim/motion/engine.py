@@ -20,6 +20,21 @@ The engines differ only in the integrator of a segment: SciPy's ``LSODA`` (or an
 solve_ivp method) stepped from Python (``engine="scipy"``), or the compiled explicit
 Runge-Kutta loop of :func:`crashsim.motion.kernels.run` (``engine="compiled"``), which
 returns to Python only for an impact.
+
+Why two segment loops and not one
+---------------------------------
+The loop around a segment (start it, find the first event on the dense output, handle it,
+settle, go on) exists twice: in Python here (:class:`_ScipyIntegrator`) and compiled in
+:mod:`crashsim.motion.kernels.integrator`.  Everything that decides the physics inside it is one
+source: the event functions and their values, the event handling, settle, the strike scan and
+the segment bounds are the kernels' and both loops call them.  What stays twice is the stepping
+and the root search: SciPy's steppers (LSODA's switching between stiff and non-stiff methods
+among them) are Python objects that a compiled loop cannot call without a round trip to Python
+at every step, which is what the compiled engine exists to avoid; and SciPy's dense output is
+its own interpolant, on which the events are located with ``brentq`` where the compiled loop
+uses its own Hermite interpolant and Brent's method (:func:`~crashsim.motion.kernels.first_root`,
+the same rule).  A shared loop would either give up SciPy's methods or put Python back into the
+compiled engine's step.
 """
 
 from __future__ import annotations

@@ -88,8 +88,9 @@ def evidence_tolerance(items, scene, rtol: float, atol: float, what: str = "sigm
                                    ("speed", max(speed, 1.0), f"the largest speed {max(speed, 1.0):.3g} m/s")):
         sig = [it.sigma for it in items if it.kind in runout_kinds and it.quantity == quantity]
         if sig:
+            unit = {"length": "m", "angle": "rad", "speed": "m/s"}[quantity]
             bounds.append((EVIDENCE_SHARE * min(sig) / scale, f"{EVIDENCE_SHARE:g} x the smallest {quantity} {what} "
-                                                               f"{min(sig):.3g} (SI) over {label}"))
+                                                               f"{min(sig):.3g} {unit} over {label}"))
     if not bounds:
         return SampleTolerance(rtol, atol, rtol, atol, "the file's tolerance (no evidence of the run-out sets a bound)")
     bound, why = min(bounds)

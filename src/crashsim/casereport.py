@@ -57,16 +57,23 @@ def _parts(dotted: str) -> list[str]:
     return [p.strip().strip('"') for p in re.findall(r'"[^"]*"|[^.]+', dotted)]
 
 
-def _comment_of(line: str) -> str | None:
-    """The comment at the end of a TOML line (a ``#`` outside any string), or None."""
+def _unquoted(text: str):
+    """``(index, character)`` of the characters of a TOML line outside its strings (quotes left out)."""
     quote = None
-    for i, ch in enumerate(line):
+    for i, ch in enumerate(text):
         if quote:
             if ch == quote:
                 quote = None
         elif ch in "\"'":
             quote = ch
-        elif ch == "#":
+        else:
+            yield i, ch
+
+
+def _comment_of(line: str) -> str | None:
+    """The comment at the end of a TOML line (a ``#`` outside any string), or None."""
+    for i, ch in _unquoted(line):
+        if ch == "#":
             return line[i + 1:].strip() or None
     return None
 
@@ -118,7 +125,8 @@ def toml_comments(text: str) -> dict[str, str]:
         key = _KEY.match(line)
         if key:
             path = ".".join(table + _parts(key[1].replace(" ", "")))
-            note = " ".join(above + ([_comment_of(line[key.end():])] if _comment_of(line[key.end():]) else []))
+            comment = _comment_of(line[key.end():])
+            note = " ".join(above + ([comment] if comment else []))
             if note:
                 out[path] = note
             rest = line[key.end():]
@@ -145,16 +153,11 @@ def _indexed(name: str, counts: dict[str, int]) -> str:
 
 def _open_brackets(text: str) -> int:
     """Brackets a value leaves open at the end of its first line (outside strings and comments)."""
-    depth, quote = 0, None
-    for ch in text:
-        if quote:
-            if ch == quote:
-                quote = None
-        elif ch in "\"'":
-            quote = ch
-        elif ch == "#":
+    depth = 0
+    for _, ch in _unquoted(text):
+        if ch == "#":
             break
-        elif ch in "[{":
+        if ch in "[{":
             depth += 1
         elif ch in "]}":
             depth -= 1

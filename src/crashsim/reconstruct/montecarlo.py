@@ -825,15 +825,20 @@ def _assemble(spec, seed, n, rows: dict, n_resumed, elapsed, engine, backend, wo
                     accepted_input_percentiles=_percentiles(inputs, meets, percentiles), tolerance=tolerance)
 
 
+def _median_scene(ov: ScenarioOverrides, med: np.ndarray):
+    """The scene with every input at its median, or None (logged) if it cannot be run."""
+    try:
+        return run_scene(ov.scenario(med))
+    except CrashsimError as exc:
+        _log.warning("the scene with every input at its median cannot be run: %s", exc)
+        return None
+
+
 def _swings(data, spec: UncertaintySpec, engine, file, q=(0.05, 0.95)) -> tuple[dict, Any]:
     """One-at-a-time swings of the contact bodies' delta-v (impact only) and the median scene."""
     ov = ScenarioOverrides(data, spec.paths, engine=engine, file=file, cache=1, field_prefix="uncertainty.inputs")
     med = np.array([d.median for d in spec.inputs])
-    nominal = None
-    try:
-        nominal = run_scene(ov.scenario(med))
-    except CrashsimError as exc:
-        _log.warning("the scene with every input at its median cannot be run: %s", exc)
+    nominal = _median_scene(ov, med)
     try:
         base_imp = solve_impact(ov.scenario(med).impact)
     except CrashsimError:
@@ -975,10 +980,12 @@ def monte_carlo(scenario_data: dict, spec: UncertaintySpec | dict | None = None,
         opts = nominal.scenario.runout.options
         tolerance = evidence_tolerance(tolerance_items(nominal.scenario.evidence), nominal, opts.rtol, opts.atol,
                                        what="tolerance")
-        if tolerance.changed:  # the samples, the median scene and the swings at the evidence's tolerance
+        if tolerance.changed:  # the samples and the median scene at the evidence's tolerance (the swings: impact only)
             scenario_data = with_tolerance(scenario_data, tolerance)
             payload["data"] = scenario_data
-            swings, nominal = _swings(scenario_data, spec, engine, file)
+            nominal = _median_scene(ScenarioOverrides(scenario_data, spec.paths, engine=engine, file=file, cache=1,
+                                                      field_prefix="uncertainty.inputs"),
+                                    np.array([d.median for d in spec.inputs]))
 
     if dask_address is not None:
         backend, nw = "dask", 0

@@ -735,7 +735,7 @@ class RunoutSpec:
 
 
 _WHEEL_KEYS = ("state", "brake", "steer", "cornering_coefficient", "cornering_stiffness", "rolling_resistance",
-               "mu_factor")
+               "mu_factor", "self_steer_limit")
 
 
 def _given(d: dict) -> dict:

@@ -195,3 +195,65 @@ def test_a_c_dolly_runs_out_as_the_merged_rigid_body(engine):
     # and an A-dolly in its place does not follow that path (the lock matters here)
     c = simulate_runout(_doubles(False), states, wheels, Road(1.0), opts)
     assert abs(c.bodies["dolly"].rest_heading - c.bodies["lead"].rest_heading) > 1e-3
+
+
+# ------------------------------------------------------------------------------------ the impact
+def _with_second(vehicle: Vehicle, at: tuple) -> Vehicle:
+    """``vehicle`` with a second trailer on the rear hitch ``at`` of its last body."""
+    second = Body("second", 9000.0, 55000.0, length=8.5, axles=(Axle(-3.0, 1.85, True, "axle"),))
+    return Vehicle(vehicle.name, vehicle.bodies + (second,), vehicle.hitches + (Hitch(at, (3.6, 0.0)),))
+
+
+@pytest.mark.parametrize("struck", ["second", "dolly", "lead"])
+@pytest.mark.parametrize("dense", [False, True])
+def test_a_c_dolly_takes_the_impact_as_the_merged_rigid_body(struck, dense):
+    """The impulse solver with a yaw-locked hitch (one more unknown: its moment impulse) gives the
+    lead trailer and the dolly the rigid motion of the merged body, and every other number (crush
+    and hitch impulses, the other bodies' velocities) equals that of the merged vehicle; on the
+    compiled single solve and on the dense NumPy path."""
+    from crashsim.impact import CrushSurface, ImpactBatch, ImpactProblem, TangentialLaw, solve_impact
+
+    chain = _with_second(_doubles(True), (0.15, 0.0))
+    merged, cg = _merged()
+    d2 = np.array(chain.hitches[1].front_point) - np.array(chain.hitches[1].rear_point)
+    merged = _with_second(merged, tuple(d2 + np.array((0.15, 0.0)) - cg))
+    states = chain_states(chain, (0.0, 0.0), 0.2, (12.0, 1.0), yaw_rates=[0.1, -0.05, -0.05, 0.2],
+                          articulation=[0.15, 0.0, -0.2])
+    lead = states["lead"]
+    R = np.array(lead.position) + rotate(cg, lead.heading)
+    vR = np.array(lead.velocity) + lead.yaw_rate * perp(rotate(cg, lead.heading))
+    m_states = {"truck": states["truck"], "second": states["second"],
+                "merged": BodyState(tuple(R), lead.heading, tuple(vR), lead.yaw_rate)}
+    car = Vehicle("C", (Body("car", 1500.0, 2800.0),))
+    target = states[struck]
+    side = rotate((0.0, 1.2), target.heading)
+    point = tuple(np.array(target.position) + side)
+    normal = math.atan2(side[1], side[0])
+    car_state = BodyState(tuple(np.array(point) + 2.4 * np.array(side) / 1.2), normal + math.pi,
+                          tuple(-12.0 * np.array(side) / 1.2), 0.0)
+    surface = CrushSurface(point, normal, 0.2, TangentialLaw("friction", 0.4), -1.0, 1)  # from the struck body into the car
+    body2 = {"second": "second", "dolly": "merged", "lead": "merged"}[struck]
+    pa = ImpactProblem((car, chain), {**states, "car": car_state}, "car", struck, surface)
+    pb = ImpactProblem((car, merged), {**m_states, "car": car_state}, "car", body2, surface)
+    if dense:
+        ba, bb = ImpactBatch.from_problem(pa), ImpactBatch.from_problem(pb)
+        oa, ob = ba.solve(condition=True), bb.solve(condition=True)
+        vel = lambda o, b, n: (o["velocity"][0, b.body_index(n)], o["yaw_rate"][0, b.body_index(n)])  # noqa: E731
+        pn_a, pn_b = oa["normal_impulse"][0], ob["normal_impulse"][0]
+        get_a = lambda n: vel(oa, ba, n)  # noqa: E731
+        get_b = lambda n: vel(ob, bb, n)  # noqa: E731
+    else:
+        ra, rb = solve_impact(pa), solve_impact(pb)
+        pn_a, pn_b = ra.normal_impulse, rb.normal_impulse
+        get_a = lambda n: (ra.bodies[n].velocity, ra.bodies[n].yaw_rate)  # noqa: E731
+        get_b = lambda n: (rb.bodies[n].velocity, rb.bodies[n].yaw_rate)  # noqa: E731
+    assert pn_a == pytest.approx(pn_b, rel=1e-9) and abs(pn_a) > 100.0
+    for n in ("car", "truck", "second"):
+        (va, wa), (vb, wb) = get_a(n), get_b(n)
+        assert np.allclose(va, vb, rtol=1e-9, atol=1e-9) and wa == pytest.approx(wb, rel=1e-9, abs=1e-12)
+    vm, wm = get_b("merged")
+    heading = states["lead"].heading
+    for n, offset in (("lead", -cg), ("dolly", d2 - cg)):
+        v, w = get_a(n)
+        assert w == pytest.approx(wm, rel=1e-9, abs=1e-12)
+        assert np.allclose(v, np.asarray(vm) + wm * perp(rotate(offset, heading)), rtol=1e-9, atol=1e-9)

@@ -316,7 +316,7 @@ class ImpactResult:
         vnames = S.vehicle_names
         hitches = {nm: HitchImpulse(nm, np.array(lam[3 + 2 * j:5 + 2 * j]), heading[S.hitches[j][0]])
                    for j, nm in enumerate(S.hitch_names)}
-        k0 = 3 + 2 * len(S.hitches)
+        k0 = 3 + 2 * len(S.hitches) + len(S.locks)
         cons = {}
         for c, nm in enumerate(S.constraint_names):
             d = inp["constraint_direction"][c]

@@ -622,14 +622,6 @@ def _secondary_impact(model: SceneModel, t: float, y: np.ndarray, geo: np.ndarra
             i = names.index(b.name)
             bi = result.bodies[b.name]
             y[L.vx.start + i], y[L.vy.start + i], y[L.w.start + i] = bi.velocity[0], bi.velocity[1], bi.yaw_rate
-    for v in involved:  # a C-dolly's yaw lock takes its moment impulse at the same instant (the solver's pins are free)
-        if any(h.yaw_locked for h in v.hitches):
-            now = L.unpack(y)
-            after = make_hitch_consistent(v, {b.name: now[b.name] for b in v.bodies}, position_tol=0.05)
-            for b in v.bodies:
-                i = names.index(b.name)
-                s = after[b.name]
-                y[L.vx.start + i], y[L.vy.start + i], y[L.w.start + i] = s.velocity[0], s.velocity[1], s.yaw_rate
     loss = ke_before - model.kinetic_energy(y)
     mask = np.zeros(len(model.vehicles), dtype=np.int64)
     for v in involved:

@@ -82,10 +82,6 @@ class SceneResult:
     warnings: tuple[str, ...] = ()
     accuracy: dict | None = None  # vehicle name -> AccuracyReport, when the scenario asks for an accuracy
     joint: Any = None  # SceneRunout: the run-out of the whole scene (impacts, pairs, events, energy ledger)
-    #: Kinetic energy [J] the yaw locks of C-dollies took just after the first impact: the impulse
-    #: solver treats every hitch as a free pin, so a lock's moment impulse is applied after it (the
-    #: projection of make_hitch_consistent), at the same instant; the ledger counts it in the first impact.
-    lock_loss: float = 0.0
 
     @property
     def at_rest(self) -> bool:
@@ -103,13 +99,13 @@ class SceneResult:
             return None
         e = self.joint.energy
         ke = self.impact.kinetic_energy["system"]
-        first = ke["before"] - ke["after"] + self.lock_loss
+        first = ke["before"] - ke["after"]
         ledger = {"before_impact": ke["before"], "first_impact": first, "later_impacts": e["impacts"],
                   "tyres": e["tyres"], "stops": e["stops"], "contacts": e["contacts"], "final": e["final"]}
         if "potential" in e:  # a sloped road: the potential energy gained
             ledger["potential"] = e["potential"]
         # kinetic energy of bystanders (not in the first impact) is in the run-out's initial energy
-        bystanders = e["initial"] - (ke["after"] - self.lock_loss)
+        bystanders = e["initial"] - ke["after"]
         ledger["before_impact"] += bystanders
         ledger["closing_error"] = ledger["before_impact"] - sum(v for k, v in ledger.items() if k != "before_impact")
         return ledger
@@ -540,7 +536,6 @@ def run_scene(scenario, *, lean: bool = False) -> SceneResult:
     runout = None
     accuracy = None
     joint = None
-    lock_loss = 0.0
     spec = scenario.runout
     if spec is not None and spec.level != "impact":
         states = separation_states(scenario, impact)
@@ -548,8 +543,6 @@ def run_scene(scenario, *, lean: bool = False) -> SceneResult:
         initial = {}
         for veh in movable:
             initial.update(make_hitch_consistent(veh, {b.name: states[b.name] for b in veh.bodies}))
-        lock_loss = sum(_kinetic(b, states[b.name]) - _kinetic(b, initial[b.name])
-                        for veh in movable if any(h.yaw_locked for h in veh.hitches) for b in veh.bodies)
         if spec.level in CONTACT_LEVELS:
             joint, accuracy = _joint_runout(movable, initial, spec, _track_filter(scenario) if lean else None)
             runout = dict(joint.vehicles)
@@ -563,12 +556,6 @@ def run_scene(scenario, *, lean: bool = False) -> SceneResult:
     warnings = [f"approach of {name}: {w}" for name, a in scenario.approaches.items() for w in a.warnings]
     warnings += [f"impact: {w}" for w in impact.warnings]
     warnings += rest_misfit_warnings(scenario.evidence)
-    if lock_loss > 0.0:
-        locked = ", ".join(f"{v.bodies[j].name}-{v.bodies[j + 1].name}" for v in scenario.vehicles
-                           for j, h in enumerate(v.hitches) if h.yaw_locked)
-        warnings.append(f"the yaw lock of a C-dolly ({locked}) took {lock_loss:.4g} J just after the first impact: the "
-                        "impulse solver treats its hitch as a free pin, so the impact's velocities and delta-v of "
-                        "those bodies are before the lock's moment impulse (the run-out starts after it)")
     if runout is not None:
         if joint is None:
             warnings += barrier_crossings(scenario, runout)
@@ -579,13 +566,7 @@ def run_scene(scenario, *, lean: bool = False) -> SceneResult:
             if not r.success:
                 warnings.append(f"the run-out of vehicle {vname!r} did not reach rest: {r.status} ({r.message})")
     return SceneResult(scenario=scenario, impact=impact, runout=runout, evidence=evidence, warnings=tuple(warnings),
-                       lock_loss=float(lock_loss),
                        accuracy=accuracy, joint=joint)
-
-
-def _kinetic(body, state) -> float:
-    """Kinetic energy of one body [J]."""
-    return 0.5 * (body.mass * (state.velocity[0] ** 2 + state.velocity[1] ** 2) + body.yaw_inertia * state.yaw_rate ** 2)
 
 
 def _track_filter(scenario):

@@ -66,3 +66,15 @@ def test_a_yaw_locked_first_hitch_is_refused_by_the_vehicle():
         Vehicle("V", (car, tr), (Hitch((-2.5, 0.0), (2.8, 0.0), yaw_locked=True),))
     with pytest.raises(ScenarioError, match="articulation_limit"):
         Hitch((-2.5, 0.0), (2.8, 0.0), 1.5, yaw_locked=True)
+
+
+def test_the_report_and_the_json_give_the_lock_moment_impulse(capsys):
+    import json
+
+    assert main(["run", str(SCENE), "--json"]) == 0
+    hitches = json.loads(capsys.readouterr().out)["impact"]["hitches"]
+    assert "lock_moment_impulse" in hitches["lead-dolly"]
+    assert all("lock_moment_impulse" not in h for n, h in hitches.items() if n != "lead-dolly")
+    assert main(["run", str(SCENE)]) == 0
+    text = capsys.readouterr().out
+    assert sum("yaw lock (C-dolly): moment" in line for line in text.splitlines()) == 1

@@ -22,7 +22,7 @@ from typing import Callable
 
 from ._jit import marker
 from .motion import RunoutOptions, Road, simulate_scene
-from .motion.model import kernels
+from .motion.scene_model import kernels
 from .scenario import scenario_from_dict
 from .scene import run_scene
 from .vehicles import Axle, Body, BodyState, Hitch, Vehicle

@@ -4,7 +4,7 @@ What is shared with the SciPy engine and what is not
 ----------------------------------------------------
 Shared (so that differences are integration differences): the vehicle, wheel settings,
 static loads, road and the **tyre force function** -- every step calls
-:meth:`crashsim.motion.dynamics.RunoutModel.evaluate` for the per-body tyre forces and
+:meth:`crashsim.motion.hitches.RunoutModel.evaluate` for the per-body tyre forces and
 moments (the constraint part of that evaluation is not used).  Independent: the time
 integration (pymunk's fixed-step semi-implicit Euler), the hitch (a ``pymunk.PivotJoint``
 solved by pymunk's iterative impulse solver with its own positional bias, *not* the
@@ -36,7 +36,7 @@ from typing import Mapping
 import numpy as np
 
 from ..errors import ScenarioError
-from ..motion.dynamics import RunoutModel
+from ..motion.hitches import RunoutModel
 from ..motion.loads import STANDARD_GRAVITY
 from ..motion.options import RunoutOptions
 from ..motion.postprocess import assemble_result

@@ -29,7 +29,7 @@ when the compiled engine is first used.
 """
 
 from .contact import ContactModel, Obstacle
-from .dynamics import make_hitch_consistent
+from .hitches import make_hitch_consistent
 from .layout import StateLayout
 from .loads import StaticLoads, static_loads
 from .options import ENGINES, METHODS, SCHEMES, RunoutOptions

@@ -120,10 +120,10 @@ from scipy.optimize import brentq
 from ..errors import ScenarioError
 from ..vehicles import BodyState, Vehicle
 from .contact import ContactModel
-from .dynamics import RunoutModel
+from .hitches import RunoutModel
 from .engine import run_model
 from .loads import STANDARD_GRAVITY
-from .model import SceneModel
+from .scene_model import SceneModel
 from .options import RunoutOptions
 from .postprocess import split_track
 from .result import BodyHistory, BodyRunout, HitchHistory, RunoutEvent, RunoutResult, WheelTrack

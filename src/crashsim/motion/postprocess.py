@@ -2,7 +2,7 @@
 
 Shared by the SciPy engine and the pymunk cross-check, so both report the same quantities
 computed the same way.  Inputs are *chunks*: consecutive pieces of the run with constant
-segment inputs (:class:`~crashsim.motion.dynamics.SegmentParams`).
+segment inputs (:class:`~crashsim.motion.hitches.SegmentParams`).
 
 * sample chunks ``(seg, t, Y)``: states ``Y`` (n_state, K) at times ``t`` (K,) for the
   histories and tracks;
@@ -20,9 +20,9 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from .dynamics import RunoutModel, SegmentParams, hitch_rows
+from .hitches import RunoutModel, SegmentParams, hitch_rows
 from .layout import StateLayout
-from .model import kernels
+from .scene_model import kernels
 from .result import (BodyHistory, BodyRunout, HitchHistory, PairSummary, RunoutEvent, RunoutResult,
                      SceneRunout, TrackSegment, WheelTrack)
 

@@ -45,7 +45,7 @@ __all__ = ["ScenarioVariant", "patch_scenario"]
 def _unchecked(obj, **changes):
     """A copy of the frozen dataclass ``obj`` with ``changes``, its ``__post_init__`` checks skipped.
 
-    For an :class:`~crashsim.impact.model.ImpactProblem` whose vehicles, bodies, names and
+    For an :class:`~crashsim.impact.problem.ImpactProblem` whose vehicles, bodies, names and
     constraints are those of a validated problem: only states (built by ``chain_states``,
     pin-consistent by construction) and the crush surface (validated by its own constructor)
     change, which its structural checks do not concern.

@@ -13,7 +13,7 @@ from ..animation import animate_scene
 from ..errors import ScenarioError, with_file
 from ..evidence.checks import REST_MISFIT_SHARE, evaluate_evidence, wheel_matches
 from ..impact import ImpactResult, solve_impact
-from ..impact.model import ImpactProblem
+from ..impact.problem import ImpactProblem
 from ..motion import make_hitch_consistent
 from ..motion.accuracy import scene_to_accuracy, simulate_to_accuracy
 from ..motion.approach import simulate_approach

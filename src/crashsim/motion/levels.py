@@ -112,6 +112,7 @@ import dataclasses
 import difflib
 import logging
 import math
+import warnings
 from typing import Mapping
 
 import numpy as np
@@ -132,7 +133,8 @@ from .simulate import simulate_runout
 from .tyres import tyre_forces
 from .wheels import WheelSettings
 
-__all__ = ["LEVELS", "LEVEL_DESCRIPTIONS", "simulate_level", "simulate_scene_level", "energy_runout", "rigid_runout"]
+__all__ = ["LEVELS", "LEVEL_DESCRIPTIONS", "check_level", "simulate_level", "simulate_scene_level", "energy_runout",
+           "rigid_runout"]
 
 _log = logging.getLogger("crashsim")
 
@@ -152,7 +154,8 @@ LEVEL_DESCRIPTIONS = {
 _SWEEP_POINTS_PER_RAD = 32
 
 
-def _check_level(level: str) -> str:
+def check_level(level: str) -> str:
+    """``level`` if it is one of :data:`LEVELS`, else a ScenarioError naming the nearest (field ``runout.level``)."""
     if level not in LEVELS:
         close = difflib.get_close_matches(str(level), LEVELS, n=3)
         hint = f"; best matches are {close}" if close else ""
@@ -227,7 +230,7 @@ def simulate_level(
     >>> simulate_level("impact", car, start, None, Road(mu=0.75)) is None
     True
     """
-    _check_level(level)
+    check_level(level)
     settings = _check_inputs(vehicle, road, options, wheels)
     if level == "impact":
         return None
@@ -249,12 +252,20 @@ def simulate_scene_level(
     road: Road,
     options: RunoutOptions = RunoutOptions(),
 ) -> dict[str, RunoutResult] | None:
-    """:func:`simulate_level` for every movable vehicle of a scene (None for ``"impact"``).
+    """:func:`simulate_level` for every movable vehicle of a scene, each alone (None for ``"impact"``).
+
+    .. deprecated::
+        Use :func:`crashsim.motion.run_runout` (``level=...``; its ``.vehicles``), the one run-out
+        entry.  It runs the ``articulated`` and ``load_transfer`` levels with every vehicle
+        together and with contact, as a scene does; this function runs each vehicle alone.
 
     Mirrors :func:`~crashsim.motion.simulate_scene`: results by vehicle name, barriers absent,
     a vehicle not in ``wheels_by_vehicle`` has all wheels locked.
     """
-    _check_level(level)
+    warnings.warn("crashsim.motion.levels.simulate_scene_level is deprecated; use crashsim.motion.run_runout "
+                  "(level=...), which runs the articulated levels with every vehicle together and with contact",
+                  DeprecationWarning, stacklevel=2)
+    check_level(level)
     vehicles = list(vehicles)
     wheels_by_vehicle = dict(wheels_by_vehicle or {})
     names = [v.name for v in vehicles]

@@ -39,7 +39,7 @@ from ..errors import ScenarioError
 from ..motion.hitches import RunoutModel
 from ..motion.loads import STANDARD_GRAVITY
 from ..motion.options import RunoutOptions
-from ..motion.postprocess import assemble_result
+from ..motion.postprocess import build_result, chunk_inputs
 from ..motion.result import RunoutEvent, RunoutResult
 from ..motion.road import Road
 from ..motion.engine import check_scene_hitches
@@ -267,7 +267,7 @@ def simulate_runout_pymunk(
                 quadrature.append((quad_seg[start], np.full(k - start, dt), QY[:, start:k]))
                 start = k
     events = [RunoutEvent(t, status, message)]
-    return assemble_result(
+    return build_result(model, chunk_inputs(
         model,
         samples=samples,
         quadrature=quadrature,
@@ -284,4 +284,4 @@ def simulate_runout_pymunk(
         n_segments=1,
         method=f"pymunk/dt={dt:g}",
         hitch_force=np.array(rec_hitch),
-    )
+    ))

@@ -51,11 +51,9 @@ import copy
 import datetime
 import logging
 import math
-import multiprocessing as mp
 import os
-import sys
+import threading
 import time
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Callable
@@ -78,6 +76,7 @@ from ..units import resolve_system
 from .montecarlo import DEFAULT_SAMPLE_TIME_LIMIT
 from .overrides import (ScenarioOverrides, default_engine, file_contents, forward_data, get_value, parse_value,
                         resolve_path, set_value)
+from .parallel import Executor, Progress
 
 __all__ = ["FitSpec", "Unknown", "FitProblem", "FitResult", "EvidenceResidual", "StartResult", "fit_scene",
            "RANK_TOL", "PENALTY"]
@@ -899,47 +898,45 @@ def _best_header(res: FitResult, data: dict) -> str:
 # fit_scene
 # ---------------------------------------------------------------------------------------------
 
-_WORKER: dict = {}
+_LOCAL = threading.local()
 
 
-def _worker_init(data, spec, engine, file, sample_time_limit=None):
-    _WORKER["problem"] = FitProblem(data, spec, engine=engine, file=file, sample_time_limit=sample_time_limit)
+def _problem_for(payload: dict) -> "FitProblem":
+    """A worker's fit problem, built once per thread from ``payload``."""
+    cache = getattr(_LOCAL, "problems", None)
+    if cache is None:
+        cache = _LOCAL.problems = {}
+    key = id(payload)
+    p = cache.get(key)
+    if p is None:
+        p = cache[key] = FitProblem(payload["data"], payload["spec"], engine=payload["engine"], file=payload["file"],
+                                    sample_time_limit=payload["time_limit"])
+    return p
 
 
-def _worker_local(z0):
-    return _WORKER["problem"].local_fit(z0)
+def _local_fit(problem: "FitProblem", z0):
+    return problem.local_fit(z0)
 
 
-def _worker_cost(z):
-    return _WORKER["problem"].cost(z)
+def _cost(problem: "FitProblem", z):
+    return problem.cost(z)
 
 
-def _start_points(spec: FitSpec, problem: FitProblem, pool, workers) -> list[np.ndarray]:
+def _start_points(spec: FitSpec, ex: Executor) -> list[np.ndarray]:
     from scipy.stats import qmc
 
     n = len(spec.unknowns)
-    first = problem.z_of([u.initial for u in spec.unknowns])
+    first = ex.local.z_of([u.initial for u in spec.unknowns])
     if spec.starts == 1:
         return [first]
     if spec.screen > 0:
         cand = qmc.LatinHypercube(d=n, seed=spec.seed).random(spec.screen)
-        costs = list(pool.map(_worker_cost, list(cand))) if pool else [problem.cost(z) for z in cand]
+        costs = ex.map(_cost, list(cand))
         order = np.argsort(costs, kind="stable")
         rest = [cand[i] for i in order[:spec.starts - 1]]
     else:
         rest = list(qmc.LatinHypercube(d=n, seed=spec.seed).random(spec.starts - 1))
     return [first] + rest
-
-
-def _progress(progress, total):
-    if progress is True:
-        try:
-            from tqdm import tqdm
-        except ImportError:  # pragma: no cover - tqdm is a dependency
-            return None
-
-        return tqdm(total=total, desc="fit starts", unit="start", file=sys.stderr)
-    return None
 
 
 def fit_scene(scenario_data: dict, fit_spec: FitSpec | dict | None = None, *, engine: str | None = None,
@@ -1001,38 +998,17 @@ def fit_scene(scenario_data: dict, fit_spec: FitSpec | dict | None = None, *, en
     workers = check_workers(workers) or (os.cpu_count() or 1)
     n_tasks = max(spec.starts, 1)
     use_pool = workers > 1 and (spec.starts > 1 or spec.screen > 1)
-    pool = None
-    bar = _progress(progress, spec.starts)
+    payload = {"data": scenario_data, "spec": spec, "engine": engine, "file": file, "time_limit": sample_time_limit}
     outcomes: list[dict] = []
     evaluations = 0
-    try:
-        if use_pool:
-            ctx = mp.get_context("fork") if "fork" in mp.get_all_start_methods() else None
-            pool = ProcessPoolExecutor(max_workers=min(workers, max(n_tasks, spec.screen)), mp_context=ctx,
-                                       initializer=_worker_init,
-                                       initargs=(scenario_data, spec, engine, file, sample_time_limit))
-        starts = _start_points(spec, problem, pool, workers)
+    with Progress(progress, spec.starts, desc="fit starts", unit="start", dynamic_ncols=False) as bar, \
+            Executor(_problem_for, payload, "processes" if use_pool else "serial",
+                     min(workers, max(n_tasks, spec.screen)), local=problem) as ex:
+        starts = _start_points(spec, ex)
         evaluations += spec.screen if spec.starts > 1 else 0
-        if pool is not None:
-            futures = [pool.submit(_worker_local, z0) for z0 in starts]
-            for k, fut in enumerate(futures):
-                outcomes.append(fut.result())
-                if bar is not None:
-                    bar.update(1)
-                elif callable(progress):
-                    progress(k + 1, len(starts))
-        else:
-            for k, z0 in enumerate(starts):
-                outcomes.append(problem.local_fit(z0))
-                if bar is not None:
-                    bar.update(1)
-                elif callable(progress):
-                    progress(k + 1, len(starts))
-    finally:
-        if pool is not None:
-            pool.shutdown()
-        if bar is not None:
-            bar.close()
+        for k, outcome in enumerate(ex.submit_each(_local_fit, starts)):
+            outcomes.append(outcome)
+            bar.update(1, k + 1)
     evaluations += sum(o["evaluations"] for o in outcomes)
     n_before = problem.nfev
     result = _analyse(problem, spec, outcomes, engine)

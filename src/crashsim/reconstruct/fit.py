@@ -260,7 +260,7 @@ class EvidenceModel:
     Parameters
     ----------
     scenario : Scenario
-        Validated (its ``data`` holds the evidence ``sigma`` keys).
+        Validated; each evidence item carries its ``sigma`` (and a rest item its ``heading_sigma``).
     sigma_from_tolerance : float, optional
         Fraction of the tolerance used as sigma where an item has none.
     mark_points : int
@@ -268,12 +268,10 @@ class EvidenceModel:
 
     def __init__(self, scenario, *, sigma_from_tolerance: float | None = None, mark_points: int = 10):
         ev = scenario.evidence
-        raw = scenario.data.get("evidence") or {}
         self.mark_points = int(mark_points)
         items: list[_Item] = []
 
-        def sig(entry: dict, key: str, tol: float, where: str) -> tuple[float, str]:
-            s = entry.get(key) if entry else None
+        def sig(s: float | None, key: str, tol: float, where: str) -> tuple[float, str]:
             if s is not None:
                 return float(s), key
             if sigma_from_tolerance is not None:
@@ -283,7 +281,7 @@ class EvidenceModel:
                                 field=f"{where}.{key}", file=scenario.path)
 
         if ev.impact_point is not None:
-            s, src = sig(raw.get("impact_point") or {}, "sigma", ev.impact_point.tolerance, "evidence.impact_point")
+            s, src = sig(ev.impact_point.sigma, "sigma", ev.impact_point.tolerance, "evidence.impact_point")
             items.append(_Item("point of impact", ev.impact_point.name, "length", s, src, 2, 2.0, 0,
                                measured=np.asarray(ev.impact_point.position, float)))
         if ev.rest and scenario.runout is None:
@@ -293,28 +291,24 @@ class EvidenceModel:
             raise ScenarioError("tyre-mark evidence needs a run-out: add [runout]", field="evidence.marks",
                                 file=scenario.path)
         for i, r in enumerate(ev.rest):
-            entry = (raw.get("rest") or [{}] * (i + 1))[i]
             name = r.name or f"rest of {r.body}"
-            s, src = sig(entry, "sigma", r.tolerance, f"evidence.rest[{i}]")
+            s, src = sig(r.sigma, "sigma", r.tolerance, f"evidence.rest[{i}]")
             items.append(_Item("rest", name, "length", s, src, 2, 2.0, i, body=r.body,
                                measured=np.asarray(r.position, float)))
             if r.heading is not None:
-                s, src = sig(entry, "heading_sigma", r.heading_tolerance, f"evidence.rest[{i}]")
+                s, src = sig(r.heading_sigma, "heading_sigma", r.heading_tolerance, f"evidence.rest[{i}]")
                 items.append(_Item("rest heading", f"{name} (heading)", "angle", s, src, 1, 1.0, i, body=r.body,
                                    measured=float(r.heading)))
         for i, m in enumerate(ev.marks):
-            entry = (raw.get("marks") or [{}] * (i + 1))[i]
-            s, src = sig(entry, "sigma", m.tolerance, f"evidence.marks[{i}]")
+            s, src = sig(m.sigma, "sigma", m.tolerance, f"evidence.marks[{i}]")
             items.append(_Item("mark", m.name or f"mark {i + 1}", "length", s, src, self.mark_points, 1.0, i,
                                mark=m))
         for i, x in enumerate(ev.delta_v):
-            entry = (raw.get("delta_v") or [{}] * (i + 1))[i]
-            s, src = sig(entry, "sigma", x.tolerance, f"evidence.delta_v[{i}]")
+            s, src = sig(x.sigma, "sigma", x.tolerance, f"evidence.delta_v[{i}]")
             items.append(_Item("delta-v", x.name or f"delta-v of {x.body} ({x.component})", "speed", s, src, 1, 1.0,
                                i, body=x.body, measured=float(x.value)))
         for i, x in enumerate(ev.recorder):
-            entry = (raw.get("recorder") or [{}] * (i + 1))[i]
-            s, src = sig(entry, "sigma", x.tolerance, f"evidence.recorder[{i}]")
+            s, src = sig(x.sigma, "sigma", x.tolerance, f"evidence.recorder[{i}]")
             n = len(x.times)
             items.append(_Item("recorder", x.name or f"recorder in {x.body}", "speed", s, src, n, float(n), i,
                                body=x.body, measured=x))
@@ -323,13 +317,12 @@ class EvidenceModel:
                 # the group's sigma: root sum of squares of its items' (independent measurements)
                 parts, srcs = [], set()
                 for i in idx:
-                    entry = (raw.get("crush") or [{}] * (i + 1))[i]
                     c = ev.crush[i]
-                    if entry.get("sigma") is None and c.tolerance is None and sigma_from_tolerance is not None:
+                    if c.sigma is None and c.tolerance is None and sigma_from_tolerance is not None:
                         raise ScenarioError("the fit needs this crush item's sigma (an energy): its tolerance is "
                                             "relative to an energy that changes with the fit; add sigma = ...",
                                             field=f"evidence.crush[{i}].sigma", file=scenario.path)
-                    s_i, src = sig(entry, "sigma", c.tolerance or 0.0, f"evidence.crush[{i}]")
+                    s_i, src = sig(c.sigma, "sigma", c.tolerance or 0.0, f"evidence.crush[{i}]")
                     parts.append(s_i)
                     srcs.add(src)
                 items.append(_Item("crush energy", f"crush energy, {GROUP_TITLES[which]}", "energy",

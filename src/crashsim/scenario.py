@@ -575,7 +575,8 @@ from .motion.loads import STANDARD_GRAVITY
 from .motion.road import signed_distance
 from .plotting import is_color
 from .scene.run import simulate_approaches
-from .survey.mapping import expand_survey
+from .survey.frame import SceneFrame
+from .survey.mapping import expand_survey, survey_frame
 
 SCHEMA = with_inverse_sections(SCHEMA)
 
@@ -673,6 +674,11 @@ class Scenario:
     approach_inputs : dict of ApproachInput
         By vehicle name: what each vehicle's approach needs (its spec, road and options, the
         speed at impact if the file gives it), built and checked at load.
+    descriptions : dict of str
+        By vehicle name: the file's ``description`` of each vehicle ("" if none), for figures and reports.
+    survey_frame : SceneFrame or None
+        Where the scene lies on its survey (``[survey]`` with files, an underlay or a CRS); None
+        for a scene not placed on a survey.
     """
 
     path: str | None
@@ -688,6 +694,8 @@ class Scenario:
     map_lines: tuple[MapLine, ...] = ()
     approaches: dict = field(default_factory=dict)
     approach_inputs: dict = field(default_factory=dict)
+    descriptions: dict = field(default_factory=dict)
+    survey_frame: SceneFrame | None = None
 
     @property
     def approaches_simulated(self) -> bool:
@@ -1325,8 +1333,12 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None, approac
         map_lines = _build_map_lines(d["map"], file)
     later.raise_any()
     meta = d["scenario"]
+    survey = d.get("survey")
+    placed = isinstance(survey, dict) and any(survey.get(k) for k in ("files", "underlay", "crs", "imported"))
     out = Scenario(file, meta["title"], meta["source"], meta["units"], tuple(vehicles), states, problem, runout,
-                   evidence, d, map_lines, {}, approach_inputs)
+                   evidence, d, map_lines, {}, approach_inputs,
+                   descriptions={n: v.get("description") or "" for n, v in d["vehicles"].items()},
+                   survey_frame=survey_frame(survey) if placed else None)
     object.__setattr__(out, "_file_data", source)  # the file contents it was built from (Scenario.file_data)
     if not approaches:
         return out
@@ -1588,7 +1600,7 @@ def _build_evidence(e: dict | None, states: dict, file: str | None, vehicles=(),
             reg = _rest_registration(r, by_name[name], key, file)
             heading = reg.heading if r["heading_tolerance"] is not None else None
             rest.append(RestEvidence(name, reg.position, r["tolerance"], heading, r["heading_tolerance"], r["name"],
-                                     reg))
+                                     reg, sigma=r.get("sigma"), heading_sigma=r.get("heading_sigma")))
             continue
         if r["position"] is None:
             raise _err(f"rest evidence of {name!r} needs position (the measured CG) or points (two or more measured "
@@ -1596,7 +1608,8 @@ def _build_evidence(e: dict | None, states: dict, file: str | None, vehicles=(),
         if (r["heading"] is None) != (r["heading_tolerance"] is None):
             raise _err("heading and heading_tolerance go together", f"{key}.heading_tolerance", file)
         rest.append(RestEvidence(name, tuple(r["position"]), r["tolerance"], r["heading"],
-                                 r["heading_tolerance"], r["name"]))
+                                 r["heading_tolerance"], r["name"], sigma=r.get("sigma"),
+                                 heading_sigma=r.get("heading_sigma")))
     marks = []
     for i, m in enumerate(e["marks"]):
         sel = m["wheel"]
@@ -1616,12 +1629,13 @@ def _build_evidence(e: dict | None, states: dict, file: str | None, vehicles=(),
                            f"({owner or 'any vehicle'}): add [vehicles.<name>.approach]",
                            f"evidence.marks[{i}].phase", file)
         marks.append(MarkEvidence(np.asarray(m["points"], dtype=float), m["tolerance"], sel, m["sliding_only"],
-                                  m["name"], m["phase"]))
+                                  m["name"], m["phase"], sigma=m.get("sigma")))
     poi = None
     if e["impact_point"] is not None:
-        poi = ImpactPointEvidence(tuple(e["impact_point"]["position"]), e["impact_point"]["tolerance"])
+        poi = ImpactPointEvidence(tuple(e["impact_point"]["position"]), e["impact_point"]["tolerance"],
+                                  sigma=e["impact_point"].get("sigma"))
     dv = [DeltaVEvidence(body(x["body"], f"evidence.delta_v[{i}].body"), x["value"], x["tolerance"], x["component"],
-                         x["name"], x["impacts"]) for i, x in enumerate(e["delta_v"])]
+                         x["name"], x["impacts"], sigma=x.get("sigma")) for i, x in enumerate(e["delta_v"])]
     recorder = []
     for i, x in enumerate(e["recorder"]):
         key = f"evidence.recorder[{i}]"
@@ -1633,7 +1647,7 @@ def _build_evidence(e: dict | None, states: dict, file: str | None, vehicles=(),
         smp = x["samples"]
         recorder.append(RecorderEvidence(name, tuple(p["time"] for p in smp), tuple(p["speed"] for p in smp),
                                          tuple(bool(p["brake"]) for p in smp), x["tolerance"], x["time_offset"],
-                                         x["name"]))
+                                         x["name"], sigma=x.get("sigma")))
     return Evidence(tuple(rest), tuple(marks), poi, tuple(dv), tuple(recorder))
 
 
@@ -1679,7 +1693,7 @@ def _build_crush(items: list, d: dict, vehicles, file: str | None) -> tuple:
         out.append(CrushEvidence(name, c["face"], by_name[name].mass, A, B, c["width"],
                                  None if c["profile"] is None else tuple(c["profile"]), c["offset"], c["ees"],
                                  c["tolerance"], c["relative_tolerance"], c["impacts"], c["compare"],
-                                 c["correction"] == "pdof", source, c["name"]))
+                                 c["correction"] == "pdof", source, c["name"], sigma=c.get("sigma")))
     for which, idx in crush_groups(out):
         modes = {out[i].compare for i in idx}
         if len(modes) > 1:

@@ -27,6 +27,10 @@ def _positive(name: str, value: float, *, allow_inf: bool = False) -> float:
 
 
 def _point(name: str, value) -> tuple[float, float]:
+    if type(value) is tuple and len(value) == 2 and all(type(c) in (float, np.float64) for c in value):
+        x, y = float(value[0]), float(value[1])  # the common case, without NumPy's per-call cost
+        if math.isfinite(x) and math.isfinite(y):
+            return (x, y)
     arr = np.asarray(value, dtype=float)
     if arr.shape != (2,) or not np.all(np.isfinite(arr)):
         raise ScenarioError(f"must be a finite 2-vector (x, y) in metres, got {value!r}", field=name)

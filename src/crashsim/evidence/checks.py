@@ -206,6 +206,8 @@ class RestEvidence:
     heading_tolerance: float | None = None
     name: str = ""
     registration: Registration | None = None
+    sigma: float | None = None  # measurement uncertainty of the position [m] (fit, posterior)
+    heading_sigma: float | None = None  # of the heading [rad]
 
 
 @dataclass(frozen=True)
@@ -216,6 +218,7 @@ class MarkEvidence:
     sliding_only: bool = True
     name: str = ""
     phase: str = "runout"  # "runout": left after the impact; "approach": before it (pre-impact skid or yaw mark)
+    sigma: float | None = None  # measurement uncertainty [m] (fit, posterior)
 
 
 @dataclass(frozen=True)
@@ -223,6 +226,7 @@ class ImpactPointEvidence:
     position: tuple[float, float]
     tolerance: float
     name: str = "point of impact"
+    sigma: float | None = None  # measurement uncertainty [m] (fit, posterior)
 
 
 @dataclass(frozen=True)
@@ -233,6 +237,7 @@ class DeltaVEvidence:
     component: str = "magnitude"  # "magnitude", "longitudinal", "lateral"
     name: str = ""
     impacts: str = "first"  # "first": the first impact only (one recorded event); "all": the sum over the body's impacts
+    sigma: float | None = None  # measurement uncertainty [m/s] (fit, posterior)
 
 
 @dataclass(frozen=True)
@@ -251,6 +256,7 @@ class RecorderEvidence:
     tolerance: float
     time_offset: float = 0.0
     name: str = ""
+    sigma: float | None = None  # measurement uncertainty of a sample [m/s] (fit, posterior)
 
 
 @dataclass(frozen=True)

@@ -22,7 +22,7 @@ MAX_STILL_SEGMENTS = 50
 
 #: solve_ivp methods accepted by :class:`RunoutOptions` (``engine="scipy"``).
 METHODS = ("RK45", "DOP853", "LSODA", "Radau", "BDF")
-#: Run-out engines: SciPy's solve_ivp, or the numba-compiled integrator of :mod:`crashsim.motion.fast`.
+#: Run-out engines: SciPy's solve_ivp, or the numba-compiled integrator of :mod:`crashsim.motion.compiled_solution`.
 ENGINES = ("scipy", "compiled")
 #: Integration schemes of the compiled engine (``engine="compiled"``).
 SCHEMES = ("dopri5", "bs3")
@@ -124,7 +124,7 @@ class RunoutOptions:
     engine : {"scipy", "compiled"}
         ``"scipy"`` (default): ``scipy.integrate.solve_ivp`` with ``method``
         (:mod:`crashsim.motion.simulate`).  ``"compiled"``: the same model, events and
-        result integrated by numba-compiled code (:mod:`crashsim.motion.fast`), about two
+        result integrated by numba-compiled code (:mod:`crashsim.motion.compiled_solution`), about two
         orders of magnitude faster per run-out (``plots/fast_path.md``), for fits and Monte
         Carlo; the first call in a fresh environment compiles it (tens of seconds, then
         cached on disk).  Every other option means the same for both engines.

@@ -38,7 +38,7 @@ from .motion.wheels import select_wheels, enumerate_wheels
 from .schema import ArrayOf, Field, ScenarioValidationError, Section, Table, document, load_toml, validate
 from .survey.schema import MAP_LINE_STYLES, SURVEY
 from .units import Kind, format_value, parse, toml_repr
-from .vehicles import Axle, Body, BodyState, Hitch, Vehicle, chain_states
+from .vehicles import MAX_ROLLOVER_THRESHOLD, Axle, Body, BodyState, Hitch, Vehicle, chain_states
 
 __all__ = ["SCHEMA", "MAP_LINE_STYLES", "MapLine", "Scenario", "RunoutSpec", "load_scenario", "presets", "preset_geometry",
            "scenario_from_dict", "schema_document"]
@@ -116,6 +116,11 @@ BODY = Section("body", [
           description="Largest articulation before the bodies meet (jack-knife stop)"),
     Field("cg_height", Kind.LENGTH, required=False, minimum=0, exclusive_minimum=True, example="1.1 m",
           description="CG height above ground (only for the run-out's load transfer)"),
+    Field("rollover_threshold", "float", required=False, minimum=0, exclusive_minimum=True,
+          maximum=MAX_ROLLOVER_THRESHOLD, example="0.35",
+          description="Lateral acceleration in g at which this body rolls (static rollover threshold, e.g. a "
+                      "tilt-table value); turns the wheel-lift and rollover check on (level load_transfer); "
+                      "default 0.75 t / (2 h) from the mean track t and cg_height h"),
     Field("drawbar", Kind.LENGTH, minimum=0, maximum=MAX_LENGTH, default=f"{DEFAULT_DRAWBAR:g} m",
           description="How far this body's hitch points (rear_hitch, front_hitch) may lie outside its outline: a "
                       "drawbar, an A-frame tongue, a ball mount (checked at load; the default covers car-trailer "
@@ -346,6 +351,10 @@ RUNOUT = Section("runout", [
           description="Computing time allowed for the run-out; more ends it with status wall_time_limit (exit 3)"),
     Field("load_transfer", "bool", default=_OPT.load_transfer,
           description="Quasi-static load transfer (needs every body's cg_height)"),
+    Field("rollover", "bool", default=False,
+          description="Record when a body's inner wheels lift and when it passes its rollover threshold "
+                      "(needs level load_transfer; each body's rollover_threshold, default 0.75 t / (2 h)); the "
+                      "result says from when the planar run-out is outside its validity"),
 ], subsections=[ArrayOf("zones", ZONE, required=False, description="Friction zones")],
    required=False, description="Run-out of every vehicle from separation to rest (omit for an impact-only study)")
 
@@ -802,6 +811,31 @@ def _build_wheels(vehicle: Vehicle, v: dict, file: str | None, prefix: str | Non
     return ws
 
 
+def _rollover_check(r: dict, level: str, vehicles, file: str | None) -> bool:
+    """Whether the wheel-lift and rollover check is asked for (runout.rollover, or a body's
+    rollover_threshold), and that it can be done: level load_transfer, and the CG height of every
+    body whose threshold is the default."""
+    asked = [("runout.rollover", "rollover = true")] if r["rollover"] else []
+    for veh in vehicles:
+        for i, b in enumerate(veh.bodies):
+            if b.rollover_threshold is not None:
+                asked.append((f"vehicles.{veh.name}.bodies[{i}].rollover_threshold",
+                              f"rollover_threshold = {b.rollover_threshold:g}"))
+    if not asked:
+        return False
+    if level != "load_transfer":
+        key, text = asked[0]
+        raise _err(f"{text} asks for the wheel-lift and rollover check, which reads the load transfer: it needs "
+                   f"level \"load_transfer\", but level = {level!r}", key, file)
+    for veh in vehicles:
+        for i, b in enumerate(veh.bodies):
+            if not b.is_fixed and b.rollover_threshold is None and b.cg_height is None:
+                raise _err(f"the default rollover threshold 0.75 t / (2 h) of body {b.name!r} needs its CG height h; "
+                           "give cg_height (m, > 0), or rollover_threshold in g, allowed (0, "
+                           f"{MAX_ROLLOVER_THRESHOLD:g}]", f"vehicles.{veh.name}.bodies[{i}].cg_height", file)
+    return True
+
+
 def _build_runout(r: dict, vehicles, raw_vehicles: dict, file: str | None, raw: dict | None = None) -> RunoutSpec:
     raw = raw or {}
     level = r["level"]
@@ -835,6 +869,7 @@ def _build_runout(r: dict, vehicles, raw_vehicles: dict, file: str | None, raw: 
         road = Road(r["road_friction"], zones, r["grade"], r["cross_slope"])
     except ScenarioError as exc:
         raise _rewrap(exc, "runout.zones", file) from None
+    rollover = _rollover_check(r, level, vehicles, file)
     try:
         extra = {"engine": r["engine"]} if "engine" in RunoutOptions.__dataclass_fields__ else {}
         if r["engine"] != "scipy" and not extra:
@@ -842,7 +877,8 @@ def _build_runout(r: dict, vehicles, raw_vehicles: dict, file: str | None, raw: 
         options = RunoutOptions(method=r["method"], rtol=r["rtol"], atol=r["atol"], eps=r["eps"], v_stop=r["v_stop"],
                                 max_step=r["max_step"], t_max=r["t_max"], sample_dt=r["sample_dt"],
                                 lateral_model=r["lateral_model"], load_transfer=level == "load_transfer",
-                                max_impacts=r["max_impacts"], max_wall_time=r["max_wall_time"], **extra)
+                                rollover=rollover, max_impacts=r["max_impacts"], max_wall_time=r["max_wall_time"],
+                                **extra)
     except ScenarioError as exc:
         raise _rewrap(exc, "runout", file) from None
     if options.load_transfer:
@@ -973,7 +1009,7 @@ def _build_vehicle(name: str, v: dict, file: str | None) -> tuple[Vehicle, dict[
         try:
             axles = tuple(Axle(a["x"], a["track"], a["dual"], a["name"]) for a in b["axles"])
             bodies.append(Body(b["name"], b["mass"], b["yaw_inertia"], b["length"], b["width"],
-                               tuple(b["outline_center"]), axles, b["cg_height"]))
+                               tuple(b["outline_center"]), axles, b["cg_height"], b["rollover_threshold"]))
         except ScenarioError as exc:
             raise _err(str(exc), key, file) from None
         if i > 0:

@@ -307,6 +307,12 @@ def format_evidence(report, system: str = "SI", labels: dict | None = None) -> s
     lines = [f"Evidence: {len(report.checks) - report.n_failed} of {len(report.checks)} items within tolerance"]
     rows = []
     for c in report.checks:
+        if c.kind == "rollover":
+            res = ("computed: " + ("rolls" if c.details["computed"] else "does not roll")
+                   if "computed" in c.details else "none computed")
+            tol = "the statement must hold"
+            rows.append(["PASS" if c.passed else "FAIL", c.kind, c.name, res, tol, c.details.get("reason", "")])
+            continue
         if c.quantity == "angle":
             res, tol = f"{math.degrees(c.residual):+.1f} deg", f"{math.degrees(c.tolerance):.1f} deg"
         elif math.isinf(c.residual):

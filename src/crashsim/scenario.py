@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from .errors import ScenarioError, with_file
-from .evidence.checks import (CORNERS, DeltaVEvidence, Evidence, ImpactPointEvidence, MarkEvidence,
+from .evidence.checks import (CORNERS, DeltaVEvidence, Evidence, ImpactPointEvidence, MarkEvidence, RolloverEvidence,
                               RecorderEvidence, RestEvidence, named_body_points, register_points)
 from .geometry import rotate
 from .impact import (CrushSurface, ExternalImpulse, ImpactProblem, TangentialLaw, VelocityConstraint,
@@ -479,6 +479,15 @@ EV_RECORDER = Section("recorder", [
                         description="The samples, e.g. [{time = \"-2 s\", speed = \"55 mph\"}, ...]")],
     description="Pre-crash speeds of an event data recorder")
 
+EV_ROLLOVER = Section("rollover", [
+    Field("unit", "str", example="trailer",
+          description="A vehicle (any of its units) or one body (unit) the statement is about"),
+    Field("rolled", "bool", example="true",
+          description="true: it rolled (found on its side or roof, or witnessed tipping); false: it stayed upright"),
+    Field("name", "str", default="", description="Label for the report (\"trailer found on its side\")"),
+], description="Whether a vehicle or one of its units rolled, against the wheel-lift and rollover check (needs "
+               "runout.rollover or a rollover_threshold, level load_transfer)")
+
 EVIDENCE = Section("evidence", [], subsections=[
     ArrayOf("rest", EV_REST, required=False, description="Rest positions"),
     ArrayOf("marks", EV_MARK, required=False, description="Tyre marks"),
@@ -486,6 +495,8 @@ EVIDENCE = Section("evidence", [], subsections=[
     ArrayOf("delta_v", EV_DV, required=False, description="Recorded delta-v"),
     ArrayOf("recorder", EV_RECORDER, required=False, description="Recorded pre-crash speeds (needs an approach)"),
     ArrayOf("crush", EV_CRUSH, required=False, description="Crush profiles (CRASH3) or EES of damaged faces"),
+    ArrayOf("rollover", EV_ROLLOVER, required=False,
+            description="Statements that a vehicle or unit did or did not roll (a verdict; not fitted)"),
 ], required=False, description="What was found at the scene; each item is checked against its tolerance")
 
 _CM = ContactModel()
@@ -1357,6 +1368,9 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None, approac
                                    {n: v["approach"] for n, v in d["vehicles"].items()})
         if d["evidence"] is not None and d["evidence"]["crush"]:
             evidence = dataclasses.replace(evidence, crush=_build_crush(d["evidence"]["crush"], d, vehicles, file))
+        if evidence.rollover and (runout is None or not runout.options.rollover):
+            raise _err("a rollover statement is checked against the wheel-lift and rollover check, which is off: add "
+                       "runout.rollover = true (level \"load_transfer\")", "evidence.rollover[0].unit", file)
     with later.each():
         map_lines = _build_map_lines(d["map"], file)
     later.raise_any()
@@ -1670,7 +1684,17 @@ def _build_evidence(e: dict | None, states: dict, file: str | None, vehicles=(),
         recorder.append(RecorderEvidence(name, tuple(p["time"] for p in smp), tuple(p["speed"] for p in smp),
                                          tuple(bool(p["brake"]) for p in smp), x["tolerance"], x["time_offset"],
                                          x["name"]))
-    return Evidence(tuple(rest), tuple(marks), poi, tuple(dv), tuple(recorder))
+    rollover = []
+    units = {v.name for v in vehicles if not v.is_barrier} | {b.name for v in vehicles if not v.is_barrier
+                                                               for b in v.bodies}
+    for i, x in enumerate(e.get("rollover") or []):
+        if x["unit"] not in units:
+            near = difflib.get_close_matches(x["unit"], sorted(units), n=1)
+            hint = f"; did you mean {near[0]!r}?" if near else ""
+            raise _err(f"unknown vehicle or body {x['unit']!r}{hint} Vehicles and bodies: "
+                       f"{', '.join(map(repr, sorted(units)))}", f"evidence.rollover[{i}].unit", file)
+        rollover.append(RolloverEvidence(x["unit"], bool(x["rolled"]), x["name"]))
+    return Evidence(tuple(rest), tuple(marks), poi, tuple(dv), tuple(recorder), rollover=tuple(rollover))
 
 
 def _build_crush(items: list, d: dict, vehicles, file: str | None) -> tuple:

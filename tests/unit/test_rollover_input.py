@@ -82,3 +82,17 @@ def test_the_default_threshold_without_a_cg_height_exits_2(tmp_path, capsys):
     # with its own threshold it needs no CG height for the threshold (the load transfer still does)
     line = _one_line_exit_2(tmp_path, capsys, text.replace('width = "1.8 m"\n', 'width = "1.8 m"\nrollover_threshold = 0.9\n'))
     assert "vehicles.car.bodies[0].cg_height" in line and 'level "load_transfer" needs the CG height' in line
+
+
+def test_a_rollover_statement_without_the_check_exits_2(tmp_path, capsys):
+    text = _with('level = "load_transfer"\n').replace(
+        "\n[evidence.impact_point]", '\n[[evidence.rollover]]\nunit = "truck"\nrolled = false\n\n[evidence.impact_point]', 1)
+    line = _one_line_exit_2(tmp_path, capsys, text)
+    assert "evidence.rollover[0].unit" in line and "runout.rollover = true" in line
+
+
+def test_a_rollover_statement_about_an_unknown_unit_exits_2(tmp_path, capsys):
+    text = _with('level = "load_transfer"\nrollover = true\n').replace(
+        "\n[evidence.impact_point]", '\n[[evidence.rollover]]\nunit = "trailr"\nrolled = true\n\n[evidence.impact_point]', 1)
+    line = _one_line_exit_2(tmp_path, capsys, text)
+    assert "evidence.rollover[0].unit" in line and "'trailr'" in line and "did you mean 'trailer'" in line

@@ -279,7 +279,7 @@ def describe_event(e, system: str = "SI") -> str:
     if k in ("wheel_lift", "unit_lift", "rollover_threshold") and "ltr" in d:
         at = f"at {fmt(d['speed_m_s'], 'speed', s)}, lateral acceleration {abs(d['lateral_acceleration_g']):.3g} g"
         if k == "wheel_lift":
-            return f"{d['lifting_side']} wheel of {d['body']} axle {d['axle']} lifts (axle load transfer ratio 1), {at}"
+            return f"{d['lifting_side']} wheel of axle {d['axle']!r} of {d['body']} lifts (axle load transfer ratio 1), {at}"
         if k == "unit_lift":
             return f"all {d['lifting_side']} wheels of {d['body']} lift (load transfer ratio {d['ltr']:+.3f}), {at}"
         return f"{d['body']} passes its rollover threshold {d['threshold_g']:.3g} g, {at}"

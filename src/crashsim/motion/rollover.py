@@ -262,7 +262,7 @@ class RollMonitor:
         if kind == "wheel_lift":
             ax = self.axles[int(axle_of[i, 0])] if axle_of[i, 0] >= 0 else None
             data["axle"] = ax.name if ax is not None else ""
-            what = f"{lifting} wheel of axle {data['axle']} of {names[i]} lifts (axle load transfer ratio 1)"
+            what = f"{lifting} wheel of axle {data['axle']!r} of {names[i]} lifts (axle load transfer ratio 1)"
         elif kind == "unit_lift":
             what = f"all {lifting} wheels of {names[i]} lift (load transfer ratio {ltr[i, 0]:+.3f})"
         else:

@@ -116,6 +116,10 @@ BODY = Section("body", [
           description="Largest articulation before the bodies meet (jack-knife stop)"),
     Field("cg_height", Kind.LENGTH, required=False, minimum=0, exclusive_minimum=True, example="1.1 m",
           description="CG height above ground (only for the run-out's load transfer)"),
+    Field("roll_coupled", "bool", default=False,
+          description="The hitch towing this body carries roll moment (a fifth wheel, stiff in roll): with load "
+                      "transfer its roll moment is shared with the towing body in proportion to the hitch's static "
+                      "load; false (default): free in roll, as a ball or a drawbar eye"),
     Field("rollover_threshold", "float", required=False, minimum=0, exclusive_minimum=True,
           maximum=MAX_ROLLOVER_THRESHOLD, example="0.35",
           description="Lateral acceleration in g at which this body rolls (static rollover threshold, e.g. a "
@@ -1010,6 +1014,9 @@ def _build_vehicle(name: str, v: dict, file: str | None) -> tuple[Vehicle, dict[
         if i == 0 and b["front_hitch"] is not None:
             raise _err(f"body {b['name']!r} is the first body but has a front_hitch {b['front_hitch']}",
                        f"{key}.front_hitch", file)
+        if i == 0 and b["roll_coupled"]:
+            raise _err(f"body {b['name']!r} is the first body: it has no front hitch to carry roll moment (roll_coupled "
+                       "belongs on the towed body, e.g. the semitrailer)", f"{key}.roll_coupled", file)
         if i == 0 and b["articulation"] != 0.0:
             raise _err("the first body has no front hitch to articulate about", f"{key}.articulation", file)
         lim = b["articulation_limit"]
@@ -1020,7 +1027,8 @@ def _build_vehicle(name: str, v: dict, file: str | None) -> tuple[Vehicle, dict[
         try:
             axles = tuple(Axle(a["x"], a["track"], a["dual"], a["name"]) for a in b["axles"])
             bodies.append(Body(b["name"], b["mass"], b["yaw_inertia"], b["length"], b["width"],
-                               tuple(b["outline_center"]), axles, b["cg_height"], b["rollover_threshold"]))
+                               tuple(b["outline_center"]), axles, b["cg_height"], b["rollover_threshold"],
+                               bool(b["roll_coupled"])))
         except ScenarioError as exc:
             raise _err(str(exc), key, file) from None
         if i > 0:

@@ -90,6 +90,11 @@ class Body:
         Lateral acceleration [g] at which the body rolls (its static rollover threshold, e.g.
         from a tilt table), in (0, :data:`MAX_ROLLOVER_THRESHOLD`]; None: the default
         ``0.75 t / (2 h)`` when the rollover check is on (:mod:`crashsim.motion.rollover`).
+    roll_coupled : bool
+        The hitch by which this body is towed carries roll moment (a fifth wheel, stiff in roll):
+        with load transfer, the body's roll moment is shared with the towing body in proportion to
+        the hitch's static vertical load (:func:`crashsim.motion.loads.load_transfer_matrix`).
+        Default False: free in roll (a ball, a drawbar eye).
     """
 
     name: str
@@ -101,6 +106,7 @@ class Body:
     axles: tuple[Axle, ...] = ()
     cg_height: float | None = None
     rollover_threshold: float | None = None
+    roll_coupled: bool = False
 
     def __post_init__(self):
         if not self.name or not isinstance(self.name, str):

@@ -139,3 +139,59 @@ def test_tractor_semitrailer_records_events_per_unit():
     assert "trailer" in rolled
     assert res.rollover["thresholds_g"]["trailer"] == pytest.approx(0.75 * 1.85 / (2 * 2.0), rel=1e-12)
     assert res.rollover["valid_until_s"] == pytest.approx(0.0, abs=1e-12)
+
+
+def _combination(coupled: bool):
+    """Tractor and semitrailer on one track width (the closed forms then need no track weighting)."""
+    from crashsim.vehicles import Axle, Body, Hitch, Vehicle
+
+    t = 1.85
+    tractor = Body("tractor", 8000.0, 32000.0, length=6.0, cg_height=1.1,
+                   axles=(Axle(1.9, t, name="steer"), Axle(-1.6, t, True, "drive 1"), Axle(-2.9, t, True, "drive 2")))
+    trailer = Body("trailer", 25000.0, 330000.0, length=13.6, cg_height=2.0, roll_coupled=coupled,
+                   axles=(Axle(-3.0, t, True, "t1"), Axle(-4.3, t, True, "t2"), Axle(-5.6, t, True, "t3")))
+    return Vehicle("ts", (tractor, trailer), (Hitch((-2.0, 0.0), (6.0, 0.0)),)), t
+
+
+@pytest.mark.parametrize("coupled", [False, True])
+def test_roll_coupled_fifth_wheel_shares_the_semitrailers_roll_moment(coupled):
+    """One lateral acceleration a on both units, no longitudinal one: with a roll-stiff fifth wheel the
+    semitrailer's own axles transfer 2 h a / (g t) (its rigid-body ratio) and the tractor's axles the rest of
+    the roll moment; free in roll, the semitrailer's axles carry all of it on W - N_kp."""
+    from crashsim.motion.loads import load_transfer_matrix, static_loads
+    from crashsim.motion.wheels import enumerate_wheels
+
+    veh, t = _combination(coupled)
+    loads = static_loads(veh)
+    A = load_transfer_matrix(veh, loads)
+    a = 0.3 * G
+    dN = A @ np.array([0.0, 0.0, a, a])
+    specs = enumerate_wheels(veh)
+    side = np.array([1.0 if s.side == "right" else -1.0 for s in specs])
+    body = np.array([s.body_index for s in specs])
+    n_kp = float(loads.hitch[0])
+    tractor, trailer = veh.bodies
+    ltr = [float((side * (loads.wheel + dN))[body == i].sum() / loads.wheel[body == i].sum()) for i in (0, 1)]
+    # the roll moments balance: sum of (dN_right - dN_left) t / 2 over every axle = sum of m h a
+    assert float((side * dN).sum()) * t / 2 == pytest.approx((tractor.mass * 1.1 + trailer.mass * 2.0) * a, rel=1e-12)
+    w2 = trailer.mass * G
+    if coupled:
+        assert ltr[1] == pytest.approx(2 * 2.0 * a / (G * t), rel=1e-12)
+        assert ltr[0] == pytest.approx(2 * (tractor.mass * 1.1 + n_kp / G * 2.0) * a / (t * (tractor.mass * G + n_kp)),
+                                       rel=1e-12)
+    else:
+        assert ltr[1] == pytest.approx(2 * trailer.mass * 2.0 * a / (t * (w2 - n_kp)), rel=1e-12)
+        assert ltr[0] == pytest.approx(2 * tractor.mass * 1.1 * a / (t * (tractor.mass * G + n_kp)), rel=1e-12)
+
+
+def test_roll_coupling_moves_only_the_semitrailers_roll_column():
+    """The coupling changes where the semitrailer's roll moment goes and nothing else: the pitch columns and
+    the tractor's own roll column are bit for bit those of the free fifth wheel."""
+    from crashsim.motion.loads import load_transfer_matrix, static_loads
+
+    free, _ = _combination(False)
+    stiff, _ = _combination(True)
+    a_free = load_transfer_matrix(free, static_loads(free))
+    a_stiff = load_transfer_matrix(stiff, static_loads(stiff))
+    assert np.array_equal(a_free[:, :3], a_stiff[:, :3])
+    assert not np.allclose(a_free[:, 3], a_stiff[:, 3])

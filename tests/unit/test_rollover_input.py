@@ -96,3 +96,13 @@ def test_a_rollover_statement_about_an_unknown_unit_exits_2(tmp_path, capsys):
         "\n[evidence.impact_point]", '\n[[evidence.rollover]]\nunit = "trailr"\nrolled = true\n\n[evidence.impact_point]', 1)
     line = _one_line_exit_2(tmp_path, capsys, text)
     assert "evidence.rollover[0].unit" in line and "'trailr'" in line and "did you mean 'trailer'" in line
+
+
+def test_roll_coupled_is_read_and_refused_on_the_first_body(tmp_path, capsys):
+    f = tmp_path / "case.toml"
+    f.write_text(_with('level = "load_transfer"\n', trailer="roll_coupled = true\n"))
+    sc = scenario_from_dict(load_toml(f), file=str(f))
+    assert [b.roll_coupled for v in sc.vehicles if v.name == "truck" for b in v.bodies] == [False, True]
+    text = SCENE.read_text().replace('preset = "tractor-3axle"\n', 'preset = "tractor-3axle"\nroll_coupled = true\n', 1)
+    line = _one_line_exit_2(tmp_path, capsys, text)
+    assert "vehicles.truck.bodies[0].roll_coupled" in line and "first body" in line

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import crashsim
@@ -50,3 +51,24 @@ def test_the_trailer_passes_its_threshold_before_the_truck_leaves_the_barrier(sc
         assert roll["valid_until_s"] <= passed.t
     a, b = (_first(s, "rollover_threshold", "trailer") for s in scenes.values())
     assert a.t == pytest.approx(b.t, abs=1e-3)
+
+
+def test_with_a_roll_coupled_fifth_wheel_the_verdict_is_marginal(tmp_path):
+    """The same scene with the semitrailer's fifth wheel stiff in roll (``roll_coupled``): the tyre loads, and
+    so the run-out, change, and the trailer's peak lateral acceleration comes within a few percent of its
+    threshold (0.5 % below it here): the verdict on this configuration is marginal, and depends on the
+    coupling model; the docs say so."""
+    path = tmp_path / "glance_coupled.toml"
+    text = SCENE.read_text().replace("[runout]\n", '[runout]\nengine = "compiled"\nlevel = "load_transfer"\n'
+                                     "rollover = true\n", 1)
+    text = text.replace('cg_height = "1.80 m"\n', 'cg_height = "1.80 m"\nroll_coupled = true\n', 1)
+    path.write_text(text)
+    scene = crashsim.run(path)
+    roll = scene.runout["truck"].rollover
+    j = scene.joint
+    t = np.linspace(0.0, 3.0, 3001)
+    nb = j.layout.n_bodies  # filtered accelerations: a_x of every body, then a_y; the trailer is body 1
+    ay = np.asarray(j.sol(t))[j.layout.accel][nb + 1] / 9.80665  # [g]
+    peak = float(np.abs(ay).max())
+    thr = roll["thresholds_g"]["trailer"]
+    assert 0.9 * thr < peak < thr and "trailer" not in roll["rolled_bodies"]

@@ -35,16 +35,17 @@ kernels) would catch those too, at the price of a kernel change and of work in e
 every run; the post-run search costs nothing when the check is off and a few array products
 when it is on.
 
-Roll coupling between units (a stated limit)
---------------------------------------------
-The load model puts each body's roll moment ``m a_y h`` on that body's own axles and the hitch
-forces at ground level: the coupling passes no roll moment.  A real fifth wheel is stiff in roll
-(tractor and semitrailer roll together and share the semitrailer's roll moment in proportion to
-the kingpin load); a drawbar eye or an A-dolly is free in roll.  With a roll-free fifth wheel the
-semitrailer's axles carry all its roll moment on less than all its weight (the kingpin carries
-the rest), so its wheels lift at ``(W - N_kp)/W`` of its rigid ``t/(2h)``, early; the tractor's
-late.  The threshold check compares each body with its own threshold, which for a coupled unit
-is the combination's tilt-table value if the user gives it (SAE J2180 tests the combination).
+Roll coupling between units
+---------------------------
+By default the load model puts each body's roll moment ``m a_y h`` on that body's own axles and
+the hitch forces at ground level: the coupling passes no roll moment (a ball, a drawbar eye, an
+A-dolly's ring).  A fifth wheel is stiff in roll; a towed body with ``roll_coupled`` shares its
+roll moment with the towing body in proportion to the hitch's static load
+(:func:`crashsim.motion.loads.load_transfer_matrix`), so its own axles transfer the rigid body's
+``2 h a_y / (g t)``.  Free in roll, a semitrailer's axles carry all its roll moment on less than
+all its weight, and its wheels lift at about ``(W - N_kp)/W`` of its ``t/(2h)``: early.  The
+threshold check compares each body with its own threshold, which for a coupled unit is best the
+combination's tilt-table value (SAE J2180 tests the combination).
 """
 
 from __future__ import annotations

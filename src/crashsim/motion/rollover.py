@@ -54,10 +54,10 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.constants import g as STANDARD_GRAVITY
 from scipy.optimize import brentq
 
 from ..errors import ScenarioError
+from ..units import G0 as STANDARD_GRAVITY
 from ..vehicles import MAX_ROLLOVER_THRESHOLD, Body
 from .model import kernels
 from .result import RunoutEvent
@@ -139,6 +139,13 @@ class RollMonitor:
                            if "left" in d and "right" in d)
         self.wheel_body = np.array([s.body_index for s in model.specs], dtype=np.int64)
         self.side = np.array([1.0 if s.side == "right" else -1.0 for s in model.specs])
+        nw = self.n0.shape[0]
+        self.ax_left = np.array([a.left for a in self.axles], dtype=np.int64)
+        self.ax_right = np.array([a.right for a in self.axles], dtype=np.int64)
+        self.ax_body = np.array([a.body for a in self.axles], dtype=np.int64)
+        #: (nb, nw): which contacts are the body's, and the same with the side's sign (right +)
+        self.member = (self.wheel_body[None, :] == np.arange(self.nb)[:, None]).astype(float).reshape(self.nb, nw)
+        self.signed = self.member * self.side[None, :]
 
     # ---------------------------------------------------------------- indicators
     def normal_factor(self, memb) -> np.ndarray:
@@ -165,24 +172,48 @@ class RollMonitor:
         K = N.shape[1]
         lift = np.full((nb, K), -np.inf)
         axle_of = np.full((nb, K), -1, dtype=np.int64)
-        for a, ax in enumerate(self.axles):
-            static = self.n0[ax.left] * gn[ax.left] + self.n0[ax.right] * gn[ax.right]
-            g = -np.minimum(N[ax.left], N[ax.right]) / max(static, 1e-12)
-            better = g > lift[ax.body]
-            lift[ax.body] = np.where(better, g, lift[ax.body])
-            axle_of[ax.body] = np.where(better, a, axle_of[ax.body])
-        ltr = np.zeros((nb, K))
-        gn_body = np.ones(nb)
-        for i in range(nb):
-            on = self.wheel_body == i
-            tot = N[on].sum(axis=0)
-            ltr[i] = np.divide((self.side[on, None] * N[on]).sum(axis=0), tot, out=np.zeros(K), where=tot > 0)
-            w = self.n0[on]
-            gn_body[i] = float(np.dot(w, gn[on]) / w.sum()) if w.sum() > 0 else 1.0
+        if self.axles:
+            n0 = self.n0 * gn
+            static = np.maximum(n0[self.ax_left] + n0[self.ax_right], 1e-12)
+            g = -np.minimum(N[self.ax_left], N[self.ax_right]) / static[:, None]  # (n_axles, K)
+            for i in range(nb):
+                rows = np.flatnonzero(self.ax_body == i)
+                if rows.size:
+                    k = np.argmax(g[rows], axis=0)
+                    lift[i] = g[rows][k, np.arange(K)]
+                    axle_of[i] = rows[k]
+        tot = self.member @ N
+        ltr = np.divide(self.signed @ N, tot, out=np.zeros((nb, K)), where=tot > 0)
+        w = self.member @ self.n0
+        gn_body = np.divide(self.member @ (self.n0 * gn), w, out=np.ones(nb), where=w > 0)
         ay = Y[7 * nb: 8 * nb] / (STANDARD_GRAVITY * gn_body[:, None])
         ind = {"wheel_lift": lift, "unit_lift": np.abs(ltr) - 1.0,
                "rollover_threshold": np.abs(ay) - self.thresholds[:, None]}
         return ind, ltr, ay, axle_of
+
+    def indicator(self, y: np.ndarray, gn: np.ndarray, i: int, kind: str) -> float:
+        """One indicator of body ``i`` at one state ``y`` (n,): the value :meth:`indicators` gives, for the
+        root search (only the body's own contacts are evaluated)."""
+        nb = self.nb
+        if kind == "rollover_threshold":
+            on = self.member[i] > 0
+            w = float(self.n0[on].sum())
+            gn_i = float(np.dot(self.n0[on], gn[on]) / w) if w > 0 else 1.0
+            return abs(float(y[7 * nb + i])) / (STANDARD_GRAVITY * gn_i) - float(self.thresholds[i])
+        acc = y[6 * nb: 8 * nb]
+        if kind == "wheel_lift":
+            rows = np.flatnonzero(self.ax_body == i)
+            if not rows.size:
+                return -np.inf
+            lf, rt = self.ax_left[rows], self.ax_right[rows]
+            n_l = self.n0[lf] * gn[lf] + self.transfer[lf] @ acc
+            n_r = self.n0[rt] * gn[rt] + self.transfer[rt] @ acc
+            static = np.maximum(self.n0[lf] * gn[lf] + self.n0[rt] * gn[rt], 1e-12)
+            return float(np.max(-np.minimum(n_l, n_r) / static))
+        on = np.flatnonzero(self.member[i] > 0)
+        n = self.n0[on] * gn[on] + self.transfer[on] @ acc
+        tot = float(n.sum())
+        return (abs(float(np.dot(self.side[on], n)) / tot) if tot > 0 else 0.0) - 1.0
 
     # ---------------------------------------------------------------- events
     def events(self, T: np.ndarray, seg_of: np.ndarray, Y: np.ndarray, memb, starts: np.ndarray, sol) -> list:
@@ -240,7 +271,7 @@ class RollMonitor:
     def _root(self, i, kind, a, b, starts, gn_of, sol) -> float:
         def f(t):
             y, gn = self._at(t, starts, gn_of, sol)
-            return float(self.indicators(y, gn)[0][kind][i, 0])
+            return self.indicator(y[:, 0], gn, i, kind)
 
         fa, fb = f(a), f(b)
         if not (fa < 0.0 <= fb):  # a segment boundary between: the sampled time stands

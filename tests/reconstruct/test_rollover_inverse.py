@@ -74,7 +74,10 @@ def test_fit_counts_the_evaluations_that_roll(tmp_path):
     best = res.scene.rollover()["truck"]
     d = res.to_dict()
     assert d["rolled_evaluations"] == res.rolled_evaluations and d["rollover"]["truck"]["rolled"] == best["rolled"]
-    assert f"a unit rolls in {res.rolled_evaluations} of the {res.rolled_of} scene evaluations" in res.report()
+    text = res.report()
+    assert f"a unit rolls in {res.rolled_evaluations} of the {res.rolled_of} scene evaluations" in text
+    trailer = "trailer" in best["rolled_bodies"]
+    assert f"{'PASS' if trailer else 'FAIL'}  evidence 'trailer on its side' (a verdict, not fitted)" in text
 
 
 def test_the_posterior_carries_rolled_as_a_derived_quantity(tmp_path):

@@ -762,6 +762,10 @@ class FitResult:
             lines.append(f"  best fit: vehicle {v} {verdict}; {valid}")
         lines.append(f"  a unit rolls in {self.rolled_evaluations} of the {self.rolled_of} scene evaluations of the "
                      "local fits and the analysis")
+        ev = getattr(self.scene, "evidence", None) if not isinstance(self.scene, Exception) else None
+        for c in (ev.checks if ev is not None else ()):
+            if c.kind == "rollover":  # a statement, not fitted: its verdict at the best fit
+                lines.append(f"  {'PASS' if c.passed else 'FAIL'}  evidence {c.name!r} (a verdict, not fitted)")
         return lines
 
     def best_scenario_dict(self) -> dict:

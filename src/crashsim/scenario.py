@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from .errors import ScenarioError, with_file
-from .evidence.checks import (CORNERS, DeltaVEvidence, Evidence, ImpactPointEvidence, MarkEvidence,
+from .evidence.checks import (CORNERS, DeltaVEvidence, Evidence, ImpactPointEvidence, MarkEvidence, RolloverEvidence,
                               RecorderEvidence, RestEvidence, named_body_points, register_points)
 from .geometry import rotate
 from .impact import (CrushSurface, ExternalImpulse, ImpactProblem, TangentialLaw, VelocityConstraint,
@@ -38,7 +38,7 @@ from .motion.wheels import select_wheels, enumerate_wheels
 from .schema import ArrayOf, Field, ScenarioValidationError, Section, Table, document, load_toml, validate
 from .survey.schema import MAP_LINE_STYLES, SURVEY
 from .units import Kind, format_value, parse, toml_repr
-from .vehicles import Axle, Body, BodyState, Hitch, Vehicle, chain_states
+from .vehicles import MAX_ROLLOVER_THRESHOLD, Axle, Body, BodyState, Hitch, Vehicle, chain_states
 
 __all__ = ["SCHEMA", "MAP_LINE_STYLES", "MapLine", "Scenario", "RunoutSpec", "load_scenario", "presets", "preset_geometry",
            "scenario_from_dict", "schema_document"]
@@ -116,6 +116,15 @@ BODY = Section("body", [
           description="Largest articulation before the bodies meet (jack-knife stop)"),
     Field("cg_height", Kind.LENGTH, required=False, minimum=0, exclusive_minimum=True, example="1.1 m",
           description="CG height above ground (only for the run-out's load transfer)"),
+    Field("roll_coupled", "bool", default=False,
+          description="The hitch towing this body carries roll moment (a fifth wheel, stiff in roll): with load "
+                      "transfer its roll moment is shared with the towing body in proportion to the hitch's static "
+                      "load; false (default): free in roll, as a ball or a drawbar eye"),
+    Field("rollover_threshold", "float", required=False, minimum=0, exclusive_minimum=True,
+          maximum=MAX_ROLLOVER_THRESHOLD, example="0.35",
+          description="Lateral acceleration in g at which this body rolls (static rollover threshold, e.g. a "
+                      "tilt-table value); turns the wheel-lift and rollover check on (level load_transfer); "
+                      "default 0.75 t / (2 h) from the mean track t and cg_height h"),
     Field("drawbar", Kind.LENGTH, minimum=0, maximum=MAX_LENGTH, default=f"{DEFAULT_DRAWBAR:g} m",
           description="How far this body's hitch points (rear_hitch, front_hitch) may lie outside its outline: a "
                       "drawbar, an A-frame tongue, a ball mount (checked at load; the default covers car-trailer "
@@ -346,6 +355,10 @@ RUNOUT = Section("runout", [
           description="Computing time allowed for the run-out; more ends it with status wall_time_limit (exit 3)"),
     Field("load_transfer", "bool", default=_OPT.load_transfer,
           description="Quasi-static load transfer (needs every body's cg_height)"),
+    Field("rollover", "bool", default=False,
+          description="Record when a body's inner wheels lift and when it passes its rollover threshold "
+                      "(needs level load_transfer; each body's rollover_threshold, default 0.75 t / (2 h)); the "
+                      "result says from when the planar run-out is outside its validity"),
 ], subsections=[ArrayOf("zones", ZONE, required=False, description="Friction zones")],
    required=False, description="Run-out of every vehicle from separation to rest (omit for an impact-only study)")
 
@@ -470,6 +483,15 @@ EV_RECORDER = Section("recorder", [
                         description="The samples, e.g. [{time = \"-2 s\", speed = \"55 mph\"}, ...]")],
     description="Pre-crash speeds of an event data recorder")
 
+EV_ROLLOVER = Section("rollover", [
+    Field("unit", "str", example="trailer",
+          description="A vehicle (any of its units) or one body (unit) the statement is about"),
+    Field("rolled", "bool", example="true",
+          description="true: it rolled (found on its side or roof, or witnessed tipping); false: it stayed upright"),
+    Field("name", "str", default="", description="Label for the report (\"trailer found on its side\")"),
+], description="Whether a vehicle or one of its units rolled, against the wheel-lift and rollover check (needs "
+               "runout.rollover or a rollover_threshold, level load_transfer)")
+
 EVIDENCE = Section("evidence", [], subsections=[
     ArrayOf("rest", EV_REST, required=False, description="Rest positions"),
     ArrayOf("marks", EV_MARK, required=False, description="Tyre marks"),
@@ -477,6 +499,8 @@ EVIDENCE = Section("evidence", [], subsections=[
     ArrayOf("delta_v", EV_DV, required=False, description="Recorded delta-v"),
     ArrayOf("recorder", EV_RECORDER, required=False, description="Recorded pre-crash speeds (needs an approach)"),
     ArrayOf("crush", EV_CRUSH, required=False, description="Crush profiles (CRASH3) or EES of damaged faces"),
+    ArrayOf("rollover", EV_ROLLOVER, required=False,
+            description="Statements that a vehicle or unit did or did not roll (a verdict; not fitted)"),
 ], required=False, description="What was found at the scene; each item is checked against its tolerance")
 
 _CM = ContactModel()
@@ -810,6 +834,31 @@ def _build_wheels(vehicle: Vehicle, v: dict, file: str | None, prefix: str | Non
     return ws
 
 
+def _rollover_check(r: dict, level: str, vehicles, file: str | None) -> bool:
+    """Whether the wheel-lift and rollover check is asked for (runout.rollover, or a body's
+    rollover_threshold), and that it can be done: level load_transfer, and the CG height of every
+    body whose threshold is the default."""
+    asked = [("runout.rollover", "rollover = true")] if r["rollover"] else []
+    for veh in vehicles:
+        for i, b in enumerate(veh.bodies):
+            if b.rollover_threshold is not None:
+                asked.append((f"vehicles.{veh.name}.bodies[{i}].rollover_threshold",
+                              f"rollover_threshold = {b.rollover_threshold:g}"))
+    if not asked:
+        return False
+    if level != "load_transfer":
+        key, text = asked[0]
+        raise _err(f"{text} asks for the wheel-lift and rollover check, which reads the load transfer: it needs "
+                   f"level \"load_transfer\", but level = {level!r}", key, file)
+    for veh in vehicles:
+        for i, b in enumerate(veh.bodies):
+            if not b.is_fixed and b.rollover_threshold is None and b.cg_height is None:
+                raise _err(f"the default rollover threshold 0.75 t / (2 h) of body {b.name!r} needs its CG height h; "
+                           "give cg_height (m, > 0), or rollover_threshold in g, allowed (0, "
+                           f"{MAX_ROLLOVER_THRESHOLD:g}]", f"vehicles.{veh.name}.bodies[{i}].cg_height", file)
+    return True
+
+
 def _build_runout(r: dict, vehicles, raw_vehicles: dict, file: str | None, raw: dict | None = None) -> RunoutSpec:
     raw = raw or {}
     level = r["level"]
@@ -843,6 +892,7 @@ def _build_runout(r: dict, vehicles, raw_vehicles: dict, file: str | None, raw: 
         road = Road(r["road_friction"], zones, r["grade"], r["cross_slope"])
     except ScenarioError as exc:
         raise _rewrap(exc, "runout.zones", file) from None
+    rollover = _rollover_check(r, level, vehicles, file)
     try:
         extra = {"engine": r["engine"]} if "engine" in RunoutOptions.__dataclass_fields__ else {}
         if r["engine"] != "scipy" and not extra:
@@ -850,7 +900,8 @@ def _build_runout(r: dict, vehicles, raw_vehicles: dict, file: str | None, raw: 
         options = RunoutOptions(method=r["method"], rtol=r["rtol"], atol=r["atol"], eps=r["eps"], v_stop=r["v_stop"],
                                 max_step=r["max_step"], t_max=r["t_max"], sample_dt=r["sample_dt"],
                                 lateral_model=r["lateral_model"], load_transfer=level == "load_transfer",
-                                max_impacts=r["max_impacts"], max_wall_time=r["max_wall_time"], **extra)
+                                rollover=rollover, max_impacts=r["max_impacts"], max_wall_time=r["max_wall_time"],
+                                **extra)
     except ScenarioError as exc:
         raise _rewrap(exc, "runout", file) from None
     if options.load_transfer:
@@ -971,6 +1022,9 @@ def _build_vehicle(name: str, v: dict, file: str | None) -> tuple[Vehicle, dict[
         if i == 0 and b["front_hitch"] is not None:
             raise _err(f"body {b['name']!r} is the first body but has a front_hitch {b['front_hitch']}",
                        f"{key}.front_hitch", file)
+        if i == 0 and b["roll_coupled"]:
+            raise _err(f"body {b['name']!r} is the first body: it has no front hitch to carry roll moment (roll_coupled "
+                       "belongs on the towed body, e.g. the semitrailer)", f"{key}.roll_coupled", file)
         if i == 0 and b["articulation"] != 0.0:
             raise _err("the first body has no front hitch to articulate about", f"{key}.articulation", file)
         lim = b["articulation_limit"]
@@ -981,7 +1035,8 @@ def _build_vehicle(name: str, v: dict, file: str | None) -> tuple[Vehicle, dict[
         try:
             axles = tuple(Axle(a["x"], a["track"], a["dual"], a["name"]) for a in b["axles"])
             bodies.append(Body(b["name"], b["mass"], b["yaw_inertia"], b["length"], b["width"],
-                               tuple(b["outline_center"]), axles, b["cg_height"]))
+                               tuple(b["outline_center"]), axles, b["cg_height"], b["rollover_threshold"],
+                               bool(b["roll_coupled"])))
         except ScenarioError as exc:
             raise _err(str(exc), key, file) from None
         if i > 0:
@@ -1329,6 +1384,9 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None, approac
                                    {n: v["approach"] for n, v in d["vehicles"].items()})
         if d["evidence"] is not None and d["evidence"]["crush"]:
             evidence = dataclasses.replace(evidence, crush=_build_crush(d["evidence"]["crush"], d, vehicles, file))
+        if evidence.rollover and (runout is None or not runout.options.rollover):
+            raise _err("a rollover statement is checked against the wheel-lift and rollover check, which is off: add "
+                       "runout.rollover = true (level \"load_transfer\")", "evidence.rollover[0].unit", file)
     with later.each():
         map_lines = _build_map_lines(d["map"], file)
     later.raise_any()
@@ -1648,7 +1706,17 @@ def _build_evidence(e: dict | None, states: dict, file: str | None, vehicles=(),
         recorder.append(RecorderEvidence(name, tuple(p["time"] for p in smp), tuple(p["speed"] for p in smp),
                                          tuple(bool(p["brake"]) for p in smp), x["tolerance"], x["time_offset"],
                                          x["name"], sigma=x.get("sigma")))
-    return Evidence(tuple(rest), tuple(marks), poi, tuple(dv), tuple(recorder))
+    rollover = []
+    units = {v.name for v in vehicles if not v.is_barrier} | {b.name for v in vehicles if not v.is_barrier
+                                                               for b in v.bodies}
+    for i, x in enumerate(e.get("rollover") or []):
+        if x["unit"] not in units:
+            near = difflib.get_close_matches(x["unit"], sorted(units), n=1)
+            hint = f"; did you mean {near[0]!r}?" if near else ""
+            raise _err(f"unknown vehicle or body {x['unit']!r}{hint} Vehicles and bodies: "
+                       f"{', '.join(map(repr, sorted(units)))}", f"evidence.rollover[{i}].unit", file)
+        rollover.append(RolloverEvidence(x["unit"], bool(x["rolled"]), x["name"]))
+    return Evidence(tuple(rest), tuple(marks), poi, tuple(dv), tuple(recorder), rollover=tuple(rollover))
 
 
 def _build_crush(items: list, d: dict, vehicles, file: str | None) -> tuple:

@@ -227,7 +227,7 @@ def test_result_is_a_complete_runout_result():
     ref = simulate_runout(veh, init, wheels, road, RunoutOptions())
     assert isinstance(res, RunoutResult) and res.success
     assert res.method == "compiled/dopri5" and res.nfev > 0 and res.njev == 0 and res.nlu == 0
-    assert res.options == dataclasses.asdict(COMPILED)
+    assert res.options == COMPILED.to_dict()
     assert set(res.wheels) == set(ref.wheels) and set(res.bodies) == set(ref.bodies)
     json.dumps(res.to_dict())
     table = res.table()

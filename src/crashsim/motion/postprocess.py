@@ -26,6 +26,7 @@ import numpy as np
 
 from .hitches import RunoutModel, SegmentParams, hitch_rows
 from .layout import StateLayout
+from .rollover import RollMonitor, roll_summary, with_events
 from .scene_model import kernels
 from .result import (BodyHistory, BodyRunout, HitchHistory, PairSummary, RunoutEvent, RunoutResult,
                      SceneRunout, TrackSegment, WheelTrack)
@@ -571,6 +572,11 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
     Y = integrator.sample(T, seg_of, y_end)
     P, SL, LD, LAMH, STOPM, CF, max_gap, pen = k.evaluate_samples(np.ascontiguousarray(Y), seg_of, M, arrays)
     sol = integrator.solution(y_end, t_end)
+    roll = model.options.rollover
+    if roll:  # wheel lift and rollover (places set): merged into the events by time, in lean runs too
+        monitor = RollMonitor(model)
+        starts = np.array([a for a, _, _ in table], dtype=float)
+        events[:] = with_events(events, monitor.events(T, seg_of, Y, arrays.memb if table else [], starts, sol))
     if lean is None:
         events[:] = event_places(model, sol, events)
     missed = None
@@ -638,6 +644,9 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
             kinetic_energies=(_ke(model, y_initial, b0, b1), _ke(model, y_end, b0, b1)),
             energy_dissipated=float(quad[nb + 2 * nw + w0: nb + 2 * nw + w1].sum()),
             gravity_work=float(w_grav[b0:b1].sum())))
+        if roll:
+            vehicles[v.name] = replace(vehicles[v.name], rollover=roll_summary(
+                v_events, [b.name for b in v.bodies], monitor.thresholds[b0:b1]))
 
     # ---- pairs and the ledger
     n_imp = {}

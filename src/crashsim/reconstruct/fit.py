@@ -479,6 +479,8 @@ class FitProblem:
         self.evidence = EvidenceModel(base, sigma_from_tolerance=spec.sigma_from_tolerance,
                                       mark_points=spec.mark_points)
         self.nfev = 0
+        self.rolled = 0  # evaluations in which a unit rolls (the wheel-lift and rollover check on)
+        self.checked = False  # whether the scenes carry the check
         self.failures = 0
         self.failure_reasons: dict[str, int] = {}
         self._cache: dict[bytes, tuple[np.ndarray, Any]] = {}
@@ -535,6 +537,10 @@ class FitProblem:
                 raise NotAtRest(bad.status, f"the run-out of {bad.vehicle!r} did not reach rest: {bad.message}")
             r = self.evidence.weighted(scene)
             out = (r, scene)
+            roll = scene.rollover()
+            if roll:
+                self.checked = True
+                self.rolled += any(v["rolled"] for v in roll.values())
         except NotAtRest as exc:
             self._fail(f"run-out: {exc.status}", exc)
             out = (np.full(self.evidence.size, PENALTY), exc)
@@ -579,14 +585,15 @@ class FitProblem:
 
     def local_fit(self, z0) -> dict:
         """One bounded least-squares fit from ``z0``; a plain dict (crosses process boundaries)."""
-        n0 = self.nfev
+        n0, r0 = self.nfev, self.rolled
         z0 = np.clip(np.asarray(z0, float), 1e-9, 1 - 1e-9)
         res = least_squares(self.residual, z0, jac=lambda z: self.jacobian(z), bounds=(0.0, 1.0),
                             method=self.spec.method, x_scale=1.0, ftol=LOCAL_FTOL, xtol=LOCAL_XTOL, gtol=1e-8,
                             max_nfev=self.spec.max_evaluations)
         return {"z0": z0.tolist(), "z": res.x.tolist(), "cost": float(res.cost), "status": int(res.status),
                 "message": str(res.message), "nfev": int(res.nfev), "njev": int(res.njev or 0),
-                "evaluations": self.nfev - n0, "active": [int(a) for a in res.active_mask],
+                "evaluations": self.nfev - n0, "rolled": self.rolled - r0, "checked": self.checked,
+                "active": [int(a) for a in res.active_mask],
                 "failure_reasons": dict(self.failure_reasons)}
 
 
@@ -699,6 +706,8 @@ class FitResult:
     failure_reasons: dict = field(default_factory=dict)
     source_data: Any = field(default=None, repr=False, compare=False)
     file: str | None = None
+    rolled_evaluations: int | None = None  # the wheel-lift and rollover check on: evaluations in which a unit rolls
+    rolled_of: int = 0  # ... of this many (the local fits' and the analysis's; not the screening's)
 
     @property
     def values(self) -> dict:
@@ -722,7 +731,34 @@ class FitResult:
             "starts": [s.to_dict() for s in self.starts], "n_starts": len(self.starts), "n_agree": self.n_agree,
             "n_same_cost": self.n_same_cost, "warnings": list(self.warnings), "evaluations": self.evaluations,
             "failures": self.failures, "failure_reasons": dict(self.failure_reasons), "elapsed": self.elapsed,
+            **({"rolled_evaluations": self.rolled_evaluations, "rolled_of": self.rolled_of,
+                "rollover": self._best_rollover()}
+               if self.rolled_evaluations is not None else {}),
         }
+
+    def _best_rollover(self) -> dict:
+        """The best fit's wheel-lift and rollover summary by vehicle (empty without its scene)."""
+        return self.scene.rollover() if self.scene is not None and not isinstance(self.scene, Exception) else {}
+
+    def rollover_lines(self, system: str) -> list[str]:
+        """The report's rollover lines: the best fit's verdict and the evaluations that rolled (none
+        without the check)."""
+        if self.rolled_evaluations is None:
+            return []
+        lines = ["Rollover (an outcome, not a failure; wheel-lift and rollover check)"]
+        for v, roll in self._best_rollover().items():
+            until = roll["valid_until_s"]
+            verdict = (f"rolls ({', '.join(roll['rolled_bodies'])})" if roll["rolled"] else "does not roll")
+            valid = ("planar result valid throughout" if until is None else
+                     f"planar result outside its validity from {fmt(until, 'time', system)}")
+            lines.append(f"  best fit: vehicle {v} {verdict}; {valid}")
+        lines.append(f"  a unit rolls in {self.rolled_evaluations} of the {self.rolled_of} scene evaluations of the "
+                     "local fits and the analysis")
+        ev = getattr(self.scene, "evidence", None) if not isinstance(self.scene, Exception) else None
+        for c in (ev.checks if ev is not None else ()):
+            if c.kind == "rollover":  # a statement, not fitted: its verdict at the best fit
+                lines.append(f"  {'PASS' if c.passed else 'FAIL'}  evidence {c.name!r} (a verdict, not fitted)")
+        return lines
 
     def best_scenario_dict(self) -> dict:
         """The fitted scenario file as a dict: the input file's with each unknown at its best value.
@@ -842,6 +878,9 @@ class FitResult:
             mark = "*" if s.agrees else ("=" if s.same_cost else " ")
             lines.append(f"  {mark} start {k + 1}: chi^2 = {2 * s.cost:.4g}, {s.evaluations} evaluations, "
                          + ", ".join(f"{u.name} {fmt(v, u.kind, system)}" for u, v in zip(self.unknowns, s.x)))
+        roll = self.rollover_lines(system)
+        if roll:
+            lines += [""] + roll
         if self.warnings:
             lines.append("")
             lines.append("Warnings")
@@ -1003,10 +1042,16 @@ def fit_scene(scenario_data: dict, fit_spec: FitSpec | dict | None = None, *, en
             outcomes.append(outcome)
             bar.update(1, k + 1)
     evaluations += sum(o["evaluations"] for o in outcomes)
-    n_before = problem.nfev
+    n_before, r_before = problem.nfev, problem.rolled
     result = _analyse(problem, spec, outcomes, engine)
     evaluations += problem.nfev - n_before
     result = _replace_timing(result, evaluations, time.perf_counter() - t0, problem.failures)
+    if problem.checked or any(o.get("checked") for o in outcomes):  # the check on: count what rolled
+        # the local fits' evaluations (in this process or the workers) and the analysis's here; the
+        # screening of the starts is not counted (its scenes are not kept)
+        rolled = sum(o.get("rolled", 0) for o in outcomes) + problem.rolled - r_before
+        of = sum(o["evaluations"] for o in outcomes) + problem.nfev - n_before
+        result = replace(result, rolled_evaluations=int(rolled), rolled_of=int(of))
 
     return replace(result, source_data=scenario_data, file=file)
 

@@ -302,7 +302,7 @@ OUTPUT_KINDS = {"delta_v": "speed", "speed": "speed", "speed_after": "speed", "e
                 "rest_x": "length", "rest_y": "length", "rest_heading": "angle", "distance": "length",
                 "delta_v_event": "speed", "impacts": "count", "speed_at_braking": "speed", "time_to_impact": "time",
                 "braking_distance": "length", "perception_distance": "length", "mu": "ratio",
-                "mu_over_mu_max": "dimensionless"}
+                "mu_over_mu_max": "dimensionless", "rolled": "dimensionless"}
 
 
 def scene_outputs(scene) -> dict[str, float]:
@@ -312,7 +312,9 @@ def scene_outputs(scene) -> dict[str, float]:
     distance from perception;
     with a joint run-out also each body's delta-v over the whole event (``delta_v_event``: the
     magnitude of the sum over all its impacts, as a recorder accumulating the event sees it)
-    and the number of impacts after the first (``impacts.later``)."""
+    and the number of impacts after the first (``impacts.later``); with the wheel-lift and rollover
+    check on, ``rolled.<vehicle>``: 1 if a unit of the vehicle rolls, else 0 (an outcome, not a
+    failed sample; its mean over the samples is the share that roll)."""
     imp = scene.impact
     out: dict[str, float] = {}
     sc = scene.scenario
@@ -342,6 +344,8 @@ def scene_outputs(scene) -> dict[str, float]:
                 own = body_impacts(name, imp, joint.impacts)
                 if own:
                     out[f"delta_v_event.{name}"] = float(np.hypot(*sum(d for d, _ in own)))
+    for vname, roll in scene.rollover().items():  # the check on: 1 where a unit of the vehicle rolls
+        out[f"rolled.{vname}"] = 1.0 if roll["rolled"] else 0.0
     for r in (scene.runout or {}).values():
         for name, b in r.bodies.items():
             out[f"rest_x.{name}"] = float(b.rest_position[0])
@@ -525,6 +529,28 @@ class MCResult:
             return f"{100 * self.accepted_share:.3g} % of {self.n_done} samples{failed} meet the {items}"
         return f"{100 * self.accepted_share:.3g} % of {self.n_done} samples{failed} meet all {items}"
 
+    @property
+    def rolled_share(self) -> dict:
+        """By vehicle (the wheel-lift and rollover check on): the share of the successful samples in which
+        a unit of it rolls; empty without the check."""
+        failed = {i for i, _ in self.errors}
+        good = np.array([int(i) not in failed for i in self.indices], dtype=bool)
+        out = {}
+        for key, v in self.outputs.items():
+            if key.startswith("rolled.") and good.any():
+                out[key.split(".", 1)[1]] = float(np.nanmean(np.asarray(v, dtype=float)[good]))
+        return out
+
+    def rollover_lines(self) -> list[str]:
+        """The report's rollover lines (none without the check)."""
+        share = self.rolled_share
+        if not share:
+            return []
+        n_ok = self.n_done - self.n_failed
+        return ["Rollover (an outcome of a sample, not a failure; wheel-lift and rollover check)"] + [
+            f"  vehicle {v}: a unit rolls in {100 * f:.1f} % of the {n_ok} successful samples "
+            f"({int(round(f * n_ok))} samples)" for v, f in share.items()]
+
     @staticmethod
     def kind_of(key: str) -> str:
         return OUTPUT_KINDS.get(key.split(".", 1)[0], "dimensionless")
@@ -548,6 +574,7 @@ class MCResult:
             "tornado": self.tornado,
             "errors": [{"i": int(i), "message": m} for i, m in self.errors[:50]],
             "failure_reasons": dict(self.failure_reasons),
+            **({"rolled_share": self.rolled_share} if self.rolled_share else {}),
             **({"accepted": {
                 "count": self.n_accepted, "share": fin(self.accepted_share), "of": self.n_done,
                 "n_evidence": self.n_evidence, "indices": [int(i) for i in self.indices[self.meets_all]],
@@ -612,6 +639,8 @@ class MCResult:
             lines.append("Share of samples within each evidence tolerance (over the successful samples)")
             for k, s in self.pass_share.items():
                 lines.append(f"  {100 * s:6.1f} %  {k}")
+        if self.rolled_share:
+            lines += [""] + self.rollover_lines()
         if self.accept:
             lines += [""] + self._accepted_lines(show, qs)
         if self.tornado:

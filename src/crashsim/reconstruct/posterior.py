@@ -94,7 +94,7 @@ ACCEPTANCE_RANGE = (0.15, 0.7)
 #: range from it (a posterior well inside its bounds has almost none there).
 EDGE, EDGE_SHARE = 0.05, 0.01
 #: Prefixes of :func:`~crashsim.reconstruct.montecarlo.scene_outputs` kept as derived quantities.
-DERIVED_PREFIXES = ("speed", "speed_at_braking", "delta_v", "speed_after", "energy_loss")
+DERIVED_PREFIXES = ("speed", "speed_at_braking", "delta_v", "speed_after", "energy_loss", "rolled")
 _FORMAT = "crashsim-posterior/1"
 
 
@@ -526,6 +526,10 @@ class PosteriorResult:
                                                                        show(p["sd"], kd) if kd != "dimensionless"
                                                                        else f"{100 * p['sd']:.1f} %"])
             lines += table(rows, "l" + "r" * (len(heads) + 2))
+            for k in self.derived:  # the wheel-lift and rollover check on: rolled.<vehicle> is 1 or 0 per sample
+                if k.startswith("rolled.") and self.percentiles.get(k) is not None:
+                    lines.append(f"  rollover (an outcome, not a failure): a unit of vehicle {k.split('.', 1)[1]} "
+                                 f"rolls in {100 * self.percentiles[k]['mean']:.1f} % of the kept samples")
         n = len(self.unknowns)
         labels = self.labels
         lines.append("")

@@ -86,6 +86,11 @@ class SceneResult:
         """True if there is no run-out or every run-out ended at rest."""
         return self.runout is None or all(r.success for r in self.runout.values())
 
+    def rollover(self) -> dict:
+        """By vehicle, its wheel-lift and rollover summary (:attr:`RunoutResult.rollover`); empty when the
+        check is off."""
+        return {v: r.rollover for v, r in (self.runout or {}).items() if getattr(r, "rollover", None) is not None}
+
     def energy_ledger(self) -> dict | None:
         """The scene's energy ledger from the approach to rest [J] (None without a joint run-out).
 

@@ -19,7 +19,7 @@ import pytest
 
 from crashsim.geometry import perp, rotate
 from crashsim.motion import Road, RunoutOptions, WheelSetting, WheelSettings, make_hitch_consistent, simulate_runout
-from crashsim.motion.dynamics import RunoutModel
+from crashsim.motion.hitches import RunoutModel
 from crashsim.motion.loads import STANDARD_GRAVITY
 from crashsim.motion.simulate import zone_membership
 from crashsim.vehicles import Axle, Body, BodyState, Hitch, Vehicle, chain_states

@@ -29,7 +29,7 @@ from .units import Kind, convert, resolve_system, to_unit
 _log = logging.getLogger("crashsim")
 
 __all__ = ["is_color", "LABEL_KINDS", "LEGEND_MODES", "PAPER_SIZES", "PrintSheet", "place_labels", "check_hide",
-           "legend_mode", "parse_scale", "print_sheet", "scene_drawing", "text_box", "BarrierAxes",
+           "legend_mode", "parse_scale", "replace_scale_bar", "print_sheet", "scene_drawing", "text_box", "BarrierAxes",
            "plot_barrier_sweep", "plot_barrier_figures", "plot_scene", "plot_histories",
            "history_panels", "save_scene_figures", "SCENE_FIGURE_SUFFIXES"]
 
@@ -505,8 +505,12 @@ def _draw_crush(S, sc) -> None:
         S.legend_entry("measured crush (to scale)", Patch(facecolor="none", edgecolor="0.2", hatch="xxxx", lw=1.0))
 
 
-#: Where the legend of a scene figure goes: under or beside the diagram, small inside it, or none.
-LEGEND_MODES = ("outside", "inside", "none")
+#: Where the legend of a scene figure goes: compact (one line per entry, the evidence as one entry)
+#: under or beside the diagram, in full under or beside it, small inside it, or none.
+LEGEND_MODES = ("compact", "outside", "inside", "none")
+
+#: Legend modes that put the legend outside the axes (the figure sized to hold it).
+_OUTSIDE = ("compact", "outside")
 
 #: Paper sizes of a print sheet, portrait (width, height) [mm]: ISO 216 A4 and A3, US letter and tabloid.
 PAPER_SIZES = {"A4": (210.0, 297.0), "A3": (297.0, 420.0), "letter": (215.9, 279.4), "tabloid": (279.4, 431.8)}
@@ -519,8 +523,8 @@ _SHEET_EDGE, _SHEET_LEFT, _SHEET_BOTTOM = 12.0 / 25.4, 0.55, 0.45
 
 
 def legend_mode(legend) -> str:
-    """``"outside"``, ``"inside"``, ``"none"`` or a matplotlib location (inside, there) from
-    :func:`plot_scene`'s ``legend`` (True: outside; False or None: none)."""
+    """``"compact"``, ``"outside"``, ``"inside"``, ``"none"`` or a matplotlib location (inside,
+    there) from :func:`plot_scene`'s ``legend`` (True: outside; False or None: none)."""
     if legend is True:
         return "outside"
     if legend is False or legend is None:
@@ -666,8 +670,12 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     system : {"SI", "US"}, optional
         Display units: coordinates in m or ft, speeds in m/s or mph. Default: the scenario's.
     legend : bool or str
-        ``"outside"`` or True: legend outside the axes (at the right; under the diagram for a new
-        figure of a wide scene or a print sheet, with the figure sized to hold it); ``"inside"``:
+        ``"compact"``: one line per entry and the evidence as one entry (its title counts the
+        verdicts; each residual is in the report), outside the axes in small type: under the
+        diagram in as many columns as fit for a new figure of a wide scene, else at its right.
+        ``"outside"`` or True: the full legend (each evidence item with its residual) outside the
+        axes (at the right; under the diagram for a new figure of a wide scene or a print sheet,
+        with the figure sized to hold it); ``"inside"``:
         small, in the corner that covers least; a matplotlib location string (``"upper left"``):
         inside, there; ``"none"`` or False: none.
     axles : bool
@@ -905,7 +913,7 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
         ax.figure.set_size_inches(*probe.size)
         leg = _scene_legend(S, mode, True, compact=True) if mode != "none" else None
         room = 0.0
-        if mode == "outside":
+        if mode in _OUTSIDE:
             fig = ax.figure
             room = leg.get_window_extent(fig.canvas.get_renderer()).height / fig.dpi + 0.15
         sheet = print_sheet(paper or "A4", lo, hi, S.k, scale, legend_height=room)
@@ -926,7 +934,7 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     below = new and (hi[1] - lo[1]) / (hi[0] - lo[0]) < 0.75
     if sheet is None:
         leg = _scene_legend(S, mode, below) if mode != "none" else None
-    outside = leg if mode == "outside" else None
+    outside = leg if mode in _OUTSIDE else None
     if sheet is not None:
         layout_print(ax, sheet)
     else:
@@ -940,7 +948,7 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     _draw_scene_underlay(S)
     xl = ax.get_xlim()
     fixed.append(_scale_bar(S, xl[1] - xl[0], sheet))
-    if leg is not None and mode != "outside":
+    if leg is not None and mode not in _OUTSIDE:
         fixed.append(leg)
     ax.figure.draw_without_rendering()
     S.fixed = fixed
@@ -1726,8 +1734,25 @@ def _scale_bar(S: SceneDrawing, width: float, sheet=None):
     # the bar itself: a thick line (size_vertical would be in data units)
     bar.size_bar.get_children()[0].set_linewidth(3.0)
     bar.set_gid("scalebar")
+    bar.crashsim_length = length
     bar.set_zorder(Z_TEXT + 1)
     S.ax.add_artist(bar)
+    return bar
+
+
+def replace_scale_bar(ax):
+    """The scale bar of a scene figure (gid ``"scalebar"``) drawn again for the axes' current
+    x limits when its 1-2-2.5-5 length changes (the animation's moving view); returns the bar."""
+    S = scene_drawing(ax)
+    x0, x1 = ax.get_xlim()
+    old = next((a for a in ax.artists if a.get_gid() == "scalebar"), None)
+    length = _nice_at_most((x1 - x0) / 5.0)
+    if old is not None and getattr(old, "crashsim_length", None) == length:
+        return old
+    if old is not None:
+        old.remove()
+    bar = _scale_bar(S, x1 - x0)
+    bar.crashsim_length = length
     return bar
 
 
@@ -1913,7 +1938,11 @@ def _axes_indicator(ax) -> list:
     return out
 
 
-def layout_scene_figure(ax, leg, below: bool, width: float = 10.0, height: float = 7.0) -> None:
+#: Width of a new scene figure laid out with the legend under it [in] (:func:`layout_scene_figure`).
+_FIGURE_WIDTH = 10.0
+
+
+def layout_scene_figure(ax, leg, below: bool, width: float = _FIGURE_WIDTH, height: float = 7.0) -> None:
     """Size a figure made by :func:`plot_scene` and place its axes: the axes box gets exactly
     the aspect of the limits (equal scale, no wasted band), the legend its measured size.
 
@@ -1984,7 +2013,7 @@ def _scene_legend(S: SceneDrawing, mode: str, below: bool, compact: bool = False
     right; ``"inside"`` small, in the corner that covers least (matplotlib's "best")."""
     labels = list(S.handles)
     handles = [S.handles[k] for k in labels]
-    size = 6.5 if compact or mode == "inside" else 7.5
+    size = 6.5 if compact or mode != "outside" else 7.5
     keys = list(labels)
     if mode != "outside":
         # inside: compact. One line per entry, the evidence items as one entry (the title counts
@@ -2001,7 +2030,7 @@ def _scene_legend(S: SceneDrawing, mode: str, below: bool, compact: bool = False
         keys = keep
         handles = [S.handles[k] for k in keys]
         labels = [k.split("\n  ")[0].replace("\n", " ") for k in keys]
-    if mode == "outside" and compact:  # a print sheet: under the drawing, as many columns as the page holds
+    if mode in _OUTSIDE and compact:  # a print sheet: under the drawing, as many columns as the page holds
         fig = S.ax.figure
         r = fig.canvas.get_renderer()
         room = fig.get_size_inches()[0] * fig.dpi - 2 * _SHEET_EDGE * fig.dpi
@@ -2013,6 +2042,24 @@ def _scene_legend(S: SceneDrawing, mode: str, below: bool, compact: bool = False
             if leg.get_window_extent(r).width <= room or ncol == 1:
                 break
             leg.remove()
+    elif mode == "compact" and below:
+        from matplotlib.transforms import offset_copy
+
+        # under the axes in as many columns (at most 4) as the figure's width holds
+        under = offset_copy(S.ax.transAxes, fig=S.ax.figure, y=-40, units="points")
+        fig = S.ax.figure
+        r = fig.canvas.get_renderer()
+        room = (_FIGURE_WIDTH - 0.4) * fig.dpi
+        for ncol in (4, 3, 2, 1):
+            leg = S.ax.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, 0.0), bbox_transform=under,
+                              borderaxespad=0.0, fontsize=size, frameon=False, handlelength=2.0, ncol=ncol,
+                              columnspacing=1.2, labelspacing=0.3)
+            if leg.get_window_extent(r).width <= room or ncol == 1:
+                break
+            leg.remove()
+    elif mode == "compact":
+        leg = S.ax.legend(handles, labels, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0,
+                          fontsize=size, frameon=False, handlelength=2.0, labelspacing=0.3)
     elif mode == "outside" and below:
         from matplotlib.transforms import offset_copy
 

@@ -23,13 +23,14 @@ from .geometry import rotate, to_body, to_world
 from .motion.approach import path_length
 from .motion.road import points_in_polygon, signed_distance
 from .report import fmt
+from .survey.mapping import is_placed
 from .survey.underlay import draw_underlay, scene_underlay
 from .units import Kind, convert, resolve_system, to_unit
 
 _log = logging.getLogger("crashsim")
 
 __all__ = ["is_color", "LABEL_KINDS", "LEGEND_MODES", "PAPER_SIZES", "PrintSheet", "place_labels", "check_hide",
-           "legend_mode", "parse_scale", "replace_scale_bar", "print_sheet", "scene_drawing", "text_box", "BarrierAxes",
+           "legend_mode", "parse_scale", "replace_scale_bar", "north_direction", "print_sheet", "scene_drawing", "text_box", "BarrierAxes",
            "plot_barrier_sweep", "plot_barrier_figures", "plot_scene", "plot_histories",
            "history_panels", "save_scene_figures", "SCENE_FIGURE_SUFFIXES"]
 
@@ -728,7 +729,8 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
 
     With a scene placed on a survey (``[survey]`` with files, an underlay or a CRS) a north
     arrow shows grid north (the survey's +y); the orthophoto (``[survey.underlay]``) lies under
-    everything.
+    everything. A scene not on a survey shows the north of ``[map] north`` (the bearing of its
+    +Y axis), if the file gives it (:func:`north_direction`).
     """
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
@@ -1756,17 +1758,30 @@ def replace_scale_bar(ax):
     return bar
 
 
-def _north_arrow(S: SceneDrawing) -> list:
-    """Grid north of a scene placed on a survey ([survey]: north is the survey's +y, the scene's
-    +X is turned ``rotation`` from its east), right of the +X/+Y arrows; none without a survey
-    (the scene's own axes say nothing of north). Returns the texts drawn."""
-    data = S.sc.data if isinstance(S.sc.data, dict) else {}
+def north_direction(sc) -> tuple[np.ndarray, str] | None:
+    """North in the scene frame, a unit vector, and what it is: ``"grid north"`` for a scene
+    placed on a survey (the survey's +y; the scene's +X is turned ``survey.rotation`` from its
+    +x), else ``"north"`` from ``[map] north`` (the bearing of the scene's +Y, clockwise from
+    north: north lies that angle counter-clockwise from +Y); None when the file says neither."""
+    data = sc.data if isinstance(sc.data, dict) else {}
     survey = data.get("survey")
-    placed = isinstance(survey, dict) and any(survey.get(k) for k in ("files", "underlay", "crs", "imported"))
-    if not placed:
+    if is_placed(survey):
+        rot = float(survey["rotation"])
+        return np.array([math.sin(rot), math.cos(rot)]), "grid north"
+    bearing = (data.get("map") or {}).get("north")
+    if bearing is None:
+        return None
+    return np.array([-math.sin(bearing), math.cos(bearing)]), "north"
+
+
+def _north_arrow(S: SceneDrawing) -> list:
+    """The north arrow, right of the +X/+Y arrows (:func:`north_direction`): grid north of a scene
+    placed on a survey, else the north of ``[map] north``; none when the file says neither (the
+    scene's own axes say nothing of north). Returns the texts drawn."""
+    got = north_direction(S.sc)
+    if got is None:
         return []
-    rot = float(survey["rotation"])
-    u = np.array([math.sin(rot), math.cos(rot)])  # survey +y in the scene frame
+    u, _ = got
     from matplotlib.transforms import offset_copy
 
     base = (0.03, 1.0)

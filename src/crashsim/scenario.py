@@ -539,7 +539,12 @@ MAP_LINE = Section("line", [
           description="Colour instead of the style's own: a matplotlib colour name or hex code"),
 ], description="A line of the road layout (edge, lane line, kerb, ...), drawn under the vehicles; no physics")
 
-MAP = Section("map", [], subsections=[
+MAP = Section("map", [
+    Field("north", Kind.ANGLE, required=False, minimum=-2.0 * math.pi, maximum=2.0 * math.pi, example="30 deg",
+          description="Bearing of the scene's +Y axis: the compass direction it points in, clockwise from north "
+                      "(0 deg: +Y points north, 90 deg: +Y points east); drawn as a north arrow on the scene figures "
+                      "and animations. A scene placed on a survey takes grid north from [survey] instead"),
+], subsections=[
     ArrayOf("lines", MAP_LINE, required=False,
             description="Lines of the road layout (road edges, lane and centre lines, kerbs, stop bars), drawn "
                         "under the vehicles on the scene figure; they do not change the physics"),
@@ -575,7 +580,7 @@ from .motion.loads import STANDARD_GRAVITY
 from .motion.road import signed_distance
 from .plotting import is_color
 from .scene.run import simulate_approaches
-from .survey.mapping import expand_survey
+from .survey.mapping import expand_survey, is_placed
 
 SCHEMA = with_inverse_sections(SCHEMA)
 
@@ -642,6 +647,15 @@ def _build_map_lines(m: dict, file: str | None) -> tuple[MapLine, ...]:
                            "or a hex code (\"#7f7f7f\")", f"map.lines[{i}].color", file)
         lines.append(MapLine(ln["name"], ln["style"], np.asarray(ln["points"], dtype=float), color))
     return tuple(lines)
+
+
+def _check_north(d: dict, file: str | None) -> None:
+    """``[map] north`` is for scenes not placed on a survey (a placed scene's grid north is the survey's +y)."""
+    north = (d.get("map") or {}).get("north")
+    if north is not None and is_placed(d.get("survey")):
+        raise _err(f"{math.degrees(north):g} deg is given for a scene placed on a survey, whose north arrow is the "
+                   "survey's grid north (its +y, turned by survey.rotation); allowed only without a placed [survey]: "
+                   "remove map.north", "map.north", file)
 
 
 @dataclass(frozen=True)
@@ -1323,6 +1337,8 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None, approac
             evidence = dataclasses.replace(evidence, crush=_build_crush(d["evidence"]["crush"], d, vehicles, file))
     with later.each():
         map_lines = _build_map_lines(d["map"], file)
+    with later.each():
+        _check_north(d, file)
     later.raise_any()
     meta = d["scenario"]
     out = Scenario(file, meta["title"], meta["source"], meta["units"], tuple(vehicles), states, problem, runout,

@@ -389,9 +389,9 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("--interval", metavar="TIME", help='time between ghost outlines, e.g. "0.5 s"')
     pl.add_argument("--units", type=_units, default=None, help="SI or US: units of the figure (default: the scenario's)")
     pl.add_argument("--dpi", type=int, default=150)
-    pl.add_argument("--legend", choices=LEGEND_MODES, default="outside",
-                    help="legend under or beside the diagram (default), compact there (one line per entry), "
-                         "small inside it, or none")
+    pl.add_argument("--legend", choices=LEGEND_MODES, default="compact",
+                    help="compact legend under or beside the diagram, one line per entry (default); the full one "
+                         "there, each evidence item with its residual (outside); small inside it; or none")
     pl.add_argument("--hide", type=_hide, default=None, metavar="KINDS",
                     help=f"label kinds to leave out, comma-separated: labels (all), {', '.join(LABEL_KINDS)}")
     pl.add_argument("--paper", choices=tuple(PAPER_SIZES), default=None,

@@ -29,7 +29,7 @@ from .units import Kind, convert, resolve_system, to_unit
 
 _log = logging.getLogger("crashsim")
 
-__all__ = ["is_color", "LABEL_KINDS", "LEGEND_MODES", "PAPER_SIZES", "PrintSheet", "place_labels", "check_hide",
+__all__ = ["is_color", "LABEL_KINDS", "LINE_SHY", "line_ink", "LEGEND_MODES", "PAPER_SIZES", "PrintSheet", "place_labels", "check_hide",
            "legend_mode", "parse_scale", "replace_scale_bar", "north_direction", "print_sheet", "scene_drawing", "text_box", "BarrierAxes",
            "plot_barrier_sweep", "plot_barrier_figures", "plot_scene", "plot_histories",
            "history_panels", "save_scene_figures", "SCENE_FIGURE_SUFFIXES"]
@@ -484,6 +484,9 @@ def _residual_text(c, system) -> str:
     return f"{fmt(abs(c.residual), c.quantity, system, 2)} (tol. {fmt(c.tolerance, c.quantity, system, 2)})"
 
 
+_CRUSH_KEY = "measured crush (to scale)"
+
+
 def _draw_crush(S, sc) -> None:
     """Each measured crush profile (``[[evidence.crush]]``) on the damaged face of its body's outline at
     impact, to scale (gid ``"crush:<body>:<face>"``)."""
@@ -503,7 +506,7 @@ def _draw_crush(S, sc) -> None:
         S.add(xy)
         drawn = True
     if drawn:
-        S.legend_entry("measured crush (to scale)", Patch(facecolor="none", edgecolor="0.2", hatch="xxxx", lw=1.0))
+        S.legend_entry(_CRUSH_KEY, Patch(facecolor="none", edgecolor="0.2", hatch="xxxx", lw=1.0))
 
 
 #: Where the legend of a scene figure goes: compact (one line per entry, the evidence as one entry)
@@ -647,7 +650,7 @@ def layout_print(ax, sheet: PrintSheet) -> None:
 
 
 def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evidence: bool = True,
-               arrows: bool = True, system: str | None = None, legend=True, axles: bool = True,
+               arrows: bool = True, system: str | None = None, legend="compact", axles: bool = True,
                approach: bool = True, hide=(), paper: str | None = None, scale: float | None = None):
     """Scale diagram of a reconstructed scene in the ground frame: impact, run-out, evidence.
 
@@ -671,9 +674,10 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     system : {"SI", "US"}, optional
         Display units: coordinates in m or ft, speeds in m/s or mph. Default: the scenario's.
     legend : bool or str
-        ``"compact"``: one line per entry and the evidence as one entry (its title counts the
-        verdicts; each residual is in the report), outside the axes in small type: under the
-        diagram in as many columns as fit for a new figure of a wide scene, else at its right.
+        ``"compact"`` (the default): one line per entry and the evidence as one entry (its title
+        counts the verdicts; each residual is in the report), outside the axes in small type:
+        under the diagram in as many columns as fit for a new figure of a wide scene, else at its
+        right.
         ``"outside"`` or True: the full legend (each evidence item with its residual) outside the
         axes (at the right; under the diagram for a new figure of a wide scene or a print sheet,
         with the figure sized to hold it); ``"inside"``:
@@ -1832,7 +1836,53 @@ def text_box(t, renderer):
     return bb
 
 
-def place_labels(ax, texts, fixed=(), avoid=None) -> int:
+#: Label kinds kept off the drawn lines and outlines where a free place near their anchor allows
+#: (names, impact numbers and ghost times belong on their body or point; zone and map labels lie
+#: along their own line by design).
+LINE_SHY = ("pdof", "delta-v", "approach", "obstacles")
+
+#: Farthest a label otherwise free moves to get off a line [points] (a ring of :data:`_RINGS`).
+_SHY_REACH = 26.0
+
+#: Spacing of the samples along drawn lines that a label is kept off [pixels].
+_INK_STEP = 2.0
+
+
+def line_ink(ax, exclude=()) -> np.ndarray:
+    """Pixel positions along every line and outline edge drawn in the axes, shape (n, 2): the
+    vertices of each Line2D and patch (leader lines and ``exclude`` left out) and points every
+    :data:`_INK_STEP` pixels between them, inside the axes."""
+    from matplotlib.lines import Line2D
+
+    frame = ax.get_window_extent(ax.figure.canvas.get_renderer())
+    out = []
+    for a in [*ax.lines, *ax.patches]:
+        if not a.get_visible() or a in exclude or (a.get_gid() or "").startswith("leader:"):
+            continue
+        if isinstance(a, Line2D):
+            if a.get_linestyle() in ("None", "none", "", " "):
+                continue  # markers only
+            xy = a.get_transform().transform(np.column_stack(a.get_data()).astype(float))
+            polys = [xy]
+        else:
+            polys = a.get_path().to_polygons(a.get_transform())
+        for xy in polys:
+            xy = xy[np.all(np.isfinite(xy), axis=1)]
+            if len(xy) < 2:
+                continue
+            seg = np.diff(xy, axis=0)
+            n = np.maximum(np.ceil(np.hypot(seg[:, 0], seg[:, 1]) / _INK_STEP), 1).astype(int)
+            f = np.concatenate([np.arange(k) / k for k in n])
+            start = np.repeat(xy[:-1], n, axis=0)
+            out.append(start + f[:, None] * np.repeat(seg, n, axis=0))
+    if not out:
+        return np.empty((0, 2))
+    pts = np.vstack(out)
+    keep = (pts[:, 0] >= frame.x0) & (pts[:, 0] <= frame.x1) & (pts[:, 1] >= frame.y0) & (pts[:, 1] <= frame.y1)
+    return pts[keep]
+
+
+def place_labels(ax, texts, fixed=(), avoid=None, lines: bool = True) -> int:
     """Move labels so that no two text boxes overlap: labels in :data:`LABEL_KINDS` order keep
     their place while free, else go to the nearest free place around their anchor.
 
@@ -1847,6 +1897,11 @@ def place_labels(ax, texts, fixed=(), avoid=None) -> int:
     avoid : ndarray, shape (n, 2), optional
         Points drawn [data units]: among free places at the same distance, the one covering
         fewest of them wins.
+    lines : bool
+        Keep labels of the :data:`LINE_SHY` kinds off the drawn lines and outline edges
+        (:func:`line_ink`) where they can: such a label that covers a line moves to the nearest
+        free place within :data:`_SHY_REACH` points that covers none (else it stays), and among
+        free places at one distance the one covering the least line wins.
 
     Returns
     -------
@@ -1861,6 +1916,8 @@ def place_labels(ax, texts, fixed=(), avoid=None) -> int:
     anchor (its nearest corner or edge towards it); the first distance with a free place
     wins, and a label moved :data:`_LEADER_FROM` points or more gets a thin leader line. It
     is a greedy step (deterministic, no iteration): labels placed earlier are never moved.
+    Labels of the :data:`LINE_SHY` kinds are also kept off the drawn lines where they can (see
+    ``lines``).
     """
     fig = ax.figure
     for old in [a for a in ax.texts if (a.get_gid() or "").startswith("leader:")]:
@@ -1889,16 +1946,26 @@ def place_labels(ax, texts, fixed=(), avoid=None) -> int:
         return int(np.count_nonzero((px[:, 0] >= bb.x0) & (px[:, 0] <= bb.x1) & (px[:, 1] >= bb.y0)
                                     & (px[:, 1] <= bb.y1)))
 
+    ink = line_ink(ax) if lines and any(_label_kind(t) in LINE_SHY for t in order) else None
+
+    def on_lines(bb):
+        return int(np.count_nonzero((ink[:, 0] >= bb.x0) & (ink[:, 0] <= bb.x1) & (ink[:, 1] >= bb.y0)
+                                    & (ink[:, 1] <= bb.y1)))
+
     lost = 0
     angles = np.radians(np.arange(0.0, 360.0, 30.0) + 90.0)  # above first, then round
     for t in order:
         bb = text_box(t, r)
-        if free(bb):
+        shy = ink is not None and len(ink) > 0 and _label_kind(t) in LINE_SHY
+        was_free = free(bb)
+        if was_free and (not shy or on_lines(bb) == 0):
             placed.append(bb)
             continue
         start = (t.xyann, t.anncoords, t.get_ha(), t.get_va())
         best = None
         for ring in _RINGS:
+            if was_free and ring > _SHY_REACH:
+                break  # free but on a line: only a near place off the lines is worth the move
             for a in angles:
                 c, s = np.cos(a), np.sin(a)
                 t.set_anncoords("offset points")
@@ -1907,11 +1974,19 @@ def place_labels(ax, texts, fixed=(), avoid=None) -> int:
                 t.set_va("bottom" if s > 0.3 else "top" if s < -0.3 else "center")
                 cand = text_box(t, r)
                 if free(cand):
-                    score = covered(cand)
-                    if best is None or score < best[0]:
-                        best = (score, ring, (ring * c, ring * s), t.get_ha(), t.get_va(), cand)
+                    score = (on_lines(cand) if shy else 0, covered(cand))
+                    if (was_free and score[0] > 0) or (best is not None and score >= best[0]):
+                        continue
+                    best = (score, ring, (ring * c, ring * s), t.get_ha(), t.get_va(), cand)
             if best is not None:
                 break
+        if best is None and was_free:  # no near place off the lines: it stays where it was
+            t.xyann, _, ha, va = start
+            t.set_anncoords(start[1])
+            t.set_ha(ha)
+            t.set_va(va)
+            placed.append(text_box(t, r))
+            continue
         if best is None:
             t.xyann, _, ha, va = start
             t.set_anncoords(start[1])
@@ -2034,8 +2109,12 @@ def _scene_legend(S: SceneDrawing, mode: str, below: bool, compact: bool = False
         # inside: compact. One line per entry, the evidence items as one entry (the title counts
         # their verdicts; each residual is in the report)
         evidence = ("measured ", "recorded ", "crush energy")
-        n_ev = sum(k.startswith(evidence) for k in keys)
-        keep = [k for k in keys if not k.startswith(evidence)]
+
+        def is_item(k):  # an evidence item with its verdict (the crush hatch is a key to the drawing)
+            return k.startswith(evidence) and k != _CRUSH_KEY
+
+        n_ev = sum(is_item(k) for k in keys)
+        keep = [k for k in keys if not is_item(k)]
         if n_ev:
             from matplotlib.lines import Line2D
 
@@ -2232,7 +2311,7 @@ def plot_histories(scene, axes=None, *, system: str | None = None):
 
 
 def save_scene_figures(scene, path, *, histories_path=None, dpi: int = 150, interval: float | None = None,
-                       system: str | None = None, time_distance_path=None, approach: bool = True, legend=True,
+                       system: str | None = None, time_distance_path=None, approach: bool = True, legend="compact",
                        hide=(), paper: str | None = None, scale: float | None = None) -> list:
     """Write the scene diagram (and optionally the histories) to files; closes its figures.
 

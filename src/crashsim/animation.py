@@ -208,8 +208,9 @@ class SceneAnimation:
     ----------
     scene : SceneResult
     fig, ax : matplotlib Figure and Axes
-        The scene figure (:func:`crashsim.plotting.plot_scene` without ghosts); axis limits
-        fixed, containing every pose of every frame.
+        The scene figure (:func:`crashsim.plotting.plot_scene` without ghosts); in the scene view
+        the axis limits are fixed and contain every pose of every frame, in the follow view
+        :meth:`frame` sets them to ``limits[k]``.
     times : ndarray, shape (n,)
         Frame times after separation [s].
     outlines : dict of str to matplotlib artist
@@ -637,12 +638,18 @@ def _write_gif(anim: SceneAnimation, path: Path, fps: float, dpi: int, hold: int
             a.set_animated(True)
         canvas.draw()  # the fixed layer
         background = canvas.copy_from_bbox(fig.bbox)
+        leg, legend_pixels = ax.get_legend(), None
+        if anim.limits is not None and leg is not None:  # the follow view: the legend outside the view drawn once
+            legend_pixels = canvas.copy_from_bbox(leg.get_window_extent(canvas.get_renderer()).padded(2.0))
+            leg.set_visible(False)
         frames = []
         n = len(anim)
         for k in range(n):
             anim.frame(k)
             if anim.limits is not None:
                 canvas.draw()
+                if legend_pixels is not None:
+                    canvas.restore_region(legend_pixels)
             else:
                 canvas.restore_region(background)
                 for a in sorted(changing, key=lambda a: a.get_zorder()):
@@ -655,6 +662,8 @@ def _write_gif(anim: SceneAnimation, path: Path, fps: float, dpi: int, hold: int
         frames += [frames[-1]] * hold
         frames[0].save(path, save_all=True, append_images=frames[1:], duration=int(1000 / fps), loop=0)
     finally:
+        if ax.get_legend() is not None:
+            ax.get_legend().set_visible(True)
         for a in changing:
             a.set_animated(False)
         fig.set_dpi(old_dpi)

@@ -316,6 +316,23 @@ def test_follow_gif_is_drawn_whole_at_each_frame(tmp_path):
     assert changed.mean() > 0.2
 
 
+def test_follow_gif_keeps_its_legend_in_every_frame(tmp_path):
+    """The follow view draws its legend (outside the view, the same in every frame) once and pastes it."""
+    scene = _scene(INTERSECTION)
+    anim = scene_animation(scene, dt=DT)
+    anim.fig.set_dpi(40)
+    anim.fig.canvas.draw()
+    box = anim.ax.get_legend().get_window_extent(anim.fig.canvas.get_renderer())
+    h = round(anim.fig.get_figheight() * 40)
+    out = animate_scene(scene, tmp_path / "l.gif", dt=DT, dpi=40)
+    with Image.open(out) as im:
+        for k in (1, im.n_frames - 1):
+            im.seek(k)
+            px = np.asarray(im.convert("L"), dtype=int)
+            region = px[h - int(box.y1):h - int(box.y0), int(box.x0):int(box.x1)]
+            assert (region < 128).mean() > 0.02, f"frame {k}: no legend drawn"
+
+
 @pytest.mark.parametrize("kwargs, field", [({"view": "camera"}, "view"), ({"legend": "outside"}, "legend")])
 def test_bad_view_or_legend_is_named(kwargs, field):
     with pytest.raises(ScenarioError, match=rf"^{field}: .* is unknown; allowed "):

@@ -83,6 +83,12 @@ def test_no_two_labels_overlap_on_a_shipped_scene(path):
     frame = ax.get_window_extent(r).padded(1.0)
     for text, bb in _text_boxes(ax.figure):
         assert frame.contains(bb.x0, bb.y0) and frame.contains(bb.x1, bb.y1), text
+    # the compact legend (the default): outside the axes, whole inside the figure, one line per entry
+    leg = ax.get_legend().get_window_extent(r)
+    fig = ax.figure.bbox
+    assert not leg.overlaps(ax.get_window_extent(r))
+    assert fig.x0 <= leg.x0 and leg.x1 <= fig.x1 and fig.y0 <= leg.y0 and leg.y1 <= fig.y1, (leg, fig)
+    assert all("\n" not in t.get_text() for t in ax.get_legend().get_texts())
 
 
 @pytest.mark.parametrize("legend", ["inside", "none"])

@@ -23,7 +23,6 @@ from .geometry import rotate, to_body, to_world
 from .motion.approach import path_length
 from .motion.road import points_in_polygon, signed_distance
 from .report import fmt
-from .survey.mapping import is_placed
 from .survey.underlay import draw_underlay, scene_underlay
 from .units import Kind, convert, resolve_system, to_unit
 
@@ -754,8 +753,7 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     for v in sc.vehicles:  # the colour key first in the legend
         if not v.is_barrier:
             fill, line, _ = S.family[v.name]
-            desc = (sc.data.get("vehicles", {}).get(v.name, {}).get("description", "")
-                    if isinstance(sc.data, dict) else "")
+            desc = sc.descriptions.get(v.name, "")
             S.legend_entry(_wrap(f"vehicle {v.name}" + (f": {desc}" if desc else ""), 60),
                            Patch(facecolor=fill, edgecolor=line, lw=1.2))
     for v in sc.vehicles:
@@ -1767,11 +1765,10 @@ def north_direction(sc) -> tuple[np.ndarray, str] | None:
     placed on a survey (the survey's +y; the scene's +X is turned ``survey.rotation`` from its
     +x), else ``"north"`` from ``[map] north`` (the bearing of the scene's +Y, clockwise from
     north: north lies that angle counter-clockwise from +Y); None when the file says neither."""
-    data = sc.data if isinstance(sc.data, dict) else {}
-    survey = data.get("survey")
-    if is_placed(survey):
-        rot = float(survey["rotation"])
+    if getattr(sc, "survey_frame", None) is not None:
+        rot = float(sc.survey_frame.rotation)
         return np.array([math.sin(rot), math.cos(rot)]), "grid north"
+    data = sc.data if isinstance(sc.data, dict) else {}
     bearing = (data.get("map") or {}).get("north")
     if bearing is None:
         return None

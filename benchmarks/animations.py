@@ -12,10 +12,13 @@ temporary folder (nothing in plots/ changes). Kernels are compiled first (not ti
 
 from __future__ import annotations
 
+import os
 import sys
 import tempfile
 import time
 from pathlib import Path
+
+from _machine import cpu_name
 
 from crashsim.cli import main as crashsim
 from crashsim.warmup import compile_kernels
@@ -54,19 +57,24 @@ def main(argv: list[str]) -> int:
                 continue
             scene = ROOT / "scenarios" / "scenes" / f"{stem}.toml"
             out = folder / f"animation_{stem}.gif"
-            t0 = time.perf_counter()
+            load = os.getloadavg()[0]
+            t0, c0 = time.perf_counter(), time.process_time()
             code = crashsim(["animate", str(scene), "-o", str(out), "--quiet", *options])
-            wall = time.perf_counter() - t0
+            wall, cpu = time.perf_counter() - t0, time.process_time() - c0
             if code:
                 return code
             frames, seconds = _gif_seconds(out)
-            rows.append((stem, " ".join(options), frames, seconds, wall))
-            print(f"{stem}: {frames} frames, {seconds:.1f} s of playback, {wall:.1f} s to make", flush=True)
+            rows.append((stem, " ".join(options), frames, seconds, wall, cpu, load))
+            print(f"{stem}: {frames} frames, {seconds:.1f} s of playback, {wall:.1f} s to make ({cpu:.1f} s CPU, "
+                  f"load average {load:.1f})", flush=True)
     if not quick:
         lines = ["# Animation rendering time (`python benchmarks/animations.py`)", "",
-                 "Wall-clock time of `crashsim animate` (load, run, render, write), kernels compiled beforehand.", "",
-                 "| scene | options | frames | playback [s] | time to make [s] |", "|---|---|---|---|---|"]
-        lines += [f"| {s} | `{o}` | {f} | {p:.1f} | {w:.1f} |" for s, o, f, p, w in rows]
+                 "Wall-clock and CPU time of `crashsim animate` (load, run, render, write; default view: follow), "
+                 f"kernels compiled beforehand; the load average (1 min) at the start of each, on {os.cpu_count()} "
+                 f"cores ({cpu_name()}).", "",
+                 "| scene | options | frames | playback [s] | time to make [s] | CPU [s] | load average |",
+                 "|---|---|---|---|---|---|---|"]
+        lines += [f"| {s} | `{o}` | {f} | {p:.1f} | {w:.1f} | {c:.1f} | {a:.1f} |" for s, o, f, p, w, c, a in rows]
         (ROOT / "plots" / "animations.md").write_text("\n".join(lines) + "\n")
     return 0
 

@@ -2,10 +2,17 @@
 
 An edge module like :mod:`crashsim.plotting` (matplotlib imported lazily, on first use). The
 fixed layer of every frame is :func:`crashsim.plotting.plot_scene` without ghost outlines
-(outlines at impact, obstacles, evidence, arrows, a compact legend inside the view, scale bar),
-drawn once; per frame the moving outlines, the hitch pins and a clock change, the tyre tracks
-and CG paths grow to the clock, the outlines at rest appear when their vehicle comes to rest
-and later impacts' numbers when they happen.
+(outlines at impact, obstacles, evidence, arrows, a compact legend outside the view, scale bar);
+per frame the moving outlines, the hitch pins and a clock change, the tyre tracks and CG paths
+grow to the clock, the outlines at rest appear when their vehicle comes to rest and later
+impacts' numbers when they happen.
+
+Two views (:data:`VIEWS`): ``"follow"`` (the default) is a camera framed on the vehicles at
+each frame, its centre and size smoothed over :data:`CAMERA_WINDOW` seconds of scene time
+(:func:`camera_limits`), so a long approach or run-out does not shrink the vehicles to a strip;
+``"scene"`` holds the whole scene still (every pose of every frame in view). The scene view is
+drawn once and only what changes is drawn over it per frame (blitting); the follow view's limits
+change with every frame, so each frame is drawn whole.
 
 Frames are at scene times 0, dt, 2 dt, ... after separation and at the end of the run-out;
 playback runs at ``fps = speed / dt`` frames per second, so ``speed = 1`` is real time and
@@ -23,11 +30,12 @@ import numpy as np
 from .errors import ScenarioError
 from .geometry import to_world
 from .motion.result import time_grid
-from .plotting import Z_REST, Z_TEXT, figure_system, layout_scene_figure, place_labels, plot_scene, scene_drawing
+from .plotting import (Z_REST, Z_TEXT, figure_system, layout_scene_figure, place_labels, plot_scene,
+                       replace_scale_bar, scene_drawing)
 from .units import Kind, to_unit
 
 __all__ = ["animate_scene", "scene_animation", "SceneAnimation", "animation_formats", "check_animation_path",
-           "frame_times", "MAX_FRAMES", "HOLD"]
+           "frame_times", "camera_limits", "MAX_FRAMES", "HOLD", "VIEWS", "ANIMATION_LEGENDS", "CAMERA_WINDOW"]
 
 _log = logging.getLogger("crashsim")
 
@@ -39,6 +47,23 @@ HOLD = 1.0
 
 #: GIF frame delays are whole centiseconds and most viewers slow down delays under 20 ms.
 _GIF_MIN_DELAY_MS = 20
+
+#: Views of an animation: a camera framed on the vehicles at each frame, or the whole scene still.
+VIEWS = ("follow", "scene")
+
+#: Legends of an animation: compact, outside the view (:func:`crashsim.plotting.plot_scene`'s
+#: ``legend="compact"``), or none.
+ANIMATION_LEGENDS = ("compact", "none")
+
+#: Half-width of the follow camera's smoothing window [s of scene time] (:func:`camera_limits`).
+CAMERA_WINDOW = 0.5
+
+#: Margin of the follow camera around the vehicles: a fraction of their box's larger side plus
+#: a length [m]; and the narrowest view [m].
+_CAMERA_MARGIN, _CAMERA_PAD, _CAMERA_MIN_WIDTH = 0.1, 3.0, 20.0
+
+#: Height over width of the follow view's figure: the median shape of the framed vehicles, within these.
+_ASPECTS = (0.5, 1.4)
 
 
 def animation_formats() -> tuple[str, ...]:
@@ -126,6 +151,54 @@ def _decimals(dt: float) -> int:
     return 6
 
 
+def camera_limits(times, boxes, aspect: float, *, window: float = CAMERA_WINDOW, pad: float = 0.0,
+                  margin: float = _CAMERA_MARGIN, min_width: float = 0.0) -> np.ndarray:
+    """Limits of a camera framed on a box that moves from frame to frame, smoothed in time.
+
+    Parameters
+    ----------
+    times : array_like, shape (n,)
+        Frame times [s], ascending.
+    boxes : array_like, shape (n, 4)
+        What frame k must show: ``(x0, y0, x1, y1)`` [display units].
+    aspect : float
+        Height over width of the view (the axes box's, equal scale).
+    window : float
+        Half-width of the smoothing window [s]: the centre is the mean of the boxes' padded
+        centres over ``|t_j - t_k| <= window``; the half-width is the largest half-width needed
+        within ``window``, then its mean over the window.
+    pad : float
+        Added on every side of a box [display units], besides ``margin`` times its larger side.
+    margin : float
+        Fraction of a box's larger side added on every side.
+    min_width : float
+        Narrowest view [display units].
+
+    Returns
+    -------
+    ndarray, shape (n, 4)
+        ``(x0, x1, y0, y1)`` per frame, each of height ``aspect`` times its width, holding its
+        padded box: every half-width averaged for frame k is the largest needed over a window
+        that contains frame k, so the mean is never below what frame k needs.
+    """
+    t = np.asarray(times, dtype=float)
+    b = np.asarray(boxes, dtype=float).reshape(-1, 4)
+    grow = margin * np.maximum(b[:, 2] - b[:, 0], b[:, 3] - b[:, 1]) + pad
+    lo = b[:, :2] - grow[:, None]
+    hi = b[:, 2:] + grow[:, None]
+    near = np.abs(t[:, None] - t[None, :]) <= window + 1e-12  # (k, j): frame j within the window of frame k
+    count = near.sum(axis=1)
+    centre = (near @ (0.5 * (lo + hi))) / count[:, None]
+    need = np.maximum(np.maximum(centre[:, 0] - lo[:, 0], hi[:, 0] - centre[:, 0]),
+                      np.maximum(centre[:, 1] - lo[:, 1], hi[:, 1] - centre[:, 1]) / aspect)
+    need = np.maximum(need, 0.5 * min_width)
+    widest = np.where(near, need[None, :], -np.inf).max(axis=1)
+    half = (near @ widest) / count
+    half = np.maximum(half, need)  # the mean of maxima is >= need already; this guards round-off only
+    return np.column_stack([centre[:, 0] - half, centre[:, 0] + half,
+                            centre[:, 1] - aspect * half, centre[:, 1] + aspect * half])
+
+
 class SceneAnimation:
     """The figure of an animation and its moving artists, set to any frame by :meth:`frame`.
 
@@ -135,8 +208,9 @@ class SceneAnimation:
     ----------
     scene : SceneResult
     fig, ax : matplotlib Figure and Axes
-        The scene figure (:func:`crashsim.plotting.plot_scene` without ghosts); axis limits
-        fixed, containing every pose of every frame.
+        The scene figure (:func:`crashsim.plotting.plot_scene` without ghosts); in the scene view
+        the axis limits are fixed and contain every pose of every frame, in the follow view
+        :meth:`frame` sets them to ``limits[k]``.
     times : ndarray, shape (n,)
         Frame times after separation [s].
     outlines : dict of str to matplotlib artist
@@ -146,6 +220,11 @@ class SceneAnimation:
         Vehicle name -> markers at its hitch pins (gid ``"anim:pins:<vehicle>"``).
     clock : matplotlib Text
         ``"t = 1.25 s"`` (gid ``"anim:clock"``).
+    view : str
+        ``"follow"`` or ``"scene"`` (:data:`VIEWS`).
+    limits : ndarray, shape (n, 4) or None
+        The follow view's ``(x0, x1, y0, y1)`` per frame [display units] (:func:`camera_limits`);
+        None for the scene view, whose limits hold every frame.
     """
 
     def __init__(self, scene, fig, ax, times, S, outlines, pins, clock, decimals, end_note):
@@ -161,6 +240,8 @@ class SceneAnimation:
         self._end_note = end_note
         self.before_impact = False  # frames before the impact show the approach (scene_animation sets it)
         self._leaders: list = []  # (leader line, time): leaders of labels that appear at a time
+        self.view = "scene"
+        self.limits = None
 
     def __len__(self) -> int:
         return len(self.times)
@@ -201,8 +282,14 @@ class SceneAnimation:
         return text + self._end_note if k == len(self.times) - 1 and self._end_note else text
 
     def frame(self, k: int) -> list:
-        """Move the outlines, pins and clock to frame ``k``; returns the artists changed."""
+        """Move the outlines, pins and clock to frame ``k`` (the follow view: the limits too);
+        returns the artists changed."""
         S = self._S
+        if self.limits is not None:
+            x0, x1, y0, y1 = self.limits[k]
+            self.ax.set_xlim(x0, x1)
+            self.ax.set_ylim(y0, y1)
+            replace_scale_bar(self.ax)
         poses = self.poses(self.times[k])
         for name, artist in self.outlines.items():
             pos, heading = poses[name]
@@ -258,6 +345,20 @@ def _frame_points(S, anim: SceneAnimation) -> np.ndarray:
     return np.vstack([np.reshape(p, (-1, 2)) for p in pts])
 
 
+def _frame_boxes(S, anim: SceneAnimation) -> np.ndarray:
+    """Box of every vehicle's outlines (or CGs) and pins at each frame, display units, shape (n, 4)."""
+    out = np.empty((len(anim.times), 4))
+    for k in range(len(anim.times)):
+        poses = anim.poses(anim.times[k])
+        pts = []
+        for name, (pos, heading) in poses.items():
+            corners = S.body_of[name].outline()
+            pts.append(np.reshape(S.d(pos if corners is None else to_world(corners, pos, heading)), (-1, 2)))
+        pts = np.vstack(pts)
+        out[k] = (*pts.min(axis=0), *pts.max(axis=0))
+    return out
+
+
 def _contain(ax, pts: np.ndarray) -> bool:
     """Widen the axis limits (3 % margin) to contain ``pts`` and lay the scene figure out again
     at the new aspect; True if the limits changed."""
@@ -269,6 +370,13 @@ def _contain(ax, pts: np.ndarray) -> bool:
     pad = 0.03 * max(x1 - x0, y1 - y0)
     ax.set_xlim(min(x0, lo[0] - pad), max(x1, hi[0] + pad))
     ax.set_ylim(min(y0, lo[1] - pad), max(y1, hi[1] + pad))
+    _relayout(ax)
+    return True
+
+
+def _relayout(ax) -> None:
+    """Lay the scene figure out again for the axes' current limits (their aspect), the legend
+    where :func:`crashsim.plotting.plot_scene` put it."""
     leg = ax.get_legend()
     fig = ax.figure
     r = fig.canvas.get_renderer()
@@ -276,11 +384,16 @@ def _contain(ax, pts: np.ndarray) -> bool:
     outside = leg is not None and not ax.get_window_extent(r).contains(*leg.get_window_extent(r).get_points()[1])
     below = outside and leg.get_window_extent(r).y1 <= ax.get_window_extent(r).y0 + 1.0
     layout_scene_figure(ax, leg if outside else None, below)
-    return True
+
+
+def _check_choice(value, allowed, field: str, what: str) -> str:
+    if value not in allowed:
+        raise ScenarioError(f"{what} {value!r} is unknown; allowed {', '.join(allowed)}", field=field)
+    return value
 
 
 def scene_animation(scene, *, dt: float = 0.05, system: str | None = None, t_end: float | None = None,
-                    approach: bool = True) -> SceneAnimation:
+                    approach: bool = True, view: str = "follow", legend: str = "compact") -> SceneAnimation:
     """Build the figure of an animation, set to its first frame (nothing written).
 
     Parameters
@@ -297,6 +410,14 @@ def scene_animation(scene, *, dt: float = 0.05, system: str | None = None, t_end
         For a scene with approaches: start at the earliest start of braking (negative times,
         every dt up to the impact at 0) and show the approach drawn on the figure; vehicles
         without an approach move at constant velocity then. False: start at the impact.
+    view : {"follow", "scene"}
+        ``"follow"``: the limits of each frame frame the vehicles (every body's outline and pin)
+        at its time, with a margin of 10 % of their box plus 3 m, at least 20 m wide, smoothed
+        over :data:`CAMERA_WINDOW` s (:func:`camera_limits`); the figure's size and aspect are
+        the scene view's. ``"scene"``: fixed limits holding every pose of every frame.
+    legend : {"compact", "none"}
+        The compact legend outside the view (under it for a wide scene, at its right for a tall
+        one), or none.
 
     Returns
     -------
@@ -305,7 +426,8 @@ def scene_animation(scene, *, dt: float = 0.05, system: str | None = None, t_end
     Raises
     ------
     ScenarioError
-        If the scene has no run-out, or for a bad ``dt``, ``t_end`` or ``system``.
+        If the scene has no run-out, or for a bad ``dt``, ``t_end``, ``system``, ``view`` or
+        ``legend``.
 
     Notes
     -----
@@ -315,6 +437,8 @@ def scene_animation(scene, *, dt: float = 0.05, system: str | None = None, t_end
     """
     from matplotlib.colors import to_rgba
 
+    _check_choice(view, VIEWS, "view", "view")
+    _check_choice(legend, ANIMATION_LEGENDS, "legend", "legend")
     system = figure_system(scene, system)
     if not scene.runout:
         raise ScenarioError(f"scene {scene.scenario.title!r} has no run-out (impact only): nothing moves after "
@@ -336,7 +460,7 @@ def scene_animation(scene, *, dt: float = 0.05, system: str | None = None, t_end
             raise ScenarioError(f"time between frames {dt:g} s gives {len(times)} frames from the start of braking "
                                 f"({-t0:.4g} s) to {float(t_end):.4g} s; at most {MAX_FRAMES}", field="dt")
 
-    ax = plot_scene(scene, times=(), system=system, approach=approach, legend="inside")
+    ax = plot_scene(scene, times=(), system=system, approach=approach, legend=legend)
     fig = ax.figure
     S = scene_drawing(ax)
     outlines, pins = {}, {}
@@ -365,19 +489,39 @@ def scene_animation(scene, *, dt: float = 0.05, system: str | None = None, t_end
         end_note = ", at rest" if scene.at_rest else ", run stopped"
     anim = SceneAnimation(scene, fig, ax, times, S, outlines, pins, clock, _decimals(dt), end_note)
     anim.before_impact = bool(approaches)
-    _contain(ax, _frame_points(S, anim))
+    if view == "scene":
+        _contain(ax, _frame_points(S, anim))
     place_labels(ax, S.texts, [*S.fixed, clock], np.vstack(S.points))  # the scale may have changed; the clock
     timed = [(t, on) for t, on in S.appear if hasattr(t, "xyann")]
     for leader in (a for a in ax.texts if (a.get_gid() or "").startswith("leader:")):
         on = next((on for t, on in timed if np.allclose(t.xy, leader.xy)), None)
         if on is not None:
             anim._leaders.append((leader, on))
+    if view == "follow":
+        boxes = _frame_boxes(S, anim)
+        pad = _CAMERA_PAD * S.k
+        # the figure's aspect: the vehicles' usual shape, within 0.5 (wide) to 1.4 (tall)
+        size = boxes[:, 2:] - boxes[:, :2]
+        grow = 2.0 * (_CAMERA_MARGIN * size.max(axis=1) + pad)
+        aspect = float(np.clip(np.median((size[:, 1] + grow) / (size[:, 0] + grow)), _ASPECTS[0], _ASPECTS[1]))
+        first = camera_limits(times, boxes, aspect, pad=pad, min_width=_CAMERA_MIN_WIDTH * S.k)[0]
+        ax.set_xlim(first[0], first[1])
+        ax.set_ylim(first[2], first[3])
+        _relayout(ax)
+        fig.draw_without_rendering()
+        box = ax.get_window_extent(fig.canvas.get_renderer())
+        anim.view = "follow"
+        anim.limits = camera_limits(times, boxes, box.height / box.width, pad=pad, min_width=_CAMERA_MIN_WIDTH * S.k)
+        for t in ax.texts:  # a label whose anchor is in view but whose text reaches past it: cut at the axes
+            t.set_clip_box(ax.bbox)
+            t.set_clip_on(True)
     anim.frame(0)
     return anim
 
 
 def animate_scene(scene, path, *, dt: float = 0.05, speed: float = 1.0, system: str | None = None, dpi: int = 100,
-                  t_end: float | None = None, approach: bool = True, progress=None) -> Path:
+                  t_end: float | None = None, approach: bool = True, progress=None, view: str = "follow",
+                  legend: str = "compact") -> Path:
     """Write an animation of a scene's run-out to scale: the scene diagram with the bodies moving.
 
     Parameters
@@ -406,6 +550,11 @@ def animate_scene(scene, path, *, dt: float = 0.05, speed: float = 1.0, system: 
     progress : callable, optional
         ``progress(done, total)`` after each frame is rendered (the command line's progress
         bar); nothing is printed here.
+    view : {"follow", "scene"}
+        A camera framed on the vehicles at each frame, or the whole scene still (see
+        :func:`scene_animation`).
+    legend : {"compact", "none"}
+        The compact legend outside the view, or none.
 
     Returns
     -------
@@ -416,7 +565,8 @@ def animate_scene(scene, path, *, dt: float = 0.05, speed: float = 1.0, system: 
     ------
     ScenarioError
         For a format that cannot be written here (checked first, before any drawing), a scene
-        without a run-out, or a bad ``dt``, ``speed``, ``dpi``, ``t_end`` or ``system``.
+        without a run-out, or a bad ``dt``, ``speed``, ``dpi``, ``t_end``, ``system``, ``view``
+        or ``legend``.
 
     Notes
     -----
@@ -429,8 +579,8 @@ def animate_scene(scene, path, *, dt: float = 0.05, speed: float = 1.0, system: 
 
     Tracks and CG paths grow with the clock, the outlines at rest (with their axles, pins and
     names) appear when their vehicle comes to rest, later impacts' numbers when they happen. A
-    GIF is rendered by drawing the fixed layer once and, per frame, only what changes over it
-    (blitting); an MP4 redraws each frame.
+    GIF of the scene view is rendered by drawing the fixed layer once and, per frame, only what
+    changes over it (blitting); the follow view and an MP4 draw each frame whole.
     """
     p = check_animation_path(path)
     if not (isinstance(speed, (int, float, np.floating)) and math.isfinite(speed) and speed > 0):
@@ -441,7 +591,7 @@ def animate_scene(scene, path, *, dt: float = 0.05, speed: float = 1.0, system: 
                             field="dpi")
     from matplotlib import animation
 
-    anim = scene_animation(scene, dt=dt, system=system, t_end=t_end, approach=approach)
+    anim = scene_animation(scene, dt=dt, system=system, t_end=t_end, approach=approach, view=view, legend=legend)
     fps = float(speed) / float(dt)
     hold = max(math.ceil(HOLD * fps - 1e-9) - 1, 0)
     n = len(anim)
@@ -482,20 +632,29 @@ def _write_gif(anim: SceneAnimation, path: Path, fps: float, dpi: int, hold: int
     fig.set_dpi(dpi)
     # whole pixels, rounded (as matplotlib's movie writers size their frames)
     fig.set_size_inches(round(old_size[0] * dpi) / dpi, round(old_size[1] * dpi) / dpi)
-    changing = anim.changing
+    changing = anim.changing if anim.limits is None else []  # the follow view: every frame drawn whole
     try:
         for a in changing:
             a.set_animated(True)
         canvas.draw()  # the fixed layer
         background = canvas.copy_from_bbox(fig.bbox)
+        leg, legend_pixels = ax.get_legend(), None
+        if anim.limits is not None and leg is not None:  # the follow view: the legend outside the view drawn once
+            legend_pixels = canvas.copy_from_bbox(leg.get_window_extent(canvas.get_renderer()).padded(2.0))
+            leg.set_visible(False)
         frames = []
         n = len(anim)
         for k in range(n):
             anim.frame(k)
-            canvas.restore_region(background)
-            for a in sorted(changing, key=lambda a: a.get_zorder()):
-                if a.get_visible():
-                    ax.draw_artist(a)
+            if anim.limits is not None:
+                canvas.draw()
+                if legend_pixels is not None:
+                    canvas.restore_region(legend_pixels)
+            else:
+                canvas.restore_region(background)
+                for a in sorted(changing, key=lambda a: a.get_zorder()):
+                    if a.get_visible():
+                        ax.draw_artist(a)
             rgba = np.asarray(canvas.buffer_rgba())
             frames.append(Image.fromarray(rgba[..., :3].copy()))
             if progress is not None:
@@ -503,6 +662,8 @@ def _write_gif(anim: SceneAnimation, path: Path, fps: float, dpi: int, hold: int
         frames += [frames[-1]] * hold
         frames[0].save(path, save_all=True, append_images=frames[1:], duration=int(1000 / fps), loop=0)
     finally:
+        if ax.get_legend() is not None:
+            ax.get_legend().set_visible(True)
         for a in changing:
             a.set_animated(False)
         fig.set_dpi(old_dpi)

@@ -17,7 +17,7 @@ from tqdm import tqdm
 from . import first_run
 from ._jit import cache_dir, ready
 from ._version import __version__
-from .animation import animate_scene, check_animation_path, frame_times
+from .animation import ANIMATION_LEGENDS, VIEWS, animate_scene, check_animation_path, frame_times
 from .casereport import load_json, survey_files, write_case_report
 from .errors import CrashsimError, ScenarioError, SolverError
 from .motion.result import jsonable as _clean  # JSON-safe copy: numpy to Python, NaN/inf to None
@@ -270,7 +270,8 @@ def _cmd_animate(args) -> int:
             bar.update(done - bar.n)
 
         written = animate_scene(scene, out, dt=dt, speed=args.speed, system=args.units, dpi=args.dpi,
-                                approach=not args.no_approach, progress=progress)
+                                approach=not args.no_approach, progress=progress, view=args.view,
+                                legend=args.legend)
     sys.stdout.write(f"wrote {written}\n")
     return 0
 
@@ -388,8 +389,9 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("--interval", metavar="TIME", help='time between ghost outlines, e.g. "0.5 s"')
     pl.add_argument("--units", type=_units, default=None, help="SI or US: units of the figure (default: the scenario's)")
     pl.add_argument("--dpi", type=int, default=150)
-    pl.add_argument("--legend", choices=LEGEND_MODES, default="outside",
-                    help="legend under or beside the diagram (default), small inside it, or none")
+    pl.add_argument("--legend", choices=LEGEND_MODES, default="compact",
+                    help="compact legend under or beside the diagram, one line per entry (default); the full one "
+                         "there, each evidence item with its residual (outside); small inside it; or none")
     pl.add_argument("--hide", type=_hide, default=None, metavar="KINDS",
                     help=f"label kinds to leave out, comma-separated: labels (all), {', '.join(LABEL_KINDS)}")
     pl.add_argument("--paper", choices=tuple(PAPER_SIZES), default=None,
@@ -409,6 +411,11 @@ def build_parser() -> argparse.ArgumentParser:
     an.add_argument("--dpi", type=int, default=100)
     an.add_argument("--no-approach", action="store_true",
                     help="start at the impact (a scene with approaches starts at the earliest start of braking)")
+    an.add_argument("--view", choices=VIEWS, default="follow",
+                    help="follow: a camera framed on the vehicles at each frame, smoothed (default); "
+                         "scene: the whole scene still")
+    an.add_argument("--legend", choices=ANIMATION_LEGENDS, default="compact",
+                    help="a compact legend outside the view (default), or none")
     an.add_argument("--quiet", action="store_true", help="no progress bar")
     an.set_defaults(func=_cmd_animate)
 

@@ -28,8 +28,8 @@ from .units import Kind, convert, resolve_system, to_unit
 
 _log = logging.getLogger("crashsim")
 
-__all__ = ["is_color", "LABEL_KINDS", "LEGEND_MODES", "PAPER_SIZES", "PrintSheet", "place_labels", "check_hide",
-           "legend_mode", "parse_scale", "print_sheet", "scene_drawing", "text_box", "BarrierAxes",
+__all__ = ["is_color", "LABEL_KINDS", "LINE_SHY", "line_ink", "LEGEND_MODES", "PAPER_SIZES", "PrintSheet", "place_labels", "check_hide",
+           "legend_mode", "parse_scale", "replace_scale_bar", "north_direction", "print_sheet", "scene_drawing", "text_box", "BarrierAxes",
            "plot_barrier_sweep", "plot_barrier_figures", "plot_scene", "plot_histories",
            "history_panels", "save_scene_figures", "SCENE_FIGURE_SUFFIXES"]
 
@@ -483,6 +483,9 @@ def _residual_text(c, system) -> str:
     return f"{fmt(abs(c.residual), c.quantity, system, 2)} (tol. {fmt(c.tolerance, c.quantity, system, 2)})"
 
 
+_CRUSH_KEY = "measured crush (to scale)"
+
+
 def _draw_crush(S, sc) -> None:
     """Each measured crush profile (``[[evidence.crush]]``) on the damaged face of its body's outline at
     impact, to scale (gid ``"crush:<body>:<face>"``)."""
@@ -502,11 +505,15 @@ def _draw_crush(S, sc) -> None:
         S.add(xy)
         drawn = True
     if drawn:
-        S.legend_entry("measured crush (to scale)", Patch(facecolor="none", edgecolor="0.2", hatch="xxxx", lw=1.0))
+        S.legend_entry(_CRUSH_KEY, Patch(facecolor="none", edgecolor="0.2", hatch="xxxx", lw=1.0))
 
 
-#: Where the legend of a scene figure goes: under or beside the diagram, small inside it, or none.
-LEGEND_MODES = ("outside", "inside", "none")
+#: Where the legend of a scene figure goes: compact (one line per entry, the evidence as one entry)
+#: under or beside the diagram, in full under or beside it, small inside it, or none.
+LEGEND_MODES = ("compact", "outside", "inside", "none")
+
+#: Legend modes that put the legend outside the axes (the figure sized to hold it).
+_OUTSIDE = ("compact", "outside")
 
 #: Paper sizes of a print sheet, portrait (width, height) [mm]: ISO 216 A4 and A3, US letter and tabloid.
 PAPER_SIZES = {"A4": (210.0, 297.0), "A3": (297.0, 420.0), "letter": (215.9, 279.4), "tabloid": (279.4, 431.8)}
@@ -519,8 +526,8 @@ _SHEET_EDGE, _SHEET_LEFT, _SHEET_BOTTOM = 12.0 / 25.4, 0.55, 0.45
 
 
 def legend_mode(legend) -> str:
-    """``"outside"``, ``"inside"``, ``"none"`` or a matplotlib location (inside, there) from
-    :func:`plot_scene`'s ``legend`` (True: outside; False or None: none)."""
+    """``"compact"``, ``"outside"``, ``"inside"``, ``"none"`` or a matplotlib location (inside,
+    there) from :func:`plot_scene`'s ``legend`` (True: outside; False or None: none)."""
     if legend is True:
         return "outside"
     if legend is False or legend is None:
@@ -642,7 +649,7 @@ def layout_print(ax, sheet: PrintSheet) -> None:
 
 
 def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evidence: bool = True,
-               arrows: bool = True, system: str | None = None, legend=True, axles: bool = True,
+               arrows: bool = True, system: str | None = None, legend="compact", axles: bool = True,
                approach: bool = True, hide=(), paper: str | None = None, scale: float | None = None):
     """Scale diagram of a reconstructed scene in the ground frame: impact, run-out, evidence.
 
@@ -666,8 +673,13 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     system : {"SI", "US"}, optional
         Display units: coordinates in m or ft, speeds in m/s or mph. Default: the scenario's.
     legend : bool or str
-        ``"outside"`` or True: legend outside the axes (at the right; under the diagram for a new
-        figure of a wide scene or a print sheet, with the figure sized to hold it); ``"inside"``:
+        ``"compact"`` (the default): one line per entry and the evidence as one entry (its title
+        counts the verdicts; each residual is in the report), outside the axes in small type:
+        under the diagram in as many columns as fit for a new figure of a wide scene, else at its
+        right.
+        ``"outside"`` or True: the full legend (each evidence item with its residual) outside the
+        axes (at the right; under the diagram for a new figure of a wide scene or a print sheet,
+        with the figure sized to hold it); ``"inside"``:
         small, in the corner that covers least; a matplotlib location string (``"upper left"``):
         inside, there; ``"none"`` or False: none.
     axles : bool
@@ -720,7 +732,8 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
 
     With a scene placed on a survey (``[survey]`` with files, an underlay or a CRS) a north
     arrow shows grid north (the survey's +y); the orthophoto (``[survey.underlay]``) lies under
-    everything.
+    everything. A scene not on a survey shows the north of ``[map] north`` (the bearing of its
+    +Y axis), if the file gives it (:func:`north_direction`).
     """
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
@@ -904,7 +917,7 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
         ax.figure.set_size_inches(*probe.size)
         leg = _scene_legend(S, mode, True, compact=True) if mode != "none" else None
         room = 0.0
-        if mode == "outside":
+        if mode in _OUTSIDE:
             fig = ax.figure
             room = leg.get_window_extent(fig.canvas.get_renderer()).height / fig.dpi + 0.15
         sheet = print_sheet(paper or "A4", lo, hi, S.k, scale, legend_height=room)
@@ -925,7 +938,7 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     below = new and (hi[1] - lo[1]) / (hi[0] - lo[0]) < 0.75
     if sheet is None:
         leg = _scene_legend(S, mode, below) if mode != "none" else None
-    outside = leg if mode == "outside" else None
+    outside = leg if mode in _OUTSIDE else None
     if sheet is not None:
         layout_print(ax, sheet)
     else:
@@ -939,7 +952,7 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     _draw_scene_underlay(S)
     xl = ax.get_xlim()
     fixed.append(_scale_bar(S, xl[1] - xl[0], sheet))
-    if leg is not None and mode != "outside":
+    if leg is not None and mode not in _OUTSIDE:
         fixed.append(leg)
     ax.figure.draw_without_rendering()
     S.fixed = fixed
@@ -1725,19 +1738,51 @@ def _scale_bar(S: SceneDrawing, width: float, sheet=None):
     # the bar itself: a thick line (size_vertical would be in data units)
     bar.size_bar.get_children()[0].set_linewidth(3.0)
     bar.set_gid("scalebar")
+    bar.crashsim_length = length
     bar.set_zorder(Z_TEXT + 1)
     S.ax.add_artist(bar)
     return bar
 
 
+def replace_scale_bar(ax):
+    """The scale bar of a scene figure (gid ``"scalebar"``) drawn again for the axes' current
+    x limits when its 1-2-2.5-5 length changes (the animation's moving view); returns the bar."""
+    S = scene_drawing(ax)
+    x0, x1 = ax.get_xlim()
+    old = next((a for a in ax.artists if a.get_gid() == "scalebar"), None)
+    length = _nice_at_most((x1 - x0) / 5.0)
+    if old is not None and getattr(old, "crashsim_length", None) == length:
+        return old
+    if old is not None:
+        old.remove()
+    bar = _scale_bar(S, x1 - x0)
+    bar.crashsim_length = length
+    return bar
+
+
+def north_direction(sc) -> tuple[np.ndarray, str] | None:
+    """North in the scene frame, a unit vector, and what it is: ``"grid north"`` for a scene
+    placed on a survey (the survey's +y; the scene's +X is turned ``survey.rotation`` from its
+    +x), else ``"north"`` from ``[map] north`` (the bearing of the scene's +Y, clockwise from
+    north: north lies that angle counter-clockwise from +Y); None when the file says neither."""
+    if getattr(sc, "survey_frame", None) is not None:
+        rot = float(sc.survey_frame.rotation)
+        return np.array([math.sin(rot), math.cos(rot)]), "grid north"
+    data = sc.data if isinstance(sc.data, dict) else {}
+    bearing = (data.get("map") or {}).get("north")
+    if bearing is None:
+        return None
+    return np.array([-math.sin(bearing), math.cos(bearing)]), "north"
+
+
 def _north_arrow(S: SceneDrawing) -> list:
-    """Grid north of a scene placed on a survey ([survey]: north is the survey's +y, the scene's
-    +X is turned ``rotation`` from its east), right of the +X/+Y arrows; none without a survey
-    (the scene's own axes say nothing of north). Returns the texts drawn."""
-    if S.sc.survey_frame is None:
+    """The north arrow, right of the +X/+Y arrows (:func:`north_direction`): grid north of a scene
+    placed on a survey, else the north of ``[map] north``; none when the file says neither (the
+    scene's own axes say nothing of north). Returns the texts drawn."""
+    got = north_direction(S.sc)
+    if got is None:
         return []
-    rot = float(S.sc.survey_frame.rotation)
-    u = np.array([math.sin(rot), math.cos(rot)])  # survey +y in the scene frame
+    u, _ = got
     from matplotlib.transforms import offset_copy
 
     base = (0.03, 1.0)
@@ -1788,7 +1833,53 @@ def text_box(t, renderer):
     return bb
 
 
-def place_labels(ax, texts, fixed=(), avoid=None) -> int:
+#: Label kinds kept off the drawn lines and outlines where a free place near their anchor allows
+#: (names, impact numbers and ghost times belong on their body or point; zone and map labels lie
+#: along their own line by design).
+LINE_SHY = ("pdof", "delta-v", "approach", "obstacles")
+
+#: Farthest a label otherwise free moves to get off a line [points] (a ring of :data:`_RINGS`).
+_SHY_REACH = 26.0
+
+#: Spacing of the samples along drawn lines that a label is kept off [pixels].
+_INK_STEP = 2.0
+
+
+def line_ink(ax, exclude=()) -> np.ndarray:
+    """Pixel positions along every line and outline edge drawn in the axes, shape (n, 2): the
+    vertices of each Line2D and patch (leader lines and ``exclude`` left out) and points every
+    :data:`_INK_STEP` pixels between them, inside the axes."""
+    from matplotlib.lines import Line2D
+
+    frame = ax.get_window_extent(ax.figure.canvas.get_renderer())
+    out = []
+    for a in [*ax.lines, *ax.patches]:
+        if not a.get_visible() or a in exclude or (a.get_gid() or "").startswith("leader:"):
+            continue
+        if isinstance(a, Line2D):
+            if a.get_linestyle() in ("None", "none", "", " "):
+                continue  # markers only
+            xy = a.get_transform().transform(np.column_stack(a.get_data()).astype(float))
+            polys = [xy]
+        else:
+            polys = a.get_path().to_polygons(a.get_transform())
+        for xy in polys:
+            xy = xy[np.all(np.isfinite(xy), axis=1)]
+            if len(xy) < 2:
+                continue
+            seg = np.diff(xy, axis=0)
+            n = np.maximum(np.ceil(np.hypot(seg[:, 0], seg[:, 1]) / _INK_STEP), 1).astype(int)
+            f = np.concatenate([np.arange(k) / k for k in n])
+            start = np.repeat(xy[:-1], n, axis=0)
+            out.append(start + f[:, None] * np.repeat(seg, n, axis=0))
+    if not out:
+        return np.empty((0, 2))
+    pts = np.vstack(out)
+    keep = (pts[:, 0] >= frame.x0) & (pts[:, 0] <= frame.x1) & (pts[:, 1] >= frame.y0) & (pts[:, 1] <= frame.y1)
+    return pts[keep]
+
+
+def place_labels(ax, texts, fixed=(), avoid=None, lines: bool = True) -> int:
     """Move labels so that no two text boxes overlap: labels in :data:`LABEL_KINDS` order keep
     their place while free, else go to the nearest free place around their anchor.
 
@@ -1803,6 +1894,11 @@ def place_labels(ax, texts, fixed=(), avoid=None) -> int:
     avoid : ndarray, shape (n, 2), optional
         Points drawn [data units]: among free places at the same distance, the one covering
         fewest of them wins.
+    lines : bool
+        Keep labels of the :data:`LINE_SHY` kinds off the drawn lines and outline edges
+        (:func:`line_ink`) where they can: such a label that covers a line moves to the nearest
+        free place within :data:`_SHY_REACH` points that covers none (else it stays), and among
+        free places at one distance the one covering the least line wins.
 
     Returns
     -------
@@ -1817,6 +1913,8 @@ def place_labels(ax, texts, fixed=(), avoid=None) -> int:
     anchor (its nearest corner or edge towards it); the first distance with a free place
     wins, and a label moved :data:`_LEADER_FROM` points or more gets a thin leader line. It
     is a greedy step (deterministic, no iteration): labels placed earlier are never moved.
+    Labels of the :data:`LINE_SHY` kinds are also kept off the drawn lines where they can (see
+    ``lines``).
     """
     fig = ax.figure
     for old in [a for a in ax.texts if (a.get_gid() or "").startswith("leader:")]:
@@ -1845,16 +1943,26 @@ def place_labels(ax, texts, fixed=(), avoid=None) -> int:
         return int(np.count_nonzero((px[:, 0] >= bb.x0) & (px[:, 0] <= bb.x1) & (px[:, 1] >= bb.y0)
                                     & (px[:, 1] <= bb.y1)))
 
+    ink = line_ink(ax) if lines and any(_label_kind(t) in LINE_SHY for t in order) else None
+
+    def on_lines(bb):
+        return int(np.count_nonzero((ink[:, 0] >= bb.x0) & (ink[:, 0] <= bb.x1) & (ink[:, 1] >= bb.y0)
+                                    & (ink[:, 1] <= bb.y1)))
+
     lost = 0
     angles = np.radians(np.arange(0.0, 360.0, 30.0) + 90.0)  # above first, then round
     for t in order:
         bb = text_box(t, r)
-        if free(bb):
+        shy = ink is not None and len(ink) > 0 and _label_kind(t) in LINE_SHY
+        was_free = free(bb)
+        if was_free and (not shy or on_lines(bb) == 0):
             placed.append(bb)
             continue
         start = (t.xyann, t.anncoords, t.get_ha(), t.get_va())
         best = None
         for ring in _RINGS:
+            if was_free and ring > _SHY_REACH:
+                break  # free but on a line: only a near place off the lines is worth the move
             for a in angles:
                 c, s = np.cos(a), np.sin(a)
                 t.set_anncoords("offset points")
@@ -1863,11 +1971,19 @@ def place_labels(ax, texts, fixed=(), avoid=None) -> int:
                 t.set_va("bottom" if s > 0.3 else "top" if s < -0.3 else "center")
                 cand = text_box(t, r)
                 if free(cand):
-                    score = covered(cand)
-                    if best is None or score < best[0]:
-                        best = (score, ring, (ring * c, ring * s), t.get_ha(), t.get_va(), cand)
+                    score = (on_lines(cand) if shy else 0, covered(cand))
+                    if (was_free and score[0] > 0) or (best is not None and score >= best[0]):
+                        continue
+                    best = (score, ring, (ring * c, ring * s), t.get_ha(), t.get_va(), cand)
             if best is not None:
                 break
+        if best is None and was_free:  # no near place off the lines: it stays where it was
+            t.xyann, _, ha, va = start
+            t.set_anncoords(start[1])
+            t.set_ha(ha)
+            t.set_va(va)
+            placed.append(text_box(t, r))
+            continue
         if best is None:
             t.xyann, _, ha, va = start
             t.set_anncoords(start[1])
@@ -1909,7 +2025,11 @@ def _axes_indicator(ax) -> list:
     return out
 
 
-def layout_scene_figure(ax, leg, below: bool, width: float = 10.0, height: float = 7.0) -> None:
+#: Width of a new scene figure laid out with the legend under it [in] (:func:`layout_scene_figure`).
+_FIGURE_WIDTH = 10.0
+
+
+def layout_scene_figure(ax, leg, below: bool, width: float = _FIGURE_WIDTH, height: float = 7.0) -> None:
     """Size a figure made by :func:`plot_scene` and place its axes: the axes box gets exactly
     the aspect of the limits (equal scale, no wasted band), the legend its measured size.
 
@@ -1980,14 +2100,18 @@ def _scene_legend(S: SceneDrawing, mode: str, below: bool, compact: bool = False
     right; ``"inside"`` small, in the corner that covers least (matplotlib's "best")."""
     labels = list(S.handles)
     handles = [S.handles[k] for k in labels]
-    size = 6.5 if compact or mode == "inside" else 7.5
+    size = 6.5 if compact or mode != "outside" else 7.5
     keys = list(labels)
     if mode != "outside":
         # inside: compact. One line per entry, the evidence items as one entry (the title counts
         # their verdicts; each residual is in the report)
         evidence = ("measured ", "recorded ", "crush energy")
-        n_ev = sum(k.startswith(evidence) for k in keys)
-        keep = [k for k in keys if not k.startswith(evidence)]
+
+        def is_item(k):  # an evidence item with its verdict (the crush hatch is a key to the drawing)
+            return k.startswith(evidence) and k != _CRUSH_KEY
+
+        n_ev = sum(is_item(k) for k in keys)
+        keep = [k for k in keys if not is_item(k)]
         if n_ev:
             from matplotlib.lines import Line2D
 
@@ -1997,7 +2121,7 @@ def _scene_legend(S: SceneDrawing, mode: str, below: bool, compact: bool = False
         keys = keep
         handles = [S.handles[k] for k in keys]
         labels = [k.split("\n  ")[0].replace("\n", " ") for k in keys]
-    if mode == "outside" and compact:  # a print sheet: under the drawing, as many columns as the page holds
+    if mode in _OUTSIDE and compact:  # a print sheet: under the drawing, as many columns as the page holds
         fig = S.ax.figure
         r = fig.canvas.get_renderer()
         room = fig.get_size_inches()[0] * fig.dpi - 2 * _SHEET_EDGE * fig.dpi
@@ -2009,6 +2133,25 @@ def _scene_legend(S: SceneDrawing, mode: str, below: bool, compact: bool = False
             if leg.get_window_extent(r).width <= room or ncol == 1:
                 break
             leg.remove()
+    elif mode == "compact" and below:
+        from matplotlib.transforms import offset_copy
+
+        # under the axes in as many columns (at most 4) as the figure's width holds, centred on the axes
+        # (layout_scene_figure: 0.8 in left of them, 0.2 in right): 0.6 in less than the width, and a margin
+        under = offset_copy(S.ax.transAxes, fig=S.ax.figure, y=-40, units="points")
+        fig = S.ax.figure
+        r = fig.canvas.get_renderer()
+        room = (_FIGURE_WIDTH - 0.8) * fig.dpi
+        for ncol in (4, 3, 2, 1):
+            leg = S.ax.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, 0.0), bbox_transform=under,
+                              borderaxespad=0.0, fontsize=size, frameon=False, handlelength=2.0, ncol=ncol,
+                              columnspacing=1.2, labelspacing=0.3)
+            if leg.get_window_extent(r).width <= room or ncol == 1:
+                break
+            leg.remove()
+    elif mode == "compact":
+        leg = S.ax.legend(handles, labels, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0,
+                          fontsize=size, frameon=False, handlelength=2.0, labelspacing=0.3)
     elif mode == "outside" and below:
         from matplotlib.transforms import offset_copy
 
@@ -2166,7 +2309,7 @@ def plot_histories(scene, axes=None, *, system: str | None = None):
 
 
 def save_scene_figures(scene, path, *, histories_path=None, dpi: int = 150, interval: float | None = None,
-                       system: str | None = None, time_distance_path=None, approach: bool = True, legend=True,
+                       system: str | None = None, time_distance_path=None, approach: bool = True, legend="compact",
                        hide=(), paper: str | None = None, scale: float | None = None) -> list:
     """Write the scene diagram (and optionally the histories) to files; closes its figures.
 

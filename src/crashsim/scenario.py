@@ -35,7 +35,8 @@ from .motion.contact import CONTACT_KEYS, WEIGHT_DEPTH
 from .motion.road import MAX_SLOPE
 from .motion.levels import LEVELS
 from .motion.wheels import select_wheels, enumerate_wheels
-from .schema import ArrayOf, Field, ScenarioValidationError, Section, Table, document, load_toml, validate
+from .schema import (ArrayOf, Field, ScenarioValidationError, Section, Table, document, load_toml, validate,
+                     validate_collect)
 from .survey.schema import MAP_LINE_STYLES, SURVEY
 from .units import Kind, format_value, parse, toml_repr
 from .vehicles import MAX_ROLLOVER_THRESHOLD, Axle, Body, BodyState, Hitch, Vehicle, chain_states
@@ -571,7 +572,12 @@ MAP_LINE = Section("line", [
           description="Colour instead of the style's own: a matplotlib colour name or hex code"),
 ], description="A line of the road layout (edge, lane line, kerb, ...), drawn under the vehicles; no physics")
 
-MAP = Section("map", [], subsections=[
+MAP = Section("map", [
+    Field("north", Kind.ANGLE, required=False, minimum=-2.0 * math.pi, maximum=2.0 * math.pi, example="30 deg",
+          description="Bearing of the scene's +Y axis: the compass direction it points in, clockwise from north "
+                      "(0 deg: +Y points north, 90 deg: +Y points east); drawn as a north arrow on the scene figures "
+                      "and animations. A scene placed on a survey takes grid north from [survey] instead"),
+], subsections=[
     ArrayOf("lines", MAP_LINE, required=False,
             description="Lines of the road layout (road edges, lane and centre lines, kerbs, stop bars), drawn "
                         "under the vehicles on the scene figure; they do not change the physics"),
@@ -608,7 +614,7 @@ from .motion.road import signed_distance
 from .plotting import is_color
 from .scene.run import simulate_approaches
 from .survey.frame import SceneFrame
-from .survey.mapping import expand_survey, survey_frame
+from .survey.mapping import expand_survey, is_placed, survey_frame
 
 SCHEMA = with_inverse_sections(SCHEMA)
 
@@ -675,6 +681,15 @@ def _build_map_lines(m: dict, file: str | None) -> tuple[MapLine, ...]:
                            "or a hex code (\"#7f7f7f\")", f"map.lines[{i}].color", file)
         lines.append(MapLine(ln["name"], ln["style"], np.asarray(ln["points"], dtype=float), color))
     return tuple(lines)
+
+
+def _check_north(d: dict, file: str | None) -> None:
+    """``[map] north`` is for scenes not placed on a survey (a placed scene's grid north is the survey's +y)."""
+    north = (d.get("map") or {}).get("north")
+    if north is not None and is_placed(d.get("survey")):
+        raise _err(f"{math.degrees(north):g} deg is given for a scene placed on a survey, whose north arrow is the "
+                   "survey's grid north (its +y, turned by survey.rotation); allowed only without a placed [survey]: "
+                   "remove map.north", "map.north", file)
 
 
 @dataclass(frozen=True)
@@ -1214,8 +1229,9 @@ class _Problems:
     kept: fit and Monte Carlo tell an unreachable or inadmissible impact from a bad file), else one
     :class:`~crashsim.schema.ScenarioValidationError` listing every one on its own line."""
 
-    def __init__(self, file: str | None):
+    def __init__(self, file: str | None, lenient: bool = False):
         self.file = file
+        self.lenient = lenient  # after schema errors: a part that fails on a bad value is skipped
         self.errors: list[ScenarioError] = []
 
     def each(self):
@@ -1257,6 +1273,8 @@ class _Keep:
         if exc is not None and isinstance(exc, ScenarioError):
             self.owner.errors.append(exc)
             return True
+        if exc is not None and self.owner.lenient and isinstance(exc, Exception):
+            return True  # a part built on a value the schema refused: its own checks cannot run
         return False
 
 
@@ -1278,9 +1296,45 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None, approac
         data = expand_survey(data, file)
     data = _units_any_case(data)
     merged = apply_presets(data, file)
-    d = validate(merged, SCHEMA, file=file)
+    d, schema_problems = validate_collect(merged, SCHEMA)
+    if schema_problems:  # the checks after the schema too, on the parts it found valid: every error in one run
+        raise ScenarioValidationError(schema_problems + _later_problems(d, data, merged, source, file, schema_problems),
+                                      file=file)
+    return _from_validated(d, data, merged, source, file, approaches)
+
+
+def _related(a: str, b: str) -> bool:
+    """Whether key paths ``a`` and ``b`` are the same key or one lies inside the other."""
+    if a == b:
+        return True
+    short, long = sorted((a, b), key=len)
+    return not short or (long.startswith(short) and long[len(short)] in ".[")
+
+
+def _later_problems(d, data, merged, source, file, schema_problems) -> list[tuple[str, str]]:
+    """The errors the checks after the schema find in a file that has schema errors: every part
+    is built and checked where it can be (a part that fails on a value the schema refused is
+    skipped), and an error at or inside a key the schema refused is left out (it repeats it)."""
+    found: list[tuple[str, str]] = []
+    try:
+        _from_validated(d, data, merged, source, file, False, lenient=True)
+    except ScenarioValidationError as exc:
+        found = list(exc.problems)
+    except ScenarioError as exc:
+        text = str(exc).removeprefix(f"{exc.file}: " if exc.file else "")
+        found = [(exc.field or "", text.removeprefix(f"{exc.field}: " if exc.field else ""))]
+    except Exception:  # noqa: BLE001 - a part built on a refused value: nothing more to report
+        found = []
+    bad = [p for p, _ in schema_problems]
+    return [(p, m) for p, m in found if not any(_related(p, b) for b in bad)]
+
+
+def _from_validated(d: dict, data: dict, merged: dict, source, file: str | None, approaches: bool,
+                    lenient: bool = False) -> Scenario:
+    """The typed scenario of a validated document ``d`` (see :func:`scenario_from_dict`); ``lenient``:
+    ``d`` has values the schema refused (None), and a part that fails on one is skipped."""
     vehicles, states = [], {}
-    problems = _Problems(file)  # the independent parts of the file first: every error of them at once
+    problems = _Problems(file, lenient)  # the independent parts of the file first: every error of them at once
     for name, v in d["vehicles"].items():
         with problems.each():
             if v["speed"] is None and v["approach"] is None:
@@ -1307,11 +1361,62 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None, approac
         with problems.each():
             runout = _build_runout(d["runout"], vehicles, d["vehicles"], file, raw_runout)
     problems.raise_any()
+    # lenient: a [runout] refused by the schema is no run-out; what needs it (the approaches) is not checked
+    runout_lost = lenient and d["runout"] is not None and runout is None
     approach_inputs = {}
     for veh in vehicles:
         v = d["vehicles"][veh.name]
-        if v["approach"] is not None:
+        if v["approach"] is not None and not runout_lost:
             approach_inputs[veh.name] = _approach_input(veh, v, runout, file)
+    later = _Problems(file, lenient)
+    imp = d["impact"]
+    problem = None
+    if lenient:  # a file with schema errors: the evidence and the map are checked even if the impact fails
+        with later.each():
+            problem = _impact_problem(d, vehicles, states, file)
+    else:
+        problem = _impact_problem(d, vehicles, states, file)
+    # the geometry at impact, the contact model, the evidence and the map: independent, every error at once
+    if problem is not None:
+        with later.each():
+            _check_overlap(problem, vehicles, states, imp["overlap_tolerance"], d["scenario"]["units"], file)  # cause
+            check_contact_point(problem, imp["contact_tolerance"], d["scenario"]["units"], file)  # first
+    if runout is not None and problem is not None:
+        with later.each():
+            runout = _with_contact(runout, d, vehicles, problem, file)
+    evidence = map_lines = crush = None
+    with later.each():
+        evidence = _build_evidence(d["evidence"], states, file, vehicles,
+                                   {n: v["approach"] for n, v in d["vehicles"].items()})
+        if evidence.rollover and (runout is None or not runout.options.rollover):
+            raise _err("a rollover statement is checked against the wheel-lift and rollover check, which is off: add "
+                       "runout.rollover = true (level \"load_transfer\")", "evidence.rollover[0].unit", file)
+    with later.each():
+        if d["evidence"] is not None and d["evidence"]["crush"]:
+            crush = _build_crush(d["evidence"]["crush"], d, vehicles, file)
+    if evidence is not None and crush is not None:
+        evidence = dataclasses.replace(evidence, crush=crush)
+    with later.each():
+        map_lines = _build_map_lines(d["map"], file)
+    with later.each():
+        _check_north(d, file)
+    later.raise_any()
+    meta = d["scenario"]
+    survey = d.get("survey")
+    placed = is_placed(survey)
+    out = Scenario(file, meta["title"], meta["source"], meta["units"], tuple(vehicles), states, problem, runout,
+                   evidence, d, map_lines, {}, approach_inputs,
+                   descriptions={n: v.get("description") or "" for n, v in d["vehicles"].items()},
+                   survey_frame=survey_frame(survey) if placed else None)
+    object.__setattr__(out, "_file_data", source)  # the file contents it was built from (Scenario.file_data)
+    if not approaches:
+        return out
+    return simulate_approaches(out)
+
+
+def _impact_problem(d: dict, vehicles: list, states: dict, file: str | None) -> ImpactProblem:
+    """The [impact] (and [barrier]) of a validated file as an ImpactProblem; a barrier joins
+    ``vehicles`` and ``states``."""
     imp = d["impact"]
     if d["barrier"] is not None:
         bname = d["barrier"]["name"]
@@ -1390,37 +1495,7 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None, approac
                                 imp["body1"], imp["body2"], surface, tuple(constraints), tuple(external))
     except ScenarioError as exc:
         raise ScenarioError(str(exc), field=exc.field, file=file) from None
-    # the geometry at impact, the contact model, the evidence and the map: independent, every error at once
-    later = _Problems(file)
-    with later.each():
-        _check_overlap(problem, vehicles, states, imp["overlap_tolerance"], d["scenario"]["units"], file)  # the cause
-        check_contact_point(problem, imp["contact_tolerance"], d["scenario"]["units"], file)  # first
-    if runout is not None:
-        with later.each():
-            runout = _with_contact(runout, d, vehicles, problem, file)
-    evidence = map_lines = None
-    with later.each():
-        evidence = _build_evidence(d["evidence"], states, file, vehicles,
-                                   {n: v["approach"] for n, v in d["vehicles"].items()})
-        if d["evidence"] is not None and d["evidence"]["crush"]:
-            evidence = dataclasses.replace(evidence, crush=_build_crush(d["evidence"]["crush"], d, vehicles, file))
-        if evidence.rollover and (runout is None or not runout.options.rollover):
-            raise _err("a rollover statement is checked against the wheel-lift and rollover check, which is off: add "
-                       "runout.rollover = true (level \"load_transfer\")", "evidence.rollover[0].unit", file)
-    with later.each():
-        map_lines = _build_map_lines(d["map"], file)
-    later.raise_any()
-    meta = d["scenario"]
-    survey = d.get("survey")
-    placed = isinstance(survey, dict) and any(survey.get(k) for k in ("files", "underlay", "crs", "imported"))
-    out = Scenario(file, meta["title"], meta["source"], meta["units"], tuple(vehicles), states, problem, runout,
-                   evidence, d, map_lines, {}, approach_inputs,
-                   descriptions={n: v.get("description") or "" for n, v in d["vehicles"].items()},
-                   survey_frame=survey_frame(survey) if placed else None)
-    object.__setattr__(out, "_file_data", source)  # the file contents it was built from (Scenario.file_data)
-    if not approaches:
-        return out
-    return simulate_approaches(out)
+    return problem
 
 
 def _check_impact_law(imp: dict, problems: _Problems, file: str | None) -> None:
@@ -1658,9 +1733,11 @@ def _rest_registration(r: dict, body: Body, key: str, file: str | None):
 
 def _build_evidence(e: dict | None, states: dict, file: str | None, vehicles=(), d_approach: dict | None = None
                     ) -> Evidence:
-    """The evidence items; ``d_approach``: the validated approach section of each vehicle (or None)."""
+    """The evidence items; ``d_approach``: the validated approach section of each vehicle (or None).
+    Every item is checked: the errors of all of them come together."""
     if e is None:
         return Evidence()
+    problems = _Problems(file)
 
     def body(name, key):
         if name not in states:
@@ -1672,116 +1749,141 @@ def _build_evidence(e: dict | None, states: dict, file: str | None, vehicles=(),
     rest = []
     by_name = {b.name: b for v in vehicles for b in v.bodies}
     for i, r in enumerate(e["rest"]):
-        key = f"evidence.rest[{i}]"
-        name = body(r["body"], f"{key}.body")
-        if r["points"]:
-            reg = _rest_registration(r, by_name[name], key, file)
-            heading = reg.heading if r["heading_tolerance"] is not None else None
-            rest.append(RestEvidence(name, reg.position, r["tolerance"], heading, r["heading_tolerance"], r["name"],
-                                     reg, sigma=r.get("sigma"), heading_sigma=r.get("heading_sigma")))
-            continue
-        if r["position"] is None:
-            raise _err(f"rest evidence of {name!r} needs position (the measured CG) or points (two or more measured "
-                       "points of the body, e.g. its corners)", f"{key}.position", file)
-        if (r["heading"] is None) != (r["heading_tolerance"] is None):
-            raise _err("heading and heading_tolerance go together", f"{key}.heading_tolerance", file)
-        rest.append(RestEvidence(name, tuple(r["position"]), r["tolerance"], r["heading"],
-                                 r["heading_tolerance"], r["name"], sigma=r.get("sigma"),
-                                 heading_sigma=r.get("heading_sigma")))
+        with problems.each():
+            rest.append(_rest_item(r, i, body, by_name, file))
     marks = []
     for i, m in enumerate(e["marks"]):
-        sel = m["wheel"]
-        if sel != "*":
-            key = f"evidence.marks[{i}].wheel"
-            vehicle = next(v for v in vehicles if body(sel.split("/")[0], key) in {b.name for b in v.bodies})
-            try:  # the wheels the selector names must exist (as for wheel settings)
-                select_wheels(vehicle, enumerate_wheels(vehicle), sel, key)
-            except ScenarioError as exc:
-                raise _err(str(exc).removeprefix(f"{key}: "), key, file) from None
-        if m["phase"] == "approach":
-            owner = (sel.split("/")[0] if sel != "*" else None)
-            with_approach = [v for v in vehicles if (d_approach or {}).get(v.name)]
-            if not with_approach or (owner is not None and not any(owner in {b.name for b in v.bodies}
-                                                                   for v in with_approach)):
-                raise _err("a pre-impact mark (phase = \"approach\") needs an approach of the vehicle that left it "
-                           f"({owner or 'any vehicle'}): add [vehicles.<name>.approach]",
-                           f"evidence.marks[{i}].phase", file)
-        marks.append(MarkEvidence(np.asarray(m["points"], dtype=float), m["tolerance"], sel, m["sliding_only"],
-                                  m["name"], m["phase"], sigma=m.get("sigma")))
+        with problems.each():
+            marks.append(_mark_item(m, i, body, vehicles, d_approach, file))
     poi = None
     if e["impact_point"] is not None:
         poi = ImpactPointEvidence(tuple(e["impact_point"]["position"]), e["impact_point"]["tolerance"],
                                   sigma=e["impact_point"].get("sigma"))
-    dv = [DeltaVEvidence(body(x["body"], f"evidence.delta_v[{i}].body"), x["value"], x["tolerance"], x["component"],
-                         x["name"], x["impacts"], sigma=x.get("sigma")) for i, x in enumerate(e["delta_v"])]
+    dv = []
+    for i, x in enumerate(e["delta_v"]):
+        with problems.each():
+            dv.append(DeltaVEvidence(body(x["body"], f"evidence.delta_v[{i}].body"), x["value"], x["tolerance"],
+                                     x["component"], x["name"], x["impacts"], sigma=x.get("sigma")))
     recorder = []
     for i, x in enumerate(e["recorder"]):
-        key = f"evidence.recorder[{i}]"
-        name = body(x["body"], f"{key}.body")
-        veh = next(v for v in vehicles if name in {b.name for b in v.bodies})
-        if not (d_approach or {}).get(veh.name):
-            raise _err(f"recorder samples are compared with the approach of vehicle {veh.name!r}, which has none: add "
-                       f"[vehicles.{veh.name}.approach]", f"{key}.body", file)
-        smp = x["samples"]
-        recorder.append(RecorderEvidence(name, tuple(p["time"] for p in smp), tuple(p["speed"] for p in smp),
-                                         tuple(bool(p["brake"]) for p in smp), x["tolerance"], x["time_offset"],
-                                         x["name"], sigma=x.get("sigma")))
+        with problems.each():
+            recorder.append(_recorder_item(x, i, body, vehicles, d_approach, file))
     rollover = []
     units = {v.name for v in vehicles if not v.is_barrier} | {b.name for v in vehicles if not v.is_barrier
                                                                for b in v.bodies}
     for i, x in enumerate(e.get("rollover") or []):
-        if x["unit"] not in units:
-            near = difflib.get_close_matches(x["unit"], sorted(units), n=1)
-            hint = f"; did you mean {near[0]!r}?" if near else ""
-            raise _err(f"unknown vehicle or body {x['unit']!r}{hint} Vehicles and bodies: "
-                       f"{', '.join(map(repr, sorted(units)))}", f"evidence.rollover[{i}].unit", file)
-        rollover.append(RolloverEvidence(x["unit"], bool(x["rolled"]), x["name"]))
+        with problems.each():
+            if x["unit"] not in units:
+                near = difflib.get_close_matches(x["unit"], sorted(units), n=1)
+                hint = f"; did you mean {near[0]!r}?" if near else ""
+                raise _err(f"unknown vehicle or body {x['unit']!r}{hint} Vehicles and bodies: "
+                           f"{', '.join(map(repr, sorted(units)))}", f"evidence.rollover[{i}].unit", file)
+            rollover.append(RolloverEvidence(x["unit"], bool(x["rolled"]), x["name"]))
+    problems.raise_any()
     return Evidence(tuple(rest), tuple(marks), poi, tuple(dv), tuple(recorder), rollover=tuple(rollover))
 
 
+def _rest_item(r: dict, i: int, body, by_name: dict, file: str | None) -> RestEvidence:
+    """One ``[[evidence.rest]]`` item."""
+    key = f"evidence.rest[{i}]"
+    name = body(r["body"], f"{key}.body")
+    if r["points"]:
+        reg = _rest_registration(r, by_name[name], key, file)
+        heading = reg.heading if r["heading_tolerance"] is not None else None
+        return RestEvidence(name, reg.position, r["tolerance"], heading, r["heading_tolerance"], r["name"], reg,
+                            sigma=r.get("sigma"), heading_sigma=r.get("heading_sigma"))
+    if r["position"] is None:
+        raise _err(f"rest evidence of {name!r} needs position (the measured CG) or points (two or more measured "
+                   "points of the body, e.g. its corners)", f"{key}.position", file)
+    if (r["heading"] is None) != (r["heading_tolerance"] is None):
+        raise _err("heading and heading_tolerance go together", f"{key}.heading_tolerance", file)
+    return RestEvidence(name, tuple(r["position"]), r["tolerance"], r["heading"], r["heading_tolerance"], r["name"],
+                        sigma=r.get("sigma"), heading_sigma=r.get("heading_sigma"))
+
+
+def _mark_item(m: dict, i: int, body, vehicles, d_approach, file: str | None) -> MarkEvidence:
+    """One ``[[evidence.marks]]`` item."""
+    sel = m["wheel"]
+    if sel != "*":
+        key = f"evidence.marks[{i}].wheel"
+        vehicle = next(v for v in vehicles if body(sel.split("/")[0], key) in {b.name for b in v.bodies})
+        try:  # the wheels the selector names must exist (as for wheel settings)
+            select_wheels(vehicle, enumerate_wheels(vehicle), sel, key)
+        except ScenarioError as exc:
+            raise _err(str(exc).removeprefix(f"{key}: "), key, file) from None
+    if m["phase"] == "approach":
+        owner = (sel.split("/")[0] if sel != "*" else None)
+        with_approach = [v for v in vehicles if (d_approach or {}).get(v.name)]
+        if not with_approach or (owner is not None and not any(owner in {b.name for b in v.bodies}
+                                                               for v in with_approach)):
+            raise _err("a pre-impact mark (phase = \"approach\") needs an approach of the vehicle that left it "
+                       f"({owner or 'any vehicle'}): add [vehicles.<name>.approach]",
+                       f"evidence.marks[{i}].phase", file)
+    return MarkEvidence(np.asarray(m["points"], dtype=float), m["tolerance"], sel, m["sliding_only"], m["name"],
+                        m["phase"], sigma=m.get("sigma"))
+
+
+def _recorder_item(x: dict, i: int, body, vehicles, d_approach, file: str | None) -> RecorderEvidence:
+    """One ``[[evidence.recorder]]`` item."""
+    key = f"evidence.recorder[{i}]"
+    name = body(x["body"], f"{key}.body")
+    veh = next(v for v in vehicles if name in {b.name for b in v.bodies})
+    if not (d_approach or {}).get(veh.name):
+        raise _err(f"recorder samples are compared with the approach of vehicle {veh.name!r}, which has none: add "
+                   f"[vehicles.{veh.name}.approach]", f"{key}.body", file)
+    smp = x["samples"]
+    return RecorderEvidence(name, tuple(p["time"] for p in smp), tuple(p["speed"] for p in smp),
+                            tuple(bool(p["brake"]) for p in smp), x["tolerance"], x["time_offset"], x["name"],
+                            sigma=x.get("sigma"))
+
+
 def _build_crush(items: list, d: dict, vehicles, file: str | None) -> tuple:
-    """The ``[[evidence.crush]]`` items as CrushEvidence (A and B from the body's preset where omitted)."""
+    """The ``[[evidence.crush]]`` items as CrushEvidence (A and B from the body's preset where omitted); the
+    errors of every item together."""
     by_name = {b.name: b for v in vehicles for b in v.bodies}
     preset_of = {b["name"]: b.get("preset") for v in d["vehicles"].values() for b in v["bodies"]}
     out = []
+    problems = _Problems(file)  # every item checked: their errors come together
     for i, c in enumerate(items):
-        key = f"evidence.crush[{i}]"
-        name = c["body"]
-        if name not in by_name or by_name[name].is_fixed:
-            near = difflib.get_close_matches(name, [n for n, b in by_name.items() if not b.is_fixed], n=1)
-            hint = f"; did you mean {near[0]!r}?" if near else ""
-            raise _err(f"unknown body {name!r}{hint} (a movable body of a vehicle)", f"{key}.body", file)
-        profile_keys = ("A", "B", "width", "profile")
-        given = [k for k in profile_keys if c[k] is not None]
-        A, B, source = c["A"], c["B"], "given in the scenario"
-        if c["ees"] is not None:
-            if given:
-                raise _err(f"give either ees or a crush profile (A, B, width, profile), not both (ees with "
-                           f"{', '.join(given)})", f"{key}.ees", file)
-        else:
-            if A is None and B is None and c["profile"] is not None:
-                preset = preset_of.get(name)
-                stiff = (presets().get(preset, {}).get("crush", {}).get(c["face"]) if preset else None)
-                if stiff is None:
-                    raise _err(f"needs A and B (CRASH3 stiffness of the {c['face']} face of {name!r}, e.g. "
-                               "A = \"50000 N/m\", B = \"600000 N/m^2\"); "
-                               + (f"preset {preset!r} has no crush stiffness for this face" if preset
-                                  else "the body has no preset with crush stiffness"), f"{key}.A", file)
-                where = f"vehicles library preset {preset!r} crush.{c['face']}"
-                A = parse(stiff["A"], Kind.FORCE_PER_LENGTH, field=f"{where}.A")
-                B = parse(stiff["B"], Kind.FORCE_PER_AREA, field=f"{where}.B")
-                source = f"preset {preset!r}: {stiff['source']}"
-            for k, v in (("A", A), ("B", B), ("width", c["width"]), ("profile", c["profile"])):
-                if v is None:
-                    raise _err(f"missing {k}: a crush item needs A, B, width and profile (CRASH3), or ees; "
-                               f"given: {', '.join(given) or 'none of them'}", f"{key}.{k}", file)
-        if (c["tolerance"] is None) == (c["relative_tolerance"] is None):
-            raise _err("give tolerance (an energy, e.g. \"10 kJ\") or relative_tolerance (e.g. \"25 %\"), "
-                       f"{'not both' if c['tolerance'] is not None else 'one of them'}", f"{key}.tolerance", file)
-        out.append(CrushEvidence(name, c["face"], by_name[name].mass, A, B, c["width"],
-                                 None if c["profile"] is None else tuple(c["profile"]), c["offset"], c["ees"],
-                                 c["tolerance"], c["relative_tolerance"], c["impacts"], c["compare"],
-                                 c["correction"] == "pdof", source, c["name"], sigma=c.get("sigma")))
+        with problems.each():
+            key = f"evidence.crush[{i}]"
+            name = c["body"]
+            if name not in by_name or by_name[name].is_fixed:
+                near = difflib.get_close_matches(name, [n for n, b in by_name.items() if not b.is_fixed], n=1)
+                hint = f"; did you mean {near[0]!r}?" if near else ""
+                raise _err(f"unknown body {name!r}{hint} (a movable body of a vehicle)", f"{key}.body", file)
+            profile_keys = ("A", "B", "width", "profile")
+            given = [k for k in profile_keys if c[k] is not None]
+            A, B, source = c["A"], c["B"], "given in the scenario"
+            if c["ees"] is not None:
+                if given:
+                    raise _err(f"give either ees or a crush profile (A, B, width, profile), not both (ees with "
+                               f"{', '.join(given)})", f"{key}.ees", file)
+            else:
+                if A is None and B is None and c["profile"] is not None:
+                    preset = preset_of.get(name)
+                    stiff = (presets().get(preset, {}).get("crush", {}).get(c["face"]) if preset else None)
+                    if stiff is None:
+                        raise _err(f"needs A and B (CRASH3 stiffness of the {c['face']} face of {name!r}, e.g. "
+                                   "A = \"50000 N/m\", B = \"600000 N/m^2\"); "
+                                   + (f"preset {preset!r} has no crush stiffness for this face" if preset
+                                      else "the body has no preset with crush stiffness"), f"{key}.A", file)
+                    where = f"vehicles library preset {preset!r} crush.{c['face']}"
+                    A = parse(stiff["A"], Kind.FORCE_PER_LENGTH, field=f"{where}.A")
+                    B = parse(stiff["B"], Kind.FORCE_PER_AREA, field=f"{where}.B")
+                    source = f"preset {preset!r}: {stiff['source']}"
+                for k, v in (("A", A), ("B", B), ("width", c["width"]), ("profile", c["profile"])):
+                    if v is None:
+                        raise _err(f"missing {k}: a crush item needs A, B, width and profile (CRASH3), or ees; "
+                                   f"given: {', '.join(given) or 'none of them'}", f"{key}.{k}", file)
+            if (c["tolerance"] is None) == (c["relative_tolerance"] is None):
+                raise _err("give tolerance (an energy, e.g. \"10 kJ\") or relative_tolerance (e.g. \"25 %\"), "
+                           f"{'not both' if c['tolerance'] is not None else 'one of them'}", f"{key}.tolerance", file)
+            out.append(CrushEvidence(name, c["face"], by_name[name].mass, A, B, c["width"],
+                                     None if c["profile"] is None else tuple(c["profile"]), c["offset"], c["ees"],
+                                     c["tolerance"], c["relative_tolerance"], c["impacts"], c["compare"],
+                                     c["correction"] == "pdof", source, c["name"], sigma=c.get("sigma")))
+    problems.raise_any()
     for which, idx in crush_groups(out):
         modes = {out[i].compare for i in idx}
         if len(modes) > 1:

@@ -58,6 +58,7 @@ __all__ = [
     "ArrayOf",
     "ScenarioValidationError",
     "validate",
+    "validate_collect",
     "load_toml",
     "document",
 ]
@@ -533,7 +534,10 @@ def _section(data: object, section: Section, path: str, problems: _Problems) -> 
     for f in section.fields:
         key = _join(path, f.name)
         if f.name in data:
+            before = len(problems)
             out[f.name] = _field(data[f.name], f, key, problems)
+            if len(problems) > before:  # refused (out of range, bad unit, ...): no value for the later checks
+                out[f.name] = None
         elif f.required:
             example = _example(f)
             hint = f"; e.g. {f.name} = {example}" if example else ""
@@ -580,11 +584,26 @@ def validate(data: dict[str, Any], schema: Section, *, file: str | None = None) 
         Listing every problem (unknown key with suggestions, missing key, wrong unit or
         type, out of range, bad choice), each with its dotted key path and value.
     """
-    problems: _Problems = []
-    result = _section(data, schema, "", problems)
+    result, problems = validate_collect(data, schema)
     if problems:
         raise ScenarioValidationError(problems, file=file)
     return result  # type: ignore[no-any-return]
+
+
+def validate_collect(data: dict[str, Any], schema: Section) -> tuple[Any, list[tuple[str, str]]]:
+    """:func:`validate` without raising: the converted document and every problem found.
+
+    Returns
+    -------
+    (dict, list of (str, str))
+        The document as :func:`validate` returns it, with ``None`` where a value (or a whole
+        table) was bad, and the problems as ``(key path, message)`` pairs; an empty list for a
+        valid document. The loader uses it to go on checking the parts that are valid, so
+        that the errors found after the schema come in the same run as the schema's.
+    """
+    problems: _Problems = []
+    result = _section(data, schema, "", problems)
+    return result, problems
 
 
 # ------------------------------------------------------------------------------- TOML input

@@ -33,6 +33,7 @@ ROOT = Path(__file__).resolve().parents[2]
 INTERSECTION = ROOT / "scenarios" / "scenes" / "intersection_car_trailer_wheels.toml"
 WAITING = ROOT / "scenarios" / "scenes" / "third_vehicle_waiting_car.toml"  # legend at the right
 TABLE6 = ROOT / "scenarios" / "paper" / "table6.toml"  # impact only
+TRUCK = ROOT / "scenarios" / "scenes" / "truck_brakes_into_car.toml"  # a long approach
 DT = 0.5
 
 
@@ -152,7 +153,7 @@ def test_poses_clamp_time_to_each_run():
 
 def test_last_frame_is_the_rest_pose_and_limits_hold_every_frame():
     scene = _scene(INTERSECTION)
-    anim = scene_animation(scene, dt=DT)
+    anim = scene_animation(scene, dt=DT, view="scene")
     limits = anim.ax.get_xlim(), anim.ax.get_ylim()
     anim.frame(len(anim) - 1)
     for r, name, body, br in _bodies(scene):
@@ -168,11 +169,12 @@ def test_last_frame_is_the_rest_pose_and_limits_hold_every_frame():
 
 @pytest.mark.parametrize("path", [INTERSECTION, WAITING], ids=["wide", "tall"])
 def test_limits_widen_to_poses_outside_the_scene_figure(monkeypatch, path):
-    """No shipped scene has a pose outside the static figure's limits: shrink them to provoke it.
-    The legend stays inside the axes (the animation's compact legend)."""
-    import crashsim.plotting
+    """No shipped scene has a pose outside the static figure's limits: shrink them to provoke it
+    (in the name the animation module calls). The compact legend stays outside the axes."""
+    import crashsim.animation
 
-    original = crashsim.plotting.plot_scene
+    original = crashsim.animation.plot_scene
+    shrunk_limits = []
 
     def shrunk(scene, **kwargs):
         ax = original(scene, **kwargs)
@@ -180,15 +182,23 @@ def test_limits_widen_to_poses_outside_the_scene_figure(monkeypatch, path):
         y0, y1 = ax.get_ylim()
         ax.set_xlim(x0 + 0.3 * (x1 - x0), x0 + 0.6 * (x1 - x0))
         ax.set_ylim(y0 + 0.4 * (y1 - y0), y0 + 0.6 * (y1 - y0))
+        shrunk_limits.append((ax.get_xlim(), ax.get_ylim()))
         return ax
 
-    monkeypatch.setattr(crashsim.plotting, "plot_scene", shrunk)
-    anim = scene_animation(_scene(path), dt=DT)
+    monkeypatch.setattr(crashsim.animation, "plot_scene", shrunk)
+    scene = _scene(path)
+    anim = scene_animation(scene, dt=DT, view="scene")
+    assert len(shrunk_limits) == 1, "the animation drew its static layer with the patched plot_scene"
+    (sx0, sx1), (sy0, sy1) = shrunk_limits[0]
     (x0, x1), (y0, y1) = anim.ax.get_xlim(), anim.ax.get_ylim()
+    assert x0 < sx0 and x1 > sx1 and y0 < sy0 and y1 > sy1, "the limits widened on every side"
+    outside = 0
     for k in range(len(anim)):
         for patch in anim.frame(k)[:len(anim.outlines)]:
             xy = _vertices(patch)
+            outside += int(np.any((xy[:, 0] < sx0) | (xy[:, 0] > sx1) | (xy[:, 1] < sy0) | (xy[:, 1] > sy1)))
             assert np.all((xy[:, 0] > x0) & (xy[:, 0] < x1) & (xy[:, 1] > y0) & (xy[:, 1] < y1))
+    assert outside > 0, "some poses lay outside the shrunk limits: the widening was needed"
     # laid out again: the axes box has the aspect of the new limits (equal scale, nothing cut)
     fig = anim.fig
     box = anim.ax.get_position()
@@ -197,9 +207,137 @@ def test_limits_widen_to_poses_outside_the_scene_figure(monkeypatch, path):
     r = fig.canvas.get_renderer()
     leg = anim.ax.get_legend().get_window_extent(r)
     axes = anim.ax.get_window_extent(r)
-    # the animation's legend is the compact one inside the axes (one line per entry), and stays there
-    assert axes.x0 <= leg.x0 and leg.x1 <= axes.x1 + 1 and axes.y0 <= leg.y0 and leg.y1 <= axes.y1 + 1
+    # the animation's legend is the compact one outside the axes (one line per entry), inside the figure
+    assert not leg.overlaps(axes)
+    assert leg.x0 >= 0 and leg.y0 >= 0 and leg.x1 <= fig.bbox.x1 + 1 and leg.y1 <= fig.bbox.y1 + 1
     assert all("\n" not in t.get_text() for t in anim.ax.get_legend().get_texts())
+
+
+# -- the follow view ------------------------------------------------------------------------
+
+def _outline_box(anim, k) -> np.ndarray:
+    """(x0, y0, x1, y1) of every moving outline and pin at frame k [display units]."""
+    pts = []
+    for a in anim.frame(k):
+        if a in anim.outlines.values() and hasattr(a, "get_xy"):
+            pts.append(_vertices(a))
+        elif a in anim.pins.values() or a in anim.outlines.values():
+            pts.append(np.column_stack(a.get_data()))
+    pts = np.vstack([p for p in pts if len(p)])
+    return np.concatenate([pts.min(axis=0), pts.max(axis=0)])
+
+
+@pytest.mark.parametrize("path", [INTERSECTION, WAITING], ids=["wide", "tall"])
+def test_follow_view_frames_every_vehicle_of_each_frame(path):
+    scene = _scene(path)
+    anim = scene_animation(scene, dt=0.1)
+    assert anim.view == "follow" and anim.limits.shape == (len(anim), 4)
+    r = anim.fig.canvas.get_renderer()
+    for k in range(len(anim)):
+        box = _outline_box(anim, k)
+        (x0, x1), (y0, y1) = anim.ax.get_xlim(), anim.ax.get_ylim()
+        np.testing.assert_allclose((x0, x1, y0, y1), anim.limits[k])
+        # the vehicles and a margin of at least 3 m inside the view
+        assert x0 + 3.0 <= box[0] and box[2] <= x1 - 3.0 and y0 + 3.0 <= box[1] and box[3] <= y1 - 3.0
+        assert x1 - x0 >= 20.0 - 1e-9
+        # equal scale: the limits have the aspect of the axes box
+        ext = anim.ax.get_window_extent(r)
+        assert (y1 - y0) / (x1 - x0) == pytest.approx(ext.height / ext.width, rel=1e-6)
+    # the scale bar follows the view: a 1-2-2.5-5 length of at most a fifth of the width
+    bar = next(a for a in anim.ax.artists if a.get_gid() == "scalebar")
+    assert bar.crashsim_length <= (anim.limits[-1, 1] - anim.limits[-1, 0]) / 5.0
+
+
+def test_follow_view_is_closer_than_the_scene_view():
+    """The truck that brakes into a car: the scene view holds 150 ft of approach; the follow view
+    keeps the 17.6 m combination well over 60 px long in a 1000 px GIF at every frame (both
+    vehicles in view while they close in) and frames the impact at least 2.5 times closer."""
+    scene = _scene(TRUCK)
+    truck = scene.scenario.vehicles[0]
+    states = scene.scenario.states
+    heading = states[truck.bodies[0].name].heading
+    along = np.concatenate([_corners(b, states[b.name].position, states[b.name].heading) @ rotate(np.array([1.0, 0.0]),
+                                                                                                    heading)
+                            for b in truck.bodies])
+    combination = float(np.ptp(along))  # front of the tractor to the rear of the trailer [m]
+    assert 15.0 < combination < 25.0
+    length_px = {}
+    for view in ("scene", "follow"):
+        anim = scene_animation(scene, dt=0.25, view=view)
+        anim.fig.set_dpi(100)
+        assert round(anim.fig.get_figwidth() * 100) == 1000
+        px = anim.ax.get_window_extent(anim.fig.canvas.get_renderer()).width
+        k, _ = to_unit(1.0, Kind.LENGTH, anim._S.system)
+        widths = (anim.limits[:, 1] - anim.limits[:, 0] if anim.limits is not None
+                  else np.full(len(anim), np.ptp(anim.ax.get_xlim())))
+        length_px[view] = combination * k * px / widths  # per frame
+        impact = int(np.flatnonzero(anim.times == 0.0)[0])
+        length_px[view + " at impact"] = length_px[view][impact]
+    assert length_px["follow"].min() > 150.0
+    assert length_px["follow at impact"] > 2.5 * length_px["scene at impact"]
+
+
+def test_camera_limits_hold_their_box_and_are_smoothed():
+    from crashsim.animation import camera_limits
+
+    t = np.arange(0.0, 4.0, 0.1)
+    boxes = np.zeros((len(t), 4))
+    boxes[:, 2:] = 4.0
+    boxes[t >= 2.0] += [30.0, 0.0, 30.0, 0.0]  # the vehicle jumps 30 m at t = 2 s
+    lim = camera_limits(t, boxes, 0.5, window=0.5, pad=3.0, margin=0.1, min_width=10.0)
+    for (x0, y0, x1, y1), (a, b, c, d) in zip(boxes, lim):
+        e = 1e-9  # round-off
+        assert a <= x0 - 3.4 + e and b >= x1 + 3.4 - e and c <= y0 - 3.4 + e and d >= y1 + 3.4 - e
+        assert (d - c) == pytest.approx(0.5 * (b - a))
+    centre = 0.5 * (lim[:, 0] + lim[:, 1])
+    # a still box: a still camera, exactly centred
+    np.testing.assert_allclose(centre[t < 1.45], 2.0)
+    # the size anticipates a change two windows ahead (the centre moves from 1.5 s, the size from 0.5 s)
+    np.testing.assert_allclose(lim[t < 0.45, 1] - lim[t < 0.45, 0], lim[0, 1] - lim[0, 0])
+    # the jump spread over the window: no step between frames larger than 30 m / (2 x 0.5 s / 0.1 s) * 1.01
+    assert np.max(np.abs(np.diff(centre))) <= 30.0 / 11 * 1.01
+    assert lim[0, 1] - lim[0, 0] >= 10.0
+
+
+def test_follow_gif_is_drawn_whole_at_each_frame(tmp_path):
+    scene = _scene(INTERSECTION)
+    out = animate_scene(scene, tmp_path / "f.gif", dt=DT, dpi=30, legend="none")
+    anim = scene_animation(scene, dt=DT, legend="none")
+    assert anim.ax.get_legend() is None
+    w, h = anim.fig.get_size_inches()
+    with Image.open(out) as im:
+        assert im.size == (round(w * 30), round(h * 30)) and im.n_frames == len(anim)
+        im.seek(0)
+        first = np.asarray(im.convert("RGB"), dtype=int)
+        im.seek(len(anim) - 1)
+        last = np.asarray(im.convert("RGB"), dtype=int)
+    # the view moved: the tick labels, grid and fixed layer moved with it, not only the outlines
+    changed = np.any(first != last, axis=2)
+    assert changed.mean() > 0.2
+
+
+def test_follow_gif_keeps_its_legend_in_every_frame(tmp_path):
+    """The follow view draws its legend (outside the view, the same in every frame) once and pastes it."""
+    scene = _scene(INTERSECTION)
+    anim = scene_animation(scene, dt=DT)
+    anim.fig.set_dpi(40)
+    anim.fig.canvas.draw()
+    box = anim.ax.get_legend().get_window_extent(anim.fig.canvas.get_renderer())
+    h = round(anim.fig.get_figheight() * 40)
+    out = animate_scene(scene, tmp_path / "l.gif", dt=DT, dpi=40)
+    with Image.open(out) as im:
+        for k in (1, im.n_frames - 1):
+            im.seek(k)
+            px = np.asarray(im.convert("L"), dtype=int)
+            region = px[h - int(box.y1):h - int(box.y0), int(box.x0):int(box.x1)]
+            assert (region < 128).mean() > 0.02, f"frame {k}: no legend drawn"
+
+
+@pytest.mark.parametrize("kwargs, field", [({"view": "camera"}, "view"), ({"legend": "outside"}, "legend")])
+def test_bad_view_or_legend_is_named(kwargs, field):
+    with pytest.raises(ScenarioError, match=rf"^{field}: .* is unknown; allowed "):
+        scene_animation(_scene(INTERSECTION), dt=DT, **kwargs)
+
 
 def test_us_units_scale_the_outlines():
     scene = _scene(INTERSECTION)

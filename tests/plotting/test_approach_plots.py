@@ -82,7 +82,7 @@ def test_shipped_scene_legend_has_every_verdict():
 
     path = Path(__file__).resolve().parents[2] / "scenarios" / "scenes" / "truck_brakes_into_car.toml"
     res = run_scene(load_scenario(path))
-    ax = plot_scene(res)
+    ax = plot_scene(res, legend="outside")  # the full legend (the compact default counts the verdicts)
     texts = [t.get_text() for t in ax.get_legend().get_texts()]
     for c in res.evidence.checks:
         if c.kind in ("recorder", "crush energy"):

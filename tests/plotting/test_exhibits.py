@@ -83,6 +83,12 @@ def test_no_two_labels_overlap_on_a_shipped_scene(path):
     frame = ax.get_window_extent(r).padded(1.0)
     for text, bb in _text_boxes(ax.figure):
         assert frame.contains(bb.x0, bb.y0) and frame.contains(bb.x1, bb.y1), text
+    # the compact legend (the default): outside the axes, whole inside the figure, one line per entry
+    leg = ax.get_legend().get_window_extent(r)
+    fig = ax.figure.bbox
+    assert not leg.overlaps(ax.get_window_extent(r))
+    assert fig.x0 <= leg.x0 and leg.x1 <= fig.x1 and fig.y0 <= leg.y0 and leg.y1 <= fig.y1, (leg, fig)
+    assert all("\n" not in t.get_text() for t in ax.get_legend().get_texts())
 
 
 @pytest.mark.parametrize("legend", ["inside", "none"])
@@ -300,3 +306,63 @@ def test_label_kinds_are_documented():
     assert set(LABEL_KINDS) == {"impacts", "names", "pdof", "delta-v", "approach", "obstacles", "zones", "map",
                                 "times"}
     plt.close("all")
+
+
+# -- labels off the lines ---------------------------------------------------------------------
+
+def _ink_under(ax, texts) -> int:
+    """Samples of the drawn lines and outlines (line_ink) under the given labels' text boxes."""
+    from crashsim.plotting import line_ink, text_box
+
+    ax.figure.draw_without_rendering()
+    r = ax.figure.canvas.get_renderer()
+    ink = line_ink(ax)
+    total = 0
+    for t in texts:
+        bb = text_box(t, r)
+        total += int(np.count_nonzero((ink[:, 0] >= bb.x0) & (ink[:, 0] <= bb.x1) & (ink[:, 1] >= bb.y0)
+                                      & (ink[:, 1] <= bb.y1)))
+    return total
+
+
+def test_a_label_on_a_line_moves_off_it_and_others_stay():
+    from crashsim.plotting import place_labels
+
+    fig, ax = plt.subplots(figsize=(6, 4))
+    ax.set_xlim(-10, 10)
+    ax.set_ylim(-10, 10)
+    ax.plot([-10, 10], [0, 0], "-", lw=2)  # a track through both anchors
+    shy = ax.annotate("PDOF car\n-17 deg", xy=(-4, 0), xytext=(0, 0), textcoords="offset points", ha="center",
+                      va="center", fontsize=7, gid="label:pdof")
+    name = ax.annotate("car", xy=(4, 0), xytext=(0, 0), textcoords="offset points", ha="center", va="center",
+                       fontsize=7, gid="label:names")
+    assert _ink_under(ax, [shy]) > 0 and _ink_under(ax, [name]) > 0
+    assert place_labels(ax, [shy, name], lines=False) == 0
+    assert _ink_under(ax, [shy]) > 0, "without lines=True nothing moves: each label is free of the other"
+    assert place_labels(ax, [shy, name]) == 0
+    assert _ink_under(ax, [shy]) == 0, "the PDOF label left the track"
+    assert np.hypot(*shy.xyann) <= 26.0, "to a place near its anchor"
+    assert name.xyann == (0, 0) and _ink_under(ax, [name]) > 0, "a body's name stays on its body"
+
+
+def test_shipped_scene_labels_cover_fewer_lines(monkeypatch):
+    """The Δv, PDOF, approach and obstacle labels of the shipped scenes lie over fewer drawn lines than
+    when they are kept clear of each other only."""
+    import crashsim.plotting as plotting
+    from crashsim.plotting import LINE_SHY
+
+    def shy_ink(lines: bool) -> int:
+        total = 0
+        for path in SHIPPED:
+            if not lines:
+                monkeypatch.setattr(plotting, "place_labels", functools.partial(ORIGINAL, lines=False))
+            ax = plot_scene(_scene(path))
+            monkeypatch.setattr(plotting, "place_labels", ORIGINAL)
+            texts = [t for t in ax.texts if (t.get_gid() or "").removeprefix("label:") in LINE_SHY]
+            total += _ink_under(ax, texts)
+            plt.close(ax.figure)
+        return total
+
+    ORIGINAL = plotting.place_labels
+    before, after = shy_ink(False), shy_ink(True)
+    assert after < 0.6 * before, (before, after)

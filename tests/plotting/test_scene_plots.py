@@ -174,13 +174,18 @@ def test_evidence_overlay_and_verdict_colours():
     i = next(k for k, c in enumerate(checks) if c.kind == "rest")
     checks[i] = dataclasses.replace(checks[i], residual=5.0, passed=False)
     bad = dataclasses.replace(scene, evidence=dataclasses.replace(scene.evidence, checks=tuple(checks)))
-    ax = plot_scene(bad)
+    ax = plot_scene(bad, legend="outside")  # the full legend: each item with its verdict
     leg = ax.get_legend()
     body = next(r.body for r in rest_items if (r.name or f"rest of {r.body}") == checks[i].name)
     (text,) = [t for t in leg.get_texts() if t.get_text().startswith(f"measured rest, {body}: FAIL")]
     assert matplotlib.colors.same_color(text.get_color(), "#c62828")
     n = len(checks)
     assert leg.get_title().get_text() == f"Evidence: {n - 1} of {n} items within tolerance"
+    # the compact default: the evidence as one entry, its title counting the failure in red
+    compact = plot_scene(bad).get_legend()
+    assert not [t for t in compact.get_texts() if t.get_text().startswith("measured rest")]
+    assert compact.get_title().get_text() == f"Evidence: {n - 1} of {n} items within tolerance"
+    assert matplotlib.colors.same_color(compact.get_title().get_color(), "#c62828")
 
 
 def test_impact_only_paper_table():

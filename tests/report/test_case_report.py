@@ -20,6 +20,7 @@ import subprocess
 from html.parser import HTMLParser
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from crashsim.casereport import FILE_COMMENT, input_rows, render_case_report, toml_comments
@@ -221,6 +222,25 @@ def test_chromium_renders_the_report(report, tmp_path):
     for s in SECTIONS:
         assert f'id="{s}"' in dom, s
     assert len(re.findall(r'<img src="data:image/svg\+xml;base64,', dom)) >= 3
+    # the whole page as laid out at 1000 px: every section and figure drawn with a size, in order, and a
+    # screenshot as high as the page whose content reaches its bottom (nothing after the first screen lost)
+    layout = _layout(base, out, tmp_path)
+    tops = [layout["sections"][s]["top"] for s in SECTIONS]
+    assert all(layout["sections"][s]["height"] > 10 for s in SECTIONS), layout["sections"]
+    assert tops == sorted(tops) and tops[-1] < layout["height"]
+    assert len(layout["imgs"]) >= 3 and all(w > 100 and h > 100 for w, h in layout["imgs"]), layout["imgs"]
+    height = layout["height"]
+    assert height > 3 * 1400, "the report is several screens long"
+    full = tmp_path / "full.png"
+    subprocess.run(base + [f"--screenshot={full}", f"--window-size=1000,{height}", url], check=True,
+                   capture_output=True, timeout=180)
+    im = Image.open(full).convert("L")
+    assert im.size == (1000, height)
+    rows = np.flatnonzero((np.asarray(im) < 200).any(axis=1))  # rows with ink on them
+    assert rows[0] < 200 and rows[-1] > height - 400, (rows[0], rows[-1], height)
+    # ink spread over the whole page, no blank screen in it (a figure or a table failed to draw)
+    gaps = np.diff(rows)
+    assert gaps.max() < 700, int(gaps.max())
     # no request made by the page (the browser's own background requests have no origin)
     log = json.loads(net.read_text())
     types = {v: k for k, v in log["constants"]["logEventTypes"].items()}
@@ -228,6 +248,29 @@ def test_chromium_renders_the_report(report, tmp_path):
             if types.get(e["type"]) == "URL_REQUEST_START_JOB" and "url" in e.get("params", {})
             and e["params"].get("initiator") != "not an origin"]
     assert not page, page
+
+
+_PROBE = """<script>window.addEventListener("load", () => {
+  const box = (e) => { const r = e.getBoundingClientRect(); return {top: r.top + window.scrollY, height: r.height}; };
+  const sections = {};
+  for (const e of document.querySelectorAll("[id]")) sections[e.id] = box(e);
+  const imgs = [...document.images].map((i) => [i.complete ? i.naturalWidth : 0, box(i).height]);
+  document.body.setAttribute("data-layout", JSON.stringify(
+    {height: document.documentElement.scrollHeight, sections: sections, imgs: imgs}));
+});</script>"""
+
+
+def _layout(base: list, page: Path, tmp_path: Path) -> dict:
+    """Where Chromium lays out each element with an id, the size of each image and the page's height
+    [CSS px] at 1000 px wide: a copy of the page with a script that writes them into the DOM."""
+    probe = tmp_path / "probe.html"
+    probe.write_text(page.read_text(encoding="utf-8").replace("</body>", _PROBE + "</body>"), encoding="utf-8")
+    dom = subprocess.run(base + ["--window-size=1000,1400", "--virtual-time-budget=5000", "--dump-dom",
+                                 probe.resolve().as_uri()], check=True, capture_output=True, text=True,
+                         timeout=180).stdout
+    found = re.search(r'data-layout="([^"]*)"', dom)
+    assert found, "the layout probe did not run"
+    return json.loads(html.unescape(found[1]))
 
 
 def test_render_without_figures_is_quick_and_names_every_input(tmp_path):

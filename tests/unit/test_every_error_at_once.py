@@ -113,8 +113,9 @@ def test_the_cli_prints_every_error_one_per_line(tmp_path, capsys):
     assert main(["run", str(f)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert err[0].startswith(f"crashsim: input error: {f}: vehicles.A.tyres.cornering_coefficient: missing key")
-    assert err[1] == "1 more problem:"
+    assert err[1] == "2 more problems:"  # the schema's two and the impact law's, found after it: one run
     assert err[2].startswith("  vehicles.A.tyres.rolling_resistance: missing key")
+    assert err[3].startswith("  impact.mu: ")
 
 
 def test_the_schema_documents_required_if():
@@ -133,8 +134,8 @@ def test_required_if_is_for_optional_fields():
 
 
 def test_evidence_and_map_errors_come_together():
-    """An evidence item on an unknown body and a map line of no colour: two errors, one run (within the
-    evidence the first error only, for now)."""
+    """Two evidence items on unknown bodies and a map line of no colour: three errors, one run (every
+    evidence item is checked)."""
     d = _scene()
     d["evidence"] = {"rest": [{"body": "carC", "position": ["1 m", "1 m"], "tolerance": "1 m"},
                               {"body": "carD", "position": ["2 m", "2 m"], "tolerance": "1 m"}]}
@@ -142,4 +143,71 @@ def test_evidence_and_map_errors_come_together():
     with pytest.raises(ScenarioError) as info:
         scenario_from_dict(d, file="s.toml")
     text = str(info.value)
-    assert [p for p, _ in info.value.problems] == ["evidence.rest[0].body", "map.lines[0].color"], text
+    assert [p for p, _ in info.value.problems] == ["evidence.rest[0].body", "evidence.rest[1].body",
+                                                   "map.lines[0].color"], text
+
+
+def _several_kinds():
+    """A file with errors of every stage: the schema's (an unknown key, a value out of range, a value
+    of the wrong unit), an evidence section with four bad items of three kinds, a crush item without
+    its tolerance, a map line of no colour and a map north on a scene placed nowhere near a survey
+    (valid: no error)."""
+    d = _scene(vehicles__B__colour="red", impact__restitution=1.7)
+    d["runout"]["road_friction"] = "0.7 m"
+    d["evidence"] = {
+        "rest": [{"body": "carC", "position": ["1 m", "1 m"], "tolerance": "1 m"},
+                 {"body": "carA", "tolerance": "1 m"}],
+        "delta_v": [{"body": "carZ", "value": "5 m/s", "tolerance": "1 m/s"}],
+        "marks": [{"wheel": "carA/7", "points": [["0 m", "0 m"], ["5 m", "0 m"]], "tolerance": "0.3 m"}],
+        "crush": [{"body": "carB", "face": "right", "ees": "30 km/h"}],
+    }
+    d["map"] = {"north": "15 deg",
+                "lines": [{"style": "edge", "points": [["0 m", "0 m"], ["9 m", "0 m"]], "color": "notacolour"}]}
+    return d
+
+
+EXPECTED = {  # key -> a piece of its one line: the value as written and what is allowed
+    "vehicles.B.colour": "unknown key",
+    "impact.restitution": "1.7 is out of range; allowed [0, 1]",
+    "runout.road_friction": "0.7 m",
+    "evidence.rest[0].body": "unknown body 'carC'",
+    "evidence.rest[1].position": "needs position",
+    "evidence.marks[0].wheel": "no axle '7' on body 'carA'",
+    "evidence.delta_v[0].body": "unknown body 'carZ'",
+    "evidence.crush[0].tolerance": "give tolerance",
+    "map.lines[0].color": "'notacolour' is not a colour",
+}
+
+
+def test_schema_and_later_errors_of_several_kinds_come_in_one_run():
+    with pytest.raises(ScenarioValidationError) as info:
+        scenario_from_dict(_several_kinds(), file="s.toml")
+    got = dict(info.value.problems)
+    assert list(got) == list(EXPECTED), str(info.value)  # the schema's first, then the later ones
+    for key, piece in EXPECTED.items():
+        assert piece in got[key], (key, got[key])
+        assert "\n" not in got[key]
+
+
+def test_a_later_error_that_repeats_a_schema_error_is_left_out():
+    """A speed of the wrong unit is a schema error; the later "speed is missing" check on the same key is
+    its echo and is not reported again."""
+    d = _scene(vehicles__A__speed="30 m")
+    d["evidence"] = {"rest": [{"body": "carC", "position": ["1 m", "1 m"], "tolerance": "1 m"}]}
+    with pytest.raises(ScenarioValidationError) as info:
+        scenario_from_dict(d, file="s.toml")
+    fields = [p for p, _ in info.value.problems]
+    assert fields.count("vehicles.A.speed") == 1
+    assert "30 m" in dict(info.value.problems)["vehicles.A.speed"]
+
+
+def test_the_cli_prints_errors_of_every_stage_one_per_line_and_exits_2(tmp_path, capsys):
+    import tomli_w
+
+    f = tmp_path / "s.toml"
+    f.write_text(tomli_w.dumps(_several_kinds()))
+    assert main(["run", str(f)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[0].startswith(f"crashsim: input error: {f}: vehicles.B.colour: unknown key")
+    assert err[1] == f"{len(EXPECTED) - 1} more problems:"
+    assert [line.strip().split(": ")[0] for line in err[2:]] == list(EXPECTED)[1:]

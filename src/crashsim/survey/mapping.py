@@ -34,7 +34,7 @@ from .schema import MAP_LINE_STYLES, SURVEY
 from .underlay import georef_from_section
 
 __all__ = ["expand_survey", "load_scene_data", "read_survey_file", "survey_frame", "survey_section",
-           "is_expanded"]
+           "is_expanded", "is_placed"]
 
 _log = logging.getLogger("crashsim")
 _ROOT = Section("root", subsections=[SURVEY], description="survey only")
@@ -364,6 +364,12 @@ class _Group:
     def __init__(self, members):
         self.members = members
         self.layer = members[0].layer
+
+
+def is_placed(survey) -> bool:
+    """Whether a ``[survey]`` table places the scene on a survey (files, an underlay, a CRS or
+    imported items): its +y is then grid north, drawn as the scene figure's north arrow."""
+    return isinstance(survey, dict) and any(survey.get(k) for k in ("files", "underlay", "crs", "imported"))
 
 
 def expand_survey(data: dict, file: str | None = None) -> dict:

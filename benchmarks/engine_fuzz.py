@@ -14,8 +14,9 @@ tractor-semitrailer, doubles; mixed wheel states, scheduled changes, friction zo
 transfer on some, a road grade and cross-slope (and zones with their own) on about a third of the single
 vehicles; speeds up to 35 m/s with side slip, yaw and articulation), and scenes of 2-3
 such vehicles on crossing paths with guardrails and poles, which meet again (secondary
-impacts, sustained contact, stops).  Every input is valid, so every run must end without a hang
-or an exception.
+impacts, sustained contact, stops), and doubles with the converter dolly as a body of its own
+(an A-dolly or a yaw-locked C-dolly, self-steering axles free, locked or locked later).  Every
+input is valid, so every run must end without a hang or an exception.
 
 For each input: the compiled engine at rtol 1e-11 (atol 1e-13) is the reference; the SciPy
 engine (LSODA) at rtol 1e-6 and 1e-8 (the default of both engines) and the compiled engine
@@ -55,7 +56,7 @@ sys.path.insert(0, str(ROOT / "tests" / "fuzz"))
 
 from crashsim.motion import simulate_runout, simulate_scene  # noqa: E402
 from crashsim.motion.rollover import ROLL_EVENT_KINDS  # noqa: E402
-from random_runouts import random_case, random_scene  # noqa: E402
+from random_runouts import DOLLY_KINDS, random_case, random_scene  # noqa: E402
 
 SETTINGS = (("scipy", 1e-6), ("scipy", 1e-8), ("compiled", 1e-6), ("compiled", 1e-7), ("compiled", 1e-8))
 REFERENCE = ("compiled", 1e-11)
@@ -76,15 +77,21 @@ def _errors(r, ref):
 def _run(kind, case, engine, rtol):
     o = dataclasses.replace(case.options, engine=engine, rtol=rtol, atol=rtol / 100)
     t0 = time.process_time()
-    if kind == "single":
+    if kind in ("single", "dolly"):
         r = simulate_runout(case.vehicle, case.initial, case.wheels, case.road, o)
     else:
         r = simulate_scene(case.vehicles, case.initial, case.wheels, case.road, o, obstacles=case.obstacles)
     return r, time.process_time() - t0
 
 
+def _case(kind, seed, i):
+    if kind == "dolly":
+        return random_case(seed, i, kinds=DOLLY_KINDS)
+    return random_case(seed, i) if kind == "single" else random_scene(seed, i)
+
+
 def _case_rows(kind, seed, i):
-    case = random_case(seed, i) if kind == "single" else random_scene(seed, i)
+    case = _case(kind, seed, i)
     ref, _ = _run(kind, case, *REFERENCE)
     rows = []
     runs = {}
@@ -170,7 +177,7 @@ def main(argv=None) -> int:
     parser.add_argument("--out", type=Path, default=ROOT / "plots")
     args = parser.parse_args(argv)
     logging.disable(logging.WARNING)  # limits are counted in the table, not logged
-    n_single, n_scene = (6, 6) if args.quick else (100, 60)
+    n_single, n_scene, n_dolly = (6, 6, 4) if args.quick else (100, 60, 30)
     # warm-up: compile or load the kernels outside the timing
     _run("single", random_case(args.seed, 0), "compiled", 1e-6)
     _run("scene", random_scene(args.seed, 0), "compiled", 1e-6)
@@ -180,6 +187,8 @@ def main(argv=None) -> int:
         rows += _case_rows("single", args.seed, i)
     for i in range(n_scene):
         rows += _case_rows("scene", args.seed, i)
+    for i in range(n_dolly):
+        rows += _case_rows("dolly", args.seed, i)
     elapsed = time.perf_counter() - t0
     args.out.mkdir(exist_ok=True)
     keys = ["kind", "case", "engine", "rtol", "status", "ref_status", "pos_err_m", "head_err_deg", "nfev", "cpu_s",
@@ -194,11 +203,12 @@ def main(argv=None) -> int:
              f"{platform.machine()}, Python {platform.python_version()}; {elapsed:.0f} s.  Reference: the compiled "
              "engine at rtol 1e-11.  Errors are the largest over the bodies of a run; only runs at rest in both "
              "count for them.", ""]
-    for kind, n in (("single", n_single), ("scene", n_scene)):
+    for kind, n in (("single", n_single), ("scene", n_scene), ("dolly", n_dolly)):
         per_case = {r["case"]: r for r in rows if r["kind"] == kind}
         ci = [r["ci_agreement"] for r in per_case.values()]
         statuses = sorted({r["ref_status"] for r in per_case.values()})
-        title = "Single vehicles" if kind == "single" else "Scenes (2-3 vehicles, obstacles, secondary impacts)"
+        title = {"single": "Single vehicles", "scene": "Scenes (2-3 vehicles, obstacles, secondary impacts)",
+                 "dolly": "Doubles on an A- or C-dolly, self-steering axles"}[kind]
         counts = ", ".join(f"{s} {sum(r['ref_status'] == s for r in per_case.values())}" for s in statuses)
         lines += [f"## {title}: {n} inputs", "",
                   f"Reference statuses: {counts}.  "

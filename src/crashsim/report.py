@@ -91,8 +91,9 @@ def format_impact(result, system: str = "SI") -> str:
                  f"{fmt(result.tangential_impulse, 'impulse', s, 6)}, moment {fmt(moment, 'moment_impulse', s)}")
     lines.append("  " + _law_text(result))
     for name, h in result.hitches.items():
+        lock = "" if h.lock_moment is None else f"; yaw lock (C-dolly): moment {fmt(h.lock_moment, 'moment_impulse', s)}"
         lines.append(f"  hitch {name}: impulse on front body {_vec(h.impulse, 'impulse', s)} "
-                     f"(longitudinal {fmt(h.longitudinal, 'impulse', s)}, lateral {fmt(h.lateral, 'impulse', s)})")
+                     f"(longitudinal {fmt(h.longitudinal, 'impulse', s)}, lateral {fmt(h.lateral, 'impulse', s)}){lock}")
     for name, c in result.constraints.items():
         lines.append(f"  constraint {name!r} on {c.body}: impulse {fmt(c.impulse, 'impulse', s)}")
     for name, x in result.external.items():

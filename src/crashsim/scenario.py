@@ -117,6 +117,10 @@ BODY = Section("body", [
           description="Largest articulation before the bodies meet (jack-knife stop)"),
     Field("cg_height", Kind.LENGTH, required=False, minimum=0, exclusive_minimum=True, example="1.1 m",
           description="CG height above ground (only for the run-out's load transfer)"),
+    Field("yaw_locked", "bool", default=False,
+          description="The front hitch is locked in yaw at zero articulation: a C-dolly (two drawbars) on the trailer "
+                      "ahead, which must itself be towed (bodies[2] or later); free in pitch. Its articulation is 0, "
+                      "its yaw rate that of the body ahead, and an articulation_limit (e.g. from a preset) is not used"),
     Field("roll_coupled", "bool", default=False,
           description="The hitch towing this body carries roll moment (a fifth wheel, stiff in roll): with load "
                       "transfer its roll moment is shared with the towing body in proportion to the hitch's static "
@@ -157,6 +161,10 @@ def _wheel_fields(override: bool) -> list[Field]:
               description="Rolling-resistance coefficient f_r (rolling and braked wheels)"),
         Field("mu_factor", "float", minimum=0, maximum=2, exclusive_minimum=True, **opt, example="0.5",
               description="Multiplier on the road friction at this wheel (e.g. a flat tyre)"),
+        Field("self_steer_limit", Kind.ANGLE, minimum=0, maximum=math.pi / 2, **opt, example="20 deg",
+              description="Self-steering (castor) wheel: it follows its path with no lateral force while the "
+                          "steer angle that needs stays within +-this limit, and acts as a fixed wheel at the "
+                          "limit beyond it; \"0 deg\" locks it straight (as for reversing); steer is then not used"),
     ]
 
 
@@ -774,7 +782,7 @@ class RunoutSpec:
 
 
 _WHEEL_KEYS = ("state", "brake", "steer", "cornering_coefficient", "cornering_stiffness", "rolling_resistance",
-               "mu_factor")
+               "mu_factor", "self_steer_limit")
 
 
 def _given(d: dict) -> dict:
@@ -1042,7 +1050,19 @@ def _build_vehicle(name: str, v: dict, file: str | None) -> tuple[Vehicle, dict[
                        "belongs on the towed body, e.g. the semitrailer)", f"{key}.roll_coupled", file)
         if i == 0 and b["articulation"] != 0.0:
             raise _err("the first body has no front hitch to articulate about", f"{key}.articulation", file)
-        lim = b["articulation_limit"]
+        if b["yaw_locked"] and i < 2:
+            where = ("the first body has no front hitch" if i == 0 else
+                     f"the body ahead, {raw[0]['name']!r}, is the first body (a tractor or truck), not a trailer")
+            raise _err(f"yaw_locked = true: a C-dolly is yaw-locked to the trailer ahead, but {where}; allowed on "
+                       f"bodies[2] or later (a body towed by a towed body)", f"{key}.yaw_locked", file)
+        if b["yaw_locked"] and b["articulation"] != 0.0:
+            raise _err(f"articulation = {math.degrees(b['articulation']):.6g} deg on a yaw-locked body (C-dolly, "
+                       "yaw_locked = true): it cannot articulate; allowed 0 deg", f"{key}.articulation", file)
+        if b["yaw_locked"] and b["yaw_rate"] != raw[i - 1]["yaw_rate"]:
+            raise _err(f"yaw_rate = {b['yaw_rate']:.6g} rad/s on a yaw-locked body (C-dolly, yaw_locked = true) differs "
+                       f"from that of {raw[i - 1]['name']!r} ({raw[i - 1]['yaw_rate']:.6g} rad/s); allowed: the same",
+                       f"{key}.yaw_rate", file)
+        lim = None if b["yaw_locked"] else b["articulation_limit"]
         if i > 0 and lim is not None and abs(b["articulation"]) > lim:
             raise _err(f"articulation = {math.degrees(b['articulation']):.6g} deg exceeds the jack-knife stop of body "
                        f"{b['name']!r}; allowed [-{math.degrees(lim):.6g}, {math.degrees(lim):.6g}] deg "
@@ -1055,7 +1075,7 @@ def _build_vehicle(name: str, v: dict, file: str | None) -> tuple[Vehicle, dict[
         except ScenarioError as exc:
             raise _err(str(exc), key, file) from None
         if i > 0:
-            hitches.append(Hitch(tuple(raw[i - 1]["rear_hitch"]), tuple(b["front_hitch"]), b["articulation_limit"]))
+            hitches.append(Hitch(tuple(raw[i - 1]["rear_hitch"]), tuple(b["front_hitch"]), lim, b["yaw_locked"]))
     try:
         veh = Vehicle(name, tuple(bodies), tuple(hitches))
     except ScenarioError as exc:

@@ -39,6 +39,8 @@ def geometry_lines(g: dict, system: str = "SI") -> list[str]:
             lines.append(f"{what}: ({L(x)}, {L(y)}) from the CG")
     if g.get("articulation_limit") is not None:
         lines.append(f"articulation limit {format_value(g['articulation_limit'], 'angle', system)}")
+    if g.get("yaw_locked"):
+        lines.append("front hitch yaw-locked to the body ahead (C-dolly: no articulation)")
     return lines
 
 

@@ -171,11 +171,17 @@ class Hitch:
         Pin position in the rear body's axes [m] (kingpin ahead of the trailer CG, ``(3.991, 0)``).
     articulation_limit : float, optional
         Largest |articulation angle| [rad] before the bodies meet (jack-knife stop).
+    yaw_locked : bool
+        The joint is locked in yaw at zero articulation (a C-dolly's two drawbars on the trailer
+        ahead): a weld in the plane, free in pitch.  The run-out holds ``psi_front - psi_rear = 0``
+        by one more multiplier row (a moment on both bodies); ``articulation_limit`` is then
+        meaningless and must be None.  See ``docs/heavy-vehicles.md`` ("C-dollies").
     """
 
     front_point: tuple[float, float]
     rear_point: tuple[float, float]
     articulation_limit: float | None = None
+    yaw_locked: bool = False
 
     def __post_init__(self):
         object.__setattr__(self, "front_point", _point("hitch.front_point", self.front_point))
@@ -187,6 +193,10 @@ class Hitch:
                     f"must lie in (0, pi] rad, got {self.articulation_limit!r}", field="hitch.articulation_limit"
                 )
             object.__setattr__(self, "articulation_limit", lim)
+        object.__setattr__(self, "yaw_locked", bool(self.yaw_locked))
+        if self.yaw_locked and self.articulation_limit is not None:
+            raise ScenarioError("a yaw-locked hitch (C-dolly) does not articulate: it has no articulation_limit",
+                                field="hitch.articulation_limit")
 
 
 @dataclass(frozen=True)
@@ -210,6 +220,13 @@ class Vehicle:
         names = [b.name for b in self.bodies]
         if len(set(names)) != len(names):
             raise ScenarioError(f"body names must be unique, got {names}", field=f"{self.name}.bodies")
+        if self.hitches and self.hitches[0].yaw_locked:
+            raise ScenarioError(
+                f"the hitch of {self.bodies[1].name!r} is yaw-locked (a C-dolly), but the body ahead, "
+                f"{self.bodies[0].name!r}, is the first body, not a trailer; a C-dolly is locked to the trailer "
+                "ahead (allowed on the hitch of the third body or later)",
+                field=f"{self.name}.hitches",
+            )
         if any(b.is_fixed for b in self.bodies) and len(self.bodies) > 1:
             raise ScenarioError("a barrier (infinite mass) must be a vehicle of one body", field=f"{self.name}.bodies")
 

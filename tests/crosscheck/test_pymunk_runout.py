@@ -111,3 +111,23 @@ def test_first_order_convergence():
     assert np.all(np.diff(errors) < 0)
     order = np.polyfit(np.log(dts), np.log(errors), 1)[0]
     assert 0.7 <= order <= 1.4
+
+
+def test_c_dolly_with_a_self_steering_axle_against_pymunk():
+    """A double on a C-dolly (yaw lock: a pymunk GearJoint) whose axle steers itself within 25 deg:
+    pymunk converges on the same rest, first order, and keeps the dolly aligned with its trailer."""
+    from crashsim.vehicles import Axle, Body, Hitch, Vehicle
+
+    truck = Body("truck", 9000.0, 30000.0, axles=(Axle(2.2, 2.05), Axle(-2.4, 1.85, True)))
+    lead = Body("lead", 8000.0, 60000.0, axles=(Axle(-2.5, 1.85, True),))
+    dolly = Body("dolly", 1500.0, 1200.0, axles=(Axle(0.1, 1.85, True),))
+    second = Body("second", 9000.0, 55000.0, axles=(Axle(-3.0, 1.85, True),))
+    veh = Vehicle("D", (truck, lead, dolly, second), (Hitch((-3.2, 0.0), (3.5, 0.0)),
+                                                     Hitch((-4.2, 0.0), (2.3, 0.0), yaw_locked=True),
+                                                     Hitch((0.15, 0.0), (3.6, 0.0), 1.5)))
+    init = make_hitch_consistent(veh, chain_states(veh, (0.0, 0.0), 0.0, (11.0, 0.8), yaw_rates=[0.1, -0.2, -0.2, 0.3],
+                                                   articulation=[0.1, 0.0, -0.15]))
+    wheels = WheelSettings(default=WheelSetting("braked", brake=0.5, **TRUCK_TYRE),
+                           wheels={"dolly": WheelSetting("rolling", self_steer_limit=math.radians(25), **TRUCK_TYRE)})
+    ref, fine = _richardson_check(veh, init, wheels, Road(0.75), RunoutOptions(), 1e-3)
+    assert abs(fine.bodies["lead"].rest_heading - fine.bodies["dolly"].rest_heading) < 1e-3

@@ -25,10 +25,15 @@ from crashsim.motion import (FrictionZone, Road, RunoutOptions, ScheduledChange,
                              make_hitch_consistent)
 from crashsim.vehicles import Axle, Body, BodyState, Hitch, Vehicle, chain_states
 
-__all__ = ["Case", "KINDS", "random_case"]
+__all__ = ["Case", "KINDS", "DOLLY_KINDS", "random_case"]
 
 #: Vehicle kinds, each drawn equally often.
 KINDS = ("car", "car+trailer", "tractor-semitrailer", "doubles")
+#: Doubles with the converter dolly as a body of its own: an A-dolly (free in yaw) or a C-dolly
+#: (yaw-locked to the lead trailer), its axle self-steering in most cases (limit 10-40 deg, or 0:
+#: locked), sometimes locked later by a scheduled change, and sometimes a self-steering rear axle on
+#: the lead trailer (drawn only when asked for: the default kinds draw what they drew before).
+DOLLY_KINDS = ("doubles+dolly",)
 
 
 @dataclass(frozen=True)
@@ -117,6 +122,15 @@ def _draw_vehicle(rng, kind):
         return Vehicle("V", (tractor, semi), (Hitch(fw, kp, lim()),))
     semi, kp, rh = _semi(rng, "semi", _u(rng, 7.5, 9.5), True)
     pup, kp2, _ = _semi(rng, "pup", _u(rng, 7.5, 9.0), False)
+    if kind == "doubles+dolly":
+        c_dolly = rng.random() < 0.5
+        dmass = _u(rng, 1000, 1800)
+        dolly = Body("dolly", dmass, dmass * _u(rng, 0.6, 1.0), _u(rng, 2.8, 3.6), 2.4, (0.0, 0.0),
+                     (Axle(_u(rng, -0.2, 0.2), 1.85, True, "axle"),), _u(rng, 0.8, 1.0))
+        eye, fifth = (_u(rng, 2.0, 2.8), 0.0), (_u(rng, 0.0, 0.3), 0.0)
+        return Vehicle("V", (tractor, semi, dolly, pup),
+                       (Hitch(fw, kp, lim()), Hitch(rh, eye, None if c_dolly else lim(), yaw_locked=c_dolly),
+                        Hitch(fifth, kp2, lim())))
     return Vehicle("V", (tractor, semi, pup), (Hitch(fw, kp, lim()), Hitch(rh, kp2, lim())))
 
 
@@ -146,6 +160,30 @@ def _wheels(rng, vehicle):
                                          "cornering_coefficient": s.cornering_coefficient,
                                          "rolling_resistance": s.rolling_resistance}))
     return WheelSettings(default=default, wheels=overrides, schedule=schedule)
+
+
+def _self_steering(wheels: WheelSettings, vehicle: Vehicle, seed: int, i: int) -> tuple[WheelSettings, str]:
+    """Self-steering axles on a doubles+dolly case, from a generator of their own."""
+    rng = np.random.default_rng([seed, i, 52])
+    overrides = dict(wheels.wheels)
+    schedule = list(wheels.schedule)
+    base = wheels.default
+    tyre = dict(cornering_coefficient=base.cornering_coefficient or 6.0, rolling_resistance=base.rolling_resistance or 0.008)
+    label = ""
+    if rng.random() < 0.8:
+        lim = 0.0 if rng.random() < 0.15 else math.radians(_u(rng, 10, 40))
+        state = str(rng.choice(["rolling", "braked"]))
+        overrides["dolly"] = WheelSetting(state, brake=_u(rng, 0.05, 0.8) if state == "braked" else 0.0,
+                                          self_steer_limit=lim, **tyre)
+        label = f", dolly self-steering {math.degrees(lim):.0f} deg"
+        if rng.random() < 0.3:
+            schedule.append(ScheduledChange(_u(rng, 0.2, 2.0), "dolly", {"self_steer_limit": 0.0}))
+            label += " (locked later)"
+    if rng.random() < 0.3:
+        overrides[f"semi/{len(vehicle.body('semi').axles) - 1}"] = WheelSetting(
+            "rolling", self_steer_limit=math.radians(_u(rng, 5, 25)), **tyre)
+        label += ", self-steering lead-trailer axle"
+    return WheelSettings(default=base, wheels=overrides, schedule=schedule), label
 
 
 def _road(rng, start, course, speed):
@@ -214,7 +252,7 @@ def random_case(seed: int, i: int, *, engine: str = "scipy", kinds=KINDS) -> Cas
     course = heading + slip
     nb = len(vehicle.bodies)
     yaw = [float(rng.normal(0, 0.6)) for _ in range(nb)]
-    art = [float(rng.uniform(-0.6, 0.6) * h.articulation_limit) for h in vehicle.hitches]
+    art = [0.0 if h.yaw_locked else float(rng.uniform(-0.6, 0.6) * h.articulation_limit) for h in vehicle.hitches]
     states = chain_states(vehicle, (0.0, 0.0), heading, speed * np.array([math.cos(course), math.sin(course)]),
                           yaw, art)
     # perturb the rear bodies' yaw rates (hitch-consistent again after the projection)
@@ -224,6 +262,10 @@ def random_case(seed: int, i: int, *, engine: str = "scipy", kinds=KINDS) -> Cas
     options = RunoutOptions(engine=engine, load_transfer=lt)
     label = f"seed {seed} case {i}: {kind}, {speed:.1f} m/s" + (", load transfer" if lt else "")
     wheels = _wheels(rng, vehicle)
+    if kind == "doubles+dolly":
+        label += ", C-dolly" if vehicle.hitches[1].yaw_locked else ", A-dolly"
+        wheels, more = _self_steering(wheels, vehicle, seed, i)
+        label += more
     road, slope = _sloped(_road(rng, np.zeros(2), course, speed), seed, i)
     (vehicle,), options, roll = _rollover((vehicle,), options, seed, i, 23)
     return Case(label + slope + roll, vehicle, initial, wheels, road, options)

@@ -28,11 +28,12 @@ import pytest
 
 from crashsim.motion import ContactModel, simulate_runout, simulate_scene
 from crashsim.motion.rollover import ROLL_EVENT_KINDS
-from random_runouts import random_case, random_scene
+from random_runouts import DOLLY_KINDS, random_case, random_scene
 
 SEED = 20261124
 N_SINGLE = 16
 N_SCENES = 20
+N_DOLLIES = 8
 POS_TOL = 0.01  # m
 HEADING_TOL = math.radians(0.1)
 IMPACT_TOL = 1e-3  # s
@@ -106,6 +107,17 @@ def _check_engines(run, options, label):
 def test_single_vehicle_engines_agree(i):
     c = random_case(SEED, i)
     _check_engines(lambda o: simulate_runout(c.vehicle, c.initial, c.wheels, c.road, o), c.options, c.label)
+
+
+@pytest.mark.parametrize("i", range(N_DOLLIES))
+def test_dollies_and_self_steering_axles_engines_agree(i):
+    """Doubles with an A- or C-dolly (yaw-locked), self-steering axles free, locked, or locked later."""
+    c = random_case(SEED, i, kinds=DOLLY_KINDS)
+    runs = _check_engines(lambda o: simulate_runout(c.vehicle, c.initial, c.wheels, c.road, o), c.options, c.label)
+    if c.vehicle.hitches[1].yaw_locked:  # the C-dolly stays aligned with the lead trailer to the end
+        for r in runs.values():
+            semi, dolly = r.bodies["semi"], r.bodies["dolly"]
+            assert abs(math.remainder(semi.rest_heading - dolly.rest_heading, 2 * math.pi)) < 1e-6, c.label
 
 
 @pytest.mark.parametrize("i", range(N_SCENES))

@@ -9,7 +9,9 @@ Scenes
 ------
 Each vehicle is a chain of rigid bodies: ``car`` (1 body), ``car+trailer`` and
 ``tractor+semitrailer`` (2), ``doubles`` (tractor, semitrailer, second trailer with its dolly
-as one body: 3) and ``doubles+dolly`` (the converter dolly as a body of its own: 4). Vehicle 2
+as one body: 3), ``doubles+dolly`` (the converter dolly as a body of its own, an A-dolly: 4) and
+``doubles+c-dolly`` (the same with a C-dolly, yaw-locked to the trailer ahead and aligned with it:
+4). Vehicle 2
 may be a rigid barrier. Masses 500-40000 kg, radii of gyration 0.4-4 m, hitch pins 0.2-9 m
 from the CGs with up to 0.4 m lateral offset, articulation |angle| < 170 deg, any heading and
 travel direction, speeds 0-40 m/s, yaw rates |.| <= 2 rad/s.
@@ -37,7 +39,7 @@ EPS = float(np.finfo(float).eps)  # 2.22e-16
 EXAMPLES = int(os.environ.get("CRASHSIM_PROPERTY_EXAMPLES", "100"))
 SETTINGS = settings(max_examples=EXAMPLES, deadline=None)
 
-KINDS = {"car": 1, "car+trailer": 2, "tractor+semitrailer": 2, "doubles": 3, "doubles+dolly": 4}
+KINDS = {"car": 1, "car+trailer": 2, "tractor+semitrailer": 2, "doubles": 3, "doubles+dolly": 4, "doubles+c-dolly": 4}
 MAX_ARTICULATION = math.radians(169.9)
 
 
@@ -101,10 +103,10 @@ def vehicles(draw, tag: str, kind: str):
         k = draw(st.floats(0.4, 4.0))  # radius of gyration [m]
         bodies.append(Body(f"{tag}{i}", m, m * k * k))
     hitches = []
-    for _ in range(n - 1):
+    for j in range(n - 1):
         front = (draw(st.floats(-7.0, -0.2)), draw(st.floats(-0.4, 0.4)))
         rear = (draw(st.floats(0.2, 9.0)), draw(st.floats(-0.4, 0.4)))
-        hitches.append(Hitch(front, rear))
+        hitches.append(Hitch(front, rear, yaw_locked=kind == "doubles+c-dolly" and j == 1))
     return Vehicle(tag, tuple(bodies), tuple(hitches))
 
 
@@ -123,6 +125,10 @@ def vehicle_states(draw, vehicle: Vehicle, contact_body: str, contact_point, *, 
     travel = heading + draw(st.floats(-math.pi, math.pi))
     yaw = [draw(st.floats(-max_yaw, max_yaw)) for _ in range(n)]
     art = [draw(st.floats(-MAX_ARTICULATION, MAX_ARTICULATION)) for _ in range(n - 1)]
+    for j, h in enumerate(vehicle.hitches):
+        if h.yaw_locked:  # a C-dolly is aligned with the trailer ahead and turns with it
+            art[j] = 0.0
+            yaw[j + 1] = yaw[j]
     states = chain_states(vehicle, (0.0, 0.0), heading, (speed * math.cos(travel), speed * math.sin(travel)),
                           yaw_rates=yaw, articulation=art)
     s = states[contact_body]
@@ -261,7 +267,7 @@ def impulses_on_bodies(problem: ImpactProblem, result):
     Returns ``{body: [(impulse vector, lever arm from the body CG), ...]}`` and
     ``{body: moment impulse}`` (pure couples). Crush: +P on body 1, -P on body 2 at the
     contact point, +M / -M; hitch: the reported impulse on the front body at its pin, minus
-    it on the rear body at its pin; constraints: their reported vectors; known external
+    it on the rear body at its pin, and a yaw lock's moment impulse +L / -L; constraints: their reported vectors; known external
     impulses as given.
     """
     forces = {b.name: [] for b in problem.bodies}
@@ -280,6 +286,10 @@ def impulses_on_bodies(problem: ImpactProblem, result):
         R = np.asarray(result.hitches[name].impulse, float)
         forces[front].append((R, af))
         forces[rear].append((-R, ar))
+        lock = result.hitches[name].lock_moment
+        if lock is not None:
+            couples[front] += lock
+            couples[rear] -= lock
     for i, c in enumerate(problem.constraints):
         forces[c.body].append((np.asarray(result.constraints[constraint_key(problem, i)].vector, float),
                                arm(c.body, c.point)))

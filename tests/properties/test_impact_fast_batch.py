@@ -65,7 +65,7 @@ RTOL = 1e-10
 CTOL = 8.0
 LAWS = ("no_slide", "ratio", "friction")
 SOLVE_KEYS = ("velocity", "yaw_rate", "impulses", "normal_impulse", "tangential_impulse", "moment_impulse", "mu",
-              "mu_max", "sliding", "hitch_impulse", "constraint_impulse", "closing_velocity", "separation_normal",
+              "mu_max", "sliding", "hitch_impulse", "lock_impulse", "constraint_impulse", "closing_velocity", "separation_normal",
               "separation_tangential", "ke_before", "ke_after", "normal", "tangent", "ok", "condition_1norm",
               "approach_tangential", "no_slide_normal")
 

@@ -94,13 +94,17 @@ def test_system_momentum_changes_only_by_external_impulses(scene):
 @SETTINGS
 @given(scenes())
 def test_pin_velocities_equal_after_impact(scene):
-    """Eq. 3: both bodies' material points at each hitch pin move alike after the impact."""
+    """Eq. 3: both bodies' material points at each hitch pin move alike after the impact; the two
+    bodies of a yaw-locked hitch (C-dolly) turn alike."""
     p, r = scene.problem, scene.result
     vs = velocity_scale(p, r)
     for name, front, rear, af, ar in hitch_pins(p):
         vf = velocity_at_arm(r.bodies[front].velocity, r.bodies[front].yaw_rate, af)
         vr = velocity_at_arm(r.bodies[rear].velocity, r.bodies[rear].yaw_rate, ar)
         assert np.all(np.abs(vf - vr) <= CONDITION_RTOL * vs), (name, vf, vr, vs)
+        if r.hitches[name].lock_moment is not None:
+            dw = abs(r.bodies[front].yaw_rate - r.bodies[rear].yaw_rate)
+            assert dw * max(np.hypot(*af), np.hypot(*ar), 1.0) <= CONDITION_RTOL * vs, (name, dw, vs)
 
 
 @SETTINGS

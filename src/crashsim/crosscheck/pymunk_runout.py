@@ -144,6 +144,10 @@ def simulate_runout_pymunk(
             stop = pymunk.RotaryLimitJoint(bodies[j], bodies[j + 1], -hitch.articulation_limit, hitch.articulation_limit)
             stop.collide_bodies = False
             space.add(stop)
+        if hitch.yaw_locked:  # a C-dolly: no relative rotation (a gear joint of ratio 1, phase 0)
+            lock = pymunk.GearJoint(bodies[j], bodies[j + 1], 0.0, 1.0)
+            lock.collide_bodies = False
+            space.add(lock)
 
     def read_state() -> np.ndarray:
         out = np.empty(L.size)

@@ -15,10 +15,11 @@ velocities are (paper Eqs. 1, 2)
 with Minv = diag(1/m, 1/m, 1/I) per body (0 for a rigid barrier: exact, not a large mass).
 The unknowns are, in this order,
 
-    lambda = (P_n, P_t, M, R_1x, R_1y, ..., R_hx, R_hy, C_1, ..., C_c)
+    lambda = (P_n, P_t, M, R_1x, R_1y, ..., R_hx, R_hy, L_1, ..., L_l, C_1, ..., C_c)
 
 (crush normal and tangential impulse on body 1, moment impulse on body 1, the impulse of
-each hitch on its front body, and each velocity constraint's impulse along its direction).
+each hitch on its front body, the moment impulse of each yaw-locked hitch (a C-dolly) on its
+front body, and each velocity constraint's impulse along its direction).
 The same rows J_k give the velocities the conditions speak of: J_n Q is the normal
 velocity of body 1's contact point relative to body 2's, J_h Q the pin-velocity mismatch.
 With W = J Minv J^T and u = J (q + Minv p_ext) the conditions are linear in lambda:
@@ -28,6 +29,7 @@ With W = J Minv J^T and u = J (q + Minv p_ext) the conditions are linear in lamb
     impulse ratio (Eq. 4)    P_t - mu P_n = 0
     moment (Eq. 6)           e' M - (1 + e') Ibar J_M Q = 0        (e' = -1 gives M = 0)
     hitch pins (Eq. 3)       W_h lambda = -u_h
+    yaw locks                W_l lambda = -u_l                    (no relative yaw rate after)
     constraints (Eq. 7)      W_c lambda = value - u_c
 
 Eq. 6 is used with the sign that makes e' a restitution coefficient (see
@@ -84,6 +86,9 @@ class ImpactStructure:
     hitches : tuple of (int, int)
         (front, rear) body indices of each hitch.
     hitch_names : tuple of str
+    locks : tuple of (int, int)
+        (front, rear) body indices of each yaw-locked hitch (C-dolly): a moment impulse keeps
+        their yaw rates equal.
     constraint_bodies : tuple of int
     constraint_names : tuple of str
     external_bodies : tuple of int
@@ -100,6 +105,7 @@ class ImpactStructure:
     body2: int
     hitches: tuple[tuple[int, int], ...] = ()
     hitch_names: tuple[str, ...] = ()
+    locks: tuple[tuple[int, int], ...] = ()
     constraint_bodies: tuple[int, ...] = ()
     constraint_names: tuple[str, ...] = ()
     external_bodies: tuple[int, ...] = ()
@@ -112,7 +118,7 @@ class ImpactStructure:
 
     @property
     def n_unknowns(self) -> int:
-        return 3 + 2 * len(self.hitches) + len(self.constraint_bodies)
+        return 3 + 2 * len(self.hitches) + len(self.locks) + len(self.constraint_bodies)
 
     def equation_labels(self) -> tuple[str, ...]:
         """Human-readable label of each equation row (for error messages)."""
@@ -123,6 +129,7 @@ class ImpactStructure:
         labels = ["restitution (Eq. 5)", t, "moment restitution (Eq. 6)"]
         for name in self.hitch_names:
             labels += [f"hitch {name!r} pin velocity x (Eq. 3)", f"hitch {name!r} pin velocity y (Eq. 3)"]
+        labels += [f"yaw lock {self.body_names[f]}-{self.body_names[r]}" for f, r in self.locks]
         labels += [f"velocity constraint {name!r} (Eq. 7)" for name in self.constraint_names]
         return tuple(labels)
 
@@ -230,6 +237,10 @@ def _assemble(S: ImpactStructure, A: ImpactArrays):
             _put(J, k, f, u, rf, 1.0)
             _put(J, k, r, u, rr, -1.0)
     k0 = 3 + 2 * len(S.hitches)
+    for l, (f, r) in enumerate(S.locks):
+        J[:, k0 + l, f, 2] += 1.0
+        J[:, k0 + l, r, 2] -= 1.0
+    k0 += len(S.locks)
     for c, b in enumerate(S.constraint_bodies):
         d = np.stack([np.cos(A.constraint_direction[:, c]), np.sin(A.constraint_direction[:, c])], -1)
         _put(J, k0 + c, b, d, A.constraint_point[:, c] - A.position[:, b], 1.0)
@@ -361,6 +372,7 @@ def _solve_chunk(S: ImpactStructure, A: ImpactArrays, condition: bool) -> dict[s
         ``velocity`` (B, n, 2), ``yaw_rate`` (B, n), ``impulses`` (B, K) in the unknown order,
         ``normal_impulse``, ``tangential_impulse``, ``moment_impulse``, ``mu``, ``mu_max`` (B,),
         ``sliding`` (B,) bool, ``hitch_impulse`` (B, h, 2) on the front body,
+        ``lock_impulse`` (B, l) the moment impulse of each yaw lock on its front body [N m s],
         ``constraint_impulse`` (B, c), ``closing_velocity`` (B,) (relative normal velocity
         before, < 0 when approaching), ``separation_normal``/``separation_tangential`` (B,)
         relative contact-point velocities after, ``ke_before``/``ke_after`` (B, n) [J],
@@ -405,8 +417,9 @@ def _solve_chunk(S: ImpactStructure, A: ImpactArrays, condition: bool) -> dict[s
     Mat[:, 2, 2] += ep
     rhs[:, 2] = (1.0 + ep) * ibar * u_free[:, 2]
     k0 = 3 + 2 * len(S.hitches)
+    kc = k0 + len(S.locks)
     if S.constraint_bodies:
-        rhs[:, k0:] = A.constraint_value - u_free[:, k0:]
+        rhs[:, kc:] = A.constraint_value - u_free[:, kc:]
 
     # First pass: no sliding at separation -> mu_max (needed by every law for the report).
     lam_ns, ok, Ms, cond1 = _solve(Mat, rhs)
@@ -475,7 +488,8 @@ def _solve_chunk(S: ImpactStructure, A: ImpactArrays, condition: bool) -> dict[s
         "mu_max": mu_max,
         "sliding": sliding,
         "hitch_impulse": lam[:, 3:k0].reshape(B, len(S.hitches), 2),
-        "constraint_impulse": lam[:, k0:],
+        "lock_impulse": lam[:, k0:kc],
+        "constraint_impulse": lam[:, kc:],
         "closing_velocity": u0[:, 0],
         "separation_normal": u_after[:, 0],
         "separation_tangential": u_after[:, 1],
@@ -507,7 +521,8 @@ def kernel_structure(S: ImpactStructure) -> tuple:
         meta = kernel.Structure(np.asarray(S.fixed, dtype=np.bool_), S.body1, S.body2, kernel.LAW_CODES[S.tangential],
                                 np.asarray(S.hitches, dtype=np.int64).reshape(len(S.hitches), 2),
                                 np.asarray(S.constraint_bodies, dtype=np.int64),
-                                np.asarray(S.external_bodies, dtype=np.int64))
+                                np.asarray(S.external_bodies, dtype=np.int64),
+                                np.asarray(S.locks, dtype=np.int64).reshape(len(S.locks), 2))
         object.__setattr__(S, "_kernel_meta", meta)  # a cache, not a field: eq, hash, replace unaffected
     return meta
 
@@ -555,11 +570,13 @@ def unpack(S: ImpactStructure, Y: np.ndarray, B: int, extras: bool = False):
     out["ok"] = out["ok"] != 0.0
     lam = out["impulses"]
     k0 = 3 + 2 * h
+    kc = k0 + len(S.locks)
     out["normal_impulse"] = lam[:, 0]
     out["tangential_impulse"] = lam[:, 1]
     out["moment_impulse"] = lam[:, 2]
     out["hitch_impulse"] = lam[:, 3:k0].reshape(B, h, 2)
-    out["constraint_impulse"] = lam[:, k0:]
+    out["lock_impulse"] = lam[:, k0:kc]
+    out["constraint_impulse"] = lam[:, kc:]
     work = out.pop("work", None)
     reason = out.pop("reason", None)
     return out, work, (reason.astype(np.int64) if reason is not None else None)
@@ -605,13 +622,14 @@ def solve_packed(S: ImpactStructure, X: np.ndarray) -> dict:
         _LIMITS = kernel.limits()
     meta = S.__dict__.get("_packed_meta")
     if meta is None:
-        fixed, b1, b2, law, hitches, cb, xb = kernel_structure(S)
+        fixed, b1, b2, law, hitches, cb, xb, locks = kernel_structure(S)
         ints = np.array([S.n_bodies, len(S.hitches), len(S.constraint_bodies), len(S.external_bodies), b1, b2, law],
                         dtype=np.int64)
         meta = (ints, fixed, hitches, cb, xb, flat_spec(output_shapes(S.n_bodies, S.n_unknowns, True)),
-                flat_spec(input_shapes(S.n_bodies, len(S.hitches), len(S.constraint_bodies), len(S.external_bodies))))
+                flat_spec(input_shapes(S.n_bodies, len(S.hitches), len(S.constraint_bodies), len(S.external_bodies))),
+                locks)
         object.__setattr__(S, "_packed_meta", meta)
-    Y = kernel.solve_packed(meta[0], meta[1], meta[2], meta[3], meta[4], X, _LIMITS, True)
+    Y = kernel.solve_packed(meta[0], meta[1], meta[2], meta[3], meta[4], meta[7], X, _LIMITS, True)
     return _flat_fields(meta[5], Y.tolist())
 
 

@@ -72,8 +72,8 @@ L_COND, L_MU_MAX, L_REL_IMPULSE, L_REL_RATIO, L_REL_ENERGY = range(5)
 #: bool (barrier bodies), the bodies ``body1``, ``body2`` of the crush surface, the tangential
 #: ``law`` code (:data:`LAW_CODES`), ``hitches`` (h, 2) front and rear body of each hitch,
 #: ``cbodies`` (c,) the body of each velocity constraint, ``xbodies`` (x,) the body of each
-#: known external impulse.
-Structure = namedtuple("Structure", ["fixed", "body1", "body2", "law", "hitches", "cbodies", "xbodies"])
+#: known external impulse, ``locks`` (l, 2) front and rear body of each yaw-locked hitch (C-dolly).
+Structure = namedtuple("Structure", ["fixed", "body1", "body2", "law", "hitches", "cbodies", "xbodies", "locks"])
 
 #: The numbers of a batch of B items, one array per field of :class:`crashsim.impact.core.ImpactArrays`
 #: (same names, shapes and SI units; C order, float64).
@@ -147,6 +147,12 @@ def _rows(S, A, i, J, rowb):
         rowb[kx, 0], rowb[kx, 1] = min(f, r), max(f, r)
         rowb[ky, 0], rowb[ky, 1] = min(f, r), max(f, r)
     k0 = 3 + 2 * hitches.shape[0]
+    for l in range(S.locks.shape[0]):  # yaw locks: the relative yaw rate of the two bodies
+        f, r = S.locks[l, 0], S.locks[l, 1]
+        J[k0 + l, f, 2] += 1.0
+        J[k0 + l, r, 2] -= 1.0
+        rowb[k0 + l, 0], rowb[k0 + l, 1] = min(f, r), max(f, r)
+    k0 += S.locks.shape[0]
     for c in range(cbodies.shape[0]):
         b = cbodies[c]
         dx, dy = math.cos(cdir[i, c]), math.sin(cdir[i, c])
@@ -267,7 +273,7 @@ def impulse_work_item(S, A, J, rowb, v1, w1, lam, i, work):
     fixed, hitches, xbodies = S.fixed, S.hitches, S.xbodies
     position, v0, w0, xpoint, ximp = A.position, A.velocity, A.yaw_rate, A.external_point, A.external_impulse
     K = lam.shape[1]
-    k0 = 3 + 2 * hitches.shape[0]
+    k0 = K - S.cbodies.shape[0]  # the hitch pins and the yaw locks are the hitches' work
     work[i, 3] = 0.0
     work[i, 4] = 0.0
     for k in range(K):
@@ -399,7 +405,7 @@ def out_size(n, K, extras):
 
 
 @njit(**_JIT)
-def solve_packed(meta, fixed, hitches, cbodies, xbodies, X, limits, extras):
+def solve_packed(meta, fixed, hitches, cbodies, xbodies, locks, X, limits, extras):
     """:func:`solve_batch` on inputs packed field by field into one float64 vector X (the order of
     ``core.ImpactArrays``' fields; ``meta`` = (n, h, c, x, body1, body2, law)): the single solve's
     entry point (four array arguments instead of nineteen)."""
@@ -444,7 +450,7 @@ def solve_packed(meta, fixed, hitches, cbodies, xbodies, X, limits, extras):
     xpoint = X[o:o + 2 * B * x].reshape((B, x, 2))
     o += 2 * B * x
     ximp = X[o:o + 2 * B * x].reshape((B, x, 2))
-    S = Structure(fixed, meta[4], meta[5], meta[6], hitches, cbodies, xbodies)
+    S = Structure(fixed, meta[4], meta[5], meta[6], hitches, cbodies, xbodies, locks)
     A = Items(mass, inertia, position, heading, velocity, yaw_rate, hfp, hrp, point, normal_angle, tangent_sign,
               restitution, law_value, moment_restitution, cpoint, cdir, cval, xpoint, ximp)
     return solve_batch(S, A, limits, extras)
@@ -638,7 +644,7 @@ def solve_batch(S, A, limits, extras):
     (``core.OUT_LAYOUT``; flags as 0.0 / 1.0); ``extras``: with the work (B, 6) and the
     admissibility code (B,) of every item."""
     B, n = A.mass.shape
-    K = 3 + 2 * S.hitches.shape[0] + S.cbodies.shape[0]
+    K = 3 + 2 * S.hitches.shape[0] + S.locks.shape[0] + S.cbodies.shape[0]
     Y = np.empty(B * out_size(n, K, extras))
     v_out, w_out, lam_out, sc, ke0_out, ke1_out, normal, tangent, cond_out, work_out, reason_out = \
         _out_views(Y, B, n, K, extras)

@@ -184,11 +184,16 @@ class BodyImpact:
 
 @dataclass(frozen=True)
 class HitchImpulse:
-    """Impulse of one hitch on its front body (the rear body receives the opposite) [N s]."""
+    """Impulse of one hitch on its front body (the rear body receives the opposite) [N s].
+
+    ``lock_moment``: for a yaw-locked hitch (C-dolly), the moment impulse of the lock on the front
+    body [N m s] (the rear body receives the opposite); None for a pin free in yaw.
+    """
 
     name: str
     impulse: np.ndarray
     front_heading: float
+    lock_moment: float | None = None
 
     @property
     def longitudinal(self) -> float:
@@ -200,8 +205,11 @@ class HitchImpulse:
         return float(rotate(self.impulse, -self.front_heading)[1])
 
     def to_dict(self) -> dict:
-        return {"impulse": [float(v) for v in self.impulse], "magnitude": float(np.hypot(*self.impulse)),
-                "longitudinal": self.longitudinal, "lateral": self.lateral}
+        out = {"impulse": [float(v) for v in self.impulse], "magnitude": float(np.hypot(*self.impulse)),
+               "longitudinal": self.longitudinal, "lateral": self.lateral}
+        if self.lock_moment is not None:
+            out["lock_moment_impulse"] = float(self.lock_moment)
+        return out
 
 
 @dataclass(frozen=True)
@@ -314,9 +322,11 @@ class ImpactResult:
         ke1 = out["ke_after"]
         bodies = LazyDict(functools.partial(_body_impacts, S, inp, out, px, py))
         vnames = S.vehicle_names
-        hitches = {nm: HitchImpulse(nm, np.array(lam[3 + 2 * j:5 + 2 * j]), heading[S.hitches[j][0]])
+        locks = {pair: 3 + 2 * len(S.hitches) + l for l, pair in enumerate(S.locks)}
+        hitches = {nm: HitchImpulse(nm, np.array(lam[3 + 2 * j:5 + 2 * j]), heading[S.hitches[j][0]],
+                                    float(lam[locks[S.hitches[j]]]) if S.hitches[j] in locks else None)
                    for j, nm in enumerate(S.hitch_names)}
-        k0 = 3 + 2 * len(S.hitches)
+        k0 = 3 + 2 * len(S.hitches) + len(S.locks)
         cons = {}
         for c, nm in enumerate(S.constraint_names):
             d = inp["constraint_direction"][c]

@@ -33,7 +33,8 @@ _STRUCTURES_MAX = 256
 def _structure_key(problem: ImpactProblem) -> tuple:
     """Everything :class:`ImpactStructure` is made of: names, barriers, contact bodies, the
     constraints' and known impulses' bodies and names, the tangential law."""
-    return (tuple((v.name, tuple((b.name, b.is_fixed) for b in v.bodies)) for v in problem.vehicles),
+    return (tuple((v.name, tuple((b.name, b.is_fixed) for b in v.bodies), tuple(h.yaw_locked for h in v.hitches))
+                  for v in problem.vehicles),
             problem.body1, problem.body2, tuple((c.body, c.name) for c in problem.constraints),
             tuple((x.body, x.name) for x in problem.external), problem.surface.tangential.kind)
 
@@ -53,11 +54,13 @@ def _build_structure(problem: ImpactProblem) -> ImpactStructure:
     bodies = problem.bodies
     names = tuple(b.name for b in bodies)
     index = {nm: i for i, nm in enumerate(names)}
-    hitches, hnames = [], []
+    hitches, hnames, locks = [], [], []
     for v in problem.vehicles:
-        for a, b in zip(v.bodies[:-1], v.bodies[1:]):
+        for a, b, h in zip(v.bodies[:-1], v.bodies[1:], v.hitches):
             hitches.append((index[a.name], index[b.name]))
             hnames.append(f"{a.name}-{b.name}")
+            if h.yaw_locked:
+                locks.append((index[a.name], index[b.name]))
     cons = problem.constraints
     ext = problem.external
     return ImpactStructure(
@@ -69,6 +72,7 @@ def _build_structure(problem: ImpactProblem) -> ImpactStructure:
         body2=index[problem.body2],
         hitches=tuple(hitches),
         hitch_names=tuple(hnames),
+        locks=tuple(locks),
         constraint_bodies=tuple(index[c.body] for c in cons),
         constraint_names=tuple(c.name or f"constraint {i + 1}" for i, c in enumerate(cons)),
         external_bodies=tuple(index[x.body] for x in ext),

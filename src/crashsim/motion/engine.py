@@ -70,6 +70,8 @@ _WALL_CHECK_EVALUATIONS = 256
 # Initial pin gap [m] and pin velocity mismatch (relative to 1 + speed) [m/s] accepted.
 _PIN_GAP_TOL = 1e-3
 _PIN_VELOCITY_TOL = 1e-6
+#: Largest initial articulation [rad] at a yaw-locked hitch (C-dolly): the pins' own tolerance over a metre.
+_YAW_LOCK_TOL = 1e-3
 #: Absolute tolerance of the contact work integrated with the state (SciPy engine), relative to
 #: the kinetic energy at the start of the run: the ledger is to close to 1e-6 of it.
 _WORK_ATOL = 1e-9
@@ -681,6 +683,16 @@ def check_scene_hitches(model: SceneModel, y: np.ndarray) -> None:
                 f"{allowed:.3g} m/s); make the states hitch-consistent first with crashsim.motion.make_hitch_consistent()",
                 field=f"initial[{rear!r}].velocity")
         lim = hitch[j, 4]
+        if hitch[j, 5] != 0.0:  # yaw-locked (C-dolly): aligned, turning together
+            theta = math.remainder(float(y[L.psi][f] - y[L.psi][r]), 2 * math.pi)
+            if abs(theta) > _YAW_LOCK_TOL:
+                raise ScenarioError(f"initial articulation {math.degrees(theta):.4g} deg at a yaw-locked hitch (C-dolly); "
+                                    f"allowed 0 deg (within {_YAW_LOCK_TOL:g} rad)", field=f"initial[{rear!r}].heading")
+            if abs(wf - wr) > allowed:
+                raise ScenarioError(f"yaw rates of {front!r} and {rear!r}, joined by a yaw-locked hitch (C-dolly), differ "
+                                    f"by {abs(wf - wr):.4g} rad/s (allowed <= {allowed:.3g} rad/s); make the states "
+                                    "consistent first with crashsim.motion.make_hitch_consistent()",
+                                    field=f"initial[{rear!r}].yaw_rate")
         if not math.isnan(lim):
             theta = math.remainder(float(y[L.psi][f] - y[L.psi][r]), 2 * math.pi)
             if abs(theta) > lim + 1e-9:

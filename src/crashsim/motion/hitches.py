@@ -55,6 +55,7 @@ __all__ = [
     "make_hitch_consistent",
     "hitch_rows",
     "hitch_state",
+    "yaw_locks",
     "check_pin_gaps",
     "project_velocities",
     "reference_lengths",
@@ -178,8 +179,15 @@ def _solve_small(A: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.linalg.solve(A, b[..., None])[..., 0]
 
 
+def yaw_locks(vehicle: Vehicle) -> tuple[tuple[int, float], ...]:
+    """The yaw-locked hitches of ``vehicle`` (C-dollies) as locks for :func:`hitch_rows`: (hitch index, 0 rad)."""
+    return tuple((j, 0.0) for j, h in enumerate(vehicle.hitches) if h.yaw_locked)
+
+
 def hitch_state(vehicle: Vehicle, layout: StateLayout, y: np.ndarray, locks=()):
     """:func:`hitch_rows` for one state vector ``y`` of ``vehicle`` (not a hot path).
+
+    The rows of the yaw-locked hitches (C-dollies) follow those of ``locks``.
 
     Returns
     -------
@@ -189,6 +197,7 @@ def hitch_state(vehicle: Vehicle, layout: StateLayout, y: np.ndarray, locks=()):
     """
     front = np.array([h.front_point for h in vehicle.hitches], dtype=float).reshape(-1, 2)
     rear = np.array([h.rear_point for h in vehicle.hitches], dtype=float).reshape(-1, 2)
+    locks = tuple(locks) + yaw_locks(vehicle)
     col = np.asarray(y, dtype=float)[:, None]
     psi = col[layout.psi]
     G, g, g_dot, _ = hitch_rows(
@@ -217,7 +226,8 @@ def make_hitch_consistent(
     """Project body velocities onto the hitch constraints (equal pin velocities).
 
     The impact solver may leave the bodies of an articulated vehicle with velocities whose
-    pin points move apart.  The projection ``z'+ = z' - M^-1 G^T (G M^-1 G^T)^-1 G z'``
+    pin points move apart (or a yaw-locked C-dolly turning against the trailer it is locked to:
+    its moment impulse is part of the projection).  The projection ``z'+ = z' - M^-1 G^T (G M^-1 G^T)^-1 G z'``
     applies the hitch impulse that makes them equal: it conserves the vehicle's linear and
     angular momentum and is the smallest velocity change in the kinetic-energy metric
     (note sec. 1.4).  Positions and headings are not changed.

@@ -182,6 +182,7 @@ class SceneModel:
                     row[k.P_CD] = math.cos(s.steer)
                     row[k.P_SD] = math.sin(s.steer)
                     row[k.P_LOCKED] = 1.0 if s.is_sliding else 0.0
+                    row[k.P_CASTOR] = -1.0 if s.self_steer_limit is None else s.self_steer_limit
 
         # ---- bodies and hitches
         self.mass = np.array([b.mass for b in self.bodies], dtype=float)
@@ -197,10 +198,11 @@ class SceneModel:
             lo, _ = self.body_range[v.name]
             for j, h in enumerate(v.hitches):
                 hitch_rows.append([*h.front_point, *h.rear_point,
-                                   math.nan if h.articulation_limit is None else h.articulation_limit])
+                                   math.nan if h.articulation_limit is None else h.articulation_limit,
+                                   1.0 if h.yaw_locked else 0.0])
                 hbody.append([lo + j, lo + j + 1])
                 self.hitch_names.append((v.bodies[j].name, v.bodies[j + 1].name))
-        hitch = np.array(hitch_rows, dtype=float).reshape(-1, 5)
+        hitch = np.array(hitch_rows, dtype=float).reshape(-1, 6)
         hbody = np.array(hbody, dtype=np.int64).reshape(-1, 2)
         self.minv = np.concatenate([1 / self.mass, 1 / self.mass, 1 / self.inertia])
         transfer = np.zeros((nw, 2 * nb))
@@ -253,6 +255,8 @@ class SceneModel:
         icfg[k.I_NSTAGES] = scheme.n_stages
         icfg[k.I_MAXEVAL] = int(options.max_evaluations)
         icfg[k.I_SLOPE] = 1 if road.sloped else 0
+        icfg[k.I_CASTOR] = 1 if bool(np.any(phase_w[:, :, k.P_CASTOR] >= 0.0)) else 0
+        icfg[k.I_YAWLOCK] = int(np.count_nonzero(hitch[:, 5])) if nh else 0
         tab = tuple(np.ascontiguousarray(a, dtype=float) for a in (scheme.A, scheme.B, scheme.C, scheme.E, scheme.P))
 
         # ---- contact geometry

@@ -90,6 +90,7 @@ __all__ = [
     "sliding_force",
     "fiala_curve",
     "linear_curve",
+    "castor_angle",
 ]
 
 #: Names of the pure-slip lateral force curves.
@@ -288,3 +289,24 @@ def tyre_kernel(u, w, mu_load, demand, cornering_stiffness, locked, eps, fiala):
     fx = _select(slide, fx_lock, fx_roll)
     fy = _select(slide, fy_lock, fy_roll)
     return fx, fy, locked | saturated
+
+
+def castor_angle(vx, vy, limit):
+    """Steer angle of a self-steering (castor) wheel [rad], relative to its body's x axis.
+
+    A self-steering axle's wheels pivot behind a king pin (castor trail), so the ground turns
+    them to roll along the path of their contact point: the slip angle, and with it the tyre's
+    lateral force, is zero.  The wheel therefore lies along the line of the contact-point
+    velocity ``(vx, vy)`` (body axes), ``delta = atan(vy / vx)`` folded into [-pi/2, pi/2]
+    (moving backwards it lies along the same line), while that angle is within ``+-limit``; beyond it the
+    wheel rests against its stop, ``delta = +-limit``, and is a fixed wheel steered by the limit
+    (the ordinary tyre law then gives its slip angle and lateral force).  ``limit = 0`` is the
+    axle locked straight.  The castor's self-centring moment and the pivot's friction are
+    neglected (an idealisation: the free wheel carries no lateral force at all); the force law
+    stays continuous where the wheel meets its stop.  Arrays or scalars (one source for both
+    engines, as :func:`tyre_kernel`).
+    """
+    d = np.arctan2(vy, vx)
+    half = 0.5 * np.pi
+    d = _select(d > half, d - np.pi, _select(d < -half, d + np.pi, d))
+    return np.minimum(np.maximum(d, -limit), limit)

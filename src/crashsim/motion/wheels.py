@@ -91,6 +91,13 @@ class WheelSetting:
         Rolling-resistance coefficient f_r in [0, 0.5]; required for a rolling or braked wheel.
     mu_factor : float
         Multiplier (0, 2] on the road or zone friction coefficient at this wheel.
+    self_steer_limit : float, optional
+        A self-steering (castor) wheel with this steer-angle limit [rad] in [0, pi/2]: the wheel
+        turns to follow its contact point's path (no slip angle, so no lateral force) while the
+        angle that needs lies within +-limit, and sits at the limit beyond it (a fixed wheel steered
+        by the limit).  ``steer`` is then not used.  0 is the axle locked straight (drivers lock a
+        self-steering axle to reverse); None (default) a wheel that does not steer by itself.
+        Model: :func:`crashsim.motion.tyres.castor_angle`.
     """
 
     state: str
@@ -100,6 +107,7 @@ class WheelSetting:
     cornering_coefficient: float | None = None
     rolling_resistance: float | None = None
     mu_factor: float = 1.0
+    self_steer_limit: float | None = None
 
     def __post_init__(self):
         if self.state not in WHEEL_STATES:
@@ -145,6 +153,12 @@ class WheelSetting:
         if not (0.0 < muf <= _MAX_MU_FACTOR):
             raise ScenarioError(f"must lie in (0, {_MAX_MU_FACTOR}], got {self.mu_factor!r}", field="mu_factor")
         object.__setattr__(self, "mu_factor", muf)
+        if self.self_steer_limit is not None:
+            lim = float(self.self_steer_limit)
+            if not (math.isfinite(lim) and 0.0 <= lim <= math.pi / 2):
+                shown = f"{math.degrees(lim):.4g} deg" if math.isfinite(lim) else repr(self.self_steer_limit)
+                raise ScenarioError(f"must lie in [0, 90] deg, got {shown}", field="self_steer_limit")
+            object.__setattr__(self, "self_steer_limit", lim)
 
     @property
     def is_sliding(self) -> bool:

@@ -26,8 +26,10 @@ from .jit import JIT
 #:
 #: * ``body`` (nb, 3): mass [kg], yaw inertia [kg m^2], rest reference length L_ref [m];
 #: * ``wheel`` (nw, 3): contact x, y in body axes [m], static load [N]; ``wheel_body`` (nw,) its body;
-#: * ``hitch`` (nh, 5): front pin x, y (front body axes), rear pin x, y (rear body axes) [m],
-#:   articulation limit [rad] (NaN: none); ``hitch_body`` (nh, 2) front and rear body index;
+#: * ``hitch`` (nh, 6): front pin x, y (front body axes), rear pin x, y (rear body axes) [m],
+#:   articulation limit [rad] (NaN: none), yaw lock (1.0: the joint is locked in yaw at zero
+#:   articulation, a C-dolly; read only when ``icfg[I_YAWLOCK]`` is set); ``hitch_body`` (nh, 2)
+#:   front and rear body index;
 #: * ``load_transfer`` (nw, 2 nb): load-transfer matrix [N per m/s^2] on the filtered
 #:   body-axes accelerations; ``inv_mass`` (3 nb,): inverse masses [1/kg] and inertias
 #:   [1/(kg m^2)] in z order (x.., y.., psi..);
@@ -103,16 +105,18 @@ Step = namedtuple("Step", ["t_old", "h", "y_old", "Q", "ytmp"])
 (C_EPS, C_ALPHA2, C_BETA2, C_TAU, C_VSTOP, C_RTOL, C_ATOL, C_MAXSTEP, C_FIRST, C_TMAX, C_SDT, C_ROADMU,
  C_ZRES, C_GX, C_GY, C_GN) = range(16)
 N_CFG = 16
-# icfg (int options); I_SLOPE: 1 where any part of the road is not level
-I_FIALA, I_LT, I_MAXSEG, I_ORDER, I_NSTAGES, I_MAXEVAL, I_SLOPE = range(7)
-N_ICFG = 7
-# phase_wheels columns (per phase and wheel)
-P_MUF, P_BRAKE, P_FROLL, P_CFIX, P_CCOEF, P_CD, P_SD, P_LOCKED = range(8)
-N_P = 8
+# icfg (int options); I_SLOPE: 1 where any part of the road is not level; I_CASTOR: 1 where any
+# wheel is self-steering in any phase; I_YAWLOCK: the number of yaw-locked hitches (C-dollies)
+I_FIALA, I_LT, I_MAXSEG, I_ORDER, I_NSTAGES, I_MAXEVAL, I_SLOPE, I_CASTOR, I_YAWLOCK = range(9)
+N_ICFG = 9
+# phase_wheels columns (per phase and wheel); P_CASTOR: the steer-angle limit of a self-steering
+# wheel [rad], -1 for a wheel that does not steer by itself
+P_MUF, P_BRAKE, P_FROLL, P_CFIX, P_CCOEF, P_CD, P_SD, P_LOCKED, P_CASTOR = range(9)
+N_P = 9
 # segment wheel columns (sw); S_N0: the static load on the road's slope [N]; S_GX, S_GY: the
-# in-plane gravity force the wheel's share of its body's mass carries, world frame [N]
-S_MU, S_MULOAD, S_DEMAND, S_CALPHA, S_DCOEF, S_CFIX, S_CCOEF, S_CD, S_SD, S_LOCKED, S_N0, S_GX, S_GY = range(13)
-N_S = 13
+# in-plane gravity force the wheel's share of its body's mass carries, world frame [N]; S_CASTOR as P_CASTOR
+S_MU, S_MULOAD, S_DEMAND, S_CALPHA, S_DCOEF, S_CFIX, S_CCOEF, S_CD, S_SD, S_LOCKED, S_N0, S_GX, S_GY, S_CASTOR = range(14)
+N_S = 14
 # per-wheel outputs of an evaluation (Work.wheel_out)
 W_U, W_V, W_FX, W_FY, W_SLIDE, W_LOAD = range(6)
 N_W = 6

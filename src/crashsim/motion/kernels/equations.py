@@ -13,7 +13,7 @@ import numpy as np
 from numba import njit
 
 from .jit import HOT, INLINE
-from .arrays import (C_GN, C_GX, C_GY, C_ROADMU, C_TAU, I_LT, I_SLOPE, S_GX, S_GY, S_N0, PS_CONTACT, P_BRAKE, P_CCOEF, P_CD, P_CFIX, P_FROLL, P_LOCKED, P_MUF,
+from .arrays import (C_GN, C_GX, C_GY, C_ROADMU, C_TAU, I_LT, I_SLOPE, S_GX, S_GY, S_N0, PS_CONTACT, P_BRAKE, P_CCOEF, P_CD, P_CFIX, P_FROLL, P_LOCKED, P_MUF, P_CASTOR, S_CASTOR,
     P_SD, S_CALPHA, S_CCOEF, S_CD, S_CFIX, S_DCOEF, S_DEMAND, S_LOCKED, S_MU, S_MULOAD, S_SD, W_FX, W_FY, W_SLIDE,
     W_U, W_V)
 from .geometry import body_trig, constraint_rows, solve_spd
@@ -66,6 +66,7 @@ def segment_params(t_phase, memb, M, sw):
         sw[k, S_CD] = pw[P_CD]
         sw[k, S_SD] = pw[P_SD]
         sw[k, S_LOCKED] = pw[P_LOCKED]
+        sw[k, S_CASTOR] = pw[P_CASTOR]
 
 
 @njit(**INLINE)

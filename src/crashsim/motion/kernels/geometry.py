@@ -14,7 +14,7 @@ import numpy as np
 from numba import njit
 
 from .jit import HOT, INLINE
-from .arrays import C_ALPHA2, C_BETA2, ZONE_TOL
+from .arrays import C_ALPHA2, C_BETA2, I_YAWLOCK, ZONE_TOL
 
 
 @njit(**INLINE)
@@ -47,12 +47,14 @@ def constraint_rows(y, cs, M, lk_j, lk_th, nlk, G, r, with_rates):
     """Constraint Jacobian ``G`` (m, 3 nb) and, if ``with_rates``, ``r = gamma + 2 zeta w0 g' + w0^2 g`` (m,).
 
     Rows ``2j, 2j+1``: pin x, y of hitch j joining bodies ``hbody[j]``; then one row per closed
-    articulation stop.  Returns ``m``.
+    articulation stop; then one row per yaw-locked hitch (a C-dolly: ``psi_front - psi_rear = 0``
+    held by a moment, ``hitch[j, 5]``), in hitch order.  Returns ``m``.
     """
     body, hitch, cfg, hbody = M.body, M.hitch, M.cfg, M.hitch_body
     nb = body.shape[0]
     nh = hitch.shape[0]
-    m = 2 * nh + nlk
+    nyaw = M.icfg[I_YAWLOCK]
+    m = 2 * nh + nlk + nyaw
     a2 = cfg[C_ALPHA2]
     b2 = cfg[C_BETA2]
     for a in range(m):
@@ -99,6 +101,19 @@ def constraint_rows(y, cs, M, lk_j, lk_th, nlk, G, r, with_rates):
             g = wrap_angle(theta - lk_th[n])
             gd = y[5 * nb + f] - y[5 * nb + q]
             r[row] = a2 * gd + b2 * g
+    if nyaw > 0:
+        row = 2 * nh + nlk
+        for j in range(nh):
+            if hitch[j, 5] == 0.0:
+                continue
+            f = hbody[j, 0]
+            q = hbody[j, 1]
+            G[row, 2 * nb + f] = 1.0
+            G[row, 2 * nb + q] = -1.0
+            if with_rates:
+                theta = math.atan2(cs[1, f] * cs[0, q] - cs[0, f] * cs[1, q], cs[0, f] * cs[0, q] + cs[1, f] * cs[1, q])
+                r[row] = a2 * (y[5 * nb + f] - y[5 * nb + q]) + b2 * theta
+            row += 1
     return m
 
 

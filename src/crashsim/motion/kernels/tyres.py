@@ -8,12 +8,14 @@ source, so both engines and the NumPy path evaluate one source.
 
 from __future__ import annotations
 
+import math
+
 from numba import njit, types
 from numba.extending import overload
 
 from .. import tyres as law
 from .jit import INLINE, JIT
-from .arrays import (C_EPS, I_FIALA, I_LT, I_SLOPE, S_GX, S_GY, S_N0, S_CALPHA, S_CCOEF, S_CD, S_CFIX, S_DCOEF, S_DEMAND, S_LOCKED, S_MU,
+from .arrays import (C_EPS, I_CASTOR, I_FIALA, I_LT, I_SLOPE, S_CASTOR, S_GX, S_GY, S_N0, S_CALPHA, S_CCOEF, S_CD, S_CFIX, S_DCOEF, S_DEMAND, S_LOCKED, S_MU,
     S_MULOAD, S_SD, W_FX, W_FY, W_LOAD, W_SLIDE, W_U, W_V)
 from .geometry import body_trig
 
@@ -47,6 +49,11 @@ def _sliding_scalar(u, w, mu_load, eps):
     return law.sliding_force
 
 
+@overload(law.castor_angle, jit_options=_OV)
+def _castor_scalar(vx, vy, limit):
+    return law.castor_angle
+
+
 @overload(law.tyre_kernel, jit_options=_OV)
 def _tyre_scalar(u, w, mu_load, demand, cornering_stiffness, locked, eps, fiala):
     return law.tyre_kernel
@@ -62,7 +69,9 @@ def tyre_eval(y, M, sw, D, W):
     each on its load: static (scaled by the slope's normal factor, ``S_N0``), or with load
     transfer ``N = N_static + T a_f`` (``M.load_transfer`` on the filtered accelerations).  On a
     sloped road the in-plane gravity of every body is added to its force sum (``S_GX, S_GY``).  Also fills ``W.trig`` with the body heading cosines and
-    sines.  Wheels of parked vehicles produce no force (their bodies are frozen).
+    sines.  Wheels of parked vehicles produce no force (their bodies are frozen).  A
+    self-steering wheel (``S_CASTOR >= 0``, only looked at when ``icfg[I_CASTOR]`` is set) takes
+    the steer angle of :func:`crashsim.motion.tyres.castor_angle` instead of its fixed one.
     """
     body, wheel, wbody, transfer, cfg, icfg, bveh = M.body, M.wheel, M.wheel_body, M.load_transfer, M.cfg, M.icfg, M.body_vehicle
     parked = D.parked
@@ -71,6 +80,7 @@ def tyre_eval(y, M, sw, D, W):
     nw = wheel.shape[0]
     lt = icfg[I_LT] != 0
     fiala = icfg[I_FIALA] != 0
+    castor = icfg[I_CASTOR] != 0
     eps = cfg[C_EPS]
     body_trig(y, nb, cs)
     for i in range(3 * nb):
@@ -96,6 +106,11 @@ def tyre_eval(y, M, sw, D, W):
         cvy = (c * vy - s * vx) + rx * w
         cd = sw[k, S_CD]
         sd = sw[k, S_SD]
+        if castor and sw[k, S_CASTOR] >= 0.0:
+            # a self-steering wheel follows its path within its limit (crashsim.motion.tyres.castor_angle)
+            delta = law.castor_angle(cvx, cvy, sw[k, S_CASTOR])
+            cd = math.cos(delta)
+            sd = math.sin(delta)
         u = cd * cvx + sd * cvy
         v = -sd * cvx + cd * cvy
         if lt:

@@ -24,6 +24,7 @@ from runout_cases import GLOBAL, G, symmetric_car, tractor_semitrailer
 
 from crashsim.motion import Road, RunoutOptions, simulate_runout
 from crashsim.motion.brakes import DEFAULT_TIMING, AirBrakes, BrakeUnit, ramp_level, ramp_stopping_distance
+from crashsim.motion.levels import simulate_level
 from crashsim.motion.wheels import WheelSetting, WheelSettings
 from crashsim.vehicles import BodyState, chain_states
 
@@ -162,3 +163,15 @@ def test_trailer_lag_on_an_articulated_vehicle_engines_agree():
         rest[engine] = np.array([res.bodies[b].rest_position for b in ("tractor", "trailer")])
         assert np.all(np.abs(rest[engine][:, 1]) < 1e-6)
     assert np.max(np.abs(rest["scipy"] - rest["compiled"])) < 0.01
+
+
+@pytest.mark.parametrize("abs_on, cap_g, expect_g", [(False, 0.4, 0.4), (False, 1.2, 0.8), (True, 1.5, 0.85 * 0.8)])
+def test_energy_level_uses_the_full_application(abs_on, cap_g, expect_g):
+    """The energy level brakes at the full application from separation: below the limit F/m, at it the wheels
+    lock (mu g), with ABS eta mu g."""
+    brakes = AirBrakes({"car": BrakeUnit((cap_g * G * MASS / 2,), "tractor", abs=abs_on)},
+                       abs_efficiency=0.85 if abs_on else 0.0)
+    res = simulate_level("energy", symmetric_car(), {"car": BodyState((0.0, 0.0), 0.0, (20.0, 0.0))},
+                         WheelSettings(default=ROLL, brakes=brakes), Road(0.8))
+    assert res.bodies["car"].rest_position[0] == pytest.approx(20.0 ** 2 / (2 * expect_g * G), rel=1e-12)
+    assert "air brakes at full application" in res.message

@@ -177,10 +177,12 @@ class SceneModel:
                                 rows[:, k.B_OFF] + rows[:, k.B_FALL]]) if len(rows) else np.zeros(0)
         #: Times at which the air brakes' force starts or stops changing (segment boundaries, no wheel change).
         self.brake_kinks = tuple(sorted({float(x) for x in kinks if 0.0 < x < options.t_max}))
-        #: Where the integration must stop and restart: the scheduled changes and the air brakes' kinks before
-        #: t_max, then t_max.
+        #: Where the integration must stop and restart: the scheduled changes before t_max (and for the compiled
+        #: engine the air brakes' kinks: its explicit Runge-Kutta steps lose their order across a kink, while
+        #: LSODA's error control finds them at less cost than a restart of the SciPy engine), then t_max.
+        kink_stops = set(self.brake_kinks) if options.engine == "compiled" else set()
         self.segment_stops = tuple(sorted({tc for tc in self.change_times if tc < options.t_max}
-                                          | set(self.brake_kinks) | {options.t_max}))
+                                          | kink_stops | {options.t_max}))
 
         phase_w = np.zeros((len(times), nw, k.N_P))
         for p, t in enumerate(times):

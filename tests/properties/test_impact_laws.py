@@ -264,6 +264,20 @@ def _zero_slip_doubles():
     return ImpactProblem((a, b), st, "A1", "B1", surface, cons)
 
 
+def test_tensile_without_friction_names_the_constraints():
+    """The zero-slip example is tensile with any tangential law's help withdrawn (mu = 0): the
+    refusal says its velocity constraints pull the surfaces apart, not that a smaller mu would do."""
+    from crashsim import solve_impact
+    from crashsim.errors import InadmissibleImpactError
+
+    with pytest.raises(InadmissibleImpactError) as err:
+        solve_impact(_zero_slip_doubles())
+    msg = str(err.value)
+    assert err.value.reason == "tensile normal impulse"
+    assert "even without a tangential impulse" in msg and "velocity constraints drive them apart" in msg
+    assert "smaller" not in msg
+
+
 @pytest.mark.xfail(strict=True, reason="known defect: at zero initial slip with a tensile no-slide solution the "
                                        "friction direction is taken from the round-off sign of the slip (0 here: no "
                                        "friction); it should come from the slip the impact creates (README, Limits)")

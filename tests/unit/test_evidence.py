@@ -77,6 +77,8 @@ def test_tensile_normal_impulse_is_refused():
     with pytest.raises(InadmissibleImpactError, match="tensile") as err:
         solve(-2.0)
     assert err.value.field == "impact.tangential" and err.value.reason == "tensile normal impulse"
+    # the no-slide law is what pulls here (mu = 0 is compressive), so the message offers the laws that slide
+    assert 'use tangential = "friction" or "ratio"' in str(err.value) and "even without" not in str(err.value)
     rear, front = solve(-2.0, check=False), solve(2.0)
     assert rear.normal_impulse < 0 and any("tensile" in w for w in rear.warnings)
     assert front.normal_impulse > 0 and not front.warnings

@@ -163,6 +163,23 @@ def _interval(S, A, field, lo, hi, anchor) -> tuple[float, float] | None:
     return min(ends), max(ends)
 
 
+def _tensile_cause(S: ImpactStructure, A: ImpactArrays) -> str:
+    """The end of the tensile-impulse message: the tangential law to change, or, where the normal
+    impulse is tensile without any tangential impulse too (mu = 0), the inputs that pull the
+    surfaces apart instead (velocity constraints, external impulses or the states)."""
+    frictionless = solve_arrays(replace(S, tangential="ratio"), replace(A, law_value=np.zeros(1)), method="dense")
+    if not frictionless["normal_impulse"][0] > 0.0:
+        given = [what for what, there in (("velocity constraints", S.constraint_bodies),
+                                          ("external impulses", S.external_bodies)) if there]
+        by = " and ".join(given) if given else "states (the surfaces are not closing at the contact point)"
+        return (f" even without a tangential impulse (mu = 0 gives P_n = {_fmt(float(frictionless['normal_impulse'][0]))}"
+                f" N s): the impact's {by} drive them apart: check those before the tangential law")
+    return {"no_slide": " to stop the sliding (a sideswipe); use tangential = \"friction\" or \"ratio\"",
+            "friction": " (a sideswipe); use a smaller friction f or tangential = \"ratio\" with a smaller |mu|",
+            "ratio": " (a sideswipe); use a smaller |mu| or tangential = \"friction\"",
+            "fraction": " (a sideswipe); use a smaller fraction of mu_max or tangential = \"friction\""}[S.tangential]
+
+
 def check_admissible(S: ImpactStructure, A: ImpactArrays, out: dict, *, work: dict | None = None) -> None:
     """Raise :class:`~crashsim.errors.InadmissibleImpactError` if the (single) impact is inadmissible.
 
@@ -207,11 +224,9 @@ def check_admissible(S: ImpactStructure, A: ImpactArrays, out: dict, *, work: di
         raise InadmissibleImpactError(f"impact.mu = {_fmt(mu)} {why}; use {allowed} or tangential = \"no_slide\"",
                                       field="impact.mu", reason=REASONS[code], value=mu, allowed=rng)
     if code == 1:
-        alt = "use tangential = \"friction\" or \"ratio\" with a smaller |mu|" if law != "ratio" else \
-              "use a smaller |mu| or tangential = \"friction\""
         raise InadmissibleImpactError(
             f"impact.tangential = \"{law}\" needs a tensile normal impulse here (P_n = {_fmt(pn)} N s < 0): the "
-            f"surfaces would have to pull on each other to satisfy the {law} law (a sideswipe); {alt}",
+            f"surfaces would have to pull on each other{_tensile_cause(S, A)}",
             field="impact.tangential", reason=REASONS[code], value=pn, allowed=None)
     # energy created at the crush surface: blame e' if the moment impulse does it, else e
     if ep >= 0.0:

@@ -52,9 +52,8 @@ import logging
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.constants import g as STANDARD_GRAVITY
-
 from ..errors import ScenarioError
+from ..units import G0 as STANDARD_GRAVITY
 from ..vehicles import Vehicle
 from .wheels import enumerate_wheels
 

@@ -27,7 +27,9 @@ engine (LSODA) at rtol 1e-6 and 1e-8 (the default of both engines) and the compi
 * right-hand-side evaluations and CPU time of the run (``process_time``);
 * on scenes, the number of secondary impacts (a different count is a bifurcation: a touch just
   above or below the impact threshold), and the energy ledger's closing error relative to the
-  kinetic energy at the start.
+  kinetic energy at the start;
+* with the rollover check (every case with load transfer): whether the wheel-lift and rollover
+  events (kind and body) are the reference's, and their largest time difference.
 
 The cross-engine agreement the CI fuzz test requires (``tests/fuzz/test_engine_fuzz.py``:
 same status, rest within 1 cm and 0.1 deg at rtol 1e-8, else at 1e-10) is also counted.
@@ -52,6 +54,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "fuzz"))
 
 from crashsim.motion import simulate_runout, simulate_scene  # noqa: E402
+from crashsim.motion.rollover import ROLL_EVENT_KINDS  # noqa: E402
 from random_runouts import random_case, random_scene  # noqa: E402
 
 SETTINGS = (("scipy", 1e-6), ("scipy", 1e-8), ("compiled", 1e-6), ("compiled", 1e-7), ("compiled", 1e-8))
@@ -92,6 +95,11 @@ def _case_rows(kind, seed, i):
                "ref_status": ref.status, "nfev": r.nfev, "cpu_s": cpu, "pos_err_m": math.nan, "head_err_deg": math.nan}
         if ref.status == "rest" and r.status == "rest":
             row["pos_err_m"], row["head_err_deg"] = _errors(r, ref)
+        ev, ev_ref = _roll_events(r), _roll_events(ref)
+        if ev or ev_ref:  # the rollover check (cases with load transfer): the same events, and how close in time
+            row["roll_events"] = len(ev_ref)
+            row["roll_differ"] = ev.keys() != ev_ref.keys()
+            row["roll_dt_s"] = max((abs(ev[k] - ev_ref[k]) for k in ev.keys() & ev_ref.keys()), default=0.0)
         if kind == "scene":
             row["impacts"] = len(r.impacts)
             row["ref_impacts"] = len(ref.impacts)
@@ -112,6 +120,11 @@ def _case_rows(kind, seed, i):
     for row in rows:
         row["ci_agreement"] = agree
     return rows
+
+
+def _roll_events(result) -> dict:
+    """The wheel-lift and rollover events of a run, ``{(kind, body): time}`` (none without the check)."""
+    return {(e.kind, e.data["body"]): e.t for e in result.events if e.kind in ROLL_EVENT_KINDS}
 
 
 def _within(a, b):
@@ -139,6 +152,14 @@ def _summary(rows, kind):
             diff = sum(r["impacts"] != r["ref_impacts"] for r in sel)
             line += f" {diff} | {max(r['closing_rel'] for r in sel):.1e} |"
         lines.append(line)
+    roll = [r for r in rows if r["kind"] == kind and "roll_events" in r]
+    if roll:
+        lines += ["", "Wheel-lift and rollover events (the rollover check is on in every case with load transfer): "
+                  + "; ".join(f"{engine} rtol {rtol:g}: {sum(r['roll_differ'] for r in sel)} of {len(sel)} runs with "
+                              f"other events than the reference, largest time difference "
+                              f"{max(r['roll_dt_s'] for r in sel):.1e} s"
+                              for engine, rtol in SETTINGS
+                              for sel in [[r for r in roll if r["engine"] == engine and r["rtol"] == rtol]] if sel)]
     return lines
 
 
@@ -162,7 +183,8 @@ def main(argv=None) -> int:
     elapsed = time.perf_counter() - t0
     args.out.mkdir(exist_ok=True)
     keys = ["kind", "case", "engine", "rtol", "status", "ref_status", "pos_err_m", "head_err_deg", "nfev", "cpu_s",
-            "impacts", "ref_impacts", "closing_rel", "negative_line", "ci_agreement", "label"]
+            "impacts", "ref_impacts", "closing_rel", "negative_line", "roll_events", "roll_differ", "roll_dt_s",
+            "ci_agreement", "label"]
     with (args.out / "engine_fuzz.csv").open("w", newline="") as fh:
         w = csv.DictWriter(fh, keys, extrasaction="ignore")
         w.writeheader()

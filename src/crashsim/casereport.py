@@ -25,7 +25,7 @@ import jinja2
 from ._version import __version__
 from .plotting import figure_system, plot_histories, plot_scene, plot_time_distance
 from .motion.wheels import wheel_labels
-from .report import closing_error_text, describe_event, format_approach
+from .report import closing_error_text, describe_event, format_approach, validity_text
 from .units import format_value, toml_repr
 
 __all__ = ["toml_comments", "input_rows", "sha256_file", "survey_files", "load_json", "render_case_report", "write_case_report",
@@ -45,6 +45,9 @@ VALIDITY_NOTES = (
     "The approach starts straight, without yaw, at the start of braking; the reaction time is at constant "
     "speed; steering is a fixed angle per wheel changed at scheduled times (no driver model).",
     "Crush energy is CRASH3's absorbed energy, compared with the energy the impulse model dissipates.",
+    "The run-out is planar: roll and pitch are not modelled. At the load_transfer level the wheel-lift and "
+    "rollover check (runout.rollover) records when a body's inner wheels lift or it passes its rollover "
+    "threshold; from then on its planar result is outside its validity.",
     "Values of the vehicle library marked \"assumption\" in their source are typical engineering values, not "
     "measurements of the case vehicle.",
 )
@@ -390,7 +393,10 @@ def _runout(scene, system: str) -> dict | None:
         rows = [{"item": label, "value": format_value(ledger[k], "energy", s)} for k, label in labels]
         opts = scene.scenario.runout.options
         rows.append({"item": "closing error", "value": closing_error_text(ledger, opts.rtol)})
-    return {"bodies": bodies, "events": events, "ledger": rows, "level": scene.scenario.runout.level}
+    validity = [f"vehicle {vname}: {validity_text(r, s)}" for vname, r in scene.runout.items()
+                if r.rollover is not None]
+    return {"bodies": bodies, "events": events, "ledger": rows, "level": scene.scenario.runout.level,
+            "validity": validity}
 
 
 def _evidence(scene, system: str) -> dict | None:

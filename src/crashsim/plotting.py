@@ -740,8 +740,7 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     for v in sc.vehicles:  # the colour key first in the legend
         if not v.is_barrier:
             fill, line, _ = S.family[v.name]
-            desc = (sc.data.get("vehicles", {}).get(v.name, {}).get("description", "")
-                    if isinstance(sc.data, dict) else "")
+            desc = sc.descriptions.get(v.name, "")
             S.legend_entry(_wrap(f"vehicle {v.name}" + (f": {desc}" if desc else ""), 60),
                            Patch(facecolor=fill, edgecolor=line, lw=1.2))
     for v in sc.vehicles:
@@ -1735,12 +1734,9 @@ def _north_arrow(S: SceneDrawing) -> list:
     """Grid north of a scene placed on a survey ([survey]: north is the survey's +y, the scene's
     +X is turned ``rotation`` from its east), right of the +X/+Y arrows; none without a survey
     (the scene's own axes say nothing of north). Returns the texts drawn."""
-    data = S.sc.data if isinstance(S.sc.data, dict) else {}
-    survey = data.get("survey")
-    placed = isinstance(survey, dict) and any(survey.get(k) for k in ("files", "underlay", "crs", "imported"))
-    if not placed:
+    if S.sc.survey_frame is None:
         return []
-    rot = float(survey["rotation"])
+    rot = float(S.sc.survey_frame.rotation)
     u = np.array([math.sin(rot), math.cos(rot)])  # survey +y in the scene frame
     from matplotlib.transforms import offset_copy
 

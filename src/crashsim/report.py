@@ -10,7 +10,7 @@ import numpy as np
 from .units import Kind, format_value, to_unit
 
 __all__ = ["format_approach", "format_impact", "format_runout", "format_joint", "format_events", "format_evidence",
-           "format_crush", "describe_event", "fmt", "table",
+           "format_crush", "describe_event", "fmt", "table", "validity_text",
            "closing_error_text", "message_in", "LEDGER_BOUND"]
 
 
@@ -158,7 +158,25 @@ def format_runout(runout: dict, system: str = "SI", *, joint: bool = False) -> s
                          f"heading {math.degrees(b.rest_heading_wrapped):.1f} deg",
                          f"travelled {fmt(b.distance, 'length', s)}", f"time to rest {ttr}"])
         lines += table(rows, indent="    ")
+        if r.rollover is not None:
+            lines.append(f"    {validity_text(r, s)}")
     return "\n".join(lines)
+
+
+def validity_text(r, system: str = "SI") -> str:
+    """What the wheel-lift and rollover check says of a vehicle's run-out (its ``rollover`` summary)."""
+    roll = r.rollover
+    thr = ", ".join(f"{b} {t:.3g} g" for b, t in roll["thresholds_g"].items())
+    if roll["valid_until_s"] is None:
+        return (f"wheel lift and rollover: no wheel lifts and no body passes its rollover threshold ({thr}); "
+                "the planar run-out stays within its validity")
+    first = min((e for e in r.events if e.t == roll["valid_until_s"] and "ltr" in e.data), key=lambda e: e.t)
+    verdict = (f"ROLLS: {', '.join(roll['rolled_bodies'])} (threshold passed or all inner wheels off)"
+               if roll["rolled"] else "wheels lift, no body passes its rollover threshold")
+    return (f"wheel lift and rollover: {verdict}; the planar run-out is OUTSIDE ITS VALIDITY from "
+            f"{fmt(roll['valid_until_s'], 'time', system)} ({first.kind} of {first.data['body']} at "
+            f"{_vec(first.place, 'length', system)}, {fmt(first.data['speed_m_s'], 'speed', system)}); "
+            f"thresholds {thr}")
 
 
 def format_joint(scene, system: str = "SI") -> str:
@@ -258,6 +276,13 @@ def describe_event(e, system: str = "SI") -> str:
     if k == "contact_pressed" and "depth_m" in d:
         return (f"{a} is pressed into {b} beyond the crush of the impact ({fmt(d['depth_m'], 'length', s)} deep): "
                 "sustained contact")
+    if k in ("wheel_lift", "unit_lift", "rollover_threshold") and "ltr" in d:
+        at = f"at {fmt(d['speed_m_s'], 'speed', s)}, lateral acceleration {abs(d['lateral_acceleration_g']):.3g} g"
+        if k == "wheel_lift":
+            return f"{d['lifting_side']} wheel of axle {d['axle']!r} of {d['body']} lifts (axle load transfer ratio 1), {at}"
+        if k == "unit_lift":
+            return f"all {d['lifting_side']} wheels of {d['body']} lift (load transfer ratio {d['ltr']:+.3f}), {at}"
+        return f"{d['body']} passes its rollover threshold {d['threshold_g']:.3g} g, {at}"
     if k == "impact" and "delta_v_m_s" in d:
         dv = ", ".join(f"{n} {fmt(v, 'speed', s)}" for n, v in d["delta_v_m_s"].items())
         return (f"{a} strikes {b} at {fmt(d['speed_m_s'], 'speed', s)}: normal impulse "
@@ -282,6 +307,12 @@ def format_evidence(report, system: str = "SI", labels: dict | None = None) -> s
     lines = [f"Evidence: {len(report.checks) - report.n_failed} of {len(report.checks)} items within tolerance"]
     rows = []
     for c in report.checks:
+        if c.kind == "rollover":
+            res = ("computed: " + ("rolls" if c.details["computed"] else "does not roll")
+                   if "computed" in c.details else "none computed")
+            tol = "the statement must hold"
+            rows.append(["PASS" if c.passed else "FAIL", c.kind, c.name, res, tol, c.details.get("reason", "")])
+            continue
         if c.quantity == "angle":
             res, tol = f"{math.degrees(c.residual):+.1f} deg", f"{math.degrees(c.tolerance):.1f} deg"
         elif math.isinf(c.residual):

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from .errors import ScenarioError, with_file
-from .evidence.checks import (CORNERS, DeltaVEvidence, Evidence, ImpactPointEvidence, MarkEvidence,
+from .evidence.checks import (CORNERS, DeltaVEvidence, Evidence, ImpactPointEvidence, MarkEvidence, RolloverEvidence,
                               RecorderEvidence, RestEvidence, named_body_points, register_points)
 from .geometry import rotate
 from .impact import (CrushSurface, ExternalImpulse, ImpactProblem, TangentialLaw, VelocityConstraint,
@@ -39,7 +39,7 @@ from .motion.wheels import select_wheels, enumerate_wheels
 from .schema import ArrayOf, Field, ScenarioValidationError, Section, Table, document, load_toml, validate
 from .survey.schema import MAP_LINE_STYLES, SURVEY
 from .units import Kind, format_value, parse, toml_repr
-from .vehicles import Axle, Body, BodyState, Hitch, Vehicle, chain_states
+from .vehicles import MAX_ROLLOVER_THRESHOLD, Axle, Body, BodyState, Hitch, Vehicle, chain_states
 
 __all__ = ["SCHEMA", "MAP_LINE_STYLES", "MapLine", "Scenario", "RunoutSpec", "load_scenario", "presets", "preset_geometry",
            "scenario_from_dict", "schema_document"]
@@ -117,6 +117,15 @@ BODY = Section("body", [
           description="Largest articulation before the bodies meet (jack-knife stop)"),
     Field("cg_height", Kind.LENGTH, required=False, minimum=0, exclusive_minimum=True, example="1.1 m",
           description="CG height above ground (only for the run-out's load transfer)"),
+    Field("roll_coupled", "bool", default=False,
+          description="The hitch towing this body carries roll moment (a fifth wheel, stiff in roll): with load "
+                      "transfer its roll moment is shared with the towing body in proportion to the hitch's static "
+                      "load; false (default): free in roll, as a ball or a drawbar eye"),
+    Field("rollover_threshold", "float", required=False, minimum=0, exclusive_minimum=True,
+          maximum=MAX_ROLLOVER_THRESHOLD, example="0.35",
+          description="Lateral acceleration in g at which this body rolls (static rollover threshold, e.g. a "
+                      "tilt-table value); turns the wheel-lift and rollover check on (level load_transfer); "
+                      "default 0.75 t / (2 h) from the mean track t and cg_height h"),
     Field("drawbar", Kind.LENGTH, minimum=0, maximum=MAX_LENGTH, default=f"{DEFAULT_DRAWBAR:g} m",
           description="How far this body's hitch points (rear_hitch, front_hitch) may lie outside its outline: a "
                       "drawbar, an A-frame tongue, a ball mount (checked at load; the default covers car-trailer "
@@ -389,6 +398,10 @@ RUNOUT = Section("runout", [
           description="Computing time allowed for the run-out; more ends it with status wall_time_limit (exit 3)"),
     Field("load_transfer", "bool", default=_OPT.load_transfer,
           description="Quasi-static load transfer (needs every body's cg_height)"),
+    Field("rollover", "bool", default=False,
+          description="Record when a body's inner wheels lift and when it passes its rollover threshold "
+                      "(needs level load_transfer; each body's rollover_threshold, default 0.75 t / (2 h)); the "
+                      "result says from when the planar run-out is outside its validity"),
 ], subsections=[ArrayOf("zones", ZONE, required=False, description="Friction zones")],
    required=False, description="Run-out of every vehicle from separation to rest (omit for an impact-only study)")
 
@@ -513,6 +526,15 @@ EV_RECORDER = Section("recorder", [
                         description="The samples, e.g. [{time = \"-2 s\", speed = \"55 mph\"}, ...]")],
     description="Pre-crash speeds of an event data recorder")
 
+EV_ROLLOVER = Section("rollover", [
+    Field("unit", "str", example="trailer",
+          description="A vehicle (any of its units) or one body (unit) the statement is about"),
+    Field("rolled", "bool", example="true",
+          description="true: it rolled (found on its side or roof, or witnessed tipping); false: it stayed upright"),
+    Field("name", "str", default="", description="Label for the report (\"trailer found on its side\")"),
+], description="Whether a vehicle or one of its units rolled, against the wheel-lift and rollover check (needs "
+               "runout.rollover or a rollover_threshold, level load_transfer)")
+
 EVIDENCE = Section("evidence", [], subsections=[
     ArrayOf("rest", EV_REST, required=False, description="Rest positions"),
     ArrayOf("marks", EV_MARK, required=False, description="Tyre marks"),
@@ -520,6 +542,8 @@ EVIDENCE = Section("evidence", [], subsections=[
     ArrayOf("delta_v", EV_DV, required=False, description="Recorded delta-v"),
     ArrayOf("recorder", EV_RECORDER, required=False, description="Recorded pre-crash speeds (needs an approach)"),
     ArrayOf("crush", EV_CRUSH, required=False, description="Crush profiles (CRASH3) or EES of damaged faces"),
+    ArrayOf("rollover", EV_ROLLOVER, required=False,
+            description="Statements that a vehicle or unit did or did not roll (a verdict; not fitted)"),
 ], required=False, description="What was found at the scene; each item is checked against its tolerance")
 
 _CM = ContactModel()
@@ -618,7 +642,8 @@ from .motion.loads import STANDARD_GRAVITY
 from .motion.road import signed_distance
 from .plotting import is_color
 from .scene.run import simulate_approaches
-from .survey.mapping import expand_survey
+from .survey.frame import SceneFrame
+from .survey.mapping import expand_survey, survey_frame
 
 SCHEMA = with_inverse_sections(SCHEMA)
 
@@ -716,6 +741,11 @@ class Scenario:
     approach_inputs : dict of ApproachInput
         By vehicle name: what each vehicle's approach needs (its spec, road and options, the
         speed at impact if the file gives it), built and checked at load.
+    descriptions : dict of str
+        By vehicle name: the file's ``description`` of each vehicle ("" if none), for figures and reports.
+    survey_frame : SceneFrame or None
+        Where the scene lies on its survey (``[survey]`` with files, an underlay or a CRS); None
+        for a scene not placed on a survey.
     """
 
     path: str | None
@@ -731,6 +761,8 @@ class Scenario:
     map_lines: tuple[MapLine, ...] = ()
     approaches: dict = field(default_factory=dict)
     approach_inputs: dict = field(default_factory=dict)
+    descriptions: dict = field(default_factory=dict)
+    survey_frame: SceneFrame | None = None
 
     @property
     def approaches_simulated(self) -> bool:
@@ -891,6 +923,31 @@ def _build_brakes(vehicle: Vehicle, b: dict | None, file: str | None, key: str) 
         raise _rewrap(exc, key, file) from None
 
 
+def _rollover_check(r: dict, level: str, vehicles, file: str | None) -> bool:
+    """Whether the wheel-lift and rollover check is asked for (runout.rollover, or a body's
+    rollover_threshold), and that it can be done: level load_transfer, and the CG height of every
+    body whose threshold is the default."""
+    asked = [("runout.rollover", "rollover = true")] if r["rollover"] else []
+    for veh in vehicles:
+        for i, b in enumerate(veh.bodies):
+            if b.rollover_threshold is not None:
+                asked.append((f"vehicles.{veh.name}.bodies[{i}].rollover_threshold",
+                              f"rollover_threshold = {b.rollover_threshold:g}"))
+    if not asked:
+        return False
+    if level != "load_transfer":
+        key, text = asked[0]
+        raise _err(f"{text} asks for the wheel-lift and rollover check, which reads the load transfer: it needs "
+                   f"level \"load_transfer\", but level = {level!r}", key, file)
+    for veh in vehicles:
+        for i, b in enumerate(veh.bodies):
+            if not b.is_fixed and b.rollover_threshold is None and b.cg_height is None:
+                raise _err(f"the default rollover threshold 0.75 t / (2 h) of body {b.name!r} needs its CG height h; "
+                           "give cg_height (m, > 0), or rollover_threshold in g, allowed (0, "
+                           f"{MAX_ROLLOVER_THRESHOLD:g}]", f"vehicles.{veh.name}.bodies[{i}].cg_height", file)
+    return True
+
+
 def _build_runout(r: dict, vehicles, raw_vehicles: dict, file: str | None, raw: dict | None = None) -> RunoutSpec:
     raw = raw or {}
     level = r["level"]
@@ -924,6 +981,7 @@ def _build_runout(r: dict, vehicles, raw_vehicles: dict, file: str | None, raw: 
         road = Road(r["road_friction"], zones, r["grade"], r["cross_slope"])
     except ScenarioError as exc:
         raise _rewrap(exc, "runout.zones", file) from None
+    rollover = _rollover_check(r, level, vehicles, file)
     try:
         extra = {"engine": r["engine"]} if "engine" in RunoutOptions.__dataclass_fields__ else {}
         if r["engine"] != "scipy" and not extra:
@@ -931,7 +989,8 @@ def _build_runout(r: dict, vehicles, raw_vehicles: dict, file: str | None, raw: 
         options = RunoutOptions(method=r["method"], rtol=r["rtol"], atol=r["atol"], eps=r["eps"], v_stop=r["v_stop"],
                                 max_step=r["max_step"], t_max=r["t_max"], sample_dt=r["sample_dt"],
                                 lateral_model=r["lateral_model"], load_transfer=level == "load_transfer",
-                                max_impacts=r["max_impacts"], max_wall_time=r["max_wall_time"], **extra)
+                                rollover=rollover, max_impacts=r["max_impacts"], max_wall_time=r["max_wall_time"],
+                                **extra)
     except ScenarioError as exc:
         raise _rewrap(exc, "runout", file) from None
     if options.load_transfer:
@@ -1052,6 +1111,9 @@ def _build_vehicle(name: str, v: dict, file: str | None) -> tuple[Vehicle, dict[
         if i == 0 and b["front_hitch"] is not None:
             raise _err(f"body {b['name']!r} is the first body but has a front_hitch {b['front_hitch']}",
                        f"{key}.front_hitch", file)
+        if i == 0 and b["roll_coupled"]:
+            raise _err(f"body {b['name']!r} is the first body: it has no front hitch to carry roll moment (roll_coupled "
+                       "belongs on the towed body, e.g. the semitrailer)", f"{key}.roll_coupled", file)
         if i == 0 and b["articulation"] != 0.0:
             raise _err("the first body has no front hitch to articulate about", f"{key}.articulation", file)
         lim = b["articulation_limit"]
@@ -1062,7 +1124,8 @@ def _build_vehicle(name: str, v: dict, file: str | None) -> tuple[Vehicle, dict[
         try:
             axles = tuple(Axle(a["x"], a["track"], a["dual"], a["name"]) for a in b["axles"])
             bodies.append(Body(b["name"], b["mass"], b["yaw_inertia"], b["length"], b["width"],
-                               tuple(b["outline_center"]), axles, b["cg_height"]))
+                               tuple(b["outline_center"]), axles, b["cg_height"], b["rollover_threshold"],
+                               bool(b["roll_coupled"])))
         except ScenarioError as exc:
             raise _err(str(exc), key, file) from None
         if i > 0:
@@ -1410,12 +1473,19 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None, approac
                                    {n: v["approach"] for n, v in d["vehicles"].items()})
         if d["evidence"] is not None and d["evidence"]["crush"]:
             evidence = dataclasses.replace(evidence, crush=_build_crush(d["evidence"]["crush"], d, vehicles, file))
+        if evidence.rollover and (runout is None or not runout.options.rollover):
+            raise _err("a rollover statement is checked against the wheel-lift and rollover check, which is off: add "
+                       "runout.rollover = true (level \"load_transfer\")", "evidence.rollover[0].unit", file)
     with later.each():
         map_lines = _build_map_lines(d["map"], file)
     later.raise_any()
     meta = d["scenario"]
+    survey = d.get("survey")
+    placed = isinstance(survey, dict) and any(survey.get(k) for k in ("files", "underlay", "crs", "imported"))
     out = Scenario(file, meta["title"], meta["source"], meta["units"], tuple(vehicles), states, problem, runout,
-                   evidence, d, map_lines, {}, approach_inputs)
+                   evidence, d, map_lines, {}, approach_inputs,
+                   descriptions={n: v.get("description") or "" for n, v in d["vehicles"].items()},
+                   survey_frame=survey_frame(survey) if placed else None)
     object.__setattr__(out, "_file_data", source)  # the file contents it was built from (Scenario.file_data)
     if not approaches:
         return out
@@ -1677,7 +1747,7 @@ def _build_evidence(e: dict | None, states: dict, file: str | None, vehicles=(),
             reg = _rest_registration(r, by_name[name], key, file)
             heading = reg.heading if r["heading_tolerance"] is not None else None
             rest.append(RestEvidence(name, reg.position, r["tolerance"], heading, r["heading_tolerance"], r["name"],
-                                     reg))
+                                     reg, sigma=r.get("sigma"), heading_sigma=r.get("heading_sigma")))
             continue
         if r["position"] is None:
             raise _err(f"rest evidence of {name!r} needs position (the measured CG) or points (two or more measured "
@@ -1685,7 +1755,8 @@ def _build_evidence(e: dict | None, states: dict, file: str | None, vehicles=(),
         if (r["heading"] is None) != (r["heading_tolerance"] is None):
             raise _err("heading and heading_tolerance go together", f"{key}.heading_tolerance", file)
         rest.append(RestEvidence(name, tuple(r["position"]), r["tolerance"], r["heading"],
-                                 r["heading_tolerance"], r["name"]))
+                                 r["heading_tolerance"], r["name"], sigma=r.get("sigma"),
+                                 heading_sigma=r.get("heading_sigma")))
     marks = []
     for i, m in enumerate(e["marks"]):
         sel = m["wheel"]
@@ -1705,12 +1776,13 @@ def _build_evidence(e: dict | None, states: dict, file: str | None, vehicles=(),
                            f"({owner or 'any vehicle'}): add [vehicles.<name>.approach]",
                            f"evidence.marks[{i}].phase", file)
         marks.append(MarkEvidence(np.asarray(m["points"], dtype=float), m["tolerance"], sel, m["sliding_only"],
-                                  m["name"], m["phase"]))
+                                  m["name"], m["phase"], sigma=m.get("sigma")))
     poi = None
     if e["impact_point"] is not None:
-        poi = ImpactPointEvidence(tuple(e["impact_point"]["position"]), e["impact_point"]["tolerance"])
+        poi = ImpactPointEvidence(tuple(e["impact_point"]["position"]), e["impact_point"]["tolerance"],
+                                  sigma=e["impact_point"].get("sigma"))
     dv = [DeltaVEvidence(body(x["body"], f"evidence.delta_v[{i}].body"), x["value"], x["tolerance"], x["component"],
-                         x["name"], x["impacts"]) for i, x in enumerate(e["delta_v"])]
+                         x["name"], x["impacts"], sigma=x.get("sigma")) for i, x in enumerate(e["delta_v"])]
     recorder = []
     for i, x in enumerate(e["recorder"]):
         key = f"evidence.recorder[{i}]"
@@ -1722,8 +1794,18 @@ def _build_evidence(e: dict | None, states: dict, file: str | None, vehicles=(),
         smp = x["samples"]
         recorder.append(RecorderEvidence(name, tuple(p["time"] for p in smp), tuple(p["speed"] for p in smp),
                                          tuple(bool(p["brake"]) for p in smp), x["tolerance"], x["time_offset"],
-                                         x["name"]))
-    return Evidence(tuple(rest), tuple(marks), poi, tuple(dv), tuple(recorder))
+                                         x["name"], sigma=x.get("sigma")))
+    rollover = []
+    units = {v.name for v in vehicles if not v.is_barrier} | {b.name for v in vehicles if not v.is_barrier
+                                                               for b in v.bodies}
+    for i, x in enumerate(e.get("rollover") or []):
+        if x["unit"] not in units:
+            near = difflib.get_close_matches(x["unit"], sorted(units), n=1)
+            hint = f"; did you mean {near[0]!r}?" if near else ""
+            raise _err(f"unknown vehicle or body {x['unit']!r}{hint} Vehicles and bodies: "
+                       f"{', '.join(map(repr, sorted(units)))}", f"evidence.rollover[{i}].unit", file)
+        rollover.append(RolloverEvidence(x["unit"], bool(x["rolled"]), x["name"]))
+    return Evidence(tuple(rest), tuple(marks), poi, tuple(dv), tuple(recorder), rollover=tuple(rollover))
 
 
 def _build_crush(items: list, d: dict, vehicles, file: str | None) -> tuple:
@@ -1768,7 +1850,7 @@ def _build_crush(items: list, d: dict, vehicles, file: str | None) -> tuple:
         out.append(CrushEvidence(name, c["face"], by_name[name].mass, A, B, c["width"],
                                  None if c["profile"] is None else tuple(c["profile"]), c["offset"], c["ees"],
                                  c["tolerance"], c["relative_tolerance"], c["impacts"], c["compare"],
-                                 c["correction"] == "pdof", source, c["name"]))
+                                 c["correction"] == "pdof", source, c["name"], sigma=c.get("sigma")))
     for which, idx in crush_groups(out):
         modes = {out[i].compare for i in idx}
         if len(modes) > 1:

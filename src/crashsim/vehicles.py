@@ -15,7 +15,12 @@ import numpy as np
 from .errors import ScenarioError
 from .geometry import rotate, perp
 
-__all__ = ["Axle", "Body", "Hitch", "Vehicle", "BodyState", "chain_states"]
+__all__ = ["Axle", "Body", "Hitch", "Vehicle", "BodyState", "chain_states", "MAX_ROLLOVER_THRESHOLD"]
+
+
+#: Largest rollover threshold accepted [g]: a rigid body's t / (2 h) is about 1.2-1.5 for the
+#: lowest sports cars; a heavy truck's tilt-table threshold is 0.25-0.6.
+MAX_ROLLOVER_THRESHOLD = 1.5
 
 
 def _positive(name: str, value: float, *, allow_inf: bool = False) -> float:
@@ -27,6 +32,10 @@ def _positive(name: str, value: float, *, allow_inf: bool = False) -> float:
 
 
 def _point(name: str, value) -> tuple[float, float]:
+    if type(value) is tuple and len(value) == 2 and all(type(c) in (float, np.float64) for c in value):
+        x, y = float(value[0]), float(value[1])  # the common case, without NumPy's per-call cost
+        if math.isfinite(x) and math.isfinite(y):
+            return (x, y)
     arr = np.asarray(value, dtype=float)
     if arr.shape != (2,) or not np.all(np.isfinite(arr)):
         raise ScenarioError(f"must be a finite 2-vector (x, y) in metres, got {value!r}", field=name)
@@ -81,6 +90,15 @@ class Body:
         Axles for the run-out (may be empty for an impact-only study).
     cg_height : float, optional
         CG height above ground [m], used only by the load-transfer option.
+    rollover_threshold : float, optional
+        Lateral acceleration [g] at which the body rolls (its static rollover threshold, e.g.
+        from a tilt table), in (0, :data:`MAX_ROLLOVER_THRESHOLD`]; None: the default
+        ``0.75 t / (2 h)`` when the rollover check is on (:mod:`crashsim.motion.rollover`).
+    roll_coupled : bool
+        The hitch by which this body is towed carries roll moment (a fifth wheel, stiff in roll):
+        with load transfer, the body's roll moment is shared with the towing body in proportion to
+        the hitch's static vertical load (:func:`crashsim.motion.loads.load_transfer_matrix`).
+        Default False: free in roll (a ball, a drawbar eye).
     """
 
     name: str
@@ -91,6 +109,8 @@ class Body:
     outline_center: tuple[float, float] = (0.0, 0.0)
     axles: tuple[Axle, ...] = ()
     cg_height: float | None = None
+    rollover_threshold: float | None = None
+    roll_coupled: bool = False
 
     def __post_init__(self):
         if not self.name or not isinstance(self.name, str):
@@ -109,6 +129,10 @@ class Body:
             v = getattr(self, attr)
             if v is not None:
                 object.__setattr__(self, attr, _positive(f"{self.name}.{attr}", v))
+        thr = self.rollover_threshold
+        if thr is not None and not (0.0 < thr <= MAX_ROLLOVER_THRESHOLD):
+            raise ScenarioError(f"rollover threshold {thr!r} g outside (0, {MAX_ROLLOVER_THRESHOLD:g}] g",
+                                field=f"{self.name}.rollover_threshold")
         object.__setattr__(self, "outline_center", _point(f"{self.name}.outline_center", self.outline_center))
         object.__setattr__(self, "axles", tuple(self.axles))
 

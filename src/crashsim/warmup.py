@@ -8,7 +8,7 @@ compile_kernels(progress)
     Every kernel through the scenario loader and :func:`crashsim.scene.run_scene`, then mark
     the cache ready (what ``crashsim`` does once, with a progress line, before a first run).
 compile_runout(), compile_report()
-    The run-out kernels alone through :func:`crashsim.motion.simulate_scene`, timed (the
+    The run-out kernels alone through :func:`crashsim.motion.run_runout`, timed (the
     compile-time benchmark).
 """
 
@@ -21,8 +21,8 @@ from pathlib import Path
 from typing import Callable
 
 from ._jit import marker
-from .motion import RunoutOptions, Road, simulate_scene
-from .motion.model import kernels
+from .motion import RunoutOptions, Road, run_runout
+from .motion.scene_model import kernels
 from .scenario import scenario_from_dict
 from .scene import run_scene
 from .vehicles import Axle, Body, BodyState, Hitch, Vehicle
@@ -119,7 +119,7 @@ def compile_runout() -> float:
         scene = [Vehicle("warm-up", (tractor, trailer), (Hitch((-2.0, 0.0), (1.5, 0.0), articulation_limit=1.0),)),
                  Vehicle("struck", (other,))]
         for engine in ("compiled", "scipy"):
-            simulate_scene(scene, states, None, Road(0.7), RunoutOptions(engine=engine, t_max=2.0))
+            run_runout(scene, states, None, Road(0.7), RunoutOptions(t_max=2.0), engine=engine)
         _COMPILE["seconds"] = time.perf_counter() - t0
         _COMPILE["from_cache"] = bool(k.run.stats.cache_hits) and not k.run.stats.cache_misses
         return _COMPILE["seconds"]

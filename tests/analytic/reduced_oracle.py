@@ -11,9 +11,9 @@ through the hitch, ``r2 = r1 + a - b`` (note sec. 1.3)::
     Q = (F1 + F2,  M1 + a x F2,  M2 - b x F2),   c = -w1^2 a + w2^2 b
 
 The constraint holds exactly by construction, so comparing this with the maximal-coordinate
-engine (:mod:`crashsim.motion.dynamics`, Lagrange multipliers + Baumgarte) checks the
+engine (:mod:`crashsim.motion.hitches`, Lagrange multipliers + Baumgarte) checks the
 multiplier and stabilisation code.  The tyre forces come from the same
-:class:`~crashsim.motion.dynamics.RunoutModel` (same wheels, loads and tyre law).  Only
+:class:`~crashsim.motion.hitches.RunoutModel` (same wheels, loads and tyre law).  Only
 what the oracle tests need is supported: one hitch, no friction zones, no schedule, no
 articulation limit, no load transfer.
 """
@@ -28,7 +28,7 @@ from scipy.integrate import solve_ivp
 
 from crashsim.errors import ScenarioError
 from crashsim.vehicles import BodyState, Vehicle
-from crashsim.motion.dynamics import RunoutModel
+from crashsim.motion.hitches import RunoutModel
 from crashsim.motion.options import RunoutOptions
 from crashsim.motion.road import Road
 from crashsim.motion.wheels import WheelSettings

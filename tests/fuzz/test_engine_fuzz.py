@@ -9,8 +9,9 @@ below the impact threshold): if the engines disagree at 1e-8, both are run again
 must then agree -- the difference was integration error, not a difference of the models.
 
 On every scene both engines report the same later impacts (the same pairs in the same order,
-within 1 ms), the energy ledger closes (the kinetic energy before the run-out is the sum of
-what the impacts, tyres, articulation stops and contacts took, plus what is left) to 1e-6 of
+within 1 ms); on every case with load transfer (the rollover check is on there) both report the
+same wheel-lift and rollover events (the same kinds of the same bodies, within 1 ms). The
+energy ledger closes (the kinetic energy before the run-out is the sum of what the impacts, tyres, articulation stops and contacts took, plus what is left) to 1e-6 of
 the start, no line of it is negative (no mechanism makes energy), no point lies deeper than
 the pair's peak force over the stiffness plus 1 mm, and no point in contact closes at the
 impulse threshold outside an impact (every re-strike is an impact).
@@ -26,6 +27,7 @@ import math
 import pytest
 
 from crashsim.motion import ContactModel, simulate_runout, simulate_scene
+from crashsim.motion.rollover import ROLL_EVENT_KINDS
 from random_runouts import random_case, random_scene
 
 SEED = 20261124
@@ -60,8 +62,22 @@ def _same_impacts(a, b) -> bool:
     return len(ia) == len(ib) and all(x[:2] == y[:2] and abs(x[2] - y[2]) <= IMPACT_TOL for x, y in zip(ia, ib))
 
 
+def _roll_events(result) -> dict:
+    """The wheel-lift and rollover events of a run, ``{(kind, body): time}`` (each at most once per body;
+    none without the check)."""
+    return {(e.kind, e.data["body"]): e.t for e in result.events if e.kind in ROLL_EVENT_KINDS}
+
+
+def _same_roll_events(a, b) -> bool:
+    """The same wheel-lift and rollover events on both engines: the same kinds of the same bodies, within
+    IMPACT_TOL (each located on its engine's own solution by the same rule; events of equal time may be
+    listed in either order)."""
+    ra, rb = _roll_events(a), _roll_events(b)
+    return ra.keys() == rb.keys() and all(abs(ra[k] - rb[k]) <= IMPACT_TOL for k in ra)
+
+
 def _agree(a, b) -> bool:
-    if a.status != b.status or not _same_impacts(a, b):
+    if a.status != b.status or not _same_impacts(a, b) or not _same_roll_events(a, b):
         return False
     dp, dh = _difference(a, b)
     return dp <= POS_TOL and dh <= HEADING_TOL
@@ -78,6 +94,7 @@ def _check_engines(run, options, label):
         a, b = runs["scipy"], runs["compiled"]
         assert a.status == b.status, (label, a.status, b.status, a.message, b.message)
         assert _same_impacts(a, b), (label, _impacts(a), _impacts(b))
+        assert _same_roll_events(a, b), (label, _roll_events(a), _roll_events(b))
         dp, dh = _difference(a, b)
         assert dp <= POS_TOL and dh <= HEADING_TOL, (label, dp, math.degrees(dh))
     for r in runs.values():
@@ -141,3 +158,14 @@ def test_the_sample_has_impacts_contacts_and_articulated_vehicles():
         obstacles += bool(c.obstacles)
     assert impacts >= 5 and hitched >= 5 and obstacles >= 2 and restrikes >= 1
     assert {"impact", "contact_end"} <= kinds
+
+
+def test_the_sample_has_rollover_events():
+    """The rollover check of the fuzz is exercised: cases with the check record events, some after the start."""
+    times = []
+    for i in range(N_SINGLE):
+        c = random_case(SEED, i)
+        if c.options.rollover:
+            r = simulate_runout(c.vehicle, c.initial, c.wheels, c.road, dataclasses.replace(c.options, engine="compiled"))
+            times += list(_roll_events(r).values())
+    assert len(times) >= 4 and max(times) > 0.1

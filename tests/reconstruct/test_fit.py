@@ -172,3 +172,25 @@ def test_evidence_without_sigma_is_an_error():
     res = fit_scene(data, {**spec, "starts": 1, "sigma_from_tolerance": 0.5}, workers=1, engine=ENGINE)
     assert res.residuals[0].sigma_source == "tolerance x 0.5"
     assert math.isclose(res.residuals[0].sigma, 0.3)
+
+
+def test_the_fit_reads_the_sigmas_of_the_typed_evidence():
+    """Each evidence item carries its sigma in SI (loaded from the file with its unit); the fit's
+    weights come from those typed items, not from the scenario's dict."""
+    import dataclasses
+    from pathlib import Path
+
+    from crashsim.reconstruct.fit import EvidenceModel
+    from crashsim.scenario import load_scenario
+
+    sc = load_scenario(Path(__file__).resolve().parents[2] / "scenarios" / "fit" / "intersection_fit.toml")
+    ev = sc.evidence
+    assert ev.impact_point.sigma == pytest.approx(0.25)
+    assert ev.rest[0].sigma == pytest.approx(0.25) and ev.rest[0].heading_sigma == pytest.approx(math.radians(5))
+    assert ev.delta_v[0].sigma == pytest.approx(0.25 * 0.44704) and ev.marks[0].sigma == pytest.approx(0.2)
+    model = EvidenceModel(sc)
+    # the same weights with the scenario's dict emptied of its evidence: nothing is read from it
+    bare = dataclasses.replace(sc, data={k: v for k, v in sc.data.items() if k != "evidence"})
+    assert [(it.name, it.sigma, it.sigma_source) for it in EvidenceModel(bare).items] == \
+        [(it.name, it.sigma, it.sigma_source) for it in model.items]
+    assert [it.sigma for it in model.items if it.kind == "rest"] == [r.sigma for r in ev.rest]

@@ -254,7 +254,7 @@ def replace_approaches(sc):
 def test_scene_model_on_another_road_equals_a_new_model():
     """SceneModel.with_road (the cached model of crashsim.scene.models with another road friction) holds the
     arrays of a model built from scratch on that road; another zone set is refused."""
-    from crashsim.motion.model import SceneModel
+    from crashsim.motion.scene_model import SceneModel
     from crashsim.motion.road import Road
     from crashsim.scene import models
 

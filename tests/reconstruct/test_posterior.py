@@ -180,7 +180,8 @@ def test_a_scene_that_cannot_be_evaluated_has_probability_zero_and_is_counted():
     """A run-out over its time limit: log-posterior -inf (never accepted), NaN derived values, and
     its reason, which the pools tally for the report."""
     from crashsim.reconstruct.fit import FitSpec
-    from crashsim.reconstruct.posterior import PosteriorProblem, _SerialPool, build_priors
+    from crashsim.reconstruct.parallel import Executor
+    from crashsim.reconstruct.posterior import PosteriorProblem, _EmceePool, build_priors
 
     data = rebound()
     fs = FitSpec.from_dict(data["fit"], data)
@@ -191,7 +192,7 @@ def test_a_scene_that_cannot_be_evaluated_has_probability_zero_and_is_counted():
     lp, blob, reason = slow.evaluate(ok.fit.z_of([9.0]))
     assert lp == -math.inf and np.isnan(blob).all() and len(blob) == len(keys)
     assert reason == "run-out: wall_time_limit"
-    pool = _SerialPool(slow)
+    pool = _EmceePool(Executor(None, {}, "serial", local=slow))
     assert [r[0] for r in pool.map(None, [ok.fit.z_of([8.0]), ok.fit.z_of([9.0])])] == [-math.inf, -math.inf]
     assert pool.failures == {"run-out: wall_time_limit": 2} and pool.evaluations == 2
     # outside the prior's support: -inf without running the scene, and not a failure

@@ -1,4 +1,4 @@
-"""The compiled run-out engine (``RunoutOptions(engine="compiled")``, crashsim.motion.fast).
+"""The compiled run-out engine (``RunoutOptions(engine="compiled")``, crashsim.motion.compiled_solution).
 
 Three kinds of evidence:
 
@@ -41,7 +41,7 @@ from crashsim.motion import (
 )
 from crashsim import warmup
 from crashsim.motion import tyres
-from crashsim.motion.dynamics import RunoutModel
+from crashsim.motion.hitches import RunoutModel
 from crashsim.vehicles import Axle, Body, BodyState, Hitch, Vehicle, chain_states
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "analytic"))
@@ -140,7 +140,7 @@ def test_the_right_hand_side_keeps_the_hitch_and_conserves_momentum(load_transfe
     phases, a closed stop): the accelerations satisfy the Baumgarte-stabilised constraint rows
     (computed independently by ``dynamics.hitch_rows``), the hitch forces are internal (the
     momentum changes by the tyre forces alone), and a closed stop holds the articulation."""
-    from crashsim.motion.dynamics import hitch_rows
+    from crashsim.motion.hitches import hitch_rows
 
     veh, wheels, road = _truck_case()
     for body in veh.bodies:  # load transfer needs CG heights
@@ -227,7 +227,7 @@ def test_result_is_a_complete_runout_result():
     ref = simulate_runout(veh, init, wheels, road, RunoutOptions())
     assert isinstance(res, RunoutResult) and res.success
     assert res.method == "compiled/dopri5" and res.nfev > 0 and res.njev == 0 and res.nlu == 0
-    assert res.options == dataclasses.asdict(COMPILED)
+    assert res.options == COMPILED.to_dict()
     assert set(res.wheels) == set(ref.wheels) and set(res.bodies) == set(ref.bodies)
     json.dumps(res.to_dict())
     table = res.table()

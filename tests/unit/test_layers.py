@@ -160,6 +160,10 @@ SHIMS = [
     ("crashsim.reconstruct.crush", "crashsim.evidence.crush", "profile_outline"),
     ("crashsim.reconstruct.inverse_schema", "crashsim.inverse_schema", "with_inverse_sections"),
     ("crashsim.motion.jitcache", "crashsim._jit", "cache_dir"),
+    ("crashsim.motion.fast", "crashsim.motion.compiled_solution", "CompiledSolution"),
+    ("crashsim.motion.dynamics", "crashsim.motion.hitches", "RunoutModel"),
+    ("crashsim.motion.model", "crashsim.motion.scene_model", "SceneModel"),
+    ("crashsim.impact.model", "crashsim.impact.problem", "ImpactProblem"),
 ]
 
 

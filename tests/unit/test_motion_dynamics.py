@@ -1,4 +1,4 @@
-"""Unit tests of the equations of motion (crashsim.motion.dynamics)."""
+"""Unit tests of the equations of motion (crashsim.motion.hitches)."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from crashsim.motion import Road, RunoutOptions, WheelSetting, WheelSettings, make_hitch_consistent, simulate_runout
-from crashsim.motion.dynamics import RunoutModel
+from crashsim.motion.hitches import RunoutModel
 from crashsim.motion.simulate import zone_membership
 from crashsim.vehicles import Axle, Body, Hitch, Vehicle, chain_states
 

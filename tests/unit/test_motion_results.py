@@ -20,7 +20,7 @@ from crashsim.motion import (
     simulate_runout,
     simulate_scene,
 )
-from crashsim.motion import dynamics
+from crashsim.motion import hitches as dynamics
 from crashsim.vehicles import Axle, Body, BodyState, Hitch, Vehicle, chain_states
 
 CAR = Vehicle("car", (Body("car", 1500.0, 2800.0, length=4.6, axles=(Axle(1.1, 1.5), Axle(-1.5, 1.5))),))

@@ -4,7 +4,7 @@ What is shared with the SciPy engine and what is not
 ----------------------------------------------------
 Shared (so that differences are integration differences): the vehicle, wheel settings,
 static loads, road and the **tyre force function** -- every step calls
-:meth:`crashsim.motion.dynamics.RunoutModel.evaluate` for the per-body tyre forces and
+:meth:`crashsim.motion.hitches.RunoutModel.evaluate` for the per-body tyre forces and
 moments (the constraint part of that evaluation is not used).  Independent: the time
 integration (pymunk's fixed-step semi-implicit Euler), the hitch (a ``pymunk.PivotJoint``
 solved by pymunk's iterative impulse solver with its own positional bias, *not* the
@@ -36,10 +36,10 @@ from typing import Mapping
 import numpy as np
 
 from ..errors import ScenarioError
-from ..motion.dynamics import RunoutModel
+from ..motion.hitches import RunoutModel
 from ..motion.loads import STANDARD_GRAVITY
 from ..motion.options import RunoutOptions
-from ..motion.postprocess import assemble_result
+from ..motion.postprocess import build_result, chunk_inputs
 from ..motion.result import RunoutEvent, RunoutResult
 from ..motion.road import Road
 from ..motion.engine import check_scene_hitches
@@ -270,7 +270,7 @@ def simulate_runout_pymunk(
                 quadrature.append((quad_seg[start], np.full(k - start, dt), QY[:, start:k]))
                 start = k
     events = [RunoutEvent(t, status, message)]
-    return assemble_result(
+    return build_result(model, chunk_inputs(
         model,
         samples=samples,
         quadrature=quadrature,
@@ -287,4 +287,4 @@ def simulate_runout_pymunk(
         n_segments=1,
         method=f"pymunk/dt={dt:g}",
         hitch_force=np.array(rec_hitch),
-    )
+    ))

@@ -25,6 +25,12 @@ delta-v         computed minus recorded delta-v of a body [m/s]: its magnitude, 
                 which includes a later impact).
 crush energy    the impact model's energy loss at the crush surface minus the CRASH3 crush energy
                 of the bodies [J], per group of crush items (:mod:`crashsim.evidence.crush`).
+rollover        a statement that a vehicle (any of its units) or one unit did or did not roll,
+                against the run-out's wheel-lift and rollover check
+                (:mod:`crashsim.motion.rollover`): residual computed minus stated (1 rolls, 0
+                does not), tolerance 0, so the verdict is whether they agree. A yes/no outcome
+                has no gradient: the fit does not fit it; Monte Carlo counts it among the
+                evidence a sample meets.
 """
 
 from __future__ import annotations
@@ -40,7 +46,7 @@ from .crush import crush_checks
 from .outcome import Check
 
 __all__ = [
-    "RestEvidence", "MarkEvidence", "ImpactPointEvidence", "DeltaVEvidence", "Evidence",
+    "RestEvidence", "MarkEvidence", "ImpactPointEvidence", "DeltaVEvidence", "RolloverEvidence", "Evidence",
     "Check", "EvidenceReport", "evaluate_evidence", "distance_to_polyline", "signed_distance_to_polyline",
     "MARK_SPACING", "Registration", "register_points", "named_body_points", "CORNERS", "MIN_POINT_SPREAD",
 ]
@@ -206,6 +212,8 @@ class RestEvidence:
     heading_tolerance: float | None = None
     name: str = ""
     registration: Registration | None = None
+    sigma: float | None = None  # measurement uncertainty of the position [m] (fit, posterior)
+    heading_sigma: float | None = None  # of the heading [rad]
 
 
 @dataclass(frozen=True)
@@ -216,6 +224,7 @@ class MarkEvidence:
     sliding_only: bool = True
     name: str = ""
     phase: str = "runout"  # "runout": left after the impact; "approach": before it (pre-impact skid or yaw mark)
+    sigma: float | None = None  # measurement uncertainty [m] (fit, posterior)
 
 
 @dataclass(frozen=True)
@@ -223,6 +232,7 @@ class ImpactPointEvidence:
     position: tuple[float, float]
     tolerance: float
     name: str = "point of impact"
+    sigma: float | None = None  # measurement uncertainty [m] (fit, posterior)
 
 
 @dataclass(frozen=True)
@@ -233,6 +243,7 @@ class DeltaVEvidence:
     component: str = "magnitude"  # "magnitude", "longitudinal", "lateral"
     name: str = ""
     impacts: str = "first"  # "first": the first impact only (one recorded event); "all": the sum over the body's impacts
+    sigma: float | None = None  # measurement uncertainty [m/s] (fit, posterior)
 
 
 @dataclass(frozen=True)
@@ -251,6 +262,16 @@ class RecorderEvidence:
     tolerance: float
     time_offset: float = 0.0
     name: str = ""
+    sigma: float | None = None  # measurement uncertainty of a sample [m/s] (fit, posterior)
+
+
+@dataclass(frozen=True)
+class RolloverEvidence:
+    """A vehicle (any of its units) or one unit (body) did (``rolled``) or did not roll."""
+
+    unit: str
+    rolled: bool
+    name: str = ""
 
 
 @dataclass(frozen=True)
@@ -263,11 +284,12 @@ class Evidence:
     delta_v: tuple[DeltaVEvidence, ...] = ()
     recorder: tuple[RecorderEvidence, ...] = ()
     crush: tuple = ()  # CrushEvidence (crashsim.evidence.crush)
+    rollover: tuple = ()  # RolloverEvidence
 
     @property
     def empty(self) -> bool:
         return not (self.rest or self.marks or self.delta_v or self.impact_point or self.recorder
-                    or self.crush)
+                    or self.crush or self.rollover)
 
 
 def recorder_residuals(ev: RecorderEvidence, approach) -> tuple[np.ndarray, np.ndarray]:
@@ -545,4 +567,25 @@ def evaluate_evidence(evidence: Evidence, impact, runout: dict | None, contact_p
         checks.append(_check_recorder(ev, approach_of_body(approaches, ev.body), i))
     if evidence.crush:
         checks += crush_checks(evidence.crush, impact, secondary)
+    for ev in evidence.rollover:
+        checks.append(_check_rollover(ev, runout))
     return EvidenceReport(tuple(checks))
+
+
+def _check_rollover(ev: RolloverEvidence, runout: dict | None) -> Check:
+    """A rollover statement against the run-out's wheel-lift and rollover check."""
+    stated = "rolls" if ev.rolled else "does not roll"
+    name = ev.name or f"{ev.unit} {stated}"
+    for vname, r in (runout or {}).items():
+        if ev.unit != vname and ev.unit not in r.bodies:
+            continue
+        roll = getattr(r, "rollover", None)
+        if roll is None:
+            break
+        computed = roll["rolled"] if ev.unit == vname else ev.unit in roll["rolled_bodies"]
+        res = float(computed) - float(ev.rolled)
+        return Check("rollover", name, res, 0.0, computed == ev.rolled, "dimensionless",
+                     {"computed": bool(computed), "stated": bool(ev.rolled), "valid_until_s": roll["valid_until_s"],
+                      "rolled_bodies": list(roll["rolled_bodies"])})
+    return Check("rollover", name, math.inf, 0.0, False, "dimensionless",
+                 {"reason": "no wheel-lift and rollover check was run for it (runout.rollover, level load_transfer)"})

@@ -65,6 +65,7 @@ class CrushEvidence:
     correction: bool = True
     source: str = "given"
     name: str = ""
+    sigma: float | None = None  # measurement uncertainty of its energy [J] (fit, posterior)
 
     @property
     def energy_uncorrected(self) -> float:

@@ -12,7 +12,7 @@ from ..errors import IllConditionedError, ScenarioError
 from .admissible import check_admissible, impulse_work
 from .core import (COND_LIMIT, WORK_KEYS, ImpactArrays, ImpactStructure, energy_loss_fraction, input_shapes,
                    inputs, solve_arrays, solve_packed)
-from .model import ImpactProblem
+from .problem import ImpactProblem
 from .result import ImpactResult
 
 __all__ = ["compile_problem", "solve_impact", "ImpactBatch", "CONDITION_LIMIT"]

@@ -1,7 +1,7 @@
 """Parameter sweeps on a batch of impacts, and the paper's barrier sweep (Figures 4 and 5).
 
 Pure numpy: a sweep is one :class:`~crashsim.impact.solve.ImpactBatch` built from a template
-:class:`~crashsim.impact.model.ImpactProblem`, with one field of its
+:class:`~crashsim.impact.problem.ImpactProblem`, with one field of its
 :class:`~crashsim.impact.core.ImpactArrays` set along the batch axis. Everything is SI and
 radians; degrees appear only in labels.
 
@@ -35,7 +35,7 @@ import numpy as np
 from ..errors import ScenarioError
 from ..vehicles import Body, BodyState, Hitch, Vehicle, chain_states
 from .core import ImpactArrays
-from .model import CrushSurface, ImpactProblem, TangentialLaw
+from .problem import CrushSurface, ImpactProblem, TangentialLaw
 from .solve import ImpactBatch
 
 __all__ = [

@@ -2,6 +2,10 @@
 
 Public API
 ----------
+run_runout, Runout
+    The one run-out entry: a scene's movable vehicles at a fidelity level (``level=``), on an
+    engine (``engine=`` or ``RunoutOptions.engine``), optionally to an accuracy target
+    (``accuracy=``); what the scene run, the approach and the warm-up call.
 simulate_runout, simulate_scene
     Integrate the run-out of one vehicle / of a whole scene (every vehicle together, with
     contact between them and with fixed obstacles: secondary impacts by the impulse solver,
@@ -29,18 +33,21 @@ when the compiled engine is first used.
 """
 
 from .contact import ContactModel, Obstacle
-from .dynamics import make_hitch_consistent
+from .hitches import make_hitch_consistent
 from .layout import StateLayout
 from .loads import StaticLoads, static_loads
 from .options import ENGINES, METHODS, SCHEMES, RunoutOptions
 from .result import (BodyHistory, BodyRunout, HitchHistory, PairSummary, RunoutEvent, RunoutResult, SceneRunout,
                      SecondaryImpact, TrackSegment, WheelTrack)
 from .road import FrictionZone, Road
+from .runout import Runout, run_runout
 from .simulate import simulate_runout, simulate_scene
 from .tyres import LATERAL_MODELS, lateral_force, tyre_forces
 from .wheels import WHEEL_STATES, ScheduledChange, WheelSetting, WheelSettings
 
 __all__ = [
+    "run_runout",
+    "Runout",
     "simulate_runout",
     "simulate_scene",
     "make_hitch_consistent",

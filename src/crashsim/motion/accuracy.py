@@ -94,7 +94,7 @@ import numpy as np
 
 from ..errors import ScenarioError
 from ..vehicles import BodyState, Vehicle
-from .dynamics import RunoutModel
+from .hitches import RunoutModel
 from .levels import simulate_level
 from .loads import STANDARD_GRAVITY
 from .options import RunoutOptions

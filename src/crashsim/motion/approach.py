@@ -53,7 +53,7 @@ from .options import RunoutOptions
 from .postprocess import split_track
 from .result import RunoutResult, TrackSegment, WheelTrack
 from .road import Road
-from .simulate import simulate_runout
+from .runout import run_runout
 from .wheels import WheelSettings
 
 __all__ = ["ApproachSpec", "ApproachResult", "simulate_approach", "approach_speed_at_braking"]
@@ -277,7 +277,8 @@ def _run(vehicle: Vehicle, spec: ApproachSpec, speed: float, position, heading: 
     first = vehicle.bodies[0].name
     while True:
         limit = min(limit, options.t_max)
-        run = simulate_runout(vehicle, init, spec.wheels, road, replace(options, t_max=limit))
+        run = run_runout([vehicle], init, {vehicle.name: spec.wheels}, road,
+                         replace(options, t_max=limit)).vehicles[vehicle.name]
         if run.status != "time_limit" or limit >= options.t_max:
             return run
         if spec.mode == "time" and run.t_end >= spec.time:

@@ -53,9 +53,9 @@ from scipy.optimize import brentq
 from ..errors import InadmissibleImpactError, ScenarioError, SolverError
 from ..impact import CrushSurface, ImpactProblem, TangentialLaw, solve_impact
 from ..vehicles import Body, BodyState, Vehicle
-from .dynamics import make_hitch_consistent
-from .fast import CompiledSolution
-from .model import SceneModel, kernels
+from .hitches import make_hitch_consistent
+from .compiled_solution import CompiledSolution
+from .scene_model import SceneModel, kernels
 from .options import MAX_STILL_SEGMENTS
 from .postprocess import GL_NODES, GL_WEIGHTS, assemble_scene, mode_snapshot, segment_arrays, split_track
 from .result import (BodyHistory, BodyRunout, HitchHistory, PairSummary, RunoutEvent, RunoutResult, SceneRunout,

@@ -116,6 +116,7 @@ import dataclasses
 import difflib
 import logging
 import math
+import warnings
 from typing import Mapping
 
 import numpy as np
@@ -124,19 +125,20 @@ from scipy.optimize import brentq
 from ..errors import ScenarioError
 from ..vehicles import BodyState, Vehicle
 from .contact import ContactModel
-from .dynamics import RunoutModel
+from .hitches import RunoutModel
 from .engine import run_model
 from .loads import STANDARD_GRAVITY
-from .model import SceneModel
+from .scene_model import SceneModel
 from .options import RunoutOptions
-from .postprocess import split_track
-from .result import BodyHistory, BodyRunout, HitchHistory, RunoutEvent, RunoutResult, WheelTrack
+from .postprocess import ResultInputs, build_result
+from .result import BodyRunout, HitchHistory, RunoutEvent, RunoutResult
 from .road import Road, slope_gravity
 from .simulate import simulate_runout
 from .tyres import tyre_forces
 from .wheels import WheelSettings
 
-__all__ = ["LEVELS", "LEVEL_DESCRIPTIONS", "simulate_level", "simulate_scene_level", "energy_runout", "rigid_runout"]
+__all__ = ["LEVELS", "LEVEL_DESCRIPTIONS", "check_level", "simulate_level", "simulate_scene_level", "energy_runout",
+           "rigid_runout"]
 
 _log = logging.getLogger("crashsim")
 
@@ -156,7 +158,8 @@ LEVEL_DESCRIPTIONS = {
 _SWEEP_POINTS_PER_RAD = 32
 
 
-def _check_level(level: str) -> str:
+def check_level(level: str) -> str:
+    """``level`` if it is one of :data:`LEVELS`, else a ScenarioError naming the nearest (field ``runout.level``)."""
     if level not in LEVELS:
         close = difflib.get_close_matches(str(level), LEVELS, n=3)
         hint = f"; best matches are {close}" if close else ""
@@ -231,7 +234,7 @@ def simulate_level(
     >>> simulate_level("impact", car, start, None, Road(mu=0.75)) is None
     True
     """
-    _check_level(level)
+    check_level(level)
     settings = _check_inputs(vehicle, road, options, wheels)
     if level == "impact":
         return None
@@ -253,12 +256,20 @@ def simulate_scene_level(
     road: Road,
     options: RunoutOptions = RunoutOptions(),
 ) -> dict[str, RunoutResult] | None:
-    """:func:`simulate_level` for every movable vehicle of a scene (None for ``"impact"``).
+    """:func:`simulate_level` for every movable vehicle of a scene, each alone (None for ``"impact"``).
+
+    .. deprecated::
+        Use :func:`crashsim.motion.run_runout` (``level=...``; its ``.vehicles``), the one run-out
+        entry.  It runs the ``articulated`` and ``load_transfer`` levels with every vehicle
+        together and with contact, as a scene does; this function runs each vehicle alone.
 
     Mirrors :func:`~crashsim.motion.simulate_scene`: results by vehicle name, barriers absent,
     a vehicle not in ``wheels_by_vehicle`` has all wheels locked.
     """
-    _check_level(level)
+    warnings.warn("crashsim.motion.levels.simulate_scene_level is deprecated; use crashsim.motion.run_runout "
+                  "(level=...), which runs the articulated levels with every vehicle together and with contact",
+                  DeprecationWarning, stacklevel=2)
+    check_level(level)
     vehicles = list(vehicles)
     wheels_by_vehicle = dict(wheels_by_vehicle or {})
     names = [v.name for v in vehicles]
@@ -519,34 +530,13 @@ def energy_runout(
     times = np.concatenate([times, [t_end]]) if (times.size == 0 or times[-1] < t_end) else times
     Y = motion.state(times)
     y_end = motion.state(t_end)
-    bodies = {}
-    initial_states = L.unpack(y0)
-    final_states = L.unpack(y_end)
-    at_rest = status == "rest"
-    for i, name in enumerate(L.bodies):
-
-        def body_sol(tq, _i=i):
-            yq = np.asarray(motion.state(tq))
-            return np.stack([yq[getattr(L, f).start + _i] for f in L.FIELDS])
-
-        hist = BodyHistory(t=times, x=Y[L.x][i], y=Y[L.y][i], heading=Y[L.psi][i], vx=Y[L.vx][i], vy=Y[L.vy][i],
-                           yaw_rate=Y[L.w][i])
-        # CG path length of body i: integrate its speed (trapezoid on a fine grid)
-        fine = np.linspace(0.0, t_end, 2001) if t_end > 0 else np.zeros(1)
+    # CG path length of every body: integrate its speed (trapezoid on a fine grid)
+    distance = np.zeros(nb)
+    if t_end > 0:
+        fine = np.linspace(0.0, t_end, 2001)
         yf = motion.state(fine)
-        sp = np.hypot(yf[L.vx][i], yf[L.vy][i])
-        dist = float(np.trapezoid(sp, fine)) if t_end > 0 else 0.0
-        bodies[name] = BodyRunout(
-            name=name,
-            initial=initial_states[name],
-            final=final_states[name],
-            rest_position=final_states[name].position,
-            rest_heading=final_states[name].heading,
-            time_to_rest=float(t_end) if at_rest else None,
-            distance=dist,
-            history=hist,
-            sol=body_sol,
-        )
+        for i in range(nb):
+            distance[i] = float(np.trapezoid(np.hypot(yf[L.vx][i], yf[L.vy][i]), fine))
 
     # wheel positions and sliding flags (tyre model at the kinematic states)
     psi_b = Y[L.psi][model.wheel_body]  # (n_wheels, K)
@@ -577,27 +567,13 @@ def energy_runout(
     )
     sliding = np.array(sliding, dtype=bool)
     energy = wheel_trans_work + wheel_rot_work
-    wheels_out = {}
-    for k, spec in enumerate(model.specs):
-        pts = np.stack([wx[k], wy[k]], 1)
-        seglen = np.hypot(*np.diff(pts, axis=0).T) if len(pts) > 1 else np.zeros(0)
-        path = float(seglen.sum())
-        slide_len = float(np.sum(seglen * sliding[k, :-1])) if len(pts) > 1 else 0.0
-        wheels_out[spec.key] = WheelTrack(
-            key=spec.key, body=spec.body, axle_index=spec.axle_index, axle_name=spec.axle_name, side=spec.side,
-            static_load=float(N[k]), t=times, points=pts, sliding=sliding[k].copy(), load=np.full(times.size, N[k]),
-            segments=split_track(times, pts, sliding[k]), path_length=path, sliding_length=slide_len,
-            energy=float(energy[k]),
-        )
-
-    hitches = []
-    for j in range(nb - 1):
-        art = Y[L.psi][j] - Y[L.psi][j + 1]
-        hitches.append(
-            HitchHistory(front=L.bodies[j], rear=L.bodies[j + 1], static_load=float(model.loads.hitch[j]), t=times,
-                         force=np.full((times.size, 2), np.nan), force_body=np.full((times.size, 2), np.nan),
-                         articulation=art, stop_moment=np.zeros(times.size))
-        )
+    points = np.stack([wx, wy], axis=-1)  # (n_wheels, K, 2)
+    path_length, sliding_length = np.zeros(len(N)), np.zeros(len(N))
+    if times.size > 1:
+        seglen = np.hypot(*np.diff(points, axis=1).transpose(2, 0, 1))  # (n_wheels, K - 1)
+        for k in range(len(N)):
+            path_length[k] = float(seglen[k].sum())
+            sliding_length[k] = float(np.sum(seglen[k] * sliding[k, :-1]))
 
     notes = []
     if scheduled:
@@ -617,30 +593,13 @@ def energy_runout(
         events.append(RunoutEvent(0.0, "lock", "articulation frozen (rigid vehicle) by a plastic hitch impulse",
                                   energy=lock_loss))
     events.append(RunoutEvent(t_end, status, message))
-    return RunoutResult(
-        vehicle=vehicle.name,
-        success=at_rest,
-        status=status,
-        message=message,
-        t_end=float(t_end),
-        nfev=0,
-        njev=0,
-        nlu=0,
-        n_segments=0,
-        bodies=bodies,
-        wheels=wheels_out,
-        hitches=tuple(hitches),
-        events=tuple(events),
-        kinetic_energy_initial=ke0,
-        kinetic_energy_final=float(model.kinetic_energy(y_end)),
-        energy_dissipated=float(energy.sum()),
-        gravity_work=w_gravity,
-        max_hitch_gap=0.0,
-        method="energy",
-        options={**opts.to_dict(), "level": "energy"},
-        sol=motion,
-        layout=L,
-    )
+    return build_result(model, ResultInputs(
+        t=times, Y=Y, points=points, sliding=sliding, load=np.repeat(N[:, None], times.size, axis=1),
+        hitch_force=np.full((times.size, 2 * (nb - 1)), np.nan), stop_moment=np.zeros((times.size, nb - 1)),
+        distance=distance, path_length=path_length, sliding_length=sliding_length, energy=energy, max_gap=0.0,
+        status=status, message=message, t_end=t_end, y_initial=y0, y_final=y_end, sol=motion, events=events,
+        method="energy", kinetic_energies=(ke0, float(model.kinetic_energy(y_end))), gravity_work=w_gravity,
+        static_load=N, options={**opts.to_dict(), "level": "energy"}))
 
 
 # ---------------------------------------------------------------------------------------------- rigid

@@ -39,7 +39,12 @@ the body-axes CG accelerations ``a_x`` (forward), ``a_y`` (left) of every body:
   through the kingpin, the tractor).  Hitch forces are taken to act at ground level (hitch
   heights are not part of the vehicle description);
 * lateral: the roll moment ``m a_y h`` of each body is carried by that body's own axles in
-  proportion to their static loads, ``dN_right = -dN_left = share * m a_y h / track``.
+  proportion to their static loads, ``dN_right = -dN_left = share * m a_y h / track``.  A towed
+  body with ``roll_coupled`` (its fifth wheel stiff in roll) passes the fraction
+  ``s = N_hitch / (N_hitch + its axle loads)`` of its roll moment (the share of its weight the
+  hitch carries, static) to the towing body's axles, by their static-load shares, and keeps
+  ``1 - s`` on its own: under one lateral acceleration its own axles then transfer
+  ``2 h a_y / (g t)`` of their load, the rigid body's ratio.
 
 Clamping at zero (wheel lift-off) is done by the caller.  The accelerations come from a
 first-order lag state (time constant tau, suspension pitch/roll response; note option 2),
@@ -207,6 +212,24 @@ def static_loads(vehicle: Vehicle, gravity: float = STANDARD_GRAVITY) -> StaticL
     return StaticLoads(axle=axle, hitch=hitch, wheel=_wheel_vector(vehicle, axle), groups=groups)
 
 
+def _couple_roll(a: np.ndarray, vehicle: Vehicle, loads: StaticLoads, specs, i: int, height: float) -> None:
+    """Move the hitch's share of body ``i``'s roll moment (column ``nb + i`` of ``a``) to the body towing it."""
+    nb = len(vehicle.bodies)
+    body, front = vehicle.bodies[i], vehicle.bodies[i - 1]
+    own = float(loads.axle[body.name].sum())
+    hitch = float(loads.hitch[i - 1])
+    s = min(max(hitch / (hitch + own), 0.0), 1.0) if hitch + own > 0 else 0.0
+    front_axles = loads.axle[front.name]
+    total = float(front_axles.sum())
+    for k, spec in enumerate(specs):
+        if spec.body_index == i:
+            a[k, nb + i] *= 1.0 - s
+        elif spec.body_index == i - 1 and total > 0:
+            sign = 1.0 if spec.side == "right" else -1.0
+            share = front_axles[spec.axle_index] / total
+            a[k, nb + i] += sign * s * share * body.mass * height / front.axles[spec.axle_index].track
+
+
 def load_transfer_matrix(vehicle: Vehicle, loads: StaticLoads) -> np.ndarray:
     """Sensitivity of the contact loads to the body accelerations.
 
@@ -250,6 +273,8 @@ def load_transfer_matrix(vehicle: Vehicle, loads: StaticLoads) -> np.ndarray:
             share = body_axles[s.axle_index] / total
             sign = 1.0 if s.side == "right" else -1.0
             a[k, nb + i] = sign * share * body.mass * heights[i] / track
+        if i > 0 and body.roll_coupled:  # a fifth wheel stiff in roll: the hitch's share to the towing body
+            _couple_roll(a, vehicle, loads, specs, i, heights[i])
     if not np.all(np.isfinite(a)):
         raise ScenarioError("load-transfer matrix is not finite", field=f"{vehicle.name}.bodies")
     return a

@@ -22,7 +22,7 @@ MAX_STILL_SEGMENTS = 50
 
 #: solve_ivp methods accepted by :class:`RunoutOptions` (``engine="scipy"``).
 METHODS = ("RK45", "DOP853", "LSODA", "Radau", "BDF")
-#: Run-out engines: SciPy's solve_ivp, or the numba-compiled integrator of :mod:`crashsim.motion.fast`.
+#: Run-out engines: SciPy's solve_ivp, or the numba-compiled integrator of :mod:`crashsim.motion.compiled_solution`.
 ENGINES = ("scipy", "compiled")
 #: Integration schemes of the compiled engine (``engine="compiled"``).
 SCHEMES = ("dopri5", "bs3")
@@ -98,6 +98,12 @@ class RunoutOptions:
     load_transfer : bool
         Quasi-static longitudinal and lateral load transfer (default off; needs every body's
         ``cg_height``), see :mod:`crashsim.motion.loads`.
+    rollover : bool
+        Record wheel lift and rollover events (default off; with ``load_transfer`` only, off
+        without it, so the lower levels of a scene run without the check; a scenario file asking
+        for it at another level is rejected at load): each
+        body's load transfer ratio and lateral acceleration against its rollover threshold, see
+        :mod:`crashsim.motion.rollover`.
     load_transfer_tau : float
         Time constant [s] of the first-order lag on the accelerations used for load transfer
         (suspension pitch/roll response, 0.1-0.3 s), default 0.2.
@@ -124,7 +130,7 @@ class RunoutOptions:
     engine : {"scipy", "compiled"}
         ``"scipy"`` (default): ``scipy.integrate.solve_ivp`` with ``method``
         (:mod:`crashsim.motion.simulate`).  ``"compiled"``: the same model, events and
-        result integrated by numba-compiled code (:mod:`crashsim.motion.fast`), about two
+        result integrated by numba-compiled code (:mod:`crashsim.motion.compiled_solution`), about two
         orders of magnitude faster per run-out (``plots/fast_path.md``), for fits and Monte
         Carlo; the first call in a fresh environment compiles it (tens of seconds, then
         cached on disk).  Every other option means the same for both engines.
@@ -146,6 +152,7 @@ class RunoutOptions:
     sample_dt: float = 0.01
     lateral_model: str = "fiala"
     load_transfer: bool = False
+    rollover: bool = False
     load_transfer_tau: float = 0.2
     baumgarte_omega: float = 10.0
     baumgarte_zeta: float = 1.0
@@ -193,7 +200,13 @@ class RunoutOptions:
         if int(self.max_impacts) < 0:
             raise ScenarioError(f"must be >= 0, got {self.max_impacts!r}", field="options.max_impacts")
         object.__setattr__(self, "load_transfer", bool(self.load_transfer))
+        # the check reads the load transfer: without it (the lower levels) it is off
+        object.__setattr__(self, "rollover", bool(self.rollover) and self.load_transfer)
 
     def to_dict(self) -> dict:
-        """Options as a JSON-ready dict (SI units)."""
-        return asdict(self)
+        """Options as a JSON-ready dict (SI units); ``rollover`` only when on (results without the
+        check are the same as before it existed)."""
+        d = asdict(self)
+        if not d["rollover"]:
+            del d["rollover"]
+        return d

@@ -1,8 +1,11 @@
 """Turn integrated states into a :class:`~crashsim.motion.result.RunoutResult`.
 
-Shared by the SciPy engine and the pymunk cross-check, so both report the same quantities
-computed the same way.  Inputs are *chunks*: consecutive pieces of the run with constant
-segment inputs (:class:`~crashsim.motion.dynamics.SegmentParams`).
+One builder, :func:`build_result`, from named inputs (:class:`ResultInputs`), shared by both
+engines (:func:`assemble_scene`), the energy level and the pymunk cross-check
+(:func:`chunk_inputs`), so all report the same quantities computed the same way.
+
+:func:`chunk_inputs` takes its states as *chunks*: consecutive pieces of the run with constant
+segment inputs (:class:`~crashsim.motion.hitches.SegmentParams`).
 
 * sample chunks ``(seg, t, Y)``: states ``Y`` (n_state, K) at times ``t`` (K,) for the
   histories and tracks;
@@ -15,18 +18,20 @@ from __future__ import annotations
 
 import logging
 import math
+import warnings
 from dataclasses import dataclass, replace
-from typing import Callable, Sequence
+from typing import Callable, NamedTuple, Sequence
 
 import numpy as np
 
-from .dynamics import RunoutModel, SegmentParams, hitch_rows
+from .hitches import RunoutModel, SegmentParams, hitch_rows
 from .layout import StateLayout
-from .model import kernels
+from .rollover import RollMonitor, roll_summary, with_events
+from .scene_model import kernels
 from .result import (BodyHistory, BodyRunout, HitchHistory, PairSummary, RunoutEvent, RunoutResult,
                      SceneRunout, TrackSegment, WheelTrack)
 
-__all__ = ["assemble_result", "build_result", "gauss_legendre_chunks", "split_track"]
+__all__ = ["ResultInputs", "build_result", "chunk_inputs", "assemble_result", "gauss_legendre_chunks", "split_track"]
 
 GL_NODES, GL_WEIGHTS = np.polynomial.legendre.leggauss(5)
 _log = logging.getLogger("crashsim")
@@ -96,7 +101,7 @@ def _missed_zone_samples(model, samples, wx, wy):
     return None
 
 
-def assemble_result(
+def chunk_inputs(
     model: RunoutModel,
     *,
     samples: Sequence[tuple[SegmentParams, np.ndarray, np.ndarray]],
@@ -115,8 +120,8 @@ def assemble_result(
     method: str,
     hitch_force: np.ndarray | None = None,
     check_zones: bool = False,
-) -> RunoutResult:
-    """Build the result object (see the module docstring for the chunk format).
+) -> ResultInputs:
+    """The :class:`ResultInputs` of a run given as chunks (see the module docstring for the chunk format).
 
     ``hitch_force`` (n_samples, 2 n_hitches), if given, replaces the hitch forces computed
     from the constraint multipliers (the pymunk cross-check reports its own joint forces).
@@ -175,8 +180,7 @@ def assemble_result(
             model.front_points, model.rear_points, np.cos(psi), np.sin(psi), Y[L.x], Y[L.y], Y[L.vx], Y[L.vy], Y[L.w]
         )
         max_gap = float(np.max(np.hypot(g[0::2], g[1::2])))
-    return build_result(
-        model,
+    return ResultInputs(
         t=t,
         Y=Y,
         points=np.stack([wx, wy], axis=-1),
@@ -205,45 +209,17 @@ def assemble_result(
     )
 
 
-def build_result(
-    model,
-    *,
-    t: np.ndarray,
-    Y: np.ndarray,
-    points: np.ndarray,
-    sliding: np.ndarray,
-    load: np.ndarray,
-    hitch_force: np.ndarray,
-    stop_moment: np.ndarray,
-    distance: np.ndarray,
-    path_length: np.ndarray,
-    sliding_length: np.ndarray,
-    energy: np.ndarray,
-    max_gap: float,
-    missed: tuple[float, str] | None,
-    status: str,
-    message: str,
-    t_end: float,
-    y_initial: np.ndarray,
-    y_final: np.ndarray,
-    sol: Callable,
-    events: Sequence[RunoutEvent],
-    nfev: int,
-    njev: int,
-    nlu: int,
-    n_segments: int,
-    method: str,
-    kinetic_energies: tuple[float, float] | None = None,
-    energy_dissipated: float | None = None,
-    gravity_work: float = 0.0,
-) -> RunoutResult:
-    """The result objects from the computed arrays (shared by the SciPy and compiled engines).
+def assemble_result(model: RunoutModel, **chunks) -> RunoutResult:
+    """Deprecated: ``build_result(model, chunk_inputs(model, ...))``."""
+    warnings.warn("crashsim.motion.postprocess.assemble_result is deprecated; use "
+                  "build_result(model, chunk_inputs(model, ...))", DeprecationWarning, stacklevel=2)
+    return build_result(model, chunk_inputs(model, **chunks))
 
-    Parameters
-    ----------
-    model : RunoutModel or compatible
-        Needs ``layout``, ``specs``, ``vehicle.name``, ``static_load``, ``loads.hitch``,
-        ``mass``, ``inertia`` and ``options``.
+
+class ResultInputs(NamedTuple):
+    """What :func:`build_result` makes a :class:`~crashsim.motion.result.RunoutResult` of: the
+    computed arrays of one vehicle's run and what the run says of itself (all SI).
+
     t : ndarray, shape (K,)
         Sample times [s].
     Y : ndarray, shape (n_state, K)
@@ -253,7 +229,7 @@ def build_result(
     sliding, load : ndarray, shape (n_wheels, K)
         Sliding flags and normal loads [N] at the samples.
     hitch_force : ndarray, shape (K, 2 n_hitches)
-        Hitch forces on the front bodies, world frame [N].
+        Hitch forces on the front bodies, world frame [N] (NaN where a level has none).
     stop_moment : ndarray, shape (K, n_hitches)
         Moments of closed articulation stops [N m].
     distance : ndarray, shape (n_bodies,)
@@ -262,20 +238,84 @@ def build_result(
         Contact path lengths [m], their sliding parts [m], dissipated energies [J].
     max_gap : float
         Largest pin gap over the samples [m].
+    status, message, t_end, y_initial, y_final, sol, events, method, nfev, njev, nlu, n_segments
+        As :class:`~crashsim.motion.result.RunoutResult`.
     missed : (float, str) or None
         Time [s] and wheel key of the first sample inside a zone the integration did not
         register; adds a ``"zone_missed"`` event and logs a warning.
-    status, message, t_end, y_initial, y_final, sol, events, nfev, njev, nlu, n_segments, method
-        As :class:`~crashsim.motion.result.RunoutResult`.
     kinetic_energies : (float, float), optional
         Initial and final kinetic energy [J], if already computed.
     energy_dissipated : float, optional
         Energy dissipated by all the vehicle's tyres [J] (default: the sum of ``energy``; given
         where ``energy`` holds some of the wheels only).
+    gravity_work : float
+        Work of the in-plane gravity [J].
+    static_load : ndarray, shape (n_wheels,), optional
+        The wheels' static loads [N] (default: the model's).
+    options : dict, optional
+        The options recorded in the result (default: the model's).
     """
+
+    t: np.ndarray
+    Y: np.ndarray
+    points: np.ndarray
+    sliding: np.ndarray
+    load: np.ndarray
+    hitch_force: np.ndarray
+    stop_moment: np.ndarray
+    distance: np.ndarray
+    path_length: np.ndarray
+    sliding_length: np.ndarray
+    energy: np.ndarray
+    max_gap: float
+    status: str
+    message: str
+    t_end: float
+    y_initial: np.ndarray
+    y_final: np.ndarray
+    sol: Callable
+    events: Sequence[RunoutEvent]
+    method: str
+    nfev: int = 0
+    njev: int = 0
+    nlu: int = 0
+    n_segments: int = 0
+    missed: tuple | None = None
+    kinetic_energies: tuple | None = None
+    energy_dissipated: float | None = None
+    gravity_work: float = 0.0
+    static_load: np.ndarray | None = None
+    options: dict | None = None
+
+
+def build_result(model, inputs: ResultInputs | None = None, **fields) -> RunoutResult:
+    """The result objects of one vehicle's run: the one builder of a
+    :class:`~crashsim.motion.result.RunoutResult` (both engines, the energy level and the pymunk
+    cross-check).
+
+    Parameters
+    ----------
+    model : RunoutModel or compatible
+        Needs ``layout``, ``specs``, ``vehicle.name``, ``static_load``, ``loads.hitch``,
+        ``mass``, ``inertia`` and ``options`` (or ``options_dict``).
+    inputs : ResultInputs
+        The computed arrays and what the run says of itself.
+    **fields
+        Deprecated: the fields of :class:`ResultInputs` as keywords.
+    """
+    if inputs is None:
+        warnings.warn("build_result(model, t=..., ...) is deprecated; give its inputs as one ResultInputs",
+                      DeprecationWarning, stacklevel=2)
+        inputs = ResultInputs(**fields)
+    elif fields:
+        raise TypeError("build_result takes a ResultInputs or keywords, not both")
+    (t, Y, points, sliding, load, hitch_force, stop_moment, distance, path_length, sliding_length, energy, max_gap,
+     status, message, t_end, y_initial, y_final, sol, events, method, nfev, njev, nlu, n_segments, missed,
+     kinetic_energies, energy_dissipated, gravity_work, static_load, options) = inputs
     L = model.layout
     nh = hitch_force.shape[1] // 2  # the hitches modelled (none at the rigid level)
     specs = model.specs
+    static_load = model.static_load if static_load is None else static_load
     events = list(events)
     if missed:
         t_miss, key = missed
@@ -330,7 +370,7 @@ def build_result(
             axle_index=s.axle_index,
             axle_name=s.axle_name,
             side=s.side,
-            static_load=float(model.static_load[k]),
+            static_load=float(static_load[k]),
             t=t,
             points=pts,
             sliding=sliding[k],
@@ -366,7 +406,8 @@ def build_result(
             np.dot(model.mass, y[L.vx] ** 2 + y[L.vy] ** 2) + np.dot(model.inertia, y[L.w] ** 2)
         )
 
-    options = getattr(model, "options_dict", None)
+    if options is None:
+        options = getattr(model, "options_dict", None)
     ke0, ke1 = kinetic_energies if kinetic_energies is not None else (kinetic(y_initial), kinetic(y_final))
     return RunoutResult(
         vehicle=model.vehicle.name,
@@ -400,9 +441,11 @@ def _sample_times(table, sample_dt: float, t_end: float):
     T, seg = [], []
     for g, (t0, t1, _) in enumerate(table):
         k0 = math.ceil(t0 / sample_dt - 1e-9)
-        grid = np.arange(k0, math.floor(t1 / sample_dt) + 1) * sample_dt
-        grid = grid[(grid > t0) & (grid < t1)]
-        T += [t0, *grid.tolist()]
+        # k sample_dt strictly inside the segment (Python floats: the same products as NumPy's, without
+        # its per-call cost on a few points per segment)
+        grid = [t for t in (k * sample_dt for k in range(k0, math.floor(t1 / sample_dt) + 1)) if t0 < t < t1]
+        T.append(t0)
+        T += grid
         seg += [g] * (1 + len(grid))
     if table:
         T.append(table[-1][1])
@@ -529,6 +572,11 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
     Y = integrator.sample(T, seg_of, y_end)
     P, SL, LD, LAMH, STOPM, CF, max_gap, pen = k.evaluate_samples(np.ascontiguousarray(Y), seg_of, M, arrays)
     sol = integrator.solution(y_end, t_end)
+    roll = model.options.rollover
+    if roll:  # wheel lift and rollover (places set): merged into the events by time, in lean runs too
+        monitor = RollMonitor(model)
+        starts = np.array([a for a, _, _ in table], dtype=float)
+        events[:] = with_events(events, monitor.events(T, seg_of, Y, arrays.memb if table else [], starts, sol))
     if lean is None:
         events[:] = event_places(model, sol, events)
     missed = None
@@ -585,8 +633,8 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
             quad_w = lambda c: quad[nb + c * nw + w0: nb + c * nw + w1]  # noqa: E731
             P_v, SL_v, LD_v = P[w0:w1][:, cols], SL[w0:w1][:, cols], LD[w0:w1][:, cols]
             gap = _vehicle_gap(model, Y[:, cols], h0, h1)
-        vehicles[v.name] = build_result(
-            view, t=Tv, Y=Y[rows][:, cols], points=P_v, sliding=SL_v,
+        vehicles[v.name] = build_result(view, ResultInputs(
+            t=Tv, Y=Y[rows][:, cols], points=P_v, sliding=SL_v,
             load=LD_v, hitch_force=LAMH[cols][:, 2 * h0:2 * h1], stop_moment=STOPM[cols][:, h0:h1],
             distance=quad_b, path_length=quad_w(0), sliding_length=quad_w(1), energy=quad_w(2),
             max_gap=gap, missed=v_missed, status=v_status, message=v_message,
@@ -595,7 +643,10 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
             nlu=integrator.nlu, n_segments=len(table), method=integrator.method,
             kinetic_energies=(_ke(model, y_initial, b0, b1), _ke(model, y_end, b0, b1)),
             energy_dissipated=float(quad[nb + 2 * nw + w0: nb + 2 * nw + w1].sum()),
-            gravity_work=float(w_grav[b0:b1].sum()))
+            gravity_work=float(w_grav[b0:b1].sum())))
+        if roll:
+            vehicles[v.name] = replace(vehicles[v.name], rollover=roll_summary(
+                v_events, [b.name for b in v.bodies], monitor.thresholds[b0:b1]))
 
     # ---- pairs and the ledger
     n_imp = {}

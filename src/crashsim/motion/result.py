@@ -364,6 +364,11 @@ class RunoutResult:
     layout : StateLayout
     gravity_work : float
         Work of the in-plane gravity on a sloped road [J] (0 on a level road).
+    rollover : dict or None
+        With the wheel-lift and rollover check on (:mod:`crashsim.motion.rollover`): each body's
+        threshold [g], whether a body rolled, which bodies lifted wheels, and ``valid_until_s``,
+        the time from which the planar result is outside its validity (None: throughout within);
+        None when the check is off.
     """
 
     vehicle: str
@@ -388,6 +393,7 @@ class RunoutResult:
     sol: Callable[[Any], np.ndarray]
     layout: Any
     gravity_work: float = 0.0
+    rollover: dict | None = None
 
     @property
     def termination(self) -> str:
@@ -532,6 +538,7 @@ class RunoutResult:
                 "hitches": hitches,
                 "events": [{"t_s": e.t, "kind": e.kind, "detail": e.detail, "energy_J": e.energy, **e.data}
                            for e in self.events],
+                **({"rollover": self.rollover} if self.rollover is not None else {}),
             }
         )
 

@@ -33,7 +33,7 @@ from ..errors import ScenarioError
 from ..vehicles import BodyState, Vehicle
 from .contact import ContactModel, Obstacle
 from .engine import run_model
-from .model import SceneModel
+from .scene_model import SceneModel
 from .options import RunoutOptions
 from .result import RunoutResult, SceneRunout
 from .road import Road
@@ -173,7 +173,7 @@ def simulate_runout(
 
 
 def zone_membership(model, y: np.ndarray) -> np.ndarray:
-    """Which friction zone every wheel of a :class:`~crashsim.motion.dynamics.RunoutModel` is in, (n_wheels, n_zones).
+    """Which friction zone every wheel of a :class:`~crashsim.motion.hitches.RunoutModel` is in, (n_wheels, n_zones).
 
     A wheel within ``1e-9 m`` of a zone edge is assigned by where its contact point is
     heading (1 micrometre ahead along its velocity), so a restart exactly at a crossing

@@ -2,7 +2,7 @@
 
 The SciPy engine (:mod:`crashsim.motion.simulate`), the pymunk cross-check
 (:mod:`crashsim.crosscheck.pymunk_runout`) and the compiled engine
-(:mod:`crashsim.motion.fast`) all evaluate the same source, :func:`tyre_kernel` (with
+(:mod:`crashsim.motion.compiled_solution`) all evaluate the same source, :func:`tyre_kernel` (with
 :func:`fiala_curve` / :func:`linear_curve`): the SciPy engine and the cross-check on NumPy
 arrays, the compiled engine per contact after numba compiles that very function for scalars.
 A difference between the integrations is therefore an integration difference, never a model
@@ -109,7 +109,7 @@ def fiala_curve(tan_alpha, mu_load, cornering_stiffness):
     """Fiala pure-slip lateral force [N] (see :func:`lateral_force`); arrays or scalars, no checks.
 
     Written with NumPy ufuncs only, so the same source runs on arrays (SciPy engine) and,
-    compiled by numba, on scalars (:mod:`crashsim.motion.fast`).
+    compiled by numba, on scalars (:mod:`crashsim.motion.compiled_solution`).
     """
     # signed normalised slip z = C tan(a) / (3 mu N), clipped to [-1, 1];
     # sgn(z) [1 - (1 - |z|)^3] = z (3 - 3 |z| + z^2)
@@ -253,7 +253,7 @@ def tyre_kernel(u, w, mu_load, demand, cornering_stiffness, locked, eps, fiala):
 
     Written with NumPy ufuncs and :func:`_select` only, so it broadcasts over arrays (the
     SciPy engine, through :func:`tyre_forces_core`) and, compiled by numba with a scalar
-    ``_select``, runs per contact in the compiled engine (:mod:`crashsim.motion.fast`).
+    ``_select``, runs per contact in the compiled engine (:mod:`crashsim.motion.compiled_solution`).
     Arguments as :func:`tyre_forces_core`, except ``locked`` (bool or bool array, never the
     shortcut ``True`` object) and ``fiala`` (bool: Fiala curve, else the linear one).
 

@@ -51,11 +51,9 @@ import copy
 import datetime
 import logging
 import math
-import multiprocessing as mp
 import os
-import sys
+import threading
 import time
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Callable
@@ -78,6 +76,7 @@ from ..units import resolve_system
 from .montecarlo import DEFAULT_SAMPLE_TIME_LIMIT
 from .overrides import (ScenarioOverrides, default_engine, file_contents, forward_data, get_value, parse_value,
                         resolve_path, set_value)
+from .parallel import Executor, Progress
 
 __all__ = ["FitSpec", "Unknown", "FitProblem", "FitResult", "EvidenceResidual", "StartResult", "fit_scene",
            "RANK_TOL", "PENALTY"]
@@ -261,7 +260,7 @@ class EvidenceModel:
     Parameters
     ----------
     scenario : Scenario
-        Validated (its ``data`` holds the evidence ``sigma`` keys).
+        Validated; each evidence item carries its ``sigma`` (and a rest item its ``heading_sigma``).
     sigma_from_tolerance : float, optional
         Fraction of the tolerance used as sigma where an item has none.
     mark_points : int
@@ -269,12 +268,10 @@ class EvidenceModel:
 
     def __init__(self, scenario, *, sigma_from_tolerance: float | None = None, mark_points: int = 10):
         ev = scenario.evidence
-        raw = scenario.data.get("evidence") or {}
         self.mark_points = int(mark_points)
         items: list[_Item] = []
 
-        def sig(entry: dict, key: str, tol: float, where: str) -> tuple[float, str]:
-            s = entry.get(key) if entry else None
+        def sig(s: float | None, key: str, tol: float, where: str) -> tuple[float, str]:
             if s is not None:
                 return float(s), key
             if sigma_from_tolerance is not None:
@@ -284,7 +281,7 @@ class EvidenceModel:
                                 field=f"{where}.{key}", file=scenario.path)
 
         if ev.impact_point is not None:
-            s, src = sig(raw.get("impact_point") or {}, "sigma", ev.impact_point.tolerance, "evidence.impact_point")
+            s, src = sig(ev.impact_point.sigma, "sigma", ev.impact_point.tolerance, "evidence.impact_point")
             items.append(_Item("point of impact", ev.impact_point.name, "length", s, src, 2, 2.0, 0,
                                measured=np.asarray(ev.impact_point.position, float)))
         if ev.rest and scenario.runout is None:
@@ -294,28 +291,24 @@ class EvidenceModel:
             raise ScenarioError("tyre-mark evidence needs a run-out: add [runout]", field="evidence.marks",
                                 file=scenario.path)
         for i, r in enumerate(ev.rest):
-            entry = (raw.get("rest") or [{}] * (i + 1))[i]
             name = r.name or f"rest of {r.body}"
-            s, src = sig(entry, "sigma", r.tolerance, f"evidence.rest[{i}]")
+            s, src = sig(r.sigma, "sigma", r.tolerance, f"evidence.rest[{i}]")
             items.append(_Item("rest", name, "length", s, src, 2, 2.0, i, body=r.body,
                                measured=np.asarray(r.position, float)))
             if r.heading is not None:
-                s, src = sig(entry, "heading_sigma", r.heading_tolerance, f"evidence.rest[{i}]")
+                s, src = sig(r.heading_sigma, "heading_sigma", r.heading_tolerance, f"evidence.rest[{i}]")
                 items.append(_Item("rest heading", f"{name} (heading)", "angle", s, src, 1, 1.0, i, body=r.body,
                                    measured=float(r.heading)))
         for i, m in enumerate(ev.marks):
-            entry = (raw.get("marks") or [{}] * (i + 1))[i]
-            s, src = sig(entry, "sigma", m.tolerance, f"evidence.marks[{i}]")
+            s, src = sig(m.sigma, "sigma", m.tolerance, f"evidence.marks[{i}]")
             items.append(_Item("mark", m.name or f"mark {i + 1}", "length", s, src, self.mark_points, 1.0, i,
                                mark=m))
         for i, x in enumerate(ev.delta_v):
-            entry = (raw.get("delta_v") or [{}] * (i + 1))[i]
-            s, src = sig(entry, "sigma", x.tolerance, f"evidence.delta_v[{i}]")
+            s, src = sig(x.sigma, "sigma", x.tolerance, f"evidence.delta_v[{i}]")
             items.append(_Item("delta-v", x.name or f"delta-v of {x.body} ({x.component})", "speed", s, src, 1, 1.0,
                                i, body=x.body, measured=float(x.value)))
         for i, x in enumerate(ev.recorder):
-            entry = (raw.get("recorder") or [{}] * (i + 1))[i]
-            s, src = sig(entry, "sigma", x.tolerance, f"evidence.recorder[{i}]")
+            s, src = sig(x.sigma, "sigma", x.tolerance, f"evidence.recorder[{i}]")
             n = len(x.times)
             items.append(_Item("recorder", x.name or f"recorder in {x.body}", "speed", s, src, n, float(n), i,
                                body=x.body, measured=x))
@@ -324,13 +317,12 @@ class EvidenceModel:
                 # the group's sigma: root sum of squares of its items' (independent measurements)
                 parts, srcs = [], set()
                 for i in idx:
-                    entry = (raw.get("crush") or [{}] * (i + 1))[i]
                     c = ev.crush[i]
-                    if entry.get("sigma") is None and c.tolerance is None and sigma_from_tolerance is not None:
+                    if c.sigma is None and c.tolerance is None and sigma_from_tolerance is not None:
                         raise ScenarioError("the fit needs this crush item's sigma (an energy): its tolerance is "
                                             "relative to an energy that changes with the fit; add sigma = ...",
                                             field=f"evidence.crush[{i}].sigma", file=scenario.path)
-                    s_i, src = sig(entry, "sigma", c.tolerance or 0.0, f"evidence.crush[{i}]")
+                    s_i, src = sig(c.sigma, "sigma", c.tolerance or 0.0, f"evidence.crush[{i}]")
                     parts.append(s_i)
                     srcs.add(src)
                 items.append(_Item("crush energy", f"crush energy, {GROUP_TITLES[which]}", "energy",
@@ -487,6 +479,8 @@ class FitProblem:
         self.evidence = EvidenceModel(base, sigma_from_tolerance=spec.sigma_from_tolerance,
                                       mark_points=spec.mark_points)
         self.nfev = 0
+        self.rolled = 0  # evaluations in which a unit rolls (the wheel-lift and rollover check on)
+        self.checked = False  # whether the scenes carry the check
         self.failures = 0
         self.failure_reasons: dict[str, int] = {}
         self._cache: dict[bytes, tuple[np.ndarray, Any]] = {}
@@ -543,6 +537,10 @@ class FitProblem:
                 raise NotAtRest(bad.status, f"the run-out of {bad.vehicle!r} did not reach rest: {bad.message}")
             r = self.evidence.weighted(scene)
             out = (r, scene)
+            roll = scene.rollover()
+            if roll:
+                self.checked = True
+                self.rolled += any(v["rolled"] for v in roll.values())
         except NotAtRest as exc:
             self._fail(f"run-out: {exc.status}", exc)
             out = (np.full(self.evidence.size, PENALTY), exc)
@@ -587,14 +585,15 @@ class FitProblem:
 
     def local_fit(self, z0) -> dict:
         """One bounded least-squares fit from ``z0``; a plain dict (crosses process boundaries)."""
-        n0 = self.nfev
+        n0, r0 = self.nfev, self.rolled
         z0 = np.clip(np.asarray(z0, float), 1e-9, 1 - 1e-9)
         res = least_squares(self.residual, z0, jac=lambda z: self.jacobian(z), bounds=(0.0, 1.0),
                             method=self.spec.method, x_scale=1.0, ftol=LOCAL_FTOL, xtol=LOCAL_XTOL, gtol=1e-8,
                             max_nfev=self.spec.max_evaluations)
         return {"z0": z0.tolist(), "z": res.x.tolist(), "cost": float(res.cost), "status": int(res.status),
                 "message": str(res.message), "nfev": int(res.nfev), "njev": int(res.njev or 0),
-                "evaluations": self.nfev - n0, "active": [int(a) for a in res.active_mask],
+                "evaluations": self.nfev - n0, "rolled": self.rolled - r0, "checked": self.checked,
+                "active": [int(a) for a in res.active_mask],
                 "failure_reasons": dict(self.failure_reasons)}
 
 
@@ -707,6 +706,8 @@ class FitResult:
     failure_reasons: dict = field(default_factory=dict)
     source_data: Any = field(default=None, repr=False, compare=False)
     file: str | None = None
+    rolled_evaluations: int | None = None  # the wheel-lift and rollover check on: evaluations in which a unit rolls
+    rolled_of: int = 0  # ... of this many (the local fits' and the analysis's; not the screening's)
 
     @property
     def values(self) -> dict:
@@ -730,7 +731,34 @@ class FitResult:
             "starts": [s.to_dict() for s in self.starts], "n_starts": len(self.starts), "n_agree": self.n_agree,
             "n_same_cost": self.n_same_cost, "warnings": list(self.warnings), "evaluations": self.evaluations,
             "failures": self.failures, "failure_reasons": dict(self.failure_reasons), "elapsed": self.elapsed,
+            **({"rolled_evaluations": self.rolled_evaluations, "rolled_of": self.rolled_of,
+                "rollover": self._best_rollover()}
+               if self.rolled_evaluations is not None else {}),
         }
+
+    def _best_rollover(self) -> dict:
+        """The best fit's wheel-lift and rollover summary by vehicle (empty without its scene)."""
+        return self.scene.rollover() if self.scene is not None and not isinstance(self.scene, Exception) else {}
+
+    def rollover_lines(self, system: str) -> list[str]:
+        """The report's rollover lines: the best fit's verdict and the evaluations that rolled (none
+        without the check)."""
+        if self.rolled_evaluations is None:
+            return []
+        lines = ["Rollover (an outcome, not a failure; wheel-lift and rollover check)"]
+        for v, roll in self._best_rollover().items():
+            until = roll["valid_until_s"]
+            verdict = (f"rolls ({', '.join(roll['rolled_bodies'])})" if roll["rolled"] else "does not roll")
+            valid = ("planar result valid throughout" if until is None else
+                     f"planar result outside its validity from {fmt(until, 'time', system)}")
+            lines.append(f"  best fit: vehicle {v} {verdict}; {valid}")
+        lines.append(f"  a unit rolls in {self.rolled_evaluations} of the {self.rolled_of} scene evaluations of the "
+                     "local fits and the analysis")
+        ev = getattr(self.scene, "evidence", None) if not isinstance(self.scene, Exception) else None
+        for c in (ev.checks if ev is not None else ()):
+            if c.kind == "rollover":  # a statement, not fitted: its verdict at the best fit
+                lines.append(f"  {'PASS' if c.passed else 'FAIL'}  evidence {c.name!r} (a verdict, not fitted)")
+        return lines
 
     def best_scenario_dict(self) -> dict:
         """The fitted scenario file as a dict: the input file's with each unknown at its best value.
@@ -850,6 +878,9 @@ class FitResult:
             mark = "*" if s.agrees else ("=" if s.same_cost else " ")
             lines.append(f"  {mark} start {k + 1}: chi^2 = {2 * s.cost:.4g}, {s.evaluations} evaluations, "
                          + ", ".join(f"{u.name} {fmt(v, u.kind, system)}" for u, v in zip(self.unknowns, s.x)))
+        roll = self.rollover_lines(system)
+        if roll:
+            lines += [""] + roll
         if self.warnings:
             lines.append("")
             lines.append("Warnings")
@@ -899,47 +930,45 @@ def _best_header(res: FitResult, data: dict) -> str:
 # fit_scene
 # ---------------------------------------------------------------------------------------------
 
-_WORKER: dict = {}
+_LOCAL = threading.local()
 
 
-def _worker_init(data, spec, engine, file, sample_time_limit=None):
-    _WORKER["problem"] = FitProblem(data, spec, engine=engine, file=file, sample_time_limit=sample_time_limit)
+def _problem_for(payload: dict) -> "FitProblem":
+    """A worker's fit problem, built once per thread from ``payload``."""
+    cache = getattr(_LOCAL, "problems", None)
+    if cache is None:
+        cache = _LOCAL.problems = {}
+    key = id(payload)
+    p = cache.get(key)
+    if p is None:
+        p = cache[key] = FitProblem(payload["data"], payload["spec"], engine=payload["engine"], file=payload["file"],
+                                    sample_time_limit=payload["time_limit"])
+    return p
 
 
-def _worker_local(z0):
-    return _WORKER["problem"].local_fit(z0)
+def _local_fit(problem: "FitProblem", z0):
+    return problem.local_fit(z0)
 
 
-def _worker_cost(z):
-    return _WORKER["problem"].cost(z)
+def _cost(problem: "FitProblem", z):
+    return problem.cost(z)
 
 
-def _start_points(spec: FitSpec, problem: FitProblem, pool, workers) -> list[np.ndarray]:
+def _start_points(spec: FitSpec, ex: Executor) -> list[np.ndarray]:
     from scipy.stats import qmc
 
     n = len(spec.unknowns)
-    first = problem.z_of([u.initial for u in spec.unknowns])
+    first = ex.local.z_of([u.initial for u in spec.unknowns])
     if spec.starts == 1:
         return [first]
     if spec.screen > 0:
         cand = qmc.LatinHypercube(d=n, seed=spec.seed).random(spec.screen)
-        costs = list(pool.map(_worker_cost, list(cand))) if pool else [problem.cost(z) for z in cand]
+        costs = ex.map(_cost, list(cand))
         order = np.argsort(costs, kind="stable")
         rest = [cand[i] for i in order[:spec.starts - 1]]
     else:
         rest = list(qmc.LatinHypercube(d=n, seed=spec.seed).random(spec.starts - 1))
     return [first] + rest
-
-
-def _progress(progress, total):
-    if progress is True:
-        try:
-            from tqdm import tqdm
-        except ImportError:  # pragma: no cover - tqdm is a dependency
-            return None
-
-        return tqdm(total=total, desc="fit starts", unit="start", file=sys.stderr)
-    return None
 
 
 def fit_scene(scenario_data: dict, fit_spec: FitSpec | dict | None = None, *, engine: str | None = None,
@@ -1001,43 +1030,28 @@ def fit_scene(scenario_data: dict, fit_spec: FitSpec | dict | None = None, *, en
     workers = check_workers(workers) or (os.cpu_count() or 1)
     n_tasks = max(spec.starts, 1)
     use_pool = workers > 1 and (spec.starts > 1 or spec.screen > 1)
-    pool = None
-    bar = _progress(progress, spec.starts)
+    payload = {"data": scenario_data, "spec": spec, "engine": engine, "file": file, "time_limit": sample_time_limit}
     outcomes: list[dict] = []
     evaluations = 0
-    try:
-        if use_pool:
-            ctx = mp.get_context("fork") if "fork" in mp.get_all_start_methods() else None
-            pool = ProcessPoolExecutor(max_workers=min(workers, max(n_tasks, spec.screen)), mp_context=ctx,
-                                       initializer=_worker_init,
-                                       initargs=(scenario_data, spec, engine, file, sample_time_limit))
-        starts = _start_points(spec, problem, pool, workers)
+    with Progress(progress, spec.starts, desc="fit starts", unit="start", dynamic_ncols=False) as bar, \
+            Executor(_problem_for, payload, "processes" if use_pool else "serial",
+                     min(workers, max(n_tasks, spec.screen)), local=problem) as ex:
+        starts = _start_points(spec, ex)
         evaluations += spec.screen if spec.starts > 1 else 0
-        if pool is not None:
-            futures = [pool.submit(_worker_local, z0) for z0 in starts]
-            for k, fut in enumerate(futures):
-                outcomes.append(fut.result())
-                if bar is not None:
-                    bar.update(1)
-                elif callable(progress):
-                    progress(k + 1, len(starts))
-        else:
-            for k, z0 in enumerate(starts):
-                outcomes.append(problem.local_fit(z0))
-                if bar is not None:
-                    bar.update(1)
-                elif callable(progress):
-                    progress(k + 1, len(starts))
-    finally:
-        if pool is not None:
-            pool.shutdown()
-        if bar is not None:
-            bar.close()
+        for k, outcome in enumerate(ex.submit_each(_local_fit, starts)):
+            outcomes.append(outcome)
+            bar.update(1, k + 1)
     evaluations += sum(o["evaluations"] for o in outcomes)
-    n_before = problem.nfev
+    n_before, r_before = problem.nfev, problem.rolled
     result = _analyse(problem, spec, outcomes, engine)
     evaluations += problem.nfev - n_before
     result = _replace_timing(result, evaluations, time.perf_counter() - t0, problem.failures)
+    if problem.checked or any(o.get("checked") for o in outcomes):  # the check on: count what rolled
+        # the local fits' evaluations (in this process or the workers) and the analysis's here; the
+        # screening of the starts is not counted (its scenes are not kept)
+        rolled = sum(o.get("rolled", 0) for o in outcomes) + problem.rolled - r_before
+        of = sum(o["evaluations"] for o in outcomes) + problem.nfev - n_before
+        result = replace(result, rolled_evaluations=int(rolled), rolled_of=int(of))
 
     return replace(result, source_data=scenario_data, file=file)
 

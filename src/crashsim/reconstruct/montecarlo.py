@@ -33,8 +33,9 @@ line is dropped). A file written for another scenario or seed is refused.
 
 Parallelism
 -----------
-``workers`` processes (default all cores; ``concurrent.futures.ProcessPoolExecutor``), or an
-existing Dask cluster (``dask_address``; ``dask.distributed``), with samples sent in chunks.
+``workers`` processes (default all cores), or an existing Dask cluster (``dask_address``;
+``dask.distributed``), with samples sent in chunks, through :mod:`crashsim.reconstruct.parallel`
+(as the fit and the posterior).
 """
 
 from __future__ import annotations
@@ -43,12 +44,8 @@ import hashlib
 import json
 import logging
 import math
-import multiprocessing as mp
-import os
-import sys
 import threading
 import time
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Callable, Sequence
@@ -60,11 +57,11 @@ from ..evidence.checks import body_impacts
 from ..geometry import circular_mean, unwrap_about_mean
 from ..impact import solve_impact
 from ..inverse_schema import DISTRIBUTIONS, validate_uncertainty
-from ..outputs import check_workers
 from ..report import fmt
 from ..scene.run import run_scene
 from ..schema import interval_text
 from .overrides import INVERSE_SECTIONS, ScenarioOverrides, default_engine, file_contents, parse_value, resolve_path
+from .parallel import Executor, Progress, child_seed, choose_backend, chunk_size as default_chunk_size, chunks
 from .tolerance import evidence_tolerance, tolerance_items, with_tolerance
 
 __all__ = ["InputDistribution", "UncertaintySpec", "MCResult", "monte_carlo", "sample_inputs", "load_results",
@@ -292,7 +289,7 @@ def _fit_to_range(distribution: str, vals: dict, target, key: str, raw: dict, fi
 
 def sample_inputs(spec: UncertaintySpec, seed: int, i: int) -> np.ndarray:
     """The inputs of sample ``i`` (SI): a function of ``(seed, i)`` only."""
-    rng = np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(int(i),)))
+    rng = np.random.default_rng(child_seed(seed, i))
     return np.array([d.sample(rng) for d in spec.inputs])
 
 
@@ -305,7 +302,7 @@ OUTPUT_KINDS = {"delta_v": "speed", "speed": "speed", "speed_after": "speed", "e
                 "rest_x": "length", "rest_y": "length", "rest_heading": "angle", "distance": "length",
                 "delta_v_event": "speed", "impacts": "count", "speed_at_braking": "speed", "time_to_impact": "time",
                 "braking_distance": "length", "perception_distance": "length", "mu": "ratio",
-                "mu_over_mu_max": "dimensionless"}
+                "mu_over_mu_max": "dimensionless", "rolled": "dimensionless"}
 
 
 def scene_outputs(scene) -> dict[str, float]:
@@ -315,7 +312,9 @@ def scene_outputs(scene) -> dict[str, float]:
     distance from perception;
     with a joint run-out also each body's delta-v over the whole event (``delta_v_event``: the
     magnitude of the sum over all its impacts, as a recorder accumulating the event sees it)
-    and the number of impacts after the first (``impacts.later``)."""
+    and the number of impacts after the first (``impacts.later``); with the wheel-lift and rollover
+    check on, ``rolled.<vehicle>``: 1 if a unit of the vehicle rolls, else 0 (an outcome, not a
+    failed sample; its mean over the samples is the share that roll)."""
     imp = scene.impact
     out: dict[str, float] = {}
     sc = scene.scenario
@@ -345,6 +344,8 @@ def scene_outputs(scene) -> dict[str, float]:
                 own = body_impacts(name, imp, joint.impacts)
                 if own:
                     out[f"delta_v_event.{name}"] = float(np.hypot(*sum(d for d, _ in own)))
+    for vname, roll in scene.rollover().items():  # the check on: 1 where a unit of the vehicle rolls
+        out[f"rolled.{vname}"] = 1.0 if roll["rolled"] else 0.0
     for r in (scene.runout or {}).values():
         for name, b in r.bodies.items():
             out[f"rest_x.{name}"] = float(b.rest_position[0])
@@ -407,21 +408,21 @@ def _runner_for(payload: dict) -> _Runner:
     return r
 
 
+def _sampler_for(payload: dict) -> tuple:
+    """A worker's state: the runner of ``payload`` (built once per thread) and the run's seed."""
+    return _runner_for(payload), payload["seed"]
+
+
+def _run_sample(state: tuple, i: int) -> dict:
+    """Sample ``i`` (a task of :class:`~crashsim.reconstruct.parallel.Executor`)."""
+    runner, seed = state
+    return runner.run(seed, i)
+
+
 def _run_chunk(payload: dict, indices: Sequence[int]) -> list[dict]:
-    """Run samples ``indices`` (used by the process pool and by Dask workers)."""
-    runner = _runner_for(payload)
-    return [runner.run(payload["seed"], i) for i in indices]
-
-
-_POOL_PAYLOAD: dict = {}
-
-
-def _pool_init(payload):
-    _POOL_PAYLOAD["p"] = payload
-
-
-def _pool_chunk(indices):
-    return _run_chunk(_POOL_PAYLOAD["p"], indices)
+    """Run samples ``indices`` in this process."""
+    state = _sampler_for(payload)
+    return [_run_sample(state, i) for i in indices]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -528,6 +529,28 @@ class MCResult:
             return f"{100 * self.accepted_share:.3g} % of {self.n_done} samples{failed} meet the {items}"
         return f"{100 * self.accepted_share:.3g} % of {self.n_done} samples{failed} meet all {items}"
 
+    @property
+    def rolled_share(self) -> dict:
+        """By vehicle (the wheel-lift and rollover check on): the share of the successful samples in which
+        a unit of it rolls; empty without the check."""
+        failed = {i for i, _ in self.errors}
+        good = np.array([int(i) not in failed for i in self.indices], dtype=bool)
+        out = {}
+        for key, v in self.outputs.items():
+            if key.startswith("rolled.") and good.any():
+                out[key.split(".", 1)[1]] = float(np.nanmean(np.asarray(v, dtype=float)[good]))
+        return out
+
+    def rollover_lines(self) -> list[str]:
+        """The report's rollover lines (none without the check)."""
+        share = self.rolled_share
+        if not share:
+            return []
+        n_ok = self.n_done - self.n_failed
+        return ["Rollover (an outcome of a sample, not a failure; wheel-lift and rollover check)"] + [
+            f"  vehicle {v}: a unit rolls in {100 * f:.1f} % of the {n_ok} successful samples "
+            f"({int(round(f * n_ok))} samples)" for v, f in share.items()]
+
     @staticmethod
     def kind_of(key: str) -> str:
         return OUTPUT_KINDS.get(key.split(".", 1)[0], "dimensionless")
@@ -551,6 +574,7 @@ class MCResult:
             "tornado": self.tornado,
             "errors": [{"i": int(i), "message": m} for i, m in self.errors[:50]],
             "failure_reasons": dict(self.failure_reasons),
+            **({"rolled_share": self.rolled_share} if self.rolled_share else {}),
             **({"accepted": {
                 "count": self.n_accepted, "share": fin(self.accepted_share), "of": self.n_done,
                 "n_evidence": self.n_evidence, "indices": [int(i) for i in self.indices[self.meets_all]],
@@ -615,6 +639,8 @@ class MCResult:
             lines.append("Share of samples within each evidence tolerance (over the successful samples)")
             for k, s in self.pass_share.items():
                 lines.append(f"  {100 * s:6.1f} %  {k}")
+        if self.rolled_share:
+            lines += [""] + self.rollover_lines()
         if self.accept:
             lines += [""] + self._accepted_lines(show, qs)
         if self.tornado:
@@ -870,10 +896,6 @@ def _swings(data, spec: UncertaintySpec, engine, file, q=(0.05, 0.95)) -> tuple[
 # monte_carlo
 # ---------------------------------------------------------------------------------------------
 
-def _chunks(indices: list[int], size: int) -> list[list[int]]:
-    return [indices[a:a + size] for a in range(0, len(indices), size)]
-
-
 def monte_carlo(scenario_data: dict, spec: UncertaintySpec | dict | None = None, n: int | None = None, *,
                 seed: int | None = None, engine: str | None = None, workers: int | None = None,
                 dask_address: Any = None, out_path: str | Path | None = None,
@@ -987,20 +1009,8 @@ def monte_carlo(scenario_data: dict, spec: UncertaintySpec | dict | None = None,
                                                       field_prefix="uncertainty.inputs"),
                                     np.array([d.median for d in spec.inputs]))
 
-    if dask_address is not None:
-        backend, nw = "dask", 0
-    else:
-        nw = check_workers(workers) or (os.cpu_count() or 1)
-        backend = "processes" if nw > 1 and len(todo) > 1 else "serial"
-    bar = None
-    if progress is True:
-        try:
-            from tqdm import tqdm
-
-            bar = tqdm(total=n, initial=n_resumed, desc="Monte Carlo", unit="sample", file=sys.stderr,
-                       dynamic_ncols=True)
-        except ImportError:  # pragma: no cover - tqdm is a dependency
-            bar = None
+    backend, nw = choose_backend(workers, dask_address, len(todo))
+    bar = Progress(progress, n, initial=n_resumed, desc="Monte Carlo", unit="sample")
 
     def take(new_rows: list[dict]) -> None:
         for row in new_rows:
@@ -1009,67 +1019,18 @@ def monte_carlo(scenario_data: dict, spec: UncertaintySpec | dict | None = None,
                 fh.write(json.dumps(row) + "\n")
         if fh is not None:
             fh.flush()
-        if bar is not None:
-            bar.update(len(new_rows))
-        elif callable(progress):
-            progress(len(rows), n)
+        bar.update(len(new_rows), len(rows))
 
     try:
         if todo:
-            if backend == "dask":
-                nw = _run_dask(dask_address, payload, todo, chunk_size, take)
-            elif backend == "processes":
-                size = chunk_size or max(1, min(64, math.ceil(len(todo) / (4 * nw))))
-                _run_pool(payload, _chunks(todo, size), nw, take)
-            else:
-                size = chunk_size or 1
-                for chunk in _chunks(todo, size):
-                    take(_run_chunk(payload, chunk))
+            with Executor(_sampler_for, payload, backend, nw, dask_address=dask_address) as ex:
+                nw = ex.workers
+                size = (chunk_size or 1) if backend == "serial" else default_chunk_size(len(todo), nw, chunk_size)
+                for new_rows in ex.as_completed(_run_sample, chunks(todo, size)):
+                    take(new_rows)
     finally:
         if fh is not None:
             fh.close()
-        if bar is not None:
-            bar.close()
+        bar.close()
     return _assemble(spec, seed, n, rows, n_resumed, time.perf_counter() - t0, engine, backend, nw,
                      out_path, percentiles, swings, nominal, accept=accept, tolerance=tolerance)
-
-
-def _run_pool(payload, chunks, workers, take) -> None:
-    ctx = mp.get_context("fork") if "fork" in mp.get_all_start_methods() else None
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_pool_init, initargs=(payload,))
-    try:
-        pending = {pool.submit(_pool_chunk, c) for c in chunks}
-        while pending:
-            done, pending = wait(pending, return_when=FIRST_COMPLETED)
-            for fut in done:
-                take(fut.result())
-    except BaseException:
-        for fut in pending:
-            fut.cancel()
-        pool.shutdown(wait=True, cancel_futures=True)
-        raise
-    pool.shutdown(wait=True)
-
-
-def _run_dask(address, payload, todo, chunk_size, take) -> int:
-    try:
-        from distributed import Client, as_completed
-    except ImportError as exc:  # pragma: no cover - depends on the environment
-        raise ScenarioError("--dask needs dask.distributed (pip install distributed)", field="dask") from exc
-    own = not isinstance(address, Client)
-    client = Client(address) if own else address
-    try:
-        nw = max(1, sum(w.get("nthreads", 1) for w in client.scheduler_info()["workers"].values()))
-        size = chunk_size or max(1, min(64, math.ceil(len(todo) / (4 * nw))))
-        remote = client.scatter([payload], broadcast=True)[0]
-        futures = [client.submit(_run_chunk, remote, c, pure=False) for c in _chunks(todo, size)]
-        try:
-            for fut in as_completed(futures):
-                take(fut.result())
-        except BaseException:
-            client.cancel(futures)
-            raise
-        return nw
-    finally:
-        if own:
-            client.close()

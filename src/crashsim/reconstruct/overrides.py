@@ -340,7 +340,7 @@ def default_engine() -> str:
     if "engine" not in RunoutOptions.__dataclass_fields__:
         return "scipy"
     try:
-        present = importlib.util.find_spec("crashsim.motion.fast") is not None
+        present = importlib.util.find_spec("crashsim.motion.compiled_solution") is not None
     except (ImportError, ValueError):  # pragma: no cover
         present = False
     return "compiled" if present else "scipy"

@@ -58,13 +58,10 @@ import hashlib
 import json
 import logging
 import math
-import multiprocessing as mp
 import os
-import sys
 import threading
 import time
 import warnings
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Callable
@@ -72,7 +69,6 @@ from typing import Any, Callable
 import numpy as np
 
 from ..errors import ScenarioError, failure_reason, in_file
-from ..outputs import check_workers
 
 __all__ = ["PosteriorSpec", "PosteriorProblem", "PosteriorResult", "run_posterior", "load_chain",
            "PERCENTILES", "MIN_KEPT_STEPS", "TAU_FACTOR", "settle_step", "SampleTolerance", "evidence_tolerance"]
@@ -87,6 +83,7 @@ from ..units import resolve_system
 from .fit import FitProblem, FitSpec, NotAtRest, fit_scene
 from .montecarlo import DEFAULT_SAMPLE_TIME_LIMIT, MCResult, UncertaintySpec, scene_outputs
 from .overrides import INVERSE_SECTIONS, default_engine, file_contents
+from .parallel import Executor, Progress, child_seed, choose_backend
 from .tolerance import SampleTolerance, evidence_tolerance, with_tolerance
 #: The kept chain should be this many autocorrelation times long (emcee's documentation: "you
 #: should not trust an estimate of tau unless the chain is longer than about 50 tau").
@@ -97,7 +94,7 @@ ACCEPTANCE_RANGE = (0.15, 0.7)
 #: range from it (a posterior well inside its bounds has almost none there).
 EDGE, EDGE_SHARE = 0.05, 0.01
 #: Prefixes of :func:`~crashsim.reconstruct.montecarlo.scene_outputs` kept as derived quantities.
-DERIVED_PREFIXES = ("speed", "speed_at_braking", "delta_v", "speed_after", "energy_loss")
+DERIVED_PREFIXES = ("speed", "speed_at_braking", "delta_v", "speed_after", "energy_loss", "rolled")
 _FORMAT = "crashsim-posterior/1"
 
 
@@ -280,18 +277,29 @@ class PosteriorProblem:
 
 
 # ---------------------------------------------------------------------------------------------
-# Pools: emcee calls pool.map(fn, positions); every pool here evaluates this problem's
-# log-posterior (built once per process or thread) in the order given, and tallies failures.
+# The pool emcee calls (pool.map(fn, positions)): this problem's log-posterior evaluated through
+# the one parallel-execution module (serial, processes or Dask), in the order given; failures tallied.
 # ---------------------------------------------------------------------------------------------
 
-class _Pool:
-    def __init__(self):
+def _evaluate(problem: "PosteriorProblem", z) -> tuple:
+    return problem.evaluate(z)
+
+
+class _EmceePool:
+    def __init__(self, executor: Executor):
+        self.executor = executor
         self.failures: dict[str, int] = {}
         self.evaluations = 0
 
-    def _take(self, results) -> list:
+    @property
+    def workers(self) -> int:
+        return self.executor.workers
+
+    def map(self, fn, positions):
+        positions = [np.asarray(z, float) for z in positions]
+        size = max(1, math.ceil(len(positions) / self.executor.workers))  # one chunk per worker
         out = []
-        for lp, blob, reason in results:
+        for lp, blob, reason in self.executor.map(_evaluate, positions, chunksize=size):
             self.evaluations += 1
             if reason is not None:
                 self.failures[reason] = self.failures.get(reason, 0) + 1
@@ -299,44 +307,7 @@ class _Pool:
         return out
 
     def close(self) -> None:
-        pass
-
-
-class _SerialPool(_Pool):
-    def __init__(self, problem: PosteriorProblem):
-        super().__init__()
-        self.problem = problem
-
-    def map(self, fn, positions):
-        return self._take([self.problem.evaluate(z) for z in positions])
-
-
-_WORKER: dict = {}
-
-
-def _pool_init(payload):
-    _WORKER["problem"] = _problem_for(payload)
-
-
-def _pool_eval(z):
-    return _WORKER["problem"].evaluate(z)
-
-
-class _ProcessPool(_Pool):
-    def __init__(self, payload: dict, workers: int):
-        super().__init__()
-        ctx = mp.get_context("fork") if "fork" in mp.get_all_start_methods() else None
-        self.workers = workers
-        self.ex = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_pool_init,
-                                      initargs=(payload,))
-
-    def map(self, fn, positions):
-        positions = [np.asarray(z, float) for z in positions]
-        size = max(1, math.ceil(len(positions) / self.workers))
-        return self._take(list(self.ex.map(_pool_eval, positions, chunksize=size)))
-
-    def close(self) -> None:
-        self.ex.shutdown(wait=True, cancel_futures=True)
+        self.executor.close(cancel=True)
 
 
 _LOCAL = threading.local()
@@ -353,32 +324,6 @@ def _problem_for(payload: dict) -> PosteriorProblem:
                                                       sample_time_limit=payload["time_limit"],
                                                       derived=payload["derived"])
     return p
-
-
-def _dask_eval(z, payload):
-    return _problem_for(payload).evaluate(np.asarray(z, float))
-
-
-class _DaskPool(_Pool):
-    def __init__(self, address, payload: dict):
-        try:
-            from distributed import Client
-        except ImportError as exc:  # pragma: no cover - depends on the environment
-            raise ScenarioError("--dask needs dask.distributed (pip install distributed)", field="dask") from exc
-        super().__init__()
-        self.own = not isinstance(address, Client)
-        self.client = Client(address) if self.own else address
-        self.remote = self.client.scatter([payload], broadcast=True)[0]
-        self.workers = max(1, sum(w.get("nthreads", 1) for w in self.client.scheduler_info()["workers"].values()))
-
-    def map(self, fn, positions):
-        futures = self.client.map(_dask_eval, [np.asarray(z, float) for z in positions], payload=self.remote,
-                                  pure=False)
-        return self._take(self.client.gather(futures))
-
-    def close(self) -> None:
-        if self.own:
-            self.client.close()
 
 
 # ---------------------------------------------------------------------------------------------
@@ -581,6 +526,10 @@ class PosteriorResult:
                                                                        show(p["sd"], kd) if kd != "dimensionless"
                                                                        else f"{100 * p['sd']:.1f} %"])
             lines += table(rows, "l" + "r" * (len(heads) + 2))
+            for k in self.derived:  # the wheel-lift and rollover check on: rolled.<vehicle> is 1 or 0 per sample
+                if k.startswith("rolled.") and self.percentiles.get(k) is not None:
+                    lines.append(f"  rollover (an outcome, not a failure): a unit of vehicle {k.split('.', 1)[1]} "
+                                 f"rolls in {100 * self.percentiles[k]['mean']:.1f} % of the kept samples")
         n = len(self.unknowns)
         labels = self.labels
         lines.append("")
@@ -771,7 +720,7 @@ def load_chain(path: str | Path) -> dict:
 
 def _initial_ball(problem: PosteriorProblem, z0: np.ndarray, spec: PosteriorSpec) -> np.ndarray:
     """``walkers`` points ~ N(z0, init_scale^2) per coordinate, each redrawn until the prior is positive there."""
-    rng = np.random.default_rng(np.random.SeedSequence(spec.seed, spawn_key=(1,)))
+    rng = np.random.default_rng(child_seed(spec.seed, 1))
     out = np.empty((spec.walkers, z0.size))
     for k in range(spec.walkers):
         for _ in range(10_000):
@@ -909,36 +858,19 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
         z_all, lp_all, bl_all, acc_all, failures, evaluations, n_resumed = [], [], [], [], {}, 0, 0
         elapsed0 = 0.0
 
-    if dask_address is not None:
-        backend, nw = "dask", 0
-    else:
-        nw = check_workers(workers) or (os.cpu_count() or 1)
-        backend = "processes" if nw > 1 else "serial"
+    backend, nw = choose_backend(workers, dask_address)
     payload = {"data": sampled_data, "fit_spec": fit_spec, "priors": priors, "engine": engine, "file": file,
                "time_limit": float(limit), "derived": derived, "hash": run_hash}
     todo = spec.steps - len(z_all)
     if spec.ess is not None and z_all and _enough(z_all, spec):
         todo = 0  # a resumed chain that meets its target already
-    bar = None
-    if progress is True and todo > 0:
-        try:
-            from tqdm import tqdm
-
-            bar = tqdm(total=spec.steps, initial=len(z_all), desc="posterior (MCMC)", unit="step", file=sys.stderr,
-                       dynamic_ncols=True)
-        except ImportError:  # pragma: no cover - tqdm is a dependency
-            bar = None
+    bar = Progress(progress, spec.steps, initial=len(z_all), desc="posterior (MCMC)", unit="step", show=todo > 0)
     pool = None
     rstate = None
     try:
         if todo > 0:
-            if backend == "dask":
-                pool = _DaskPool(dask_address, payload)
-                nw = pool.workers
-            elif backend == "processes":
-                pool = _ProcessPool(payload, nw)
-            else:
-                pool = _SerialPool(problem)
+            pool = _EmceePool(Executor(_problem_for, payload, backend, nw, dask_address=dask_address, local=problem))
+            nw = pool.workers if backend == "dask" else nw
             move = emcee.moves.StretchMove() if spec.move == "stretch" else emcee.moves.DEMove()
             sampler = emcee.EnsembleSampler(spec.walkers, ndim, problem.log_prob, pool=pool, moves=move)
             if saved is not None and n_resumed > 0 and len(z_all) == saved["z"].shape[0]:
@@ -954,7 +886,7 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
                 start_coords = _initial_ball(problem, z0, spec)
                 state = emcee.State(start_coords,
                                     random_state=np.random.RandomState(
-                                        np.random.SeedSequence(spec.seed, spawn_key=(2,)).generate_state(4)
+                                        child_seed(spec.seed, 2).generate_state(4)
                                     ).get_state())
                 acc0 = np.zeros(spec.walkers)
             if state is not None:
@@ -973,10 +905,7 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
                               np.array(acc_all), rstate, _merge(failures, pool.failures),
                               evaluations + pool.evaluations, derived, elapsed0 + time.perf_counter() - t0)
                         since = 0
-                    if bar is not None:
-                        bar.update(1)
-                    elif callable(progress):
-                        progress(len(z_all), spec.steps)
+                    bar.update(1, len(z_all))
                     if spec.ess is not None and len(z_all) % spec.check_every == 0 and _enough(z_all, spec):
                         break
     finally:
@@ -986,8 +915,7 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
                       rstate, _merge(failures, pool.failures), evaluations + pool.evaluations, derived,
                       elapsed0 + time.perf_counter() - t0)
             pool.close()
-        if bar is not None:
-            bar.close()
+        bar.close()
     if pool is not None:
         failures = _merge(failures, pool.failures)
         evaluations += pool.evaluations

@@ -31,10 +31,8 @@ import math
 from dataclasses import replace
 from typing import Sequence
 
-import numpy as np
-
 from ..errors import ScenarioError
-from ..motion.road import FrictionZone, Road, signed_distance
+from ..motion.road import Road, point_distance
 from ..scenario import contact_outlines, frame_point, frame_xform, vehicle_states
 from ..schema import in_range
 from .patch import LAW_KEY, patch_kind, set_validated
@@ -45,7 +43,7 @@ __all__ = ["ScenarioVariant", "patch_scenario"]
 def _unchecked(obj, **changes):
     """A copy of the frozen dataclass ``obj`` with ``changes``, its ``__post_init__`` checks skipped.
 
-    For an :class:`~crashsim.impact.model.ImpactProblem` whose vehicles, bodies, names and
+    For an :class:`~crashsim.impact.problem.ImpactProblem` whose vehicles, bodies, names and
     constraints are those of a validated problem: only states (built by ``chain_states``,
     pin-consistent by construction) and the crush surface (validated by its own constructor)
     change, which its structural checks do not concern.
@@ -110,12 +108,8 @@ class ScenarioVariant:
         self._normal_turn = None
         if "point" in kinds:
             self._point = lambda p: frame_point(p, imp["point_frame"], base.states, "impact.point_frame", file)
-            self._outlines = []
-            for _, world in contact_outlines(problem, base.states):
-                try:  # a polygon with its edges prepared once (its distance is signed_distance's, bit for bit)
-                    self._outlines.append(FrictionZone(world, 1.0).signed_distance)
-                except ScenarioError:
-                    self._outlines.append(lambda p, world=world: signed_distance(p, world))
+            # each outline with its edges prepared once (its distance is signed_distance's, bit for bit)
+            self._outlines = [point_distance(world) for _, world in contact_outlines(problem, base.states)]
         if "normal" in kinds:
             self._normal_turn = frame_xform(imp["normal_frame"], base.states, "impact.normal_frame", file)[1]
         self._body_names = tuple(b.name for v in problem.vehicles for b in v.bodies)
@@ -157,9 +151,9 @@ class ScenarioVariant:
                 surface = replace(problem.surface, **surface_changes) if surface_changes else problem.surface
                 problem = _unchecked(problem, states={n: states[n] for n in self._body_names}, surface=surface)
             if "point" in kinds:  # the contact point in or near both outlines (else the full build's error)
-                p = np.asarray(problem.surface.point)[None]
+                px, py = problem.surface.point
                 tol = imp["contact_tolerance"]
-                if any(max(0.0, -float(distance(p)[0])) > tol for distance in self._outlines):
+                if any(max(0.0, -distance(px, py)) > tol for distance in self._outlines):
                     return None
             runout = base.runout
             inputs = base.approach_inputs

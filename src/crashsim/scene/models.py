@@ -1,12 +1,12 @@
 """The run-out's scene model, reused across the scenes of a fit or a Monte Carlo run.
 
-Building a :class:`~crashsim.motion.model.SceneModel` (wheels, loads, contact pieces and
+Building a :class:`~crashsim.motion.scene_model.SceneModel` (wheels, loads, contact pieces and
 pairs as kernel arrays) costs about as much as a compiled run-out of the shipped scenes.
 The samples of a fit or Monte Carlo run that change only speeds, impact coefficients, the
 point of impact or the road friction share the vehicles, wheel settings, contact model,
 obstacles and options *objects* (:mod:`crashsim.reconstruct.patch` keeps them), so their
 model is built once and, where only the road friction differs, copied with the new
-coefficient (:meth:`~crashsim.motion.model.SceneModel.with_road`).
+coefficient (:meth:`~crashsim.motion.scene_model.SceneModel.with_road`).
 
 The cache is keyed by the identity of those objects and holds them, so a key cannot be
 reused by other objects while its entry lives; a scenario built the full way has new
@@ -18,7 +18,7 @@ from __future__ import annotations
 import threading
 from collections import OrderedDict
 
-from ..motion.model import SceneModel
+from ..motion.scene_model import SceneModel
 from ..motion.simulate import check_common
 
 __all__ = ["scene_model", "clear"]
@@ -37,7 +37,7 @@ def clear() -> None:
 
 
 def scene_model(movable, spec):
-    """The :class:`~crashsim.motion.model.SceneModel` of ``movable`` vehicles under run-out ``spec``
+    """The :class:`~crashsim.motion.scene_model.SceneModel` of ``movable`` vehicles under run-out ``spec``
     (as :func:`crashsim.motion.simulate_scene` builds it), from the cache where it holds one.
 
     Parameters

@@ -13,13 +13,11 @@ from ..animation import animate_scene
 from ..errors import ScenarioError, with_file
 from ..evidence.checks import REST_MISFIT_SHARE, evaluate_evidence, wheel_matches
 from ..impact import ImpactResult, solve_impact
-from ..impact.model import ImpactProblem
+from ..impact.problem import ImpactProblem
 from ..motion import make_hitch_consistent
-from ..motion.accuracy import scene_to_accuracy, simulate_to_accuracy
 from ..motion.approach import simulate_approach
-from ..motion.engine import run_model
-from ..motion.levels import simulate_level
 from ..motion.result import time_grid
+from ..motion.runout import CONTACT_LEVELS, run_runout
 from ..motion.wheels import enumerate_wheels, wheel_labels
 from ..plotting import plot_scene
 from ..report import (format_approach, format_crush, format_events, format_evidence, format_impact,
@@ -87,6 +85,11 @@ class SceneResult:
     def at_rest(self) -> bool:
         """True if there is no run-out or every run-out ended at rest."""
         return self.runout is None or all(r.success for r in self.runout.values())
+
+    def rollover(self) -> dict:
+        """By vehicle, its wheel-lift and rollover summary (:attr:`RunoutResult.rollover`); empty when the
+        check is off."""
+        return {v: r.rollover for v, r in (self.runout or {}).items() if getattr(r, "rollover", None) is not None}
 
     def energy_ledger(self) -> dict | None:
         """The scene's energy ledger from the approach to rest [J] (None without a joint run-out).
@@ -504,16 +507,13 @@ def simulate_approaches(scenario):
     return out
 
 
-#: Fidelity levels whose run-out models contact between vehicles and with obstacles.
-CONTACT_LEVELS = ("articulated", "load_transfer")
-
-
 def run_scene(scenario, *, lean: bool = False) -> SceneResult:
     """Solve a loaded scenario: the impact, then the run-out of the whole scene if asked for.
 
     At the ``articulated`` and ``load_transfer`` levels every vehicle runs out together, with
     contact between them and with the scene's obstacles (the barrier of the impact among
-    them): later impacts are solved by the impulse solver (:func:`crashsim.motion.simulate_scene`).
+    them): later impacts are solved by the impulse solver (:func:`crashsim.motion.run_runout`, the one
+    run-out entry).
     The ``energy`` and ``rigid`` levels run each vehicle alone, without contact.
 
     ``lean``: the result a fit, Monte Carlo or posterior sample reads (its records, residuals
@@ -543,11 +543,14 @@ def run_scene(scenario, *, lean: bool = False) -> SceneResult:
         initial = {}
         for veh in movable:
             initial.update(make_hitch_consistent(veh, {b.name: states[b.name] for b in veh.bodies}))
-        if spec.level in CONTACT_LEVELS:
-            joint, accuracy = _joint_runout(movable, initial, spec, _track_filter(scenario) if lean else None)
-            runout = dict(joint.vehicles)
-        else:
-            runout, accuracy = _separate_runouts(movable, initial, spec)
+        contact = spec.level in CONTACT_LEVELS
+        run = run_runout(movable, initial, spec.wheels, spec.road, spec.options, level=spec.level,
+                         contact=spec.contact, pair_contact=spec.pair_contact, obstacles=spec.obstacles,
+                         accuracy=spec.accuracy, accuracy_heading=spec.accuracy_heading,
+                         # the scene model reused across fit/MC samples
+                         model=scene_model(movable, spec) if contact and spec.accuracy is None else None,
+                         lean=_track_filter(scenario) if lean and contact else None)
+        runout, joint, accuracy = run
     evidence = None
     if not scenario.evidence.empty:
         evidence = evaluate_evidence(scenario.evidence, impact, runout, scenario.impact.surface.point,
@@ -573,33 +576,6 @@ def _track_filter(scenario):
     """The wheels whose tracks a lean run keeps: those a run-out tyre mark of the evidence can match."""
     selectors = tuple(m.wheel for m in scenario.evidence.marks if m.phase == "runout")
     return lambda spec: any(wheel_matches(spec, s) for s in selectors)
-
-
-def _joint_runout(movable, initial, spec, lean=None):
-    """Every vehicle together, with contact (and to an accuracy target if the scenario asks);
-    ``lean``: None, or the wheel filter of a lean result."""
-    kwargs = dict(contact=spec.contact, pair_contact=spec.pair_contact, obstacles=spec.obstacles)
-    if spec.accuracy is None:
-        # the same as simulate_scene(...), with the scene model reused across fit/MC samples
-        return run_model(scene_model(movable, spec), initial, lean=lean), None
-
-    joint, report = scene_to_accuracy(movable, initial, spec.wheels, spec.road, spec.accuracy, spec.accuracy_heading,
-                                      spec.options, level=spec.level, **kwargs)
-    return joint, {v.name: report for v in movable}
-
-
-def _separate_runouts(movable, initial, spec):
-    """The ``energy`` and ``rigid`` levels: each vehicle alone (no contact)."""
-    runout, accuracy = {}, ({} if spec.accuracy is not None else None)
-    for veh in movable:
-        init = {b.name: initial[b.name] for b in veh.bodies}
-        if spec.accuracy is not None:
-            runout[veh.name], accuracy[veh.name] = simulate_to_accuracy(
-                veh, init, spec.wheels[veh.name], spec.road, spec.accuracy, spec.accuracy_heading, spec.options,
-                level=spec.level)
-        else:
-            runout[veh.name] = simulate_level(spec.level, veh, init, spec.wheels[veh.name], spec.road, spec.options)
-    return runout, accuracy
 
 
 #: Growth of a body's overlap with the barrier after separation [m] that is reported: the

@@ -1,7 +1,7 @@
 """The physics of the run-out of a whole scene: one source for both engines.
 
 Everything here is nopython code on SI floats in flat arrays.  Both engines run it: the
-compiled engine (:mod:`crashsim.motion.fast`) inside its own integration loop (:func:`~crashsim.motion.kernels.integrator.run`),
+compiled engine (:mod:`crashsim.motion.compiled_solution`) inside its own integration loop (:func:`~crashsim.motion.kernels.integrator.run`),
 the SciPy engine (:mod:`crashsim.motion.simulate`) through thin compiled entry points
 (:mod:`~crashsim.motion.kernels.scipy_calls`) called from its Python loop
 around SciPy's integrators.  So the right-hand side, the event functions and what happens at
@@ -12,7 +12,7 @@ order (:class:`~crashsim.motion.layout.StateLayout`): X.., Y.., psi.., vx.., vy.
 then the filtered body-axes accelerations with load transfer.
 
 The arrays are named (:mod:`crashsim.motion.kernels.arrays`): the model ``M``
-(:class:`~crashsim.motion.kernels.arrays.KernelModel`, built by :mod:`crashsim.motion.model`:
+(:class:`~crashsim.motion.kernels.arrays.KernelModel`, built by :mod:`crashsim.motion.scene_model`:
 bodies, wheels, hitches, load transfer, wheel-setting phases, friction zones, options, the RK
 tableau, contact pieces and pairs), the mode ``D`` (:class:`~crashsim.motion.kernels.arrays.Mode`:
 zone membership of every wheel, the closed articulation stops (hitch, locked angle, count in

@@ -3,7 +3,7 @@
 The kernels read three bundles, each a namedtuple of arrays (numba compiles namedtuples:
 attribute access costs what a tuple index does):
 
-* :class:`KernelModel` ``M``: the scene (built once by :class:`crashsim.motion.model.SceneModel`);
+* :class:`KernelModel` ``M``: the scene (built once by :class:`crashsim.motion.scene_model.SceneModel`);
 * :class:`Mode` ``D``: the discrete state, changed only at events (:func:`mode_arrays`);
 * :class:`Work` ``W``: scratch arrays of one evaluation (:func:`make_work`).
 

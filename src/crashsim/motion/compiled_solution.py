@@ -1,4 +1,5 @@
-"""The compiled run-out engine: the SciPy engine's model, events and results, integrated in numba.
+"""The compiled engine's dense output (:class:`CompiledSolution`), and the notes on that engine: the SciPy
+engine's model, events and results, integrated in numba (the loop is :mod:`crashsim.motion.kernels.integrator`).
 
 Use it through the common entry points with ``RunoutOptions(engine="compiled")``
 (:func:`~crashsim.motion.simulate_runout`, :func:`~crashsim.motion.simulate_scene`), which

@@ -1,4 +1,6 @@
-"""Planar equations of motion of a chain of bodies on tyres: maximal coordinates + hitch multipliers.
+"""Hitch constraint rows of a chain of bodies on tyres (maximal coordinates + hitch multipliers), and
+:class:`RunoutModel`, one vehicle's equations for NumPy callers (the equations themselves are
+:mod:`crashsim.motion.kernels.equations`).
 
 Formulation (note sec. 1.4)
 ---------------------------
@@ -41,7 +43,7 @@ from ..vehicles import BodyState, Vehicle
 from .contact import ContactModel
 from .layout import StateLayout
 from .loads import StaticLoads, load_transfer_matrix, static_loads
-from .model import SceneModel, kernels, reference_lengths
+from .scene_model import SceneModel, kernels, reference_lengths
 from .options import RunoutOptions
 from .road import Road
 from .wheels import ResolvedWheels, WheelSetting

@@ -117,7 +117,7 @@ def test_lean_scene_gives_the_full_numbers(raw):
     Monte Carlo samples (and the bodies' rest states and histories, the kept wheels' tracks)."""
     from crashsim.reconstruct.montecarlo import UncertaintySpec, _check_key, sample_inputs, scene_outputs
     from crashsim.reconstruct.overrides import ScenarioOverrides
-    from crashsim.reconstruct.scene import run_scene
+    from crashsim.scene.run import run_scene
 
     spec = UncertaintySpec.from_dict(raw["uncertainty"], file=str(FILE))
     fspec = FitSpec.from_dict(raw["fit"], raw, file=str(FILE))
@@ -156,7 +156,7 @@ def test_the_inverse_api_takes_a_scenario(raw, monkeypatch):
     one built in memory with no file; the same numbers as from the file's path."""
     import crashsim
     import crashsim.scenario as sm
-    from crashsim.reconstruct.inverse_schema import with_inverse_sections
+    from crashsim.inverse_schema import with_inverse_sections
     from crashsim.reconstruct.overrides import file_contents
 
     monkeypatch.setattr(sm, "SCHEMA", with_inverse_sections(sm.SCHEMA))

@@ -12,7 +12,7 @@ What is measured
 Inputs: ``tests/fuzz/random_runouts.py`` -- single vehicles (car, car + trailer,
 tractor-semitrailer, doubles; mixed wheel states, scheduled changes, friction zones, load
 transfer on some, a road grade and cross-slope (and zones with their own) on about a third of the single
-vehicles; speeds up to 35 m/s with side slip, yaw and articulation), and scenes of 2-3
+vehicles, air brakes (timing, capacity, brakes out of adjustment, release, ABS) on about a third of them; speeds up to 35 m/s with side slip, yaw and articulation), and scenes of 2-3
 such vehicles on crossing paths with guardrails and poles, which meet again (secondary
 impacts, sustained contact, stops), and doubles with the converter dolly as a body of its own
 (an A-dolly or a yaw-locked C-dolly, self-steering axles free, locked or locked later).  Every

@@ -31,6 +31,7 @@ from .impact import (CrushSurface, ExternalImpulse, ImpactProblem, TangentialLaw
                      tyre_friction_impulse)
 from .motion import (LATERAL_MODELS, METHODS, WHEEL_STATES, ContactModel, FrictionZone, Obstacle, Road, RunoutOptions,
                      ScheduledChange, WheelSetting, WheelSettings)
+from .motion.brakes import MAX_BRAKE_TIME, MAX_CAPACITY, UNIT_TYPES, AirBrakes, BrakeUnit, unit_type_default
 from .motion.contact import CONTACT_KEYS, WEIGHT_DEPTH
 from .motion.road import MAX_SLOPE
 from .motion.levels import LEVELS
@@ -184,6 +185,46 @@ APPROACH_WHEEL_CHANGE = Section("wheel_change", [
     Field("select", "str", example="trailer", description="Which wheels (as in wheels[].select)"),
 ] + _wheel_fields(True), description="A change of the approach's wheel settings from a given time on")
 
+BRAKE_UNIT = Section("unit", [
+    Field("body", "str", example="tractor", description="The braked body (a body without an entry has no air brakes)"),
+    Field("type", choices=UNIT_TYPES, required=False, example="last_trailer",
+          description="Unit type whose default timing applies (default: the first body a tractor, the last a "
+                      "last_trailer, a body named like a dolly a dolly, others a towing_trailer)"),
+    Field("capacity", Kind.FORCE, counts=tuple(range(1, 13)), minimum=0, maximum=MAX_CAPACITY,
+          example='["45 kN", "90 kN", "90 kN"]',
+          description="Brake capacity of each axle, front to rear (one value: every axle): the brake force at the road "
+                      "its brakes develop at full application, both sides together"),
+    Field("delay", Kind.TIME, required=False, minimum=0, maximum=MAX_BRAKE_TIME, example="0.225 s",
+          description="From the first movement of the brake control until the unit's brake force starts to build "
+                      "(default by unit type, from FMVSS 121's application timing: docs/heavy-vehicles.md)"),
+    Field("rise", Kind.TIME, required=False, minimum=0, maximum=MAX_BRAKE_TIME, example="0.375 s",
+          description="Time the brake force takes to build linearly to its full value (default by unit type)"),
+    Field("release_delay", Kind.TIME, required=False, minimum=0, maximum=MAX_BRAKE_TIME, example="0.275 s",
+          description="From the release of the control until the brake force starts to fall (default by unit type)"),
+    Field("fall", Kind.TIME, required=False, minimum=0, maximum=MAX_BRAKE_TIME, example="0.29 s",
+          description="Time the brake force takes to fall linearly to zero (default by unit type)"),
+    Field("out_of_adjustment", "float", minimum=0, maximum=1, default=0.0, example="0.2",
+          description="Fraction of the unit's brake capacity lost to brakes out of adjustment"),
+], description="The air brakes of one body (unit)")
+
+
+def _brakes_section(when: str) -> Section:
+    return Section("brakes", [
+        Field("apply", Kind.TIME, minimum=-60, maximum=60, default="0 s", example="0.5 s",
+              description=f"First movement of the brake control, {when}"),
+        Field("release", Kind.TIME, required=False, minimum=-60, maximum=600, example="3 s",
+              description=f"Release of the brake control, {when} (absent: held)"),
+        Field("tractor_abs", "bool", default=False, description="ABS on the first body's wheels"),
+        Field("trailer_abs", "bool", default=False, description="ABS on the wheels of every other body"),
+        Field("abs_efficiency", "float", required=False, minimum=0, maximum=1, exclusive_minimum=True,
+              exclusive_maximum=True, example="0.85",
+              description="ABS modulation efficiency: the longitudinal force of a wheel under ABS as a fraction of "
+                          "the sliding force's (required with ABS; docs/heavy-vehicles.md)"),
+    ], subsections=[ArrayOf("units", BRAKE_UNIT, min_items=1, description="The braked bodies")], required=False,
+        description="Air brakes: each unit's brake force builds after a delay along a ramp (and releases the same "
+                    "way), limited by the tyre (the wheel locks) or, with ABS, held below it")
+
+
 #: Largest approach (distance from the start of braking to the impact [m], time [s]).
 MAX_APPROACH_DISTANCE = 2000.0
 MAX_APPROACH_TIME = 120.0
@@ -215,6 +256,7 @@ APPROACH = Section("approach", [
     ArrayOf("wheels", WHEEL, required=False, description="Per-wheel overrides of the approach's tyres section"),
     ArrayOf("wheel_changes", APPROACH_WHEEL_CHANGE, required=False,
             description="Scheduled changes of the approach's wheel settings (times after the start of braking)"),
+    _brakes_section("after the start of braking"),
 ], required=False, description="The motion before the impact, from the start of braking, simulated with the run-out's "
                                "tyre model and engine; it gives the vehicle's velocity and yaw rates at impact")
 
@@ -234,6 +276,7 @@ VEHICLE = Section("vehicle", [
     TYRES,
     ArrayOf("wheels", WHEEL, required=False, description="Per-wheel overrides of the tyres section"),
     ArrayOf("wheel_changes", WHEEL_CHANGE, required=False, description="Scheduled changes of wheel settings"),
+    _brakes_section("after separation (negative: before the impact)"),
     APPROACH,
 ], description="A vehicle: a chain of bodies (car; car + trailer; tractor + semitrailer; doubles)")
 
@@ -849,12 +892,58 @@ def _build_wheels(vehicle: Vehicle, v: dict, file: str | None, prefix: str | Non
                 raise _err(rest, f"{key}.{word}", file) from None
             raise _err(f"select = {c['select']!r} at {c['at']:g} s: {msg}", f"{key}.select", file) from None
         schedule.append(change)
+    brakes = _build_brakes(vehicle, v.get("brakes"), file, f"{prefix}.brakes")
     try:
         ws = WheelSettings(default, overrides, schedule)
         ws.resolve(vehicle)
     except ScenarioError as exc:
         raise _rewrap(exc, prefix, file) from None
+    if brakes is not None:
+        try:
+            ws = WheelSettings(default, overrides, schedule, brakes)
+            ws.resolve(vehicle)
+        except ScenarioError as exc:
+            raise _rewrap(exc, f"{prefix}.brakes", file) from None
     return ws
+
+
+def _build_brakes(vehicle: Vehicle, b: dict | None, file: str | None, key: str) -> AirBrakes | None:
+    """The air brakes of ``vehicle`` from its (validated) brakes table, or None."""
+    if b is None:
+        return None
+    names = [body.name for body in vehicle.bodies]
+    if b["release"] is not None and b["release"] < b["apply"]:
+        raise _err(f"release = {b['release']:g} s is before apply = {b['apply']:g} s; allowed: release >= apply",
+                   f"{key}.release", file)
+    if (b["tractor_abs"] or b["trailer_abs"]) and b["abs_efficiency"] is None:
+        raise _err("ABS is on (tractor_abs or trailer_abs) but abs_efficiency is missing; give it in (0, 1), e.g. "
+                   "0.85 (docs/heavy-vehicles.md)", f"{key}.abs_efficiency", file)
+    units = {}
+    for i, u in enumerate(b["units"]):
+        where = f"{key}.units[{i}]"
+        if u["body"] not in names:
+            near = difflib.get_close_matches(u["body"], names, n=1)
+            hint = f"; did you mean {near[0]!r}?" if near else ""
+            raise _err(f"body = {u['body']!r} is not a body of vehicle {vehicle.name!r}{hint} Allowed: {names}",
+                       f"{where}.body", file)
+        if u["body"] in units:
+            raise _err(f"body = {u['body']!r} has two entries; give one per body", f"{where}.body", file)
+        index = names.index(u["body"])
+        n_axles = len(vehicle.bodies[index].axles)
+        if len(u["capacity"]) not in (1, n_axles):
+            raise _err(f"gives {len(u['capacity'])} values for body {u['body']!r} with {n_axles} axles; allowed: one "
+                       "per axle, or one for every axle", f"{where}.capacity", file)
+        try:
+            units[u["body"]] = BrakeUnit(
+                tuple(u["capacity"]), u["type"] or unit_type_default(len(names), index, u["body"]),
+                u["delay"], u["rise"], u["release_delay"], u["fall"], u["out_of_adjustment"],
+                bool(b["tractor_abs"] if index == 0 else b["trailer_abs"]))
+        except ScenarioError as exc:
+            raise _rewrap(exc, where, file) from None
+    try:
+        return AirBrakes(units, b["apply"], b["release"], b["abs_efficiency"] or 0.0)
+    except ScenarioError as exc:
+        raise _rewrap(exc, key, file) from None
 
 
 def _rollover_check(r: dict, level: str, vehicles, file: str | None) -> bool:
@@ -1126,7 +1215,7 @@ def _approach_input(veh: Vehicle, v: dict, runout: "RunoutSpec | None", file: st
         raise _err("with an approach the direction of the velocity at impact follows from the approach; remove "
                    "course", f"vehicles.{veh.name}.course", file)
     wheels = _build_wheels(veh, {"tyres": a["tyres"], "wheels": a["wheels"], "wheel_changes": a["wheel_changes"],
-                                 "bodies": v["bodies"]}, file, prefix=key)
+                                 "bodies": v["bodies"], "brakes": a["brakes"]}, file, prefix=key)
     if a["road_friction"] is not None:
         road = (Road(a["road_friction"], runout.road.zones, runout.road.grade, runout.road.cross_slope)
                 if runout is not None else Road(a["road_friction"]))

@@ -6,7 +6,9 @@ trailer, a tractor-semitrailer or a tractor with two trailers; mixed wheel state
 braked, locked, jammed, with steer and mu factors), scheduled wheel changes, friction zones
 placed across the expected path, load transfer on some cases, a road slope on about a third of
 the single-vehicle cases (grade within 6 %, cross-slope within 4 %, half the zones with a grade
-of their own within 8 %; the scenes stay level, see ``random_scene``), the wheel-lift and
+of their own within 8 %; the scenes stay level, see ``random_scene``), air brakes on about a
+third of the single-vehicle cases (timing, capacities below and above the tyres' limit, brakes
+out of adjustment, releases, ABS; :func:`_air_braked`), the wheel-lift and
 rollover check on every case with load transfer (half the bodies with a threshold of their own),
 hitch-consistent initial states
 with speeds up to 35 m/s, yaw rates, side slip and articulation (inside the articulation limit).
@@ -23,6 +25,7 @@ import numpy as np
 
 from crashsim.motion import (FrictionZone, Road, RunoutOptions, ScheduledChange, WheelSetting, WheelSettings,
                              make_hitch_consistent)
+from crashsim.motion.brakes import AirBrakes, BrakeUnit, unit_type_default
 from crashsim.vehicles import Axle, Body, BodyState, Hitch, Vehicle, chain_states
 
 __all__ = ["Case", "KINDS", "DOLLY_KINDS", "random_case"]
@@ -214,6 +217,55 @@ def _sloped(road: Road, seed: int, i: int) -> tuple[Road, str]:
     return Road(road.mu, zones, grade, cross), f", grade {100 * grade:.1f} %, cross-slope {100 * cross:.1f} %"
 
 
+def _air_braked(wheels: WheelSettings, vehicle, seed: int, i: int) -> tuple[WheelSettings, str]:
+    """The wheel settings with air brakes in about a third of the cases: a random set of braked bodies
+    with random capacities (some below, some above the tyres' limit), timing, brakes out of
+    adjustment, a release on some, ABS on some (tractor and trailers drawn apart).
+
+    Drawn from a generator of its own (the other draws of a case stay those without air brakes).
+    The wheel states are made valid for them: a ``braked`` fraction becomes ``rolling`` (the air
+    brakes give the force) and, where a unit has ABS, a ``locked`` wheel too.
+    """
+    rng = np.random.default_rng([seed, i, 121])
+    if rng.random() >= 0.35:
+        return wheels, ""
+    tractor_abs, trailer_abs = rng.random() < 0.5, rng.random() < 0.4
+    units = {}
+    for bi, body in enumerate(vehicle.bodies):
+        if rng.random() < 0.75 and body.axles:
+            per_axle = body.mass * 9.81 / len(body.axles)
+            units[body.name] = BrakeUnit(
+                tuple(_u(rng, 0.2, 1.4) * per_axle for _ in body.axles),
+                unit_type_default(len(vehicle.bodies), bi, body.name),
+                delay=_u(rng, 0.0, 0.6), rise=_u(rng, 0.0, 0.6) if rng.random() < 0.9 else 0.0,
+                release_delay=_u(rng, 0.1, 0.6), fall=_u(rng, 0.1, 0.7),
+                out_of_adjustment=_u(rng, 0.0, 0.3) if rng.random() < 0.4 else 0.0,
+                abs=tractor_abs if bi == 0 else trailer_abs)
+    if not units:
+        return wheels, ""
+    apply = _u(rng, -0.5, 1.0)
+    release = apply + _u(rng, 0.5, 3.0) if rng.random() < 0.3 else None
+    brakes = AirBrakes(units, apply, release, _u(rng, 0.7, 0.95))
+    any_abs = any(u.abs for u in units.values())
+
+    def valid(state):
+        return "rolling" if state == "braked" or (any_abs and state == "locked") else state
+
+    def fix(ws):
+        return dataclasses.replace(ws, state=valid(ws.state), brake=0.0)
+
+    schedule = []
+    for c in wheels.schedule:
+        ch = dict(c.changes)
+        ch["state"] = valid(ch.get("state", "rolling"))
+        ch["brake"] = 0.0
+        schedule.append(ScheduledChange(c.time, c.wheels, ch))
+    out = WheelSettings(default=fix(wheels.default), wheels={k: fix(w) for k, w in wheels.wheels.items()},
+                        schedule=schedule, brakes=brakes)
+    which = ", ".join(f"{n}{' (ABS)' if u.abs else ''}" for n, u in units.items())
+    return out, f", air brakes on {which} from {apply:.2f} s"
+
+
 def _rollover(vehicles, options: RunoutOptions, seed: int, i: int, tag: int):
     """With load transfer, the wheel-lift and rollover check on, and about half the bodies with a threshold of
     their own (0.2-0.9 g; the others the default 0.75 t / (2 h)): ``(vehicles, options, label)``.
@@ -267,8 +319,9 @@ def random_case(seed: int, i: int, *, engine: str = "scipy", kinds=KINDS) -> Cas
         wheels, more = _self_steering(wheels, vehicle, seed, i)
         label += more
     road, slope = _sloped(_road(rng, np.zeros(2), course, speed), seed, i)
+    wheels, air = _air_braked(wheels, vehicle, seed, i)
     (vehicle,), options, roll = _rollover((vehicle,), options, seed, i, 23)
-    return Case(label + slope + roll, vehicle, initial, wheels, road, options)
+    return Case(label + slope + air + roll, vehicle, initial, wheels, road, options)
 
 
 @dataclass(frozen=True)

@@ -145,6 +145,16 @@ def check_contacts(run, label, contact=ContactModel()):
         assert p.max_closing <= contact.velocity_threshold * (1 + 1e-6) + 1e-9, (label, p.name, p.max_closing)
 
 
+def test_the_single_sample_draws_air_brakes():
+    """The single-vehicle sample has air-braked cases, with and without ABS, on articulated vehicles too."""
+    braked = [random_case(SEED, i) for i in range(N_SINGLE)]
+    braked = [c for c in braked if c.wheels.brakes is not None]
+    assert len(braked) >= 3
+    assert any(u.abs for c in braked for u in c.wheels.brakes.units.values())
+    assert any(not u.abs for c in braked for u in c.wheels.brakes.units.values())
+    assert any(len(c.vehicle.bodies) > 1 for c in braked)
+
+
 def test_the_sample_has_impacts_contacts_and_articulated_vehicles():
     """The fuzz sample is not trivial: impacts, sustained contacts, stops and obstacles occur."""
     kinds, impacts, hitched, obstacles, restrikes = set(), 0, 0, 0, 0

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from crashsim import run as crashsim_run
 from crashsim.cli import main
 from crashsim.scenario import load_scenario
 
@@ -27,7 +28,7 @@ def test_there_are_shipped_scenes():
     names = {p.stem for p in SCENES}
     assert {"intersection_car_trailer_wheels", "barrier_15deg", "barrier_75deg", "car_trailer_side_impact",
             "median_barrier_slide", "third_vehicle_waiting_car", "trailer_swings_into_car",
-            "verge_run_off", "truck_brakes_into_car"} <= names
+            "verge_run_off", "truck_brakes_into_car", "truck_downgrade_abs"} <= names
 
 
 @pytest.mark.parametrize("path", SCENES, ids=[p.stem for p in SCENES])
@@ -190,3 +191,26 @@ def test_truck_brakes_before_the_impact(capsys):
     assert work == pytest.approx(run.kinetic_energy_initial - run.kinetic_energy_final, rel=1e-3)
     assert run.kinetic_energy_initial == pytest.approx(0.5 * m * ap.speed_at_braking**2, rel=1e-9)
     assert 0 < lost < work
+
+
+def test_truck_downgrade_abs(capsys):
+    """Air brakes down a grade: the tractor's ABS wheels leave no mark before the impact while the
+    trailer's (no ABS, brakes lagging) lock only after the tractor's brakes act; the truck gains speed
+    on the grade until its brakes take hold; the energy ledger books the grade's potential energy."""
+    path = ROOT / "scenarios" / "scenes" / "truck_downgrade_abs.toml"
+    assert main(["run", str(path), "--json", "--strict"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["evidence"]["all_passed"]
+    sc = load_scenario(path)
+    ap = sc.approaches["truck"]
+    tracks = ap.tracks
+    assert not any(t.sliding.any() for k, t in tracks.items() if k.startswith("tractor/"))
+    trailer = [t for k, t in tracks.items() if k.startswith("trailer/")]
+    assert all(t.sliding.any() for t in trailer)
+    brakes = sc.approach_inputs["truck"].spec.wheels.brakes
+    t_lock = min(float(t.t[np.argmax(t.sliding)]) for t in trailer) + ap.time_to_impact  # tracks: from the impact
+    assert t_lock > brakes.apply + brakes.units["trailer"].delay > brakes.apply + brakes.units["tractor"].delay
+    # downhill, the speed grows until the brakes outweigh the grade
+    assert float(np.max(ap.speed_at(np.linspace(-ap.time_to_impact, 0.0, 200)))) > ap.speed_at_braking
+    ledger = crashsim_run(path).energy_ledger()
+    assert ledger["potential"] < 0  # downhill: potential energy lost to the tyres

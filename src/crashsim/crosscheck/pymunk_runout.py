@@ -156,6 +156,8 @@ def simulate_runout_pymunk(
             out[L.psi.start + i] = body.angle
             out[L.vx.start + i], out[L.vy.start + i] = body.velocity
             out[L.w.start + i] = body.angular_velocity
+        if L.clock_index is not None:  # air brakes: their force follows the time
+            out[L.clock_index] = current["t"]
         return out
 
     state = {"step": -1, "forces": None, "seg": None, "key": None}
@@ -233,6 +235,7 @@ def simulate_runout_pymunk(
         quad_seg.append(state["seg"])
         step += 1
         t = step * dt
+        current["t"] = t  # the recorded state's time (its clock, with air brakes)
         y_new = read_state()
         if not np.all(np.isfinite(y_new)):
             status, message = "solver_failure", f"pymunk state not finite at t = {t:.6g} s"

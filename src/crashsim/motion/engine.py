@@ -499,6 +499,8 @@ def _log_records(model: SceneModel, t: float, recs, log: list) -> None:
         elif kind == k.LOG_SCHEDULE:
             changing = tuple(v.name for v in model.vehicles if any(abs(tc - t) < 1e-12
                                                                   for tc in model.resolved[v.name].change_times))
+            if not changing:  # a kink of the air brakes' ramps: a segment boundary, no change of settings
+                continue
             changes = _wheel_changes(model, changing, t)
             labels = {w.key: w.label for w in model.specs}  # the axles' names from the file
             what = "; ".join(f"{labels.get(key, key)}: {a} -> {b}" for key, a, b in changes)

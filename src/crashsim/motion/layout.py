@@ -35,6 +35,9 @@ class StateLayout:
         Body names, front to rear.
     accel_filter : bool
         Whether the state carries the filtered accelerations used for load transfer.
+    clock : bool
+        Whether the state ends with the clock (time [s], derivative 1): the air brakes' force
+        is a function of time, and every kernel that evaluates a state reads it there.
 
     Attributes
     ----------
@@ -44,12 +47,15 @@ class StateLayout:
         ``(x, y, psi)`` and ``(vx, vy, w)`` blocks (length ``3 n_bodies``).
     ax_f, ay_f : slice or None
         Filtered body-axes accelerations [m/s^2] (None without load transfer).
+    clock_index : int or None
+        Index of the clock (with ``clock``).
     size : int
         Length of the state vector.
     """
 
     bodies: tuple[str, ...]
     accel_filter: bool = False
+    clock: bool = False
 
     FIELDS = ("x", "y", "psi", "vx", "vy", "w")
 
@@ -68,7 +74,10 @@ class StateLayout:
             object.__setattr__(self, "ax_f", None)
             object.__setattr__(self, "ay_f", None)
             object.__setattr__(self, "accel", None)
-        object.__setattr__(self, "size", (8 if self.accel_filter else 6) * n)
+        size = (8 if self.accel_filter else 6) * n
+        object.__setattr__(self, "clock", bool(self.clock))
+        object.__setattr__(self, "clock_index", size if self.clock else None)
+        object.__setattr__(self, "size", size + (1 if self.clock else 0))
 
     @property
     def n_bodies(self) -> int:

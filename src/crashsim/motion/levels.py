@@ -44,6 +44,10 @@ written down exactly so that it can be reproduced by hand:
      wheel, the full remaining side force across it.  This neglects the linear (unsaturated)
      range of the side force at small slip angles, where a rolling tyre resists less.
 
+   * with air brakes (:mod:`crashsim.motion.brakes`): ``f_x = F_b / N + f_r`` with the brake
+     force at full application (their timing ignored, said so in the message); ``f = mu`` where
+     that reaches ``mu`` (the wheel locks), ``f_x <= eta mu`` with ABS.
+
    ``mu`` is the road or zone friction coefficient at the **CG** times the wheel's
    ``mu_factor``; wheel settings are those in force at separation (scheduled changes are
    ignored and said so in the message); loads are the static wheel loads (for an
@@ -358,8 +362,12 @@ class _RigidMotion:
     __call__ = state
 
 
-def _drag_factors(settings, mu_road: float, beta: np.ndarray) -> np.ndarray:
-    """Drag factor of every wheel for the angles ``beta`` (n_wheels, ...) between motion and wheel heading."""
+def _drag_factors(settings, mu_road: float, beta: np.ndarray, air=None, load=None) -> np.ndarray:
+    """Drag factor of every wheel for the angles ``beta`` (n_wheels, ...) between motion and wheel heading.
+
+    ``air`` (n_wheels, 7): the air brakes' rows (:meth:`ResolvedWheels.brake_rows`) with the loads ``load``
+    [N]: a wheel with air brakes drags with its brake force at full application per unit load (a wheel
+    whose brake reaches ``mu`` locks; with ABS the drag along the wheel is at most ``eta mu``)."""
     out = np.empty_like(beta, dtype=float)
     for k, s in enumerate(settings):
         mu = mu_road * s.mu_factor
@@ -367,6 +375,13 @@ def _drag_factors(settings, mu_road: float, beta: np.ndarray) -> np.ndarray:
             out[k] = mu
         else:
             fx = min(s.brake * mu + (s.rolling_resistance or 0.0), mu)
+            if air is not None and air[k, 0] != 0.0:
+                fx = air[k, 5] / load[k] + (s.rolling_resistance or 0.0) if load[k] > 0 else 0.0
+                if air[k, 6] > 0.0:
+                    fx = min(fx, air[k, 6] * mu)
+                elif fx >= mu:
+                    out[k] = mu
+                    continue
             out[k] = fx * np.abs(np.cos(beta[k])) + math.sqrt(max(mu * mu - fx * fx, 0.0)) * np.abs(np.sin(beta[k]))
     return out
 
@@ -395,6 +410,7 @@ def energy_runout(
     y0 = L.pack(initial)
     settings = model.wheels.at(0.0)
     scheduled = bool(model.wheels.change_times)
+    air = model.wheels.brake_rows(vehicle) if model.wheels.brakes is not None else None
 
     m = model.mass
     inertia = model.inertia
@@ -433,7 +449,7 @@ def energy_runout(
     wheel_rot_work = np.zeros(len(N))
     if w_c != 0.0:
         spin_dir = np.arctan2(d[:, 1], d[:, 0]) + math.copysign(math.pi / 2, w_c)
-        f_spin = _drag_factors(settings, mu_start, (spin_dir - theta)[:, None])[:, 0]
+        f_spin = _drag_factors(settings, mu_start, (spin_dir - theta)[:, None], air, N)[:, 0]
         M_f = float(np.sum(N * r * f_spin))
         if M_f > 0:
             wheel_rot_work = N * r * f_spin * (I_c * w_c * w_c / (2 * M_f))
@@ -454,7 +470,7 @@ def energy_runout(
     total_n = float(N.sum())
 
     def mean_drag(mu_here: float) -> tuple[float, np.ndarray]:
-        f = _drag_factors(settings, mu_here, beta).mean(axis=1)  # per wheel, mean over the sweep
+        f = _drag_factors(settings, mu_here, beta, air, N).mean(axis=1)  # per wheel, mean over the sweep
         return float(np.sum(N * f) / total_n), f
 
     g = STANDARD_GRAVITY
@@ -562,6 +578,8 @@ def energy_runout(
     notes = []
     if scheduled:
         notes.append("scheduled wheel changes ignored (wheel settings at separation used)")
+    if air is not None:
+        notes.append("air brakes at full application from separation (their timing and release ignored)")
     if status == "rest":
         message = (f"energy model: slide {s:.4g} m in {t_trans:.4g} s, rotation {math.degrees(dpsi_total):.4g} deg in "
                    f"{t_rot:.4g} s")

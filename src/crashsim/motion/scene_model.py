@@ -127,7 +127,7 @@ class SceneModel:
         if len(set(body_names)) != len(body_names):
             raise ScenarioError(f"body names must be unique in the scene, got {body_names}", field="vehicles")
         self.body_vehicle = np.array([i for i, v in enumerate(self.vehicles) for _ in v.bodies], dtype=np.int64)
-        self.layout = StateLayout(tuple(body_names), accel_filter=options.load_transfer)
+        self.layout = None  # set once the wheels are known (the air brakes add the clock)
 
         # ---- wheels, loads and wheel-setting phases, vehicle by vehicle
         self.resolved = {}
@@ -161,12 +161,29 @@ class SceneModel:
             h0 += nh_v
         self.specs = tuple(specs)
         nb, nw, nh = b0, w0, h0
+        wheel_brake = np.zeros((nw, k.N_B))
+        for v in self.vehicles:
+            lo, hi = self.wheel_range[v.name]
+            wheel_brake[lo:hi] = self.resolved[v.name].brake_rows(v)
+        self.air_brakes = bool(np.any(wheel_brake[:, k.B_HAS] != 0.0))
+        self.layout = StateLayout(tuple(body_names), accel_filter=options.load_transfer, clock=self.air_brakes)
         self.static_load = np.concatenate([self.loads[v.name].wheel for v in self.vehicles])
         times = sorted({0.0} | {t for r in self.resolved.values() for t in r.change_times})
         self.phase_times = np.array(times, dtype=float)
         self.change_times = tuple(times[1:])
-        #: Where the integration must stop and restart: the scheduled changes before t_max, then t_max.
-        self.segment_stops = tuple(sorted({tc for tc in self.change_times if tc < options.t_max} | {options.t_max}))
+        # the kinks of the air brakes' ramps: where the brake force starts or stops changing
+        rows = wheel_brake[wheel_brake[:, k.B_HAS] != 0.0]
+        kinks = np.concatenate([rows[:, k.B_ON], rows[:, k.B_ON] + rows[:, k.B_RISE], rows[:, k.B_OFF],
+                                rows[:, k.B_OFF] + rows[:, k.B_FALL]]) if len(rows) else np.zeros(0)
+        #: Times at which the air brakes' force starts or stops changing (segment boundaries, no wheel change).
+        self.brake_kinks = tuple(sorted({float(x) for x in kinks if 0.0 < x < options.t_max}))
+        #: Where the integration must stop and restart: the scheduled changes before t_max (and for the compiled
+        #: engine the air brakes' kinks: its explicit Runge-Kutta steps lose their order across a kink, while
+        #: LSODA's error control finds them at less cost than a restart of the SciPy engine), then t_max.
+        kink_stops = set(self.brake_kinks) if options.engine == "compiled" else set()
+        self.segment_stops = tuple(sorted({tc for tc in self.change_times if tc < options.t_max}
+                                          | kink_stops | {options.t_max}))
+
         phase_w = np.zeros((len(times), nw, k.N_P))
         for p, t in enumerate(times):
             for v in self.vehicles:
@@ -257,6 +274,8 @@ class SceneModel:
         icfg[k.I_SLOPE] = 1 if road.sloped else 0
         icfg[k.I_CASTOR] = 1 if bool(np.any(phase_w[:, :, k.P_CASTOR] >= 0.0)) else 0
         icfg[k.I_YAWLOCK] = int(np.count_nonzero(hitch[:, 5])) if nh else 0
+        icfg[k.I_BRAKE] = 1 if self.air_brakes else 0
+        icfg[k.I_CLOCK] = self.layout.clock_index if self.air_brakes else 0
         tab = tuple(np.ascontiguousarray(a, dtype=float) for a in (scheme.A, scheme.B, scheme.C, scheme.E, scheme.P))
 
         # ---- contact geometry
@@ -326,7 +345,8 @@ class SceneModel:
             piece_info=np.array(info, dtype=float).reshape(-1, 4),
             pair_body=np.array(pr_body, dtype=np.int64).reshape(-1, 2), pair_ptr=np.array(pr_ptr, dtype=np.int64),
             piece_pairs=np.array(pp, dtype=np.int64).reshape(-1, 2),
-            pair_par=np.array(pr_par, dtype=float).reshape(-1, k.N_R), zone_slope=zone_slope, wheel_mass=wheel_mass)
+            pair_par=np.array(pr_par, dtype=float).reshape(-1, k.N_R), zone_slope=zone_slope, wheel_mass=wheel_mass,
+            wheel_brake=np.ascontiguousarray(wheel_brake))
         self.n_bodies, self.n_wheels, self.n_hitches = nb, nw, nh
 
     def with_road(self, road: Road) -> "SceneModel":

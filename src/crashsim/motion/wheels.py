@@ -36,6 +36,7 @@ import numpy as np
 
 from ..errors import ScenarioError
 from ..vehicles import Vehicle
+from .brakes import AirBrakes
 
 __all__ = [
     "WHEEL_STATES",
@@ -396,6 +397,9 @@ class WheelSettings:
     schedule : sequence of ScheduledChange
         Changes from given times on, applied in time order (changes at equal times in the
         order given).
+    brakes : AirBrakes, optional
+        Air brakes (:mod:`crashsim.motion.brakes`): the brake force of the rolling wheels of
+        the braked units as a ramp in time; None (the default) leaves the wheels as set.
 
     Examples
     --------
@@ -410,8 +414,11 @@ class WheelSettings:
     default: WheelSetting | None = None
     wheels: Mapping[str, WheelSetting] = field(default_factory=dict)
     schedule: Sequence[ScheduledChange] = ()
+    brakes: AirBrakes | None = None
 
     def __post_init__(self):
+        if self.brakes is not None and not isinstance(self.brakes, AirBrakes):
+            raise ScenarioError(f"must be AirBrakes, got {type(self.brakes).__name__}", field="brakes")
         if self.default is not None and not isinstance(self.default, WheelSetting):
             raise ScenarioError(f"must be a WheelSetting, got {type(self.default).__name__}", field="wheels.default")
         object.__setattr__(self, "wheels", MappingProxyType(dict(self.wheels)))
@@ -450,7 +457,43 @@ class WheelSettings:
         for t, settings in phases:
             for s, setting in zip(specs, settings):
                 setting.check_tyre_data(f"{where}[{s.key!r}] (t >= {t} s)")
-        return ResolvedWheels(specs=specs, phases=tuple(phases))
+        if self.brakes is not None:
+            check_brakes(vehicle, specs, phases, self.brakes)
+        return ResolvedWheels(specs=specs, phases=tuple(phases), brakes=self.brakes)
+
+
+def check_brakes(vehicle: Vehicle, specs, phases, brakes: AirBrakes) -> None:
+    """Raise ScenarioError where the air brakes do not fit the vehicle or its wheel states: a unit that is
+    not a body, capacities that do not match its axles, a braked wheel (fraction) on a braked unit, or a
+    wheel of an ABS unit locked by its settings while the brakes act."""
+    names = [b.name for b in vehicle.bodies]
+    for name, unit in brakes.units.items():
+        if name not in names:
+            raise ScenarioError(f"no body {name!r} in vehicle {vehicle.name!r}; bodies are {names}"
+                                f"{_suggest(name, names)}", field="units.body")
+        n_axles = len(vehicle.body(name).axles)
+        if len(unit.capacity) not in (1, n_axles):
+            raise ScenarioError(f"body {name!r} has {n_axles} axles, got {len(unit.capacity)} capacities (give one "
+                                f"per axle, or one for every axle)", field=f"units[{name!r}].capacity")
+    ends = [t for t, _ in phases[1:]] + [math.inf]
+    for (t0, settings), t1 in zip(phases, ends):
+        for s, setting in zip(specs, settings):
+            unit = brakes.units.get(s.body)
+            if unit is None:
+                continue
+            if setting.state == "braked":
+                raise ScenarioError(f"wheel {s.label!r} is 'braked' with a brake fraction ({setting.brake:g}) from "
+                                    f"{t0:g} s while body {s.body!r} has air brakes; give state = \"rolling\" (the air "
+                                    "brakes give its brake force) or remove the body from the brakes' units",
+                                    field=f"units[{s.body!r}]")
+            if unit.abs and setting.state == "locked":
+                on, _, off, fall = brakes.times(s.body)
+                if t1 > on and t0 < off + fall:
+                    flag = "tractor_abs" if s.body_index == 0 else "trailer_abs"
+                    span = f"from {t0:g} s on" if math.isinf(t1) else f"from {t0:g} s to {t1:g} s"
+                    raise ScenarioError(f"is true, but wheel {s.label!r} is locked by its wheel settings {span} while its unit's brakes act (from {on:g} s); ABS keeps its wheels "
+                                        f"rolling: allowed is {flag} = false or state = \"rolling\" there",
+                                        field=flag)
 
 
 @dataclass(frozen=True)
@@ -467,6 +510,23 @@ class ResolvedWheels:
 
     specs: tuple[WheelSpec, ...]
     phases: tuple[tuple[float, tuple[WheelSetting, ...]], ...]
+    brakes: AirBrakes | None = None
+
+    def brake_rows(self, vehicle: Vehicle) -> np.ndarray:
+        """Per wheel ``(has air brakes, t_on, rise, t_off, fall, brake force at full application [N],
+        ABS efficiency (0: none))``, shape (nw, 7); all zero without air brakes."""
+        out = np.zeros((len(self.specs), 7))
+        if self.brakes is None:
+            return out
+        for k, s in enumerate(self.specs):
+            unit = self.brakes.units.get(s.body)
+            if unit is None:
+                continue
+            cap = unit.capacity[0] if len(unit.capacity) == 1 else unit.capacity[s.axle_index]
+            t_on, rise, t_off, fall = self.brakes.times(s.body)
+            out[k] = (1.0, t_on, rise, t_off, fall, 0.5 * cap * (1.0 - unit.out_of_adjustment),
+                      self.brakes.abs_efficiency if unit.abs else 0.0)
+        return out
 
     @property
     def change_times(self) -> tuple[float, ...]:

@@ -50,12 +50,16 @@ from .jit import JIT
 #: * slope (read only when ``icfg[I_SLOPE]`` is set): ``zone_slope`` (nz, 3) the in-plane gravity
 #:   x, y [m/s^2] and the normal factor inside each zone (the road's in ``cfg[C_GX, C_GY, C_GN]``;
 #:   :func:`crashsim.motion.road.slope_gravity`); ``wheel_mass`` (nw,) the mass [kg] of its body
-#:   that a wheel carries in the in-plane gravity (its share of the body's static wheel loads).
+#:   that a wheel carries in the in-plane gravity (its share of the body's static wheel loads);
+#: * air brakes (read only when ``icfg[I_BRAKE]`` is set): ``wheel_brake`` (nw, N_B) per wheel
+#:   (``B_*`` columns: has air brakes, t_on, rise, t_off, fall [s], brake force at full application
+#:   [N], ABS efficiency; :meth:`crashsim.motion.wheels.ResolvedWheels.brake_rows`); the clock
+#:   (time [s]) is then the state's entry ``icfg[I_CLOCK]``.
 KernelModel = namedtuple("KernelModel", [
     "body", "wheel", "wheel_body", "hitch", "load_transfer", "inv_mass", "phase_times", "phase_wheels",
     "zone_mu", "zone_ptr", "zone_edges", "cfg", "icfg", "tab_a", "tab_b", "tab_c", "tab_e", "tab_p",
     "zone_box", "body_vehicle", "hitch_body", "piece_body", "piece_ptr", "piece_verts", "piece_normals",
-    "piece_info", "pair_body", "pair_ptr", "piece_pairs", "pair_par", "zone_slope", "wheel_mass"])
+    "piece_info", "pair_body", "pair_ptr", "piece_pairs", "pair_par", "zone_slope", "wheel_mass", "wheel_brake"])
 
 #: The mode ``D`` (the discrete state of a segment, changed in place at events):
 #:
@@ -106,17 +110,24 @@ Step = namedtuple("Step", ["t_old", "h", "y_old", "Q", "ytmp"])
  C_ZRES, C_GX, C_GY, C_GN) = range(16)
 N_CFG = 16
 # icfg (int options); I_SLOPE: 1 where any part of the road is not level; I_CASTOR: 1 where any
-# wheel is self-steering in any phase; I_YAWLOCK: the number of yaw-locked hitches (C-dollies)
-I_FIALA, I_LT, I_MAXSEG, I_ORDER, I_NSTAGES, I_MAXEVAL, I_SLOPE, I_CASTOR, I_YAWLOCK = range(9)
-N_ICFG = 9
+# wheel is self-steering in any phase; I_YAWLOCK: the number of yaw-locked hitches (C-dollies);
+# I_BRAKE: 1 where any wheel has air brakes, and I_CLOCK the index of the clock (time [s]) in the state then
+I_FIALA, I_LT, I_MAXSEG, I_ORDER, I_NSTAGES, I_MAXEVAL, I_SLOPE, I_CASTOR, I_YAWLOCK, I_BRAKE, I_CLOCK = range(11)
+N_ICFG = 11
 # phase_wheels columns (per phase and wheel); P_CASTOR: the steer-angle limit of a self-steering
 # wheel [rad], -1 for a wheel that does not steer by itself
 P_MUF, P_BRAKE, P_FROLL, P_CFIX, P_CCOEF, P_CD, P_SD, P_LOCKED, P_CASTOR = range(9)
 N_P = 9
 # segment wheel columns (sw); S_N0: the static load on the road's slope [N]; S_GX, S_GY: the
-# in-plane gravity force the wheel's share of its body's mass carries, world frame [N]; S_CASTOR as P_CASTOR
-S_MU, S_MULOAD, S_DEMAND, S_CALPHA, S_DCOEF, S_CFIX, S_CCOEF, S_CD, S_SD, S_LOCKED, S_N0, S_GX, S_GY, S_CASTOR = range(14)
-N_S = 14
+# in-plane gravity force the wheel's share of its body's mass carries, world frame [N]; S_CASTOR as P_CASTOR;
+# S_AIR: 1 where the wheel's brake force comes from the air brakes in this segment (a rolling wheel of a
+# braked unit)
+S_MU, S_MULOAD, S_DEMAND, S_CALPHA, S_DCOEF, S_CFIX, S_CCOEF, S_CD, S_SD, S_LOCKED, S_N0, S_GX, S_GY, S_CASTOR, S_AIR = range(15)
+N_S = 15
+# air-brake columns (wheel_brake): has air brakes (1/0), brakes start building [s], rise time [s],
+# release starts [s] (inf: held), fall time [s], brake force at full application [N], ABS efficiency (0: none)
+B_HAS, B_ON, B_RISE, B_OFF, B_FALL, B_FORCE, B_ABS = range(7)
+N_B = 7
 # per-wheel outputs of an evaluation (Work.wheel_out)
 W_U, W_V, W_FX, W_FY, W_SLIDE, W_LOAD = range(6)
 N_W = 6

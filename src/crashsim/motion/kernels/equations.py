@@ -13,7 +13,7 @@ import numpy as np
 from numba import njit
 
 from .jit import HOT, INLINE
-from .arrays import (C_GN, C_GX, C_GY, C_ROADMU, C_TAU, I_LT, I_SLOPE, S_GX, S_GY, S_N0, PS_CONTACT, P_BRAKE, P_CCOEF, P_CD, P_CFIX, P_FROLL, P_LOCKED, P_MUF, P_CASTOR, S_CASTOR,
+from .arrays import (B_HAS, C_GN, C_GX, C_GY, C_ROADMU, C_TAU, I_BRAKE, I_CLOCK, I_LT, I_SLOPE, S_AIR, S_GX, S_GY, S_N0, PS_CONTACT, P_BRAKE, P_CCOEF, P_CD, P_CFIX, P_FROLL, P_LOCKED, P_MUF, P_CASTOR, S_CASTOR,
     P_SD, S_CALPHA, S_CCOEF, S_CD, S_CFIX, S_DCOEF, S_DEMAND, S_LOCKED, S_MU, S_MULOAD, S_SD, W_FX, W_FY, W_SLIDE,
     W_U, W_V)
 from .geometry import body_trig, constraint_rows, solve_spd
@@ -28,11 +28,14 @@ def segment_params(t_phase, memb, M, sw):
     On a sloped road (``icfg[I_SLOPE]``) a wheel's static load is scaled by the normal factor of
     the slope under it, and ``S_GX, S_GY`` hold the in-plane gravity on its share of its body's
     mass (world frame [N]); on a level road they are 0 and the static load is used as it is.
+    ``S_AIR`` is 1 for a rolling wheel of a unit with air brakes (``icfg[I_BRAKE]``): its brake force
+    then follows the clock (:func:`crashsim.motion.kernels.tyres.air_demand`).
     """
     wheel, phase_w, zone_mu, cfg = M.wheel, M.phase_wheels, M.zone_mu, M.cfg
     nw = wheel.shape[0]
     nz = zone_mu.shape[0]
     slope = M.icfg[I_SLOPE] != 0
+    air = M.icfg[I_BRAKE] != 0
     for k in range(nw):
         road_mu = cfg[C_ROADMU]
         zk = -1
@@ -67,6 +70,7 @@ def segment_params(t_phase, memb, M, sw):
         sw[k, S_SD] = pw[P_SD]
         sw[k, S_LOCKED] = pw[P_LOCKED]
         sw[k, S_CASTOR] = pw[P_CASTOR]
+        sw[k, S_AIR] = 1.0 if air and M.wheel_brake[k, B_HAS] != 0.0 and pw[P_LOCKED] == 0.0 else 0.0
 
 
 @njit(**INLINE)
@@ -160,6 +164,8 @@ def evaluate(y, M, sw, D, dydt, W):
         if parked[bveh[i]] != 0:
             for fld in range(8 if lt else 6):
                 dydt[fld * nb + i] = 0.0
+    if icfg[I_BRAKE] != 0:
+        dydt[icfg[I_CLOCK]] = 1.0
     return m
 
 

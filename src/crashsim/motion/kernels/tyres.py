@@ -15,7 +15,7 @@ from numba.extending import overload
 
 from .. import tyres as law
 from .jit import INLINE, JIT
-from .arrays import (C_EPS, I_CASTOR, I_FIALA, I_LT, I_SLOPE, S_CASTOR, S_GX, S_GY, S_N0, S_CALPHA, S_CCOEF, S_CD, S_CFIX, S_DCOEF, S_DEMAND, S_LOCKED, S_MU,
+from .arrays import (B_ABS, B_FALL, B_FORCE, B_OFF, B_ON, B_RISE, C_EPS, I_CASTOR, I_CLOCK, I_FIALA, I_LT, I_SLOPE, S_AIR, S_CASTOR, S_GX, S_GY, S_N0, S_CALPHA, S_CCOEF, S_CD, S_CFIX, S_DCOEF, S_DEMAND, S_LOCKED, S_MU,
     S_MULOAD, S_SD, W_FX, W_FY, W_LOAD, W_SLIDE, W_U, W_V)
 from .geometry import body_trig
 
@@ -60,6 +60,41 @@ def _tyre_scalar(u, w, mu_load, demand, cornering_stiffness, locked, eps, fiala)
 
 
 @njit(**INLINE)
+def brake_level(t, b):
+    """Application level in [0, 1] of a brake at time ``t`` [s] (``b``: its ``B_*`` row;
+    :func:`crashsim.motion.brakes.ramp_level`)."""
+    on, rise, off, fall = b[B_ON], b[B_RISE], b[B_OFF], b[B_FALL]
+    tt = min(t, off)
+    if rise > 0.0:
+        up = min(max((tt - on) / rise, 0.0), 1.0)
+    else:
+        up = 1.0 if tt >= on else 0.0
+    if t < off:
+        return up
+    if fall > 0.0:
+        return up * (1.0 - min((t - off) / fall, 1.0))
+    return 0.0
+
+
+@njit(**INLINE)
+def air_demand(t, b, u, v, roll, mu_load, eps):
+    """Longitudinal demand [N] of a rolling wheel with air brakes (``b``: its ``B_*`` row) at time ``t``,
+    and whether the wheel locks.
+
+    The demand is ``F_b + roll`` with the brake force ``F_b = r(t) F_full``; where it reaches the
+    tyre's limit ``mu N`` the wheel locks (slides).  With ABS (``b[B_ABS] = eta > 0``) the demand is
+    held to ``eta mu N sqrt(u^2 + eps^2) / sqrt(|v|^2 + eps^2)``, so that the tyre law's longitudinal
+    force is ``eta`` times the sliding force's longitudinal component: the wheel never locks.
+    """
+    demand = brake_level(t, b) * b[B_FORCE] + roll
+    eta = b[B_ABS]
+    if eta > 0.0:
+        cap = eta * mu_load * math.sqrt(u * u + eps * eps) / math.sqrt(u * u + v * v + eps * eps)
+        return min(demand, cap), False
+    return demand, demand >= mu_load and demand > 0.0
+
+
+@njit(**INLINE)
 def tyre_eval(y, M, sw, D, W):
     """Tyre forces of state ``y``: per-wheel results in ``W.wheel_out`` (``W_*`` columns), world-frame body sums in ``W.body_force``.
 
@@ -71,7 +106,9 @@ def tyre_eval(y, M, sw, D, W):
     sloped road the in-plane gravity of every body is added to its force sum (``S_GX, S_GY``).  Also fills ``W.trig`` with the body heading cosines and
     sines.  Wheels of parked vehicles produce no force (their bodies are frozen).  A
     self-steering wheel (``S_CASTOR >= 0``, only looked at when ``icfg[I_CASTOR]`` is set) takes
-    the steer angle of :func:`crashsim.motion.tyres.castor_angle` instead of its fixed one.
+    the steer angle of :func:`crashsim.motion.tyres.castor_angle` instead of its fixed one.  A rolling
+    wheel with air brakes (``S_AIR``) takes its longitudinal demand from :func:`air_demand` at the
+    state's clock.
     """
     body, wheel, wbody, transfer, cfg, icfg, bveh = M.body, M.wheel, M.wheel_body, M.load_transfer, M.cfg, M.icfg, M.body_vehicle
     parked = D.parked
@@ -122,16 +159,22 @@ def tyre_eval(y, M, sw, D, W):
         else:
             load = sw[k, S_N0]
             mu_load = sw[k, S_MULOAD]
-        if sw[k, S_LOCKED] != 0.0:
-            fx, fy = law.sliding_force(u, v, mu_load, eps)
-            sliding = True
-        else:
+        locked = sw[k, S_LOCKED] != 0.0
+        demand = 0.0
+        c_alpha = 0.0
+        if not locked:
             if lt:
                 demand = sw[k, S_DCOEF] * load
                 c_alpha = sw[k, S_CFIX] + sw[k, S_CCOEF] * load
             else:
                 demand = sw[k, S_DEMAND]
                 c_alpha = sw[k, S_CALPHA]
+            if sw[k, S_AIR] != 0.0:
+                demand, locked = air_demand(y[icfg[I_CLOCK]], M.wheel_brake[k], u, v, demand, mu_load, eps)
+        if locked:
+            fx, fy = law.sliding_force(u, v, mu_load, eps)
+            sliding = True
+        else:
             fx, fy, sliding = law.tyre_kernel(u, v, mu_load, demand, c_alpha, False, eps, fiala)
         wk[k, W_U] = u
         wk[k, W_V] = v

@@ -57,9 +57,10 @@ def fmvss_tractor_with_control_trailer() -> Vehicle:
     tractor = Body("tractor", m1, 60000.0, length=7.0, width=2.5, outline_center=(x_f - 4.6 + 3.5, 0.0),
                    axles=(Axle(x_f, 2.05, name="steer"), Axle(x_r + 0.65, 1.85, True, "drive 1"),
                           Axle(x_r - 0.65, 1.85, True, "drive 2")), cg_height=1.1)
-    trailer = Body("control", m2, 80000.0, length=12.0, width=2.5, axles=(Axle(-5.0, 1.85, True, "axle"),),
+    half = 0.5 * 258.0 * 0.0254  # S6.1.10.3: the axle 258 in behind the kingpin, the CG midway [m]
+    trailer = Body("control", m2, 80000.0, length=8.5, width=2.5, axles=(Axle(-half, 1.85, True, "axle"),),
                    cg_height=1.2)
-    return Vehicle("truck", (tractor, trailer), (Hitch((x_r, 0.0), (5.0, 0.0)),))
+    return Vehicle("truck", (tractor, trailer), (Hitch((x_r, 0.0), (half, 0.0)),))
 
 
 def run_fmvss_stop(engine: str = "compiled") -> float:

@@ -27,35 +27,24 @@ def test_the_shipped_c_dolly_is_yaw_locked_and_self_steering():
         assert s.self_steer_limit == (pytest.approx(expect) if expect else None)
 
 
-def _run(tmp_path, capsys, text):
-    f = tmp_path / "case.toml"
-    f.write_text(text)
-    code = main(["run", str(f)])
-    out, err = capsys.readouterr()
-    assert code == 2 and out == ""
-    line = err.strip()
-    assert "\n" not in line and "case.toml" in line
-    return line
-
-
 @pytest.mark.parametrize("value", ["-5 deg", "95 deg"])
-def test_a_steer_limit_outside_0_90_deg_exits_2_with_one_line(tmp_path, capsys, value):
-    line = _run(tmp_path, capsys, SCENE.read_text().replace('self_steer_limit = "20 deg"', f'self_steer_limit = "{value}"'))
+def test_a_steer_limit_outside_0_90_deg_exits_2_with_one_line(refused_line, value):
+    line = refused_line(SCENE.read_text().replace('self_steer_limit = "20 deg"', f'self_steer_limit = "{value}"'))
     assert "vehicles.truck.wheels[0].self_steer_limit" in line and value.split()[0] in line
     assert "90" in line and "deg" in line
 
 
-def test_a_c_dolly_behind_the_tractor_exits_2_with_one_line(tmp_path, capsys):
+def test_a_c_dolly_behind_the_tractor_exits_2_with_one_line(refused_line):
     """yaw_locked on the body towed by the tractor: no trailer ahead to lock to."""
     text = SCENE.read_text().replace('preset = "pup-28ft"\nmass = "11000 kg"\nyaw_inertia = "72900 kg m^2"      # m (L^2 + W^2) / 12 of the loaded box',
                                      'preset = "pup-28ft"\nyaw_locked = true\nmass = "11000 kg"\nyaw_inertia = "72900 kg m^2"', 1)
-    line = _run(tmp_path, capsys, text)
+    line = refused_line(text)
     assert "vehicles.truck.bodies[1].yaw_locked" in line and "true" in line and "bodies[2] or later" in line
 
 
-def test_a_c_dolly_with_an_articulation_exits_2_with_one_line(tmp_path, capsys):
+def test_a_c_dolly_with_an_articulation_exits_2_with_one_line(refused_line):
     text = SCENE.read_text().replace('preset = "dolly-c"', 'preset = "dolly-c"\narticulation = "5 deg"', 1)
-    line = _run(tmp_path, capsys, text)
+    line = refused_line(text)
     assert "vehicles.truck.bodies[2].articulation" in line and "5 deg" in line and "allowed 0 deg" in line
 
 

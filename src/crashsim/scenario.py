@@ -360,9 +360,9 @@ ZONE = Section("zone", [
           description="Tyre-road friction coefficient inside the zone"),
     Field("polygon", Kind.LENGTH, n=2, points=True, min_points=3, example='[["0 m", "-4 m"], ["60 m", "-4 m"], ["60 m", "-12 m"]]',
           description="Vertices of the zone, world frame"),
-    Field("grade", Kind.DIMENSIONLESS, required=False, minimum=-MAX_SLOPE, maximum=MAX_SLOPE, example="-6 %",
+    Field("grade", Kind.SLOPE, required=False, minimum=-MAX_SLOPE, maximum=MAX_SLOPE, example="-6 %",
           description="Grade inside the zone, rise over run along world +x (default: runout.grade)"),
-    Field("cross_slope", Kind.DIMENSIONLESS, required=False, minimum=-MAX_SLOPE, maximum=MAX_SLOPE, example="2 %",
+    Field("cross_slope", Kind.SLOPE, required=False, minimum=-MAX_SLOPE, maximum=MAX_SLOPE, example="2 %",
           description="Cross-slope inside the zone, rise over run along world +y (default: runout.cross_slope)"),
 ], description="A friction zone (polygon with its own coefficient); later zones win where zones overlap")
 
@@ -380,11 +380,13 @@ RUNOUT = Section("runout", [
                       "same model; used by fit and mc)"),
     Field("road_friction", "float", minimum=0, maximum=2, exclusive_minimum=True, example="0.7",
           description="Tyre-road friction coefficient outside the zones"),
-    Field("grade", Kind.DIMENSIONLESS, default=0.0, minimum=-MAX_SLOPE, maximum=MAX_SLOPE, example="-6 %",
+    Field("grade", Kind.SLOPE, default=0.0, minimum=-MAX_SLOPE, maximum=MAX_SLOPE, example="-6 %",
           description="Road grade, rise over run along world +x (\"-6 %\": downhill toward +x); in-plane gravity "
-                      "on every body, normal loads scaled (run-out, approach, energy level)"),
-    Field("cross_slope", Kind.DIMENSIONLESS, default=0.0, minimum=-MAX_SLOPE, maximum=MAX_SLOPE, example="2 %",
-          description="Road cross-slope, rise over run along world +y"),
+                      "on every body, normal loads scaled (run-out, approach, energy level); or the surface's angle "
+                      "(\"-3.43 deg\" is about -6 %)"),
+    Field("cross_slope", Kind.SLOPE, default=0.0, minimum=-MAX_SLOPE, maximum=MAX_SLOPE, example="2 %",
+          description="Road cross-slope, rise over run along world +y (a percentage, a number, or the surface's angle: "
+                      "\"2 %\", \"0.02\" and \"1.15 deg\" are about the same)"),
     Field("method", choices=METHODS, default=_OPT.method, description="solve_ivp method (LSODA: cheap also when stiff)"),
     Field("rtol", "float", minimum=1e-14, maximum=0.1, default=_OPT.rtol, description="Relative tolerance of the solver"),
     Field("atol", "float", minimum=0, maximum=1, exclusive_minimum=True, default=_OPT.atol,

@@ -103,6 +103,7 @@ class Kind(str, enum.Enum):
     FORCE_PER_LENGTH = "force_per_length"
     FORCE_PER_AREA = "force_per_area"
     DIMENSIONLESS = "dimensionless"
+    SLOPE = "slope"
 
     def __str__(self) -> str:
         return self.value
@@ -150,6 +151,8 @@ _SPECS: dict[Kind, _Spec] = {
                                ("600000 N/m^2", "87.0 lb/in^2"), ("N/m^2", "kN/m^2", "MN/m^2", "lbf/in^2", "lb/in^2")),
     Kind.DIMENSIONLESS: _Spec("a plain number", "a number, or a percentage", ("0.6", "5 %"),
                               ("%",)),
+    Kind.SLOPE: _Spec("a slope", "rise over run as a number or a percentage, or the angle of the surface (deg, rad)",
+                      ("-6 %", "-3.43 deg"), ("%", "deg", "rad")),
 }
 
 DISPLAY_UNITS: dict[Kind, dict[str, str]] = {
@@ -168,10 +171,14 @@ DISPLAY_UNITS: dict[Kind, dict[str, str]] = {
     Kind.FORCE_PER_LENGTH: {"SI": "N/m", "US": "lbf/in"},
     Kind.FORCE_PER_AREA: {"SI": "N/m^2", "US": "lbf/in^2"},
     Kind.DIMENSIONLESS: {"SI": "", "US": ""},
+    Kind.SLOPE: {"SI": "", "US": ""},
 }
 """Display unit of each kind in each system: the one table behind :func:`to_unit`.
 
 Every label is also accepted by :func:`parse`, so ``f"{value!r} {label}"`` reads back."""
+
+#: Kinds written as plain numbers (or percentages): no SI unit label.
+_PLAIN = frozenset({Kind.DIMENSIONLESS, Kind.SLOPE})
 
 # Aliases defined in the registry if this pint version lacks them.
 _ALIASES = (("kph", "kilometer_per_hour"), ("fps", "foot_per_second"),
@@ -273,7 +280,7 @@ def _dims_noun(unit: pint.Unit) -> str:
     """What a unit measures, in words (``"a mass"``), for error messages."""
     power = _angle_power(unit)
     for kind, spec in _SPECS.items():
-        if kind is not Kind.DIMENSIONLESS and power == spec.angle_power:
+        if kind not in _PLAIN and power == spec.angle_power:
             if unit.dimensionality == registry().parse_units(si_unit(kind)).dimensionality:
                 return spec.noun
     if power == 0 and unit.dimensionless:
@@ -360,7 +367,16 @@ def _to_si(value: object, kind: Kind) -> float:
         number, unit = float(match["num"]), match["unit"]
     if not math.isfinite(number):
         raise _Invalid(f"{shown} is not a finite number")
-    if kind is Kind.DIMENSIONLESS:
+    if kind is Kind.SLOPE and unit and unit not in ("%", "percent"):
+        try:
+            angle = number * _si_factor(unit, Kind.ANGLE)
+        except _Invalid:
+            angle = None
+        if angle is not None:
+            if not abs(angle) < 0.5 * math.pi:
+                raise _Invalid(f"{shown} is not the angle of a road surface: it must lie strictly between -90 and 90 deg")
+            return math.tan(angle)  # rise over run of a surface at that angle
+    if kind in _PLAIN:
         if not unit:
             return number
         if unit in ("%", "percent"):
@@ -369,6 +385,8 @@ def _to_si(value: object, kind: Kind) -> float:
             what = f"is {_dims_noun(_pint_unit(_HYPHEN.sub('*', unit)))}"
         except _Invalid as exc:
             what = str(exc)
+        if kind is Kind.SLOPE:
+            raise _Invalid(f'{shown} {what}; expected a slope such as "-6 %", "-0.06" or "-3.43 deg"')
         raise _Invalid(f'{shown} {what}; expected a plain number such as "0.6" or "5 %"')
     if not unit:
         raise _Invalid(f"{shown} has no unit; {_such_as(spec)}")
@@ -511,7 +529,7 @@ def to_unit(si_value: float, kind: Kind | str, system: System = "SI") -> tuple[f
     if system not in ("SI", "US"):
         raise ValueError(f"unknown unit system {system!r}; use 'SI' or 'US'")
     label = DISPLAY_UNITS[kind][system]
-    if kind is Kind.DIMENSIONLESS:
+    if kind in _PLAIN:
         return float(si_value), label
     return float(si_value) / _si_factor(label, kind), label
 
@@ -551,7 +569,12 @@ def write_like(si_value: float, kind: Kind | str, like: object = None) -> str | 
     if isinstance(like, str):
         m = _NUMBER.fullmatch(like)
         unit = m["unit"] if m is not None and m["unit"] else None
-    if kind is Kind.DIMENSIONLESS:
+    if kind is Kind.SLOPE and unit not in (None, "%", "percent"):
+        try:
+            return f"{math.atan(x) / _si_factor(unit, Kind.ANGLE)!r} {unit}"
+        except _Invalid:  # not an angle unit: a plain number below
+            pass
+    if kind in _PLAIN:
         return f"{100.0 * x!r} %" if unit in ("%", "percent") else x
     if unit is not None:
         try:
@@ -610,7 +633,9 @@ def convert(value: float, from_unit: str, to_unit: str, kind: Kind | str | None 
     >>> round(convert(21000, "kg m^2", "ft-lb-s^2"), 1)
     15488.8
     """
-    kinds = list(Kind) if kind is None else [_kind(kind)]
+    if kind is not None and _kind(kind) is Kind.SLOPE:  # rise over run is not a multiple of an angle
+        return _slope_in(_to_si(f"{value!r} {from_unit}".strip(), Kind.SLOPE), to_unit)
+    kinds = [k for k in Kind if k is not Kind.SLOPE] if kind is None else [_kind(kind)]
     results: dict[Kind, float] = {}
     reasons: list[str] = []
     for k in kinds:
@@ -629,6 +654,18 @@ def convert(value: float, from_unit: str, to_unit: str, kind: Kind | str | None 
         raise ScenarioError(f"converting '{from_unit}' to '{to_unit}' is ambiguous between "
                             f"{', '.join(k.value for k in results)}; pass kind=")
     return first
+
+
+def _slope_in(rise_over_run: float, unit: str) -> float:
+    """A slope (rise over run) as a number in ``unit``: none, a percentage or an angle unit."""
+    if not unit:
+        return rise_over_run
+    if unit in ("%", "percent"):
+        return 100.0 * rise_over_run
+    try:
+        return math.atan(rise_over_run) / _si_factor(unit, Kind.ANGLE)
+    except _Invalid as exc:
+        raise ScenarioError(f"cannot convert a slope to '{unit}': '{unit}' {exc}, not a percentage or an angle") from None
 
 
 def example(kind: Kind | str) -> str:

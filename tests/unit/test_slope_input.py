@@ -1,7 +1,8 @@
-"""Road slope keys: read in % (or as a plain fraction), per zone, and refused beyond 30 % with one line."""
+"""Road slope keys: read in % (or as a plain fraction, or as the angle of the surface), per zone, and refused beyond 30 % with one line."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import pytest
@@ -38,3 +39,25 @@ def test_slope_keys_are_read_for_the_road_the_zones_and_the_approach(tmp_path):
 def test_slope_beyond_30_percent_exits_2_with_one_line(refused_line, grade, zone, key):
     line = refused_line(_with(SCENE.read_text(), grade, zone=zone))
     assert key in line and "[-30, 30] %" in line
+
+
+def test_a_slope_in_degrees_is_the_tangent_of_its_angle(tmp_path):
+    """A grade written as the surface's angle is read as rise over run tan(angle): "-3.43 deg" on the road
+    and "4 deg" in a zone; the same run as at the equal grade in % (the SI value is the same number)."""
+    f = tmp_path / "slope.toml"
+    f.write_text(_with(SCENE.read_text(), "-3.43 deg", zone="4 deg"))
+    road = scenario_from_dict(load_toml(f), file=str(f)).runout.road
+    assert road.grade == pytest.approx(math.tan(math.radians(-3.43)), rel=1e-12)
+    assert road.zones[0].grade == pytest.approx(math.tan(math.radians(4.0)), rel=1e-12)
+    g = tmp_path / "percent.toml"
+    g.write_text(_with(SCENE.read_text(), f"{100 * math.tan(math.radians(-3.43))!r} %", zone=f"{math.tan(math.radians(4.0))!r}"))
+    same = scenario_from_dict(load_toml(g), file=str(g)).runout.road
+    assert (same.grade, same.zones[0].grade) == pytest.approx((road.grade, road.zones[0].grade), rel=1e-14)
+
+
+@pytest.mark.parametrize("grade, words", [("-17 deg", ["-17 deg", "[-16.7, 16.7] deg"]),
+                                          ("90 deg", ["90 deg", "between -90 and 90 deg"]),
+                                          ("3 mph", ["3 mph", "is a speed", '"-3.43 deg"'])])
+def test_a_slope_in_degrees_out_of_range_or_not_an_angle_exits_2_with_one_line(refused_line, grade, words):
+    line = refused_line(_with(SCENE.read_text(), grade))
+    assert "runout.grade" in line and all(w in line for w in words), line

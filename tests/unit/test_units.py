@@ -511,7 +511,7 @@ def test_importing_units_does_not_import_pint():
     subprocess.run([sys.executable, "-c", code], check=True, env=env)
 
 
-@pytest.mark.parametrize("kind", [k for k in Kind if k is not Kind.DIMENSIONLESS])
+@pytest.mark.parametrize("kind", [k for k in Kind if DISPLAY_UNITS[k]["SI"]])  # the plain kinds: below
 @pytest.mark.parametrize("system", ["SI", "US"])
 def test_write_like_keeps_the_unit_and_reads_back(kind, system):
     from crashsim.units import write_like
@@ -531,3 +531,18 @@ def test_write_like_plain_numbers_percentages_and_no_unit():
     assert write_like(9500.0, Kind.MASS, "20945 lbf") == f"{9500.0 * G0 / parse('1 lbf', Kind.FORCE, field='f')!r} lbf"
     assert write_like(2.5, Kind.LENGTH, None) == "2.5 m"
     assert write_like(2.5, Kind.LENGTH, "not a value") == "2.5 m"
+
+
+@pytest.mark.parametrize("like", ["-3 deg", "0.05 rad", "2 %", 0.1, "0.1"])
+def test_a_slope_is_written_in_the_unit_it_was_given_and_reads_back(like):
+    """A slope (rise over run) goes back into an angle through atan, a percentage by 100 or a plain
+    number, and reads back to the same rise over run."""
+    from crashsim.units import write_like
+
+    x = -0.0612345678901
+    text = write_like(x, Kind.SLOPE, like)
+    unit = like.split()[-1] if isinstance(like, str) and " " in like else None
+    assert (text.endswith(f" {unit}") if unit else text == x), text
+    assert parse(text, Kind.SLOPE, field="g") == pytest.approx(x, rel=1e-13)
+    if unit == "deg":
+        assert text.startswith(f"{math.degrees(math.atan(x))!r}")

@@ -35,6 +35,6 @@ def format_value(x: float, target, like: Any = None) -> Any:
     f = target.field
     if like is not None:
         return write_like(x, f.kind if isinstance(f.kind, Kind) else Kind.DIMENSIONLESS, like)
-    if isinstance(f.kind, Kind) and f.kind is not Kind.DIMENSIONLESS:
+    if isinstance(f.kind, Kind) and si_unit(f.kind):
         return f"{float(x)!r} {si_unit(f.kind)}"
     return float(x)

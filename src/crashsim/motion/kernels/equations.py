@@ -105,6 +105,19 @@ def phase_at(t, phase_t):
     return i
 
 
+@njit(**INLINE)
+def gram(G, minv, m, n3, A):
+    """``A = G M^-1 G^T``: the m x m (symmetric) matrix of the multiplier solve, from the constraint
+    Jacobian ``G`` (m rows over the ``n3`` coordinates) and the inverse masses ``minv``."""
+    for a in range(m):
+        for c in range(a + 1):
+            s = 0.0
+            for col in range(n3):
+                s += G[a, col] * minv[col] * G[c, col]
+            A[a, c] = s
+            A[c, a] = s
+
+
 @njit(**HOT)
 def evaluate(y, M, sw, D, dydt, W):
     """Right-hand side ``dydt`` of state ``y`` for the segment inputs ``sw`` and mode ``D``.
@@ -140,12 +153,7 @@ def evaluate(y, M, sw, D, dydt, W):
             for col in range(n3):
                 s += G[a, col] * minv[col] * f[col]
             lam[a] = -(s + lam[a])
-            for b in range(a + 1):
-                s = 0.0
-                for col in range(n3):
-                    s += G[a, col] * minv[col] * G[b, col]
-                A[a, b] = s
-                A[b, a] = s
+        gram(G, minv, m, n3, A)
         solve_spd(A, lam, m)
     for col in range(n3):
         dydt[col] = y[n3 + col]
@@ -278,12 +286,7 @@ def project_velocities(y, M, lk_j, lk_th, nlk, G, A, b, cs):
         for col in range(n3):
             s += G[a, col] * y[n3 + col]
         b[a] = s
-        for c in range(a + 1):
-            s = 0.0
-            for col in range(n3):
-                s += G[a, col] * minv[col] * G[c, col]
-            A[a, c] = s
-            A[c, a] = s
+    gram(G, minv, m, n3, A)
     solve_spd(A, b, m)
     for col in range(n3):
         s = 0.0

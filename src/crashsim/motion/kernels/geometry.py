@@ -43,6 +43,29 @@ def body_trig(y, nb, cs):
 
 
 @njit(**INLINE)
+def hitch_arms(cs, hitch, j, f, q):
+    """World vectors from the CGs of hitch ``j``'s front body ``f`` and rear body ``q`` to its pin:
+    ``(ax, ay, bx, by)`` (the body-frame hitch points ``hitch[j, 0:4]`` turned by the headings ``cs``)."""
+    c0 = cs[0, f]
+    s0 = cs[1, f]
+    c1 = cs[0, q]
+    s1 = cs[1, q]
+    hfx, hfy, hrx, hry = hitch[j, 0], hitch[j, 1], hitch[j, 2], hitch[j, 3]
+    return c0 * hfx - s0 * hfy, s0 * hfx + c0 * hfy, c1 * hrx - s1 * hry, s1 * hrx + c1 * hry
+
+
+@njit(**INLINE)
+def pin_gap(y, cs, hitch, hbody, j, nb):
+    """Distance between the two pins of hitch ``j`` [m] (zero when the hitch holds)."""
+    f = hbody[j, 0]
+    q = hbody[j, 1]
+    ax, ay, bx, by = hitch_arms(cs, hitch, j, f, q)
+    gx = y[f] + ax - y[q] - bx
+    gy = y[nb + f] + ay - y[nb + q] - by
+    return math.sqrt(gx * gx + gy * gy)
+
+
+@njit(**INLINE)
 def constraint_rows(y, cs, M, lk_j, lk_th, nlk, G, r, with_rates):
     """Constraint Jacobian ``G`` (m, 3 nb) and, if ``with_rates``, ``r = gamma + 2 zeta w0 g' + w0^2 g`` (m,).
 
@@ -63,15 +86,7 @@ def constraint_rows(y, cs, M, lk_j, lk_th, nlk, G, r, with_rates):
     for j in range(nh):
         f = hbody[j, 0]
         q = hbody[j, 1]
-        c0 = cs[0, f]
-        s0 = cs[1, f]
-        c1 = cs[0, q]
-        s1 = cs[1, q]
-        hfx, hfy, hrx, hry = hitch[j, 0], hitch[j, 1], hitch[j, 2], hitch[j, 3]
-        ax = c0 * hfx - s0 * hfy
-        ay = s0 * hfx + c0 * hfy
-        bx = c1 * hrx - s1 * hry
-        by = s1 * hrx + c1 * hry
+        ax, ay, bx, by = hitch_arms(cs, hitch, j, f, q)
         G[2 * j, f] = 1.0
         G[2 * j, q] = -1.0
         G[2 * j, 2 * nb + f] = -ay

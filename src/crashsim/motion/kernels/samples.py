@@ -15,7 +15,7 @@ from numba import njit
 from .jit import JIT
 from .arrays import (Mode, A_DEPTH, N_S, N_W, PS_ARMED, PS_CONTACT, PS_DISARMED, P_BRAKE, P_FROLL, P_MUF, S_DCOEF,
     S_DEMAND, S_MU, S_MULOAD, S_N0, W_LOAD, W_SLIDE, make_work)
-from .geometry import body_trig, pair_gap, signed_distance, wheel_xy
+from .geometry import body_trig, pair_gap, pin_gap, signed_distance, wheel_xy
 from .contacts import pair_forces, strike_speed, touch_geometry
 from .equations import evaluate, quad_integrand, segment_params
 from .events import interpolate
@@ -183,15 +183,7 @@ def evaluate_samples(Y, seg_of, M, S):
         for q in range(D.lk_n[0]):
             STOPM[p, D.lk_j[q]] = lam[2 * nh + q]
         for j in range(nh):
-            f = hbody[j, 0]
-            r = hbody[j, 1]
-            c0 = cs[0, f]
-            sn0 = cs[1, f]
-            c1 = cs[0, r]
-            sn1 = cs[1, r]
-            gx = yq[f] + (c0 * hitch[j, 0] - sn0 * hitch[j, 1]) - yq[r] - (c1 * hitch[j, 2] - sn1 * hitch[j, 3])
-            gy = yq[nb + f] + (sn0 * hitch[j, 0] + c0 * hitch[j, 1]) - yq[nb + r] - (sn1 * hitch[j, 2] + c1 * hitch[j, 3])
-            max_gap = max(max_gap, math.sqrt(gx * gx + gy * gy))
+            max_gap = max(max_gap, pin_gap(yq, cs, hitch, hbody, j, nb))
         for q in range(npr):
             st = D.pstate[q]
             if st == PS_DISARMED:

@@ -59,6 +59,7 @@ MAX_YAW_INERTIA = 5.0e7     # kg m^2
 MAX_LENGTH = 40.0           # m (body length, axle offset)
 MAX_WIDTH = 6.0             # m
 MAX_TRACK = 4.0             # m
+MAX_CONTACT_HEIGHT = 5.0    # m (above the tallest road vehicles: 4.0 m in the EU, 13 ft 6 in in most US states)
 
 AXLE = Section("axle", [
     Field("name", "str", default="", description="Label (\"steer\", \"drive 1\"); selects wheels as <body>/<name>"),
@@ -118,6 +119,11 @@ BODY = Section("body", [
           description="Largest articulation before the bodies meet (jack-knife stop)"),
     Field("cg_height", Kind.LENGTH, required=False, minimum=0, exclusive_minimum=True, example="1.1 m",
           description="CG height above ground (only for the run-out's load transfer)"),
+    Field("contact_height", Kind.LENGTH, required=False, minimum=0, maximum=MAX_CONTACT_HEIGHT,
+          exclusive_minimum=True, example="0.5 m",
+          description="Height above ground at which contact forces (other vehicles, obstacles) act on this body, "
+                      "only for the run-out's load transfer: below the CG a side push rolls the body toward it; "
+                      "default: the CG height (a push there moves no load)"),
     Field("yaw_locked", "bool", default=False,
           description="The front hitch is locked in yaw at zero articulation: a C-dolly (two drawbars) on the trailer "
                       "ahead, which must itself be towed (bodies[2] or later); free in pitch. Its articulation is 0, "
@@ -1162,7 +1168,7 @@ def _build_vehicle(name: str, v: dict, file: str | None) -> tuple[Vehicle, dict[
             axles = tuple(Axle(a["x"], a["track"], a["dual"], a["name"]) for a in b["axles"])
             bodies.append(Body(b["name"], b["mass"], b["yaw_inertia"], b["length"], b["width"],
                                tuple(b["outline_center"]), axles, b["cg_height"], b["rollover_threshold"],
-                               bool(b["roll_coupled"])))
+                               bool(b["roll_coupled"]), b["contact_height"]))
         except ScenarioError as exc:
             raise _err(str(exc), key, file) from None
         if i > 0:

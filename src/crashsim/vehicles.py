@@ -99,6 +99,11 @@ class Body:
         with load transfer, the body's roll moment is shared with the towing body in proportion to
         the hitch's static vertical load (:func:`crashsim.motion.loads.load_transfer_matrix`).
         Default False: free in roll (a ball, a drawbar eye).
+    contact_height : float, optional
+        Height above ground [m] at which contact forces (other vehicles, obstacles) act on this
+        body, used only by the load-transfer option: their roll and pitch moments about the ground
+        against the CG's move load between the wheels (:func:`crashsim.motion.kernels.equations.specific_force`).
+        None: at the CG height (a push there moves no load).
     """
 
     name: str
@@ -111,6 +116,7 @@ class Body:
     cg_height: float | None = None
     rollover_threshold: float | None = None
     roll_coupled: bool = False
+    contact_height: float | None = None
 
     def __post_init__(self):
         if not self.name or not isinstance(self.name, str):
@@ -125,7 +131,7 @@ class Body:
                 "a movable body both finite",
                 field=f"{self.name}.mass",
             )
-        for attr in ("length", "width", "cg_height"):
+        for attr in ("length", "width", "cg_height", "contact_height"):
             v = getattr(self, attr)
             if v is not None:
                 object.__setattr__(self, attr, _positive(f"{self.name}.{attr}", v))

@@ -48,7 +48,11 @@ the body-axes CG accelerations ``a_x`` (forward), ``a_y`` (left) of every body:
 
 Clamping at zero (wheel lift-off) is done by the caller.  The accelerations come from a
 first-order lag state (time constant tau, suspension pitch/roll response; note option 2),
-see :mod:`crashsim.motion.simulate`.
+see :mod:`crashsim.motion.simulate`.  They are the specific forces that transfer load: the
+acceleration less the in-plane gravity (at the CG) and less the share of contact forces that acts
+at the CG's height (a contact force at ``h_c`` counts with ``1 - h_c / h`` of it;
+:func:`crashsim.motion.kernels.equations.specific_force`), so that ``m a h`` is the moment about the
+ground of the forces acting above it.
 """
 
 from __future__ import annotations

@@ -13,9 +13,12 @@ accelerations of the state).  From the *unclamped* loads (the tyre forces use ``
   axles; all its inner wheels are off the ground when ``|LTR|`` reaches 1: event
   ``"unit_lift"``.  For a rigid body on one track width this happens at the lateral acceleration
   ``a_y = g t / (2 h)`` (the static stability factor);
-* the body's lateral acceleration ``|a_y| / (g g_n)`` (the filtered body-axes specific force of
-  the ground forces, in units of the normal gravity) reaching its rollover threshold (an input in
-  g, default :func:`default_rollover_threshold`): event ``"rollover_threshold"``.
+* the body's lateral acceleration ``|a_y| / (g g_n)`` (the filtered body-axes specific force that
+  transfers load: tyre and hitch forces at the ground, contact forces by their height over the
+  CG's, :func:`crashsim.motion.kernels.equations.specific_force`; in units of the normal gravity)
+  reaching its rollover threshold (an input in g, default :func:`default_rollover_threshold`):
+  event ``"rollover_threshold"``.  A side push at the CG's height (a contact at the default
+  height) accelerates the body without counting here.
 
 Each is recorded once per body, at its first occurrence, with the body's CG place and speed.
 From the earliest of them the planar result of that vehicle is outside its validity (a unit

@@ -27,7 +27,7 @@ from .options import RunoutOptions
 from .road import Road, slope_gravity
 from .wheels import ResolvedWheels, WheelSettings, WheelSpec
 
-__all__ = ["SceneModel", "Pair", "kernels", "reference_lengths"]
+__all__ = ["SceneModel", "Pair", "contact_levers", "kernels", "reference_lengths"]
 
 # Minimum rest reference length [m] (|yaw rate| * L_ref is compared with v_stop).
 _MIN_L_REF = 0.5
@@ -61,6 +61,22 @@ def reference_lengths(vehicle: Vehicle, specs) -> np.ndarray:
             reach = [math.hypot(*s.position) for s in specs if s.body_index == i]
             out.append(max(max(reach, default=0.0), _MIN_L_REF))
     return np.array(out, dtype=float)
+
+
+def contact_levers(bodies, load_transfer: bool) -> np.ndarray:
+    """Per body, the height of its contact forces over its CG height, ``h_c / h`` (nb,) [-].
+
+    ``contact_height`` over ``cg_height`` where a body gives both, else 1 (contact forces at the CG's
+    height, the default); all 1 without load transfer (not read then).  The load transfer takes a
+    contact force's moment about the ground against the CG's
+    (:func:`crashsim.motion.kernels.equations.specific_force`).
+    """
+    out = np.ones(len(bodies))
+    if load_transfer:
+        for i, b in enumerate(bodies):
+            if b.contact_height is not None and b.cg_height is not None:
+                out[i] = b.contact_height / b.cg_height
+    return out
 
 
 def kernels():
@@ -235,6 +251,7 @@ class SceneModel:
                 nbv = bhi - blo
                 transfer[wlo:whi, blo:bhi] = T[:, :nbv]
                 transfer[wlo:whi, nb + blo:nb + bhi] = T[:, nbv:]
+        contact_lever = contact_levers(self.bodies, options.load_transfer)
 
         # ---- road and options
         zone_mu = np.array([z.mu for z in road.zones], dtype=float)
@@ -346,7 +363,7 @@ class SceneModel:
             pair_body=np.array(pr_body, dtype=np.int64).reshape(-1, 2), pair_ptr=np.array(pr_ptr, dtype=np.int64),
             piece_pairs=np.array(pp, dtype=np.int64).reshape(-1, 2),
             pair_par=np.array(pr_par, dtype=float).reshape(-1, k.N_R), zone_slope=zone_slope, wheel_mass=wheel_mass,
-            wheel_brake=np.ascontiguousarray(wheel_brake))
+            wheel_brake=np.ascontiguousarray(wheel_brake), contact_lever=contact_lever)
         self.n_bodies, self.n_wheels, self.n_hitches = nb, nw, nh
 
     def with_road(self, road: Road) -> "SceneModel":

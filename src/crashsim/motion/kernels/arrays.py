@@ -54,12 +54,16 @@ from .jit import JIT
 #: * air brakes (read only when ``icfg[I_BRAKE]`` is set): ``wheel_brake`` (nw, N_B) per wheel
 #:   (``B_*`` columns: has air brakes, t_on, rise, t_off, fall [s], brake force at full application
 #:   [N], ABS efficiency; :meth:`crashsim.motion.wheels.ResolvedWheels.brake_rows`); the clock
-#:   (time [s]) is then the state's entry ``icfg[I_CLOCK]``.
+#:   (time [s]) is then the state's entry ``icfg[I_CLOCK]``;
+#: * contact height (read only with load transfer, ``icfg[I_LT]``, in scenes with contact pairs):
+#:   ``contact_lever`` (nb,) the height of the body's contact forces over its CG height, ``h_c / h``
+#:   [-] (1: at the CG, the default; :func:`crashsim.motion.kernels.equations.specific_force`).
 KernelModel = namedtuple("KernelModel", [
     "body", "wheel", "wheel_body", "hitch", "load_transfer", "inv_mass", "phase_times", "phase_wheels",
     "zone_mu", "zone_ptr", "zone_edges", "cfg", "icfg", "tab_a", "tab_b", "tab_c", "tab_e", "tab_p",
     "zone_box", "body_vehicle", "hitch_body", "piece_body", "piece_ptr", "piece_verts", "piece_normals",
-    "piece_info", "pair_body", "pair_ptr", "piece_pairs", "pair_par", "zone_slope", "wheel_mass", "wheel_brake"])
+    "piece_info", "pair_body", "pair_ptr", "piece_pairs", "pair_par", "zone_slope", "wheel_mass", "wheel_brake",
+    "contact_lever"])
 
 #: The mode ``D`` (the discrete state of a segment, changed in place at events):
 #:
@@ -80,9 +84,11 @@ Mode = namedtuple("Mode", ["memb", "lk_j", "lk_th", "lk_n", "shift", "pstate", "
 #: * ``multipliers`` (m_max,): hitch forces on the front body [N], then stop moments [N m];
 #: * ``trig`` (2, nb): cos and sin of the body headings;
 #: * ``pair_power`` (np,): power of each pair's contact forces on the bodies [W];
-#: * ``manifold_pts`` (2, 3): scratch for a contact manifold (x, y, depth) [m].
+#: * ``manifold_pts`` (2, 3): scratch for a contact manifold (x, y, depth) [m];
+#: * ``contact_force`` (2 nb,): the contacts' share of ``body_force``, world-frame x.., y.. [N]
+#:   (written only in scenes with contact pairs; the load transfer reads it).
 Work = namedtuple("Work", ["wheel_out", "body_force", "jacobian", "gram", "multipliers", "trig", "pair_power",
-                           "manifold_pts"])
+                           "manifold_pts", "contact_force"])
 
 #: The modes of a run's stored segments, stacked (segment first), for the post-processing
 #: kernels: ``phase`` (ns,) wheel-setting phase, ``nlk`` (ns,) the number of closed stops, and
@@ -192,6 +198,7 @@ def make_work(M):
         np.zeros((2, nb)),
         np.zeros(M.pair_body.shape[0]),
         np.zeros((2, 3)),
+        np.zeros(2 * nb),
     )
 
 

@@ -29,8 +29,9 @@ def in_crush(y, M, D, cs, p, ia, px, py):
 
 
 @njit(**HOT)
-def pair_forces(y, M, D, cs, p, f, mf):
-    """Penalty forces of pair ``p`` (in contact) added to the world-frame body forces ``f`` (z order).
+def pair_forces(y, M, D, cs, p, f, mf, fc):
+    """Penalty forces of pair ``p`` (in contact) added to the world-frame body forces ``f`` (z order),
+    and their x, y components to the contact share ``fc`` (2 nb: x.., y..) for the load transfer.
 
     Sustained contact as the README states it ("Contact model"; package docstring, "States"):
     at each manifold point ``F_n = max(0, k e + c e')`` on the depth ``e`` beyond the
@@ -92,19 +93,26 @@ def pair_forces(y, M, D, cs, p, f, mf):
             f[ia] += fx
             f[nb + ia] += fy
             f[2 * nb + ia] += (px - y[ia]) * fy - (py - y[nb + ia]) * fx
+            fc[ia] += fx
+            fc[nb + ia] += fy
             if ib >= 0:
                 f[ib] -= fx
                 f[nb + ib] -= fy
                 f[2 * nb + ib] -= (px - y[ib]) * fy - (py - y[nb + ib]) * fx
+                fc[ib] -= fx
+                fc[nb + ib] -= fy
     return power
 
 
 @njit(**HOT)
-def contact_forces(y, M, D, cs, f, pf, mf):
-    """Penalty forces of every pair in contact added to ``f``; ``pf[p]`` their power [W] (:func:`pair_forces`)."""
+def contact_forces(y, M, D, cs, f, pf, mf, fc):
+    """Penalty forces of every pair in contact added to ``f``; ``pf[p]`` their power [W]; ``fc`` (2 nb)
+    their world-frame x, y sums per body alone [N] (:func:`pair_forces`)."""
     pstate = D.pstate
+    for i in range(fc.shape[0]):
+        fc[i] = 0.0
     for p in range(M.pair_body.shape[0]):
-        pf[p] = pair_forces(y, M, D, cs, p, f, mf) if pstate[p] == PS_CONTACT else 0.0
+        pf[p] = pair_forces(y, M, D, cs, p, f, mf, fc) if pstate[p] == PS_CONTACT else 0.0
 
 
 @njit(**HOT)

@@ -74,11 +74,19 @@ def segment_params(t_phase, memb, M, sw):
 
 
 @njit(**INLINE)
-def specific_force(dydt, M, sw, i, c, s):
-    """Body-axes acceleration of body ``i`` less the in-plane gravity (the tyres' and contacts' share) [m/s^2].
+def specific_force(dydt, M, sw, fc, i, c, s):
+    """Body-axes specific force of body ``i`` that transfers load [m/s^2]: its acceleration less the
+    in-plane gravity and less the contacts' share that acts at the CG's height.
 
-    The load transfer follows the forces the wheels and contacts exert, not the gravity that acts
-    at the CG: on a slope the acceleration of a coasting body is gravity's alone and moves no load.
+    Load moves between the wheels by the roll and pitch moments about the ground of the forces
+    acting above it (quasi-static; :mod:`crashsim.motion.loads` puts the moment ``m a h`` on the
+    axles).  Gravity acts at the CG: on a slope the acceleration of a coasting body is gravity's
+    alone and moves no load.  The tyre forces act at the ground, the hitch forces are taken to act
+    there too.  A contact force ``F_c`` (another body, an obstacle: ``fc``, world frame) acts at the
+    height ``h_c``: with the inertial force ``-m a`` at the CG height ``h`` its moment about the
+    ground is ``m a h - F_c h_c = m (a - (h_c / h) F_c / m) h``, so the load moves as under the
+    specific force ``a - (h_c / h) F_c / m`` (``M.contact_lever[i] = h_c / h``, 1 by default: a push
+    at CG height moves no load; 0 would be a push at ground level).
     """
     nb = M.body.shape[0]
     accx = dydt[3 * nb + i]
@@ -92,6 +100,10 @@ def specific_force(dydt, M, sw, i, c, s):
                 gy += sw[k, S_GY]
         accx -= gx * M.inv_mass[i]
         accy -= gy * M.inv_mass[i]
+    if M.pair_body.shape[0] > 0:
+        lever = M.contact_lever[i] * M.inv_mass[i]
+        accx -= lever * fc[i]
+        accy -= lever * fc[nb + i]
     return c * accx + s * accy, c * accy - s * accx
 
 
@@ -131,9 +143,10 @@ def evaluate(y, M, sw, D, dydt, W):
     The run-out model of the README ("Run-out model": three planar degrees of freedom per
     body, hitches as pins held by Lagrange multipliers with Baumgarte stabilisation):
     ``M z'' = f + G^T lam`` with tyre forces (the shared tyre kernel) and penalty contact
-    forces in ``f``, and the multiplier solve ``(G M^-1 G^T) lam = -(G M^-1 f + gamma +
-    2 zeta w0 g' + w0^2 g)`` (:func:`constraint_rows`); with load transfer the body-axes
-    accelerations are filtered, ``a_f' = (a - a_f) / tau``.  The bodies of parked vehicles are
+    forces in ``f`` (their share alone in ``W.contact_force``), and the multiplier solve
+    ``(G M^-1 G^T) lam = -(G M^-1 f + gamma + 2 zeta w0 g' + w0^2 g)`` (:func:`constraint_rows`); with load transfer the body-axes
+    accelerations are filtered, ``a_f' = (a_s - a_f) / tau``, ``a_s`` the specific force that
+    transfers load (:func:`specific_force`).  The bodies of parked vehicles are
     frozen (zero derivative).
     """
     body, hitch, minv, cfg, icfg, bveh = M.body, M.hitch, M.inv_mass, M.cfg, M.icfg, M.body_vehicle
@@ -143,7 +156,7 @@ def evaluate(y, M, sw, D, dydt, W):
     nh = hitch.shape[0]
     tyre_eval(y, M, sw, D, W)
     if M.pair_body.shape[0] > 0:
-        contact_forces(y, M, D, cs, f, W.pair_power, W.manifold_pts)
+        contact_forces(y, M, D, cs, f, W.pair_power, W.manifold_pts, W.contact_force)
     n3 = 3 * nb
     m = 0
     if nh > 0:
@@ -165,7 +178,7 @@ def evaluate(y, M, sw, D, dydt, W):
     if lt:
         tau = cfg[C_TAU]
         for i in range(nb):
-            ax, ay = specific_force(dydt, M, sw, i, cs[0, i], cs[1, i])
+            ax, ay = specific_force(dydt, M, sw, W.contact_force, i, cs[0, i], cs[1, i])
             dydt[6 * nb + i] = (ax - y[6 * nb + i]) / tau
             dydt[7 * nb + i] = (ay - y[7 * nb + i]) / tau
     for i in range(nb):
@@ -304,7 +317,7 @@ def consistent_accelerations(y, M, sw, D, dydt, W):
         cs = W.trig
         change = 0.0
         for i in range(nb):
-            new_x, new_y = specific_force(dydt, M, sw, i, cs[0, i], cs[1, i])
+            new_x, new_y = specific_force(dydt, M, sw, W.contact_force, i, cs[0, i], cs[1, i])
             change = max(change, abs(new_x - y[6 * nb + i]), abs(new_y - y[7 * nb + i]))
             y[6 * nb + i] = new_x
             y[7 * nb + i] = new_y

@@ -161,6 +161,7 @@ def evaluate_samples(Y, seg_of, M, S):
     dydt = np.zeros(Y.shape[0])
     yq = np.zeros(Y.shape[0])
     f_scratch = np.zeros(3 * nb)
+    fc_scratch = np.zeros(2 * nb)
     last = -1
     D = segment_mode(0, S)
     for p in range(K):
@@ -194,7 +195,7 @@ def evaluate_samples(Y, seg_of, M, S):
             if st == PS_CONTACT:  # the pair's force on A
                 for i in range(3 * nb):
                     f_scratch[i] = 0.0
-                pair_forces(yq, M, D, cs, q, f_scratch, W.manifold_pts)
+                pair_forces(yq, M, D, cs, q, f_scratch, W.manifold_pts, fc_scratch)
                 ia = M.pair_body[q, 0]
                 CF[p, q] = math.sqrt(f_scratch[ia] ** 2 + f_scratch[nb + ia] ** 2)
     return P, SL, LD, LAMH, STOPM, CF, max_gap, pen
@@ -243,7 +244,7 @@ def contact_samples(Y, seg_of, M, S):
             if st == PS_CONTACT:  # the pair's force on A
                 for i in range(3 * nb):
                     f_scratch[i] = 0.0
-                pair_forces(y, M, D, cs, q, f_scratch, W.manifold_pts)
+                pair_forces(y, M, D, cs, q, f_scratch, W.manifold_pts, W.contact_force)  # the last not read
                 ia = M.pair_body[q, 0]
                 CF[col, q] = math.sqrt(f_scratch[ia] ** 2 + f_scratch[nb + ia] ** 2)
     return CF, pen, closing

@@ -567,9 +567,25 @@ def run_scene(scenario, *, lean: bool = False) -> SceneResult:
                          for i in joint.impacts if i.warning]
         for vname, r in runout.items():
             if not r.success:
-                warnings.append(f"the run-out of vehicle {vname!r} did not reach rest: {r.status} ({r.message})")
+                warnings.append(f"the run-out of vehicle {vname!r} did not reach rest: {r.status} ({r.message})"
+                                + rolling_downhill(spec.road, r))
     return SceneResult(scenario=scenario, impact=impact, runout=runout, evidence=evidence, warnings=tuple(warnings),
                        accuracy=accuracy, joint=joint)
+
+
+def rolling_downhill(road, r) -> str:
+    """A hint for a run-out that hit its time limit on a slope: free-rolling wheels on a slope steeper
+    than their rolling resistance never stop (a reading of the input, not a fault of the solver)."""
+    if r.status != "time_limit" or road is None or not road.sloped:
+        return ""
+    ends = np.array([b.final.position for b in r.bodies.values()], dtype=float)
+    slopes = road.slope_from_membership(road.membership(ends))
+    steepest = float(np.max(np.hypot(slopes[:, 0], slopes[:, 1])))
+    if steepest == 0.0:
+        return ""
+    return (f"; it stopped on a slope of {100 * steepest:.3g} %: a vehicle whose wheels roll freely keeps rolling "
+            f"where the slope is steeper than their rolling resistance; if it came to rest, give it braked or "
+            f"locked wheels (tyres, wheels[] or wheel_changes[]) or air brakes")
 
 
 def _track_filter(scenario):

@@ -933,7 +933,8 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     ax.grid(True, color="0.9", lw=0.6, zorder=0)
     ax.set_axisbelow(True)
     ax.set_title(_wrap(sc.title, 100), fontsize=10)
-    fixed = _axes_indicator(ax) + _north_arrow(S)
+    north = _north_arrow(S)
+    fixed = _axes_indicator(ax) + north + _downhill_arrow(S, 130 if north else 80)
     # a new figure of a wide scene: legend under the diagram; else at the right
     below = new and (hi[1] - lo[1]) / (hi[0] - lo[0]) < 0.75
     if sheet is None:
@@ -986,7 +987,7 @@ def _legend_headroom(ax, leg, below: bool) -> None:
     ax.set_ylim(y0, y1 + extra)
     layout_scene_figure(ax, None, below)
     fig.draw_without_rendering()
-    marks = [a for a in ax.texts if a.get_gid() in ("axes-indicator", "north-arrow")]
+    marks = [a for a in ax.texts if a.get_gid() in ("axes-indicator", "north-arrow", "downhill-arrow")]
     lb = leg.get_window_extent(r)
     if any(lb.overlaps(a.get_window_extent(r)) for a in marks):
         down = ScaledTranslation(0.0, -(lb.height + 6.0) / fig.dpi, fig.dpi_scale_trans)
@@ -1523,7 +1524,9 @@ def _zones(S: SceneDrawing) -> tuple:
 
 
 def _zone_label(zone) -> str:
-    return f"{zone.name}, f = {zone.mu:g}"
+    slope = [f"{what} {100 * v:.3g} %" for what, v in (("grade", zone.grade), ("cross-slope", zone.cross_slope))
+             if v is not None]
+    return ", ".join([f"{zone.name}, f = {zone.mu:g}", *slope])
 
 
 def _draw_zones(S: SceneDrawing, roi: _Roi) -> None:
@@ -1793,6 +1796,30 @@ def _north_arrow(S: SceneDrawing) -> list:
     t = S.ax.annotate("N", xy=base, xycoords=corner, xytext=tuple(9 * u), textcoords="offset points",
                       fontsize=9, fontweight="bold", ha="center", va="center", zorder=Z_TEXT + 1,
                       path_effects=_halo(), gid="north-arrow")
+    return [t]
+
+
+def _downhill_arrow(S: SceneDrawing, x: float) -> list:
+    """An arrow pointing down the road's slope (``runout.grade`` and ``cross_slope``), with its
+    steepness, ``x`` points right of the +X/+Y arrows; none on a level road (a zone's own slope is
+    in its label). Returns the texts drawn."""
+    spec = S.sc.runout
+    if spec is None or (spec.road.grade == 0.0 and spec.road.cross_slope == 0.0):
+        return []
+    g = np.array([spec.road.grade, spec.road.cross_slope])
+    steep = float(np.hypot(*g))
+    u = -g / steep
+    from matplotlib.transforms import offset_copy
+
+    base = (0.03, 1.0)
+    corner = offset_copy(S.ax.transAxes, fig=S.ax.figure, x=x, y=-34, units="points")
+    head = offset_copy(S.ax.transAxes, fig=S.ax.figure, x=x + 13 * u[0], y=-34 + 13 * u[1], units="points")
+    arrow = dict(arrowstyle="-|>", lw=1.4, color="0.25", shrinkA=0, shrinkB=0, mutation_scale=12)
+    S.ax.annotate("", xy=base, xycoords=head, xytext=tuple(-26 * u), textcoords="offset points",
+                  arrowprops=arrow, zorder=Z_TEXT + 1, gid="downhill-arrow")
+    t = S.ax.annotate(f"downhill {100 * steep:.3g} %", xy=base, xycoords=corner, xytext=(0, -16),
+                      textcoords="offset points", fontsize=7.5, ha="center", va="top", zorder=Z_TEXT + 1,
+                      path_effects=_halo(), gid="downhill-arrow")
     return [t]
 
 

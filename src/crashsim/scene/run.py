@@ -178,10 +178,10 @@ class SceneResult:
             if self.joint is not None:
                 j = self.joint
                 out["runout"].update(
-                    status=j.status, message=j.message, t_end=j.t_end, method=j.method,
+                    status=j.status, message=j.message, t_end_s=j.t_end, method=j.method,
                     pairs=[p.to_dict() for p in j.pairs],
-                    energy=self.energy_ledger(),
-                    events=[{"t": e.t, "kind": e.kind, "detail": e.detail, "energy": e.energy,
+                    energy_J=self.energy_ledger(),
+                    events=[{"t_s": e.t, "kind": e.kind, "detail": e.detail, "energy_J": e.energy,
                              "vehicles": list(e.vehicles), **e.data} for e in j.events],
                     obstacles=[{"name": o.name, "points": [list(p) for p in o.points], "thickness": o.thickness,
                                 "closed": o.closed} for o in sc.runout.obstacles])

@@ -1100,6 +1100,8 @@ def plot_time_distance(scene, axes=None, *, system: str | None = None):
     kv, vu = to_unit(1.0, Kind.SPEED, system)
     sc = scene.scenario
     movable = [v for v in sc.vehicles if not v.is_barrier]
+    drawn = {"perception": False, "braking": False, "rest": False, "recorded": False, "lower": False,
+             "constant": False}
     colors = {v.name: _FAMILIES[i % len(_FAMILIES)][2] for i, v in enumerate(movable)}
     for v in movable:
         c = colors[v.name]
@@ -1116,6 +1118,17 @@ def plot_time_distance(scene, axes=None, *, system: str | None = None):
                 tp = tb - a.reaction_time
                 for axx, y in ((ax_s, kl * (sb - a.reaction_distance)), (ax_v, kv * a.speed_at_braking)):
                     axx.plot(tp, y, "D", mfc="white", mec=c, ms=5, zorder=5)
+            # recorder samples from before the modelled motion: the constant speed the recorder check
+            # assumes there, dotted back to the earliest of them
+            t0, s0 = tb - a.reaction_time, sb - a.reaction_distance
+            early = [t + x.time_offset for x in getattr(sc.evidence, "recorder", ())
+                     if any(b.name == x.body for b in v.bodies) for t in x.times]
+            if early and min(early) < t0:
+                te = min(early)
+                ax_s.plot([te, t0], [kl * (s0 - a.speed_at_braking * (t0 - te)), kl * s0], ":", color=c, lw=1.3,
+                          gid=f"td:constant:{v.name}")
+                ax_v.plot([te, t0], [kv * a.speed_at_braking] * 2, ":", color=c, lw=1.3)
+                drawn["constant"] = True
             ax_s.annotate(f"{v.name}: braking {fmt(a.speed_at_braking, 'speed', system)}", (tb, kl * sb),
                           xytext=(4, -10), textcoords="offset points", fontsize=7, color=c)
         if scene.runout and v.name in scene.runout:
@@ -1131,7 +1144,6 @@ def plot_time_distance(scene, axes=None, *, system: str | None = None):
         else:
             ax_s.plot([], [], "-", color=c, label=f"vehicle {v.name} ({first})")
     # recorder samples on the speed panel, beside the computed speed they are checked against
-    drawn = {"perception": False, "braking": False, "rest": False, "recorded": False, "lower": False}
     for i, x in enumerate(getattr(sc.evidence, "recorder", ())):
         vn = next((v.name for v in movable if any(b.name == x.body for b in v.bodies)), None)
         if vn is None:
@@ -1180,7 +1192,8 @@ def plot_time_distance(scene, axes=None, *, system: str | None = None):
              (Line2D([], [], ls="none", marker="o", ms=5.5, mfc="white", mec=_EVIDENCE, mew=1.4),
               "recorded speed (bar: tolerance)", "recorded"),
              (Line2D([], [], ls="none", marker="^", ms=5.5, mfc="white", mec=_EVIDENCE, mew=1.4),
-              "recorded, braking: a lower bound", "lower")]
+              "recorded, braking: a lower bound", "lower"),
+             (Line2D([], [], ls=":", color="0.2", lw=1.3), "constant speed before the approach (assumed)", "constant")]
     extra = [(h, t) for h, t, key in extra if drawn[key]]
     # beside the panels: never over the impact labels or the curves
     ax_s.legend(handles + [h for h, _ in extra], labels + [t for _, t in extra], fontsize=7, loc="upper left",

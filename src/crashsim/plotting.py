@@ -2231,6 +2231,11 @@ def history_panels(scene) -> int:
     return 4 if joint is not None and any(p.contact_time > 0 for p in joint.pairs) else 3
 
 
+#: An articulation limit is drawn on the histories' articulation panel once a hitch's articulation
+#: reaches this share of it (below, the legend names it without the lines).
+LIMIT_SHOWN_FROM = 0.3
+
+
 def plot_histories(scene, axes=None, *, system: str | None = None):
     """Run-out time histories: CG speed, yaw rate and articulation angle after separation, and
     the sustained-contact forces when bodies stayed in contact.
@@ -2284,10 +2289,13 @@ def plot_histories(scene, axes=None, *, system: str | None = None):
     styles = ("-", "--", ":", "-.")
     movable = [v for v in scene.scenario.vehicles if not v.is_barrier]
     family = {v.name: _FAMILIES[i % len(_FAMILIES)] for i, v in enumerate(movable)}
-    limits = {}
+    limits, locked = {}, set()
     for v in movable:
         for i, h in enumerate(v.hitches):
             limits[(v.bodies[i].name, v.bodies[i + 1].name)] = h.articulation_limit
+            if h.yaw_locked:
+                locked.add((v.bodies[i].name, v.bodies[i + 1].name))
+    reached: dict[float, float] = {}  # articulation limit -> the largest |articulation| of its hitches
     t_max = 0.0
     n_hitch = 0
     for vn, r in scene.runout.items():
@@ -2306,13 +2314,22 @@ def plot_histories(scene, axes=None, *, system: str | None = None):
         for k, hh in enumerate(r.hitches):
             n_hitch += 1
             color = dark if k == 0 else line
+            lock = ", yaw-locked" if (hh.front, hh.rear) in locked else ""
             ax_a.plot(hh.t, ka * hh.articulation, styles[k % len(styles)], color=color, lw=1.5,
-                      label=f"{hh.front} \N{MINUS SIGN} {hh.rear} ({vn})")
+                      label=f"{hh.front} \N{MINUS SIGN} {hh.rear} ({vn}{lock})")
             lim = limits.get((hh.front, hh.rear))
             if lim is not None:
-                for sgn in (1, -1):
-                    ax_a.axhline(sgn * ka * lim, color="0.6", lw=0.8, ls="--")
-                ax_a.plot([], [], "--", color="0.6", lw=0.8, label="articulation limit")
+                peak = float(np.max(np.abs(hh.articulation))) if len(hh.articulation) else 0.0
+                reached[lim] = max(reached.get(lim, 0.0), peak)
+    # each limit once; its lines only where an articulation comes within reach of it (else they would
+    # squeeze a few degrees of articulation into a hair), the legend names it either way
+    for lim, peak in sorted(reached.items()):
+        shown = peak >= LIMIT_SHOWN_FROM * lim
+        if shown:
+            for sgn in (1, -1):
+                ax_a.axhline(sgn * ka * lim, color="0.6", lw=0.8, ls="--")
+        ax_a.plot([], [], ls="--" if shown else "none", color="0.6", lw=0.8,
+                  label=f"articulation limit \N{PLUS-MINUS SIGN}{ka * lim:.0f} deg" + ("" if shown else " (off the scale)"))
     ax_v.set_ylabel(f"CG speed [{vunit}]")
     ax_w.set_ylabel("yaw rate [deg/s]")
     ax_a.set_ylabel("articulation [deg]")

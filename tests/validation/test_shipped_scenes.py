@@ -214,3 +214,11 @@ def test_truck_downgrade_abs(capsys):
     assert float(np.max(ap.speed_at(np.linspace(-ap.time_to_impact, 0.0, 200)))) > ap.speed_at_braking
     ledger = crashsim_run(path).energy_ledger()
     assert ledger["potential"] < 0  # downhill: potential energy lost to the tyres
+    # the rollover verdict (issue 22): at the load_transfer level with the check on, neither the truck
+    # nor the struck car lifts a wheel; the tractor's push on the car's side acts at the car's CG height
+    # (the default contact height) and moves no load (pushed at the ground, its right wheels lifted)
+    assert out["runout_level"] == "load_transfer"
+    for vehicle in ("truck", "car"):
+        roll = out["runout"]["vehicles"][vehicle]["rollover"]
+        assert not roll["rolled"] and not roll["wheel_lift_bodies"] and roll["valid_until_s"] is None
+    assert [c["passed"] for c in out["evidence"]["checks"] if c["kind"] == "rollover"] == [True, True]

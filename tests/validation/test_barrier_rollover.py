@@ -57,7 +57,7 @@ def test_the_trailer_passes_its_threshold_before_the_truck_leaves_the_barrier(sc
 def test_with_a_roll_coupled_fifth_wheel_the_verdict_is_marginal(tmp_path):
     """The same scene with the semitrailer's fifth wheel stiff in roll (``roll_coupled``): the tyre loads, and
     so the run-out, change, and the trailer's peak lateral acceleration comes within a few percent of its
-    threshold (0.5 % below it here): the verdict on this configuration is marginal, and depends on the
+    threshold (1.1 % below it here): the verdict on this configuration is marginal, and depends on the
     coupling model; the docs say so."""
     path = tmp_path / "glance_coupled.toml"
     text = SCENE.read_text().replace("[runout]\n", '[runout]\nengine = "compiled"\nlevel = "load_transfer"\n'

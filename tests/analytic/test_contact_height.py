@@ -139,3 +139,31 @@ def test_without_contact_the_height_changes_nothing(engine):
                            opts) for hc in (None, 0.2)]
     a, b = (r.vehicles["car"].bodies["car"].final for r in runs)
     assert a.position == b.position and a.heading == b.heading and runs[0].t_end == runs[1].t_end
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_the_rollover_check_follows_the_contact_height(engine):
+    """The wall case above with a rollover threshold of 0.05 g (below the cross-slope's tan(phi) = 0.08):
+    with the wall's force at the ground its lateral specific force is tan(phi) g, the threshold is passed
+    and the planar result is declared outside its validity; at the CG's height it is 0 and nothing fires."""
+    slope = 0.08
+    free = WheelSettings(default=WheelSetting("rolling", cornering_coefficient=8.6, rolling_resistance=0.0))
+    wall = Obstacle("wall", ((-10.0, -1.0), (200.0, -1.0)), thickness=0.2)
+    out = {}
+    for label, hc in (("cg", None), ("ground", 1e-6)):
+        veh = car(hc)
+        veh = dataclasses.replace(veh, bodies=(dataclasses.replace(veh.bodies[0], rollover_threshold=0.05),))
+        opts = RunoutOptions(engine=engine, load_transfer=True, rollover=True, t_max=5.0, rtol=1e-9, atol=1e-11)
+        # 1.1 cm from the wall (arming distance 1 cm): it touches before its tyres, holding it on the slope
+        # until then, build their side force (0.03 g of 0.08 g)
+        run = simulate_scene([veh], {"car": BodyState((0.0, 0.011), 0.0, (10.0, 0.0))}, {"car": free},
+                             Road(0.7, cross_slope=slope), opts,
+                             contact=ContactModel(friction=0.0, arm_distance=0.01), obstacles=[wall])
+        out[label] = (run, [e for e in run.events if e.kind == "rollover_threshold"])
+    run, fired = out["ground"]
+    contact = next(e.t for e in run.events if e.kind == "contact")
+    assert len(fired) == 1 and fired[0].t > contact
+    assert abs(fired[0].data["lateral_acceleration_g"]) == pytest.approx(0.05, abs=1e-6)
+    assert run.vehicles["car"].rollover["valid_until_s"] == fired[0].t
+    run, fired = out["cg"]
+    assert not fired and run.vehicles["car"].rollover["valid_until_s"] is None

@@ -136,7 +136,10 @@ def test_trajectories_tracks_and_hitch_forces_agree(case, runs):
         assert mine.energy == pytest.approx(track.energy, rel=1e-4, abs=1.0)
         assert np.max(np.hypot(*(mine.points - track.points).T)) < 5 * POS_TOL
         assert np.mean(mine.sliding == track.sliding) > 0.98
-        assert mine.load == pytest.approx(track.load, rel=1e-6)
+        # with load transfer the loads follow the integrated filtered accelerations: a derived quantity
+        # (1e-4, as the module says); truck_downgrade_abs (load_transfer level) is the first shipped scene whose
+        # loads vary: its car, spinning at 300 deg/s, differs by 2.0e-6 between the engines (static loads: 0)
+        assert mine.load == pytest.approx(track.load, rel=1e-4)
         assert [s.kind for s in mine.segments][:1] == [s.kind for s in track.segments][:1]
     assert fast.energy_dissipated == pytest.approx(ref.energy_dissipated, rel=1e-5)
     assert abs(fast.energy_residual) < 1e-4

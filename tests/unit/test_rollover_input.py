@@ -94,3 +94,21 @@ def test_roll_coupled_is_read_and_refused_on_the_first_body(tmp_path, refused_li
     text = SCENE.read_text().replace('preset = "tractor-3axle"\n', 'preset = "tractor-3axle"\nroll_coupled = true\n', 1)
     line = refused_line(text)
     assert "vehicles.truck.bodies[0].roll_coupled" in line and "first body" in line
+
+
+def test_a_contact_height_is_read_in_the_files_units(tmp_path):
+    f = tmp_path / "case.toml"
+    f.write_text(_with('level = "load_transfer"\n', car='contact_height = "20 in"\n'))
+    sc = scenario_from_dict(load_toml(f), file=str(f))
+    car = [b for v in sc.vehicles for b in v.bodies if b.name == "car"][0]
+    assert car.contact_height == pytest.approx(0.508, rel=1e-12)
+    # absent: None, the CG height in the load transfer
+    f.write_text(_with('level = "load_transfer"\n'))
+    sc = scenario_from_dict(load_toml(f), file=str(f))
+    assert all(b.contact_height is None for v in sc.vehicles for b in v.bodies)
+
+
+@pytest.mark.parametrize("value, shown", [('"0 m"', "0 m"), ('"-0.5 m"', "-0.5 m"), ('"20 ft"', "20 ft")])
+def test_a_contact_height_out_of_range_exits_2(tmp_path, refused_line, value, shown):
+    line = refused_line(_with('level = "load_transfer"\n', trailer=f"contact_height = {value}\n"))
+    assert "vehicles.truck.bodies[1].contact_height" in line and shown in line and "5" in line

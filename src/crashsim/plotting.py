@@ -1784,8 +1784,7 @@ def north_direction(sc) -> tuple[np.ndarray, str] | None:
     if getattr(sc, "survey_frame", None) is not None:
         rot = float(sc.survey_frame.rotation)
         return np.array([math.sin(rot), math.cos(rot)]), "grid north"
-    data = sc.data if isinstance(sc.data, dict) else {}
-    bearing = (data.get("map") or {}).get("north")
+    bearing = getattr(sc, "north", None)
     if bearing is None:
         return None
     return np.array([-math.sin(bearing), math.cos(bearing)]), "north"

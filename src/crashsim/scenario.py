@@ -779,6 +779,12 @@ class Scenario:
     survey_frame : SceneFrame or None
         Where the scene lies on its survey (``[survey]`` with files, an underlay or a CRS); None
         for a scene not placed on a survey.
+    north : float or None
+        ``[map] north``: the bearing of the scene's +Y axis, clockwise from north [rad]; None if the
+        file does not give it.
+    barrier_extent : (float, float) or None
+        (from, to) along the crush tangent [m] of the ``[barrier]`` face, from the contact point;
+        (-inf, inf) for an endless one; None without a barrier.
     """
 
     path: str | None
@@ -796,6 +802,8 @@ class Scenario:
     approach_inputs: dict = field(default_factory=dict)
     descriptions: dict = field(default_factory=dict)
     survey_frame: SceneFrame | None = None
+    north: float | None = None
+    barrier_extent: tuple[float, float] | None = None
 
     @property
     def approaches_simulated(self) -> bool:
@@ -808,15 +816,6 @@ class Scenario:
         :func:`scenario_from_dict`, or None (a scenario made another way, e.g. by
         :func:`dataclasses.replace`): what fit, Monte Carlo and posterior samples vary."""
         return self.__dict__.get("_file_data")
-
-    @property
-    def barrier_extent(self) -> tuple[float, float] | None:
-        """(from, to) along the crush tangent [m] of a barrier face; None without a barrier,
-        (-inf, inf) for an endless one."""
-        b = self.data.get("barrier")
-        if b is None:
-            return None
-        return tuple(b["extent"]) if b["extent"] is not None else (-math.inf, math.inf)
 
 
 @dataclass(frozen=True)
@@ -1506,11 +1505,19 @@ def _from_validated(d: dict, data: dict, merged: dict, source, file: str | None,
     out = Scenario(file, meta["title"], meta["source"], meta["units"], tuple(vehicles), states, problem, runout,
                    evidence, d, map_lines, {}, approach_inputs,
                    descriptions={n: v.get("description") or "" for n, v in d["vehicles"].items()},
-                   survey_frame=survey_frame(survey) if placed else None)
+                   survey_frame=survey_frame(survey) if placed else None,
+                   north=(d.get("map") or {}).get("north"), barrier_extent=_barrier_extent(d.get("barrier")))
     object.__setattr__(out, "_file_data", source)  # the file contents it was built from (Scenario.file_data)
     if not approaches:
         return out
     return simulate_approaches(out)
+
+
+def _barrier_extent(barrier: dict | None) -> tuple[float, float] | None:
+    """:attr:`Scenario.barrier_extent` of a validated ``[barrier]`` table."""
+    if barrier is None:
+        return None
+    return tuple(barrier["extent"]) if barrier["extent"] is not None else (-math.inf, math.inf)
 
 
 def _impact_problem(d: dict, vehicles: list, states: dict, file: str | None) -> ImpactProblem:

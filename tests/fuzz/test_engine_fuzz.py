@@ -172,6 +172,17 @@ def test_the_sample_has_impacts_contacts_and_articulated_vehicles():
     assert {"impact", "contact_end"} <= kinds
 
 
+def test_the_scene_sample_draws_slopes_with_impacts_and_zones_of_their_own():
+    """Scenes on sloped roads are drawn, some with zones of their own grade (the ledger's gravity work
+    across zone edges) and among them the regression scene of the event search (scene 2: two bodies
+    reaching one car 0.9 ms apart)."""
+    scenes = [random_scene(SEED, i) for i in range(N_SCENES)]
+    sloped = [c for c in scenes if c.road.sloped]
+    assert len(sloped) >= 4
+    assert any(any(z.grade is not None for z in c.road.zones) for c in sloped)
+    assert scenes[2].road.sloped
+
+
 def test_the_sample_has_rollover_events():
     """The rollover check of the fuzz is exercised: cases with the check record events, some after the start."""
     times = []

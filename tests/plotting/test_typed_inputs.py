@@ -37,3 +37,21 @@ def test_descriptions_and_north_arrow_come_from_the_typed_scenario():
     ax = plot_scene(unplaced)
     assert "N" not in _texts(ax)
     plt.close(ax.figure)
+
+
+def test_map_north_and_the_barrier_extent_come_from_the_typed_scenario(tmp_path):
+    """[map] north and the [barrier] extent are read into the Scenario at load: a scenario whose dict has
+    lost them still draws the north arrow and the barrier face over its extent."""
+    import numpy as np
+
+    from crashsim.plotting import north_direction
+
+    src = ROOT / "scenarios" / "scenes" / "barrier_15deg.toml"
+    f = tmp_path / "north.toml"
+    f.write_text(src.read_text() + '\n[map]\nnorth = "90 deg"\n')
+    sc = load_scenario(f)
+    assert sc.north == np.pi / 2 and sc.barrier_extent is not None
+    bare = dataclasses.replace(sc, data={k: v for k, v in sc.data.items() if k not in ("map", "barrier")})
+    u, what = north_direction(bare)
+    assert what == "north" and np.allclose(u, (-1.0, 0.0), atol=1e-12)
+    assert bare.barrier_extent == sc.barrier_extent

@@ -123,7 +123,9 @@ def _with_barrier_extent(scene, extent):
     sc = scene.scenario
     data = dict(sc.data)
     data["barrier"] = dict(data["barrier"], extent=extent)
-    return dataclasses.replace(scene, scenario=dataclasses.replace(sc, data=data))
+    # the figures read the typed field (Scenario.barrier_extent, read at load), not the file's dict
+    return dataclasses.replace(scene, scenario=dataclasses.replace(sc, data=data,
+                                                                   barrier_extent=None if extent is None else tuple(extent)))
 
 
 def test_view_does_not_grow_with_the_barrier_extent():

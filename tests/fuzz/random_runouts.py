@@ -7,8 +7,8 @@ braked, locked, jammed, with steer and mu factors), scheduled wheel changes, fri
 placed across the expected path, load transfer on some cases, a road slope on about a third of
 the single-vehicle cases (grade within 6 %, cross-slope within 4 %, half the zones with a grade
 of their own within 8 %; the scenes stay level, see ``random_scene``), air brakes on about a
-third of the single-vehicle cases (timing, capacities below and above the tyres' limit, brakes
-out of adjustment, releases, ABS; :func:`_air_braked`), the wheel-lift and
+third of the single-vehicle cases and of the vehicles of a scene (timing, capacities below and
+above the tyres' limit, brakes out of adjustment, releases, ABS; :func:`_air_braked`), the wheel-lift and
 rollover check on every case with load transfer (half the bodies with a threshold of their own),
 hitch-consistent initial states
 with speeds up to 35 m/s, yaw rates, side slip and articulation (inside the articulation limit).
@@ -217,16 +217,18 @@ def _sloped(road: Road, seed: int, i: int) -> tuple[Road, str]:
     return Road(road.mu, zones, grade, cross), f", grade {100 * grade:.1f} %, cross-slope {100 * cross:.1f} %"
 
 
-def _air_braked(wheels: WheelSettings, vehicle, seed: int, i: int) -> tuple[WheelSettings, str]:
+def _air_braked(wheels: WheelSettings, vehicle, seed: int, i: int, tag: int = 121) -> tuple[WheelSettings, str]:
     """The wheel settings with air brakes in about a third of the cases: a random set of braked bodies
-    with random capacities (some below, some above the tyres' limit), timing, brakes out of
-    adjustment, a release on some, ABS on some (tractor and trailers drawn apart).
+    with random capacities (some below, some above the tyres' limit), timing (rise and fall times of 0,
+    steps of the brake force, among them), brakes out of adjustment, a release on some, ABS on some
+    (tractor and trailers drawn apart).
 
-    Drawn from a generator of its own (the other draws of a case stay those without air brakes).
+    Drawn from a generator of its own, ``(seed, i, tag)`` (the other draws of a case stay those
+    without air brakes; a scene's vehicles each have a tag of their own).
     The wheel states are made valid for them: a ``braked`` fraction becomes ``rolling`` (the air
     brakes give the force) and, where a unit has ABS, a ``locked`` wheel too.
     """
-    rng = np.random.default_rng([seed, i, 121])
+    rng = np.random.default_rng([seed, i, tag])
     if rng.random() >= 0.35:
         return wheels, ""
     tractor_abs, trailer_abs = rng.random() < 0.5, rng.random() < 0.4
@@ -427,5 +429,9 @@ def random_scene(seed: int, i: int, *, engine: str = "scipy", kinds=KINDS, n_veh
     # SciPy engine missing a strike (v0_pup into v1_car, 6.7 cm deep without an impact) that the
     # compiled engine finds, at every rtol: an event-detection gap of that engine, reported on issue 22
     vehicles, options, roll = _rollover(tuple(vehicles), options, seed, i, 24)
-    return SceneCase(label + roll, tuple(vehicles), initial, wheels, _road(rng, np.zeros(2), 0.0, 10.0), options,
-                     tuple(obstacles))
+    road = _road(rng, np.zeros(2), 0.0, 10.0)
+    air = ""
+    for k, v in enumerate(vehicles):  # air brakes on about a third of the vehicles (a stream per vehicle)
+        wheels[v.name], more = _air_braked(wheels[v.name], v, seed, i, 1210 + k)
+        air += more
+    return SceneCase(label + roll + air, tuple(vehicles), initial, wheels, road, options, tuple(obstacles))

@@ -8,6 +8,7 @@ error (one measured scene moved 1.1 m on the compiled engine at rtol 1e-6, 4 cm 
 below the impact threshold): if the engines disagree at 1e-8, both are run again at 1e-10 and
 must then agree -- the difference was integration error, not a difference of the models.
 
+The scenes draw air brakes too (about a third of their vehicles: :func:`random_runouts._air_braked`).
 On every scene both engines report the same later impacts (the same pairs in the same order,
 within 1 ms); on every case with load transfer (the rollover check is on there) both report the
 same wheel-lift and rollover events (the same kinds of the same bodies, within 1 ms). The
@@ -153,6 +154,18 @@ def test_the_single_sample_draws_air_brakes():
     assert any(u.abs for c in braked for u in c.wheels.brakes.units.values())
     assert any(not u.abs for c in braked for u in c.wheels.brakes.units.values())
     assert any(len(c.vehicle.bodies) > 1 for c in braked)
+
+
+def test_the_scene_sample_draws_air_brakes():
+    """The whole-scene sample has vehicles with air brakes, with and without ABS, articulated ones among
+    them, and steps of the brake force (a rise or fall time of 0)."""
+    braked = [(v, c.wheels[v.name].brakes) for c in (random_scene(SEED, i) for i in range(N_SCENES)) for v in c.vehicles
+              if c.wheels[v.name].brakes is not None]
+    assert len(braked) >= 5
+    units = [u for _, b in braked for u in b.units.values()]
+    assert any(u.abs for u in units) and any(not u.abs for u in units)
+    assert any(len(v.bodies) > 1 for v, _ in braked)
+    assert any(u.rise == 0.0 for u in units)
 
 
 def test_the_sample_has_impacts_contacts_and_articulated_vehicles():

@@ -25,7 +25,7 @@ import jinja2
 from ._version import __version__
 from .plotting import figure_system, plot_histories, plot_scene, plot_time_distance
 from .motion.wheels import wheel_labels
-from .report import closing_error_text, describe_event, format_approach, validity_text
+from .report import closing_error_text, describe_event, format_approach, rollover_cells, validity_text
 from .units import format_value, toml_repr
 
 __all__ = ["toml_comments", "input_rows", "sha256_file", "survey_files", "load_json", "render_case_report", "write_case_report",
@@ -407,14 +407,16 @@ def _evidence(scene, system: str) -> dict | None:
     s = system
     rows = []
     for c in ev.checks:
-        if math.isinf(c.residual):
-            res = "none computed"
+        if c.kind == "rollover":
+            res, tol = rollover_cells(c)
+        elif math.isinf(c.residual):
+            res, tol = "none computed", format_value(c.tolerance, c.quantity, s)
         else:
-            res = format_value(c.residual, c.quantity, s)
+            res, tol = format_value(c.residual, c.quantity, s), format_value(c.tolerance, c.quantity, s)
         wheel = c.details.get("matched_wheel")
         note = labels.get(wheel, wheel) if wheel else (c.details.get("reason") or "")
         rows.append({"verdict": "PASS" if c.passed else "FAIL", "kind": c.kind, "name": c.name, "residual": res,
-                     "tolerance": format_value(c.tolerance, c.quantity, s), "note": f"closest track: {note}"
+                     "tolerance": tol, "note": f"closest track: {note}"
                      if "matched_wheel" in c.details else note})
     return {"rows": rows, "n": len(ev.checks), "passed": len(ev.checks) - ev.n_failed}
 

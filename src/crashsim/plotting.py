@@ -933,7 +933,8 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     ax.grid(True, color="0.9", lw=0.6, zorder=0)
     ax.set_axisbelow(True)
     ax.set_title(_wrap(sc.title, 100), fontsize=10)
-    fixed = _axes_indicator(ax) + _north_arrow(S)
+    north = _north_arrow(S)
+    fixed = _axes_indicator(ax) + north + _downhill_arrow(S, 130 if north else 80)
     # a new figure of a wide scene: legend under the diagram; else at the right
     below = new and (hi[1] - lo[1]) / (hi[0] - lo[0]) < 0.75
     if sheet is None:
@@ -986,7 +987,7 @@ def _legend_headroom(ax, leg, below: bool) -> None:
     ax.set_ylim(y0, y1 + extra)
     layout_scene_figure(ax, None, below)
     fig.draw_without_rendering()
-    marks = [a for a in ax.texts if a.get_gid() in ("axes-indicator", "north-arrow")]
+    marks = [a for a in ax.texts if a.get_gid() in ("axes-indicator", "north-arrow", "downhill-arrow")]
     lb = leg.get_window_extent(r)
     if any(lb.overlaps(a.get_window_extent(r)) for a in marks):
         down = ScaledTranslation(0.0, -(lb.height + 6.0) / fig.dpi, fig.dpi_scale_trans)
@@ -1099,6 +1100,8 @@ def plot_time_distance(scene, axes=None, *, system: str | None = None):
     kv, vu = to_unit(1.0, Kind.SPEED, system)
     sc = scene.scenario
     movable = [v for v in sc.vehicles if not v.is_barrier]
+    drawn = {"perception": False, "braking": False, "rest": False, "recorded": False, "lower": False,
+             "constant": False}
     colors = {v.name: _FAMILIES[i % len(_FAMILIES)][2] for i, v in enumerate(movable)}
     for v in movable:
         c = colors[v.name]
@@ -1115,6 +1118,17 @@ def plot_time_distance(scene, axes=None, *, system: str | None = None):
                 tp = tb - a.reaction_time
                 for axx, y in ((ax_s, kl * (sb - a.reaction_distance)), (ax_v, kv * a.speed_at_braking)):
                     axx.plot(tp, y, "D", mfc="white", mec=c, ms=5, zorder=5)
+            # recorder samples from before the modelled motion: the constant speed the recorder check
+            # assumes there, dotted back to the earliest of them
+            t0, s0 = tb - a.reaction_time, sb - a.reaction_distance
+            early = [t + x.time_offset for x in getattr(sc.evidence, "recorder", ())
+                     if any(b.name == x.body for b in v.bodies) for t in x.times]
+            if early and min(early) < t0:
+                te = min(early)
+                ax_s.plot([te, t0], [kl * (s0 - a.speed_at_braking * (t0 - te)), kl * s0], ":", color=c, lw=1.3,
+                          gid=f"td:constant:{v.name}")
+                ax_v.plot([te, t0], [kv * a.speed_at_braking] * 2, ":", color=c, lw=1.3)
+                drawn["constant"] = True
             ax_s.annotate(f"{v.name}: braking {fmt(a.speed_at_braking, 'speed', system)}", (tb, kl * sb),
                           xytext=(4, -10), textcoords="offset points", fontsize=7, color=c)
         if scene.runout and v.name in scene.runout:
@@ -1130,7 +1144,6 @@ def plot_time_distance(scene, axes=None, *, system: str | None = None):
         else:
             ax_s.plot([], [], "-", color=c, label=f"vehicle {v.name} ({first})")
     # recorder samples on the speed panel, beside the computed speed they are checked against
-    drawn = {"perception": False, "braking": False, "rest": False, "recorded": False, "lower": False}
     for i, x in enumerate(getattr(sc.evidence, "recorder", ())):
         vn = next((v.name for v in movable if any(b.name == x.body for b in v.bodies)), None)
         if vn is None:
@@ -1179,7 +1192,8 @@ def plot_time_distance(scene, axes=None, *, system: str | None = None):
              (Line2D([], [], ls="none", marker="o", ms=5.5, mfc="white", mec=_EVIDENCE, mew=1.4),
               "recorded speed (bar: tolerance)", "recorded"),
              (Line2D([], [], ls="none", marker="^", ms=5.5, mfc="white", mec=_EVIDENCE, mew=1.4),
-              "recorded, braking: a lower bound", "lower")]
+              "recorded, braking: a lower bound", "lower"),
+             (Line2D([], [], ls=":", color="0.2", lw=1.3), "constant speed before the approach (assumed)", "constant")]
     extra = [(h, t) for h, t, key in extra if drawn[key]]
     # beside the panels: never over the impact labels or the curves
     ax_s.legend(handles + [h for h, _ in extra], labels + [t for _, t in extra], fontsize=7, loc="upper left",
@@ -1523,7 +1537,9 @@ def _zones(S: SceneDrawing) -> tuple:
 
 
 def _zone_label(zone) -> str:
-    return f"{zone.name}, f = {zone.mu:g}"
+    slope = [f"{what} {100 * v:.3g} %" for what, v in (("grade", zone.grade), ("cross-slope", zone.cross_slope))
+             if v is not None]
+    return ", ".join([f"{zone.name}, f = {zone.mu:g}", *slope])
 
 
 def _draw_zones(S: SceneDrawing, roi: _Roi) -> None:
@@ -1793,6 +1809,30 @@ def _north_arrow(S: SceneDrawing) -> list:
     t = S.ax.annotate("N", xy=base, xycoords=corner, xytext=tuple(9 * u), textcoords="offset points",
                       fontsize=9, fontweight="bold", ha="center", va="center", zorder=Z_TEXT + 1,
                       path_effects=_halo(), gid="north-arrow")
+    return [t]
+
+
+def _downhill_arrow(S: SceneDrawing, x: float) -> list:
+    """An arrow pointing down the road's slope (``runout.grade`` and ``cross_slope``), with its
+    steepness, ``x`` points right of the +X/+Y arrows; none on a level road (a zone's own slope is
+    in its label). Returns the texts drawn."""
+    spec = S.sc.runout
+    if spec is None or (spec.road.grade == 0.0 and spec.road.cross_slope == 0.0):
+        return []
+    g = np.array([spec.road.grade, spec.road.cross_slope])
+    steep = float(np.hypot(*g))
+    u = -g / steep
+    from matplotlib.transforms import offset_copy
+
+    base = (0.03, 1.0)
+    corner = offset_copy(S.ax.transAxes, fig=S.ax.figure, x=x, y=-34, units="points")
+    head = offset_copy(S.ax.transAxes, fig=S.ax.figure, x=x + 13 * u[0], y=-34 + 13 * u[1], units="points")
+    arrow = dict(arrowstyle="-|>", lw=1.4, color="0.25", shrinkA=0, shrinkB=0, mutation_scale=12)
+    S.ax.annotate("", xy=base, xycoords=head, xytext=tuple(-26 * u), textcoords="offset points",
+                  arrowprops=arrow, zorder=Z_TEXT + 1, gid="downhill-arrow")
+    t = S.ax.annotate(f"downhill {100 * steep:.3g} %", xy=base, xycoords=corner, xytext=(0, -16),
+                      textcoords="offset points", fontsize=7.5, ha="center", va="top", zorder=Z_TEXT + 1,
+                      path_effects=_halo(), gid="downhill-arrow")
     return [t]
 
 
@@ -2191,6 +2231,11 @@ def history_panels(scene) -> int:
     return 4 if joint is not None and any(p.contact_time > 0 for p in joint.pairs) else 3
 
 
+#: An articulation limit is drawn on the histories' articulation panel once a hitch's articulation
+#: reaches this share of it (below, the legend names it without the lines).
+LIMIT_SHOWN_FROM = 0.3
+
+
 def plot_histories(scene, axes=None, *, system: str | None = None):
     """Run-out time histories: CG speed, yaw rate and articulation angle after separation, and
     the sustained-contact forces when bodies stayed in contact.
@@ -2244,10 +2289,13 @@ def plot_histories(scene, axes=None, *, system: str | None = None):
     styles = ("-", "--", ":", "-.")
     movable = [v for v in scene.scenario.vehicles if not v.is_barrier]
     family = {v.name: _FAMILIES[i % len(_FAMILIES)] for i, v in enumerate(movable)}
-    limits = {}
+    limits, locked = {}, set()
     for v in movable:
         for i, h in enumerate(v.hitches):
             limits[(v.bodies[i].name, v.bodies[i + 1].name)] = h.articulation_limit
+            if h.yaw_locked:
+                locked.add((v.bodies[i].name, v.bodies[i + 1].name))
+    reached: dict[float, float] = {}  # articulation limit -> the largest |articulation| of its hitches
     t_max = 0.0
     n_hitch = 0
     for vn, r in scene.runout.items():
@@ -2266,13 +2314,22 @@ def plot_histories(scene, axes=None, *, system: str | None = None):
         for k, hh in enumerate(r.hitches):
             n_hitch += 1
             color = dark if k == 0 else line
+            lock = ", yaw-locked" if (hh.front, hh.rear) in locked else ""
             ax_a.plot(hh.t, ka * hh.articulation, styles[k % len(styles)], color=color, lw=1.5,
-                      label=f"{hh.front} \N{MINUS SIGN} {hh.rear} ({vn})")
+                      label=f"{hh.front} \N{MINUS SIGN} {hh.rear} ({vn}{lock})")
             lim = limits.get((hh.front, hh.rear))
             if lim is not None:
-                for sgn in (1, -1):
-                    ax_a.axhline(sgn * ka * lim, color="0.6", lw=0.8, ls="--")
-                ax_a.plot([], [], "--", color="0.6", lw=0.8, label="articulation limit")
+                peak = float(np.max(np.abs(hh.articulation))) if len(hh.articulation) else 0.0
+                reached[lim] = max(reached.get(lim, 0.0), peak)
+    # each limit once; its lines only where an articulation comes within reach of it (else they would
+    # squeeze a few degrees of articulation into a hair), the legend names it either way
+    for lim, peak in sorted(reached.items()):
+        shown = peak >= LIMIT_SHOWN_FROM * lim
+        if shown:
+            for sgn in (1, -1):
+                ax_a.axhline(sgn * ka * lim, color="0.6", lw=0.8, ls="--")
+        ax_a.plot([], [], ls="--" if shown else "none", color="0.6", lw=0.8,
+                  label=f"articulation limit \N{PLUS-MINUS SIGN}{ka * lim:.0f} deg" + ("" if shown else " (off the scale)"))
     ax_v.set_ylabel(f"CG speed [{vunit}]")
     ax_w.set_ylabel("yaw rate [deg/s]")
     ax_a.set_ylabel("articulation [deg]")

@@ -300,6 +300,13 @@ def format_events(events, system: str = "SI", title: str = "Run-out events") -> 
     return "\n".join([title] + table(rows, "r"))
 
 
+def rollover_cells(c) -> tuple[str, str]:
+    """The residual and tolerance cells of a rollover statement (a verdict, not a number)."""
+    res = ("computed: " + ("rolls" if c.details["computed"] else "does not roll")
+           if "computed" in c.details else "none computed")
+    return res, "the statement must hold"
+
+
 def format_evidence(report, system: str = "SI", labels: dict | None = None) -> str:
     """Text table of evidence residuals and verdicts; ``labels`` names the wheels (key -> the axle's name
     from the file, :func:`crashsim.motion.wheels.wheel_labels`)."""
@@ -309,9 +316,7 @@ def format_evidence(report, system: str = "SI", labels: dict | None = None) -> s
     rows = []
     for c in report.checks:
         if c.kind == "rollover":
-            res = ("computed: " + ("rolls" if c.details["computed"] else "does not roll")
-                   if "computed" in c.details else "none computed")
-            tol = "the statement must hold"
+            res, tol = rollover_cells(c)
             rows.append(["PASS" if c.passed else "FAIL", c.kind, c.name, res, tol, c.details.get("reason", "")])
             continue
         if c.quantity == "angle":

@@ -156,8 +156,10 @@ def _wheel_fields(override: bool) -> list[Field]:
         Field("cornering_coefficient", "float", minimum=0, exclusive_minimum=True, **opt, example="8.6",
               **moving, **({} if override else {"unless": ("cornering_stiffness",)}),
               description="Cornering stiffness per unit load [1/rad] (8.6/rad = 15 %/deg, car tyres)"),
-        Field("cornering_stiffness", Kind.FORCE, minimum=0, exclusive_minimum=True, **opt, example="40000 N",
-              description="Cornering stiffness per tyre, in force per radian of slip angle"),
+        Field("cornering_stiffness", Kind.CORNERING_STIFFNESS, minimum=0, exclusive_minimum=True, **opt,
+              example="40000 N/rad",
+              description="Cornering stiffness per tyre, a force per angle of slip (\"155 lbf/deg\"; a bare force "
+                          "such as \"40000 N\" is read per radian)"),
         Field("rolling_resistance", "float", minimum=0, maximum=0.5, **opt, example="0.012", **moving,
               description="Rolling-resistance coefficient f_r (rolling and braked wheels)"),
         Field("mu_factor", "float", minimum=0, maximum=2, exclusive_minimum=True, **opt, example="0.5",

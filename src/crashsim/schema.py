@@ -394,6 +394,8 @@ def _field(value: object, f: Field, path: str, problems: _Problems) -> Any:
         return None if any(g is None for g in got) else tuple(got)
     kind = f.kind
     if f.counts:
+        if 1 in f.counts and isinstance(value, (str, int, float)) and not isinstance(value, bool):
+            value = [value]  # one value where a list of one is allowed: "80 kN" for ["80 kN"]
         if not isinstance(value, list) or len(value) not in f.counts:
             what = f"has {len(value)} values" if isinstance(value, list) else "is not a list"
             problems.append((path, f"{toml_repr(value)} {what}; allowed a list of {_counts(f)} values such as "

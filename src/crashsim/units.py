@@ -104,6 +104,7 @@ class Kind(str, enum.Enum):
     FORCE_PER_AREA = "force_per_area"
     DIMENSIONLESS = "dimensionless"
     SLOPE = "slope"
+    CORNERING_STIFFNESS = "cornering_stiffness"
 
     def __str__(self) -> str:
         return self.value
@@ -151,6 +152,10 @@ _SPECS: dict[Kind, _Spec] = {
                                ("600000 N/m^2", "87.0 lb/in^2"), ("N/m^2", "kN/m^2", "MN/m^2", "lbf/in^2", "lb/in^2")),
     Kind.DIMENSIONLESS: _Spec("a plain number", "a number, or a percentage", ("0.6", "5 %"),
                               ("%",)),
+    Kind.CORNERING_STIFFNESS: _Spec("a cornering stiffness",
+                                    "force per angle of slip: N/rad, kN/rad, N/deg, lbf/deg; or a force, read per radian",
+                                    ("40000 N/rad", "155 lbf/deg"), ("N/rad", "kN/rad", "N/deg", "lbf/deg", "lbf/rad"),
+                                    angle_power=-1),
     Kind.SLOPE: _Spec("a slope", "rise over run as a number or a percentage, or the angle of the surface (deg, rad)",
                       ("-6 %", "-3.43 deg"), ("%", "deg", "rad")),
 }
@@ -172,6 +177,7 @@ DISPLAY_UNITS: dict[Kind, dict[str, str]] = {
     Kind.FORCE_PER_AREA: {"SI": "N/m^2", "US": "lbf/in^2"},
     Kind.DIMENSIONLESS: {"SI": "", "US": ""},
     Kind.SLOPE: {"SI": "", "US": ""},
+    Kind.CORNERING_STIFFNESS: {"SI": "N/rad", "US": "lbf/deg"},
 }
 """Display unit of each kind in each system: the one table behind :func:`to_unit`.
 
@@ -323,6 +329,9 @@ def _si_factor(unit: str, kind: Kind) -> float:
     if fits(literal):
         return float(ureg.Quantity(1.0, literal).to(si).magnitude)
     newton = ureg.parse_units("N")
+    if (kind is Kind.CORNERING_STIFFNESS and literal.dimensionality == newton.dimensionality
+            and _angle_power(literal) == 0):
+        return float(ureg.Quantity(1.0, literal).to(newton).magnitude)  # a force, read per radian
     if kind is Kind.MASS and literal.dimensionality == newton.dimensionality:
         return float(ureg.Quantity(1.0, literal).to(newton).magnitude) / G0  # weight
     if _POUND.search(text):

@@ -113,3 +113,28 @@ def test_animation_starts_at_the_start_of_braking(result):
     only_runout = scene_animation(result, dt=0.1, approach=False)
     assert only_runout.times[0] == 0.0
     assert len(anim.times) - len(only_runout.times) == int(np.sum(t < 0))
+
+
+def test_recorder_samples_before_the_approach_get_the_assumed_constant_speed():
+    """The shipped truck scene's recorder starts 5 s before the impact, before the modelled approach: the
+    chart draws the constant speed the recorder check assumes there, from the earliest sample to the start
+    of the approach (perception or braking), at the speed of braking; a scene whose recorder starts inside
+    the approach has no such line."""
+    from crashsim.scenario import load_scenario
+
+    path = Path(__file__).resolve().parents[2] / "scenarios" / "scenes" / "truck_brakes_into_car.toml"
+    res = run_scene(load_scenario(path))
+    a = res.scenario.approaches["truck"]
+    earliest = min(t + x.time_offset for x in res.scenario.evidence.recorder for t in x.times)
+    start = -a.time_to_impact - a.reaction_time
+    assert earliest < start
+    fig = plot_time_distance(res, system="SI")
+    ax_s, ax_v = fig.axes[:2]
+    xy = np.asarray(_line(ax_s, "td:constant:truck").get_xydata())
+    assert xy[0, 0] == pytest.approx(earliest) and xy[1, 0] == pytest.approx(start)
+    assert (xy[1, 1] - xy[0, 1]) / (xy[1, 0] - xy[0, 0]) == pytest.approx(a.speed_at_braking, rel=1e-12)
+    assert xy[1, 1] == pytest.approx(-a.distance - a.reaction_distance)
+    legends = list(fig.legends) + [ax.get_legend() for ax in fig.axes if ax.get_legend() is not None]
+    assert "constant speed before the approach (assumed)" in [t.get_text() for lg in legends for t in lg.get_texts()]
+    no_early = plot_time_distance(run_scene(scenario_from_dict(approach_scene())), system="SI")
+    assert not [ln for ln in no_early.axes[0].lines if (ln.get_gid() or "").startswith("td:constant:")]

@@ -262,6 +262,36 @@ def test_histories_of_articulation_match_headings():
     np.testing.assert_allclose(line.get_ydata(), np.degrees(tr.heading - tl.heading), atol=1e-9)
 
 
+def test_articulation_limits_once_each_and_only_where_reached():
+    """Each articulation limit is named once in the panel's legend; its lines are drawn only where a hitch's
+    articulation reaches LIMIT_SHOWN_FROM of it, else the legend says it is off the scale. A C-dolly's
+    yaw-locked hitch says so in its label."""
+    from crashsim.plotting import LIMIT_SHOWN_FROM
+
+    scene = _scene(ROOT / "scenarios" / "scenes" / "doubles_c_dolly.toml")
+    ax = plot_histories(scene).axes[2]
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    limit_labels = [t for t in labels if t.startswith("articulation limit")]
+    limits = {h.articulation_limit for v in scene.scenario.vehicles for h in v.hitches
+              if h.articulation_limit is not None}
+    assert len(limit_labels) == len(limits) >= 1
+    assert any("yaw-locked" in t for t in labels)
+    peaks = {}
+    for r in scene.runout.values():
+        for v in scene.scenario.vehicles:
+            for i, h in enumerate(v.hitches):
+                hh = next((x for x in r.hitches if (x.front, x.rear) == (v.bodies[i].name, v.bodies[i + 1].name)), None)
+                if hh is not None and h.articulation_limit is not None:
+                    peaks[h.articulation_limit] = max(peaks.get(h.articulation_limit, 0.0),
+                                                      float(np.max(np.abs(hh.articulation))))
+    flat = [ln for ln in ax.get_lines() if len(ln.get_ydata()) == 2 and ln.get_ydata()[0] == ln.get_ydata()[1] != 0]
+    for lim, peak in peaks.items():
+        drawn = [ln for ln in flat if abs(abs(ln.get_ydata()[0]) - math.degrees(lim)) < 1e-9]
+        assert len(drawn) == (2 if peak >= LIMIT_SHOWN_FROM * lim else 0)
+        label = next(t for t in limit_labels if f"{math.degrees(lim):.0f} deg" in t)
+        assert ("off the scale" in label) == (peak < LIMIT_SHOWN_FROM * lim)
+
+
 def test_contact_force_panel_and_impact_lines():
     """The median-barrier slide: both bodies stay in sustained contact; the fourth panel draws
     each pair's sampled force (the pair's force track; the report's peak force, read off the

@@ -309,3 +309,22 @@ def test_monte_carlo_and_posterior_sections_in_the_users_units(tmp_path):
     post_part = body[body.index("Posterior"):]
     assert "road friction" in post_part and "0.7" in post_part and "30 mph" in post_part
     assert "chain short" in post_part
+
+
+def test_a_rollover_statement_reads_as_a_verdict_in_the_evidence_table(tmp_path):
+    """A rollover item is a statement, not a measurement: its row says what was computed and that the
+    statement must hold (as the text report does), not a residual of 0 against a tolerance of 0."""
+    text = SCENE.read_text().replace("[runout]\nroad_friction = 0.7\n",
+                                     '[runout]\nroad_friction = 0.7\nlevel = "load_transfer"\nrollover = true\n', 1)
+    assert "rollover = true" in text
+    f = tmp_path / "roll.toml"
+    f.write_text(text + '\n[[evidence.rollover]]\nunit = "car"\nrolled = false\nname = "car stayed upright"\n')
+    scene = run_scene(load_scenario(f))
+    page = render_case_report(scene, input_files=[f], figures=False)
+    rows = [[html.unescape(re.sub(r"<[^>]+>", "", c)).strip() for c in re.findall(r"<td[^>]*>(.*?)</td>", r, re.S)]
+            for r in re.findall(r"<tr[^>]*>(.*?)</tr>", page, re.S) if "car stayed upright" in r]
+    verdicts = [c for c in rows if c and c[0] in ("PASS", "FAIL")]
+    assert len(verdicts) == 1
+    cells = verdicts[0]
+    assert "computed: does not roll" in cells and "the statement must hold" in cells
+    assert cells[0] == "PASS"

@@ -79,3 +79,12 @@ def test_braked_fraction_on_an_air_braked_unit_exits_2(tmp_path, refused_line):
     f.write_text(f.read_text().replace('state = "braked"\n', 'state = "braked"\nbrake = 0.5\n', 1))
     line = refused_line(f.read_text())
     assert "vehicles.truck.brakes" in line and "rolling" in line, line
+
+
+def test_one_capacity_may_be_written_without_a_list(tmp_path):
+    """The schema says "one value: every axle": "80 kN" reads as ["80 kN"]."""
+    f = _scene(tmp_path)
+    f.write_text(f.read_text().replace('capacity = ["100 kN"]', 'capacity = "100 kN"'))
+    assert 'capacity = "100 kN"' in f.read_text()
+    sc = scenario_from_dict(load_toml(f), file=str(f))
+    assert sc.runout.wheels["truck"].brakes.units["trailer"].capacity == pytest.approx((100e3,))

@@ -194,7 +194,7 @@ def test_json_of_a_joint_run_out(capsys):
     for i in out["impacts"][1:]:
         assert {"body1", "body2", "point", "normal", "closing_speed", "normal_impulse", "tangential_impulse",
                 "energy_loss", "delta_v", "law", "restitution", "friction"} <= set(i)
-    e = out["runout"]["energy"]
+    e = out["runout"]["energy_J"]
     assert {"before_impact", "first_impact", "later_impacts", "tyres", "stops", "contacts", "final",
             "closing_error"} == set(e)
     assert abs(e["closing_error"]) < 1e-5 * e["before_impact"]

@@ -61,3 +61,20 @@ def test_a_slope_in_degrees_is_the_tangent_of_its_angle(tmp_path):
 def test_a_slope_in_degrees_out_of_range_or_not_an_angle_exits_2_with_one_line(refused_line, grade, words):
     line = refused_line(_with(SCENE.read_text(), grade))
     assert "runout.grade" in line and all(w in line for w in words), line
+
+
+def test_a_vehicle_rolling_away_down_a_grade_gets_a_hint_not_just_a_time_limit(tmp_path):
+    """Free-rolling wheels on a grade steeper than their rolling resistance never stop: the time-limit
+    warning says so and names the slope where the vehicle stopped, so the user looks at the wheel
+    settings rather than at the solver."""
+    from crashsim import api
+
+    text = SCENE.read_text().replace('state = "locked"\n', 'state = "rolling"\ncornering_coefficient = 6.0\n'
+                                                           'rolling_resistance = 0.008\n', 1)
+    f = tmp_path / "roll.toml"
+    f.write_text(_with(text, "-6 %").replace("[runout]\n", '[runout]\nt_max = "8 s"\n', 1))
+    result = api.run(str(f))
+    hints = [w for w in result.warnings if "keeps rolling" in w]
+    assert len(hints) == 1 and "did not reach rest: time_limit" in hints[0] and "slope of 6.32 %" in hints[0] and "truck" in hints[0]
+    level = api.run(str(f), {"runout.grade": "0 %", "runout.cross_slope": "0 %"})
+    assert not any("keeps rolling" in w for w in level.warnings)

@@ -546,3 +546,19 @@ def test_a_slope_is_written_in_the_unit_it_was_given_and_reads_back(like):
     assert parse(text, Kind.SLOPE, field="g") == pytest.approx(x, rel=1e-13)
     if unit == "deg":
         assert text.startswith(f"{math.degrees(math.atan(x))!r}")
+
+
+@pytest.mark.parametrize("text, si", [
+    ("40000 N/rad", 40000.0),
+    ("40 kN/rad", 40000.0),
+    ("700 N/deg", 700.0 * 180.0 / math.pi),
+    ("155 lbf/deg", 155.0 * 4.4482216152605 * 180.0 / math.pi),
+    ("40000 N", 40000.0),  # a bare force is read per radian (scenes written before the unit existed)
+])
+def test_cornering_stiffness_is_a_force_per_angle_of_slip(text, si):
+    assert units.parse(text, "cornering_stiffness", field="k") == pytest.approx(si, rel=1e-12)
+
+
+def test_cornering_stiffness_refuses_a_force_per_length():
+    with pytest.raises(ScenarioError, match="cornering stiffness"):
+        units.parse("40 kN/m", "cornering_stiffness", field="k")

@@ -106,7 +106,7 @@ def test_barrier_75_solves_the_trailer_side_slap(capsys):
     n = np.array(second["normal"])
     dv = np.array(second["delta_v"]["trailer"]["vector"])
     assert dv @ n > 0.5
-    e = out["runout"]["energy"]
+    e = out["runout"]["energy_J"]
     assert e["later_impacts"] == pytest.approx(second["energy_loss"])
     assert abs(e["closing_error"]) < 1e-5 * e["before_impact"]
     assert all(b["at_rest"] for b in out["runout"]["bodies"].values())
@@ -150,7 +150,7 @@ def test_sliding_along_the_median_barrier(capsys):
     assert main(["run", str(ROOT / "scenarios" / "scenes" / "median_barrier_slide.toml"), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     pairs = {p["name"]: p for p in out["runout"]["pairs"]}
-    t_end = out["runout"]["t_end"]
+    t_end = out["runout"]["t_end_s"]
     for body in ("tractor", "trailer"):
         p = pairs[f"{body}|median"]
         assert p["contact_time"] > 0.5 * t_end and p["contact_work"] < 0
@@ -158,7 +158,7 @@ def test_sliding_along_the_median_barrier(capsys):
     assert later[0] == ("trailer", "median") and set(later) == {("trailer", "median"), ("tractor", "median")}
     for p in pairs.values():
         assert p["max_closing"] < 0.5  # nothing struck the barrier unrecorded
-    assert out["runout"]["energy"]["contacts"] > 0
+    assert out["runout"]["energy_J"]["contacts"] > 0
 
 
 def test_truck_brakes_before_the_impact(capsys):

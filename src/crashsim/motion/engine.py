@@ -428,12 +428,13 @@ def _first_root(k, M, phase, D, t, t_new, dense, g_old, g_new, r_old, r_new, ev_
 
         ta, fa = t, a
         for j in range(1, n_sub + 1):
-            if j == n_sub:
+            last = j == n_sub
+            if last:
                 tb, fb = t_new, b
             else:
                 tb = t + (t_new - t) * j / n_sub
-                if tb >= t_first:
-                    break
+                if tb >= t_first:  # an earlier event fires at t_first: search up to it, not past it
+                    tb, last = t_first, True
                 fb = g(tb)
             if (d > 0 and fa <= 0.0 <= fb) or (d < 0 and fa >= 0.0 >= fb):
                 root = tb
@@ -449,6 +450,8 @@ def _first_root(k, M, phase, D, t, t_new, dense, g_old, g_new, r_old, r_new, ev_
                         root = brentq(g, ta, tb, xtol=eps4, rtol=eps4)
                 if root < t_first:
                     t_first, fired = root, e
+                break
+            if last:
                 break
             ta, fa = tb, fb
     return t_first, fired

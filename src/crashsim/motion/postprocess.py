@@ -525,10 +525,11 @@ def gravity_work(model, Y: np.ndarray, seg_of: np.ndarray, memb: np.ndarray) -> 
     """Work of the in-plane gravity on every body over the sampled run [J], shape (nb,).
 
     Each wheel carries its share of its body's mass (``M.wheel_mass``) under the gravity of the
-    slope where it stands (its zone's, else the road's); the work is summed over the sampled
-    steps of its body's CG with the force averaged at the step's ends.  Exact where the slope
-    is uniform (the force is constant, the work its dot product with the displacement); across
-    zones with their own slopes, to the sampling.  Zero on a level road.
+    slope where it stands (its zone's, else the road's), acting at the body's CG; the work is summed
+    over the sampled steps of its CG, each step under the force of the segment it starts in. Exact:
+    the force is constant within a segment (zone membership changes only at segment starts, which
+    are samples), so its work over a step is its dot product with the CG's displacement.  Zero on a
+    level road.
     """
     nb = model.n_bodies
     out = np.zeros(nb)
@@ -550,8 +551,9 @@ def gravity_work(model, Y: np.ndarray, seg_of: np.ndarray, memb: np.ndarray) -> 
         g = np.broadcast_to(road_g, (memb.shape[0], model.n_wheels, 2))
     for w in range(model.n_wheels):  # summed wheel by wheel, as the force of one segment always was
         force[:, M.wheel_body[w]] += M.wheel_mass[w] * g[:, w]
-    f = force[seg_of]  # (K, nb, 2)
-    fm = 0.5 * (f[1:] + f[:-1])
+    # the force of the segment a step starts in: a step ends at the next sample, which is the next
+    # segment's start where the membership changes, so its whole displacement is under that force
+    fm = force[seg_of[:-1]]  # (K - 1, nb, 2)
     out += np.sum(fm[:, :, 0].T * np.diff(x, axis=1) + fm[:, :, 1].T * np.diff(y, axis=1), axis=1)
     return out
 

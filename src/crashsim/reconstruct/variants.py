@@ -158,7 +158,7 @@ class ScenarioVariant:
             runout = base.runout
             inputs = base.approach_inputs
             if "road_friction" in kinds:
-                runout = replace(runout, road=Road(d["runout"]["road_friction"], runout.road.zones))
+                runout = replace(runout, road=replace(runout.road, mu=d["runout"]["road_friction"]))  # zones, slope kept
                 if self._on_runout_road:
                     inputs = dict(inputs)
                     for n in self._on_runout_road:

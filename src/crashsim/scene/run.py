@@ -178,10 +178,10 @@ class SceneResult:
             if self.joint is not None:
                 j = self.joint
                 out["runout"].update(
-                    status=j.status, message=j.message, t_end=j.t_end, method=j.method,
+                    status=j.status, message=j.message, t_end_s=j.t_end, method=j.method,
                     pairs=[p.to_dict() for p in j.pairs],
-                    energy=self.energy_ledger(),
-                    events=[{"t": e.t, "kind": e.kind, "detail": e.detail, "energy": e.energy,
+                    energy_J=self.energy_ledger(),
+                    events=[{"t_s": e.t, "kind": e.kind, "detail": e.detail, "energy_J": e.energy,
                              "vehicles": list(e.vehicles), **e.data} for e in j.events],
                     obstacles=[{"name": o.name, "points": [list(p) for p in o.points], "thickness": o.thickness,
                                 "closed": o.closed} for o in sc.runout.obstacles])
@@ -567,9 +567,25 @@ def run_scene(scenario, *, lean: bool = False) -> SceneResult:
                          for i in joint.impacts if i.warning]
         for vname, r in runout.items():
             if not r.success:
-                warnings.append(f"the run-out of vehicle {vname!r} did not reach rest: {r.status} ({r.message})")
+                warnings.append(f"the run-out of vehicle {vname!r} did not reach rest: {r.status} ({r.message})"
+                                + rolling_downhill(spec.road, r))
     return SceneResult(scenario=scenario, impact=impact, runout=runout, evidence=evidence, warnings=tuple(warnings),
                        accuracy=accuracy, joint=joint)
+
+
+def rolling_downhill(road, r) -> str:
+    """A hint for a run-out that hit its time limit on a slope: free-rolling wheels on a slope steeper
+    than their rolling resistance never stop (a reading of the input, not a fault of the solver)."""
+    if r.status != "time_limit" or road is None or not road.sloped:
+        return ""
+    ends = np.array([b.final.position for b in r.bodies.values()], dtype=float)
+    slopes = road.slope_from_membership(road.membership(ends))
+    steepest = float(np.max(np.hypot(slopes[:, 0], slopes[:, 1])))
+    if steepest == 0.0:
+        return ""
+    return (f"; it stopped on a slope of {100 * steepest:.3g} %: a vehicle whose wheels roll freely keeps rolling "
+            f"where the slope is steeper than their rolling resistance; if it came to rest, give it braked or "
+            f"locked wheels (tyres, wheels[] or wheel_changes[]) or air brakes")
 
 
 def _track_filter(scenario):

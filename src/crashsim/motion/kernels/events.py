@@ -225,8 +225,10 @@ def first_root(step, t_new, M, ev, n_ev, vals, D, sw, dydt, W):
     (``min(|g_old|, |g_new|) < rate x h``, with the larger of the rates at the two ends) is
     also searched at points of its dense output no further apart than the event's resolution
     (at most ``MAX_SUBSAMPLES``): a wheel cannot step over the corner of a zone, nor a body
-    through a thin obstacle, by a step longer than the feature.  The root is located by
-    Brent's method on the dense output.
+    through a thin obstacle, by a step longer than the feature.  Once an event has a root, the
+    others are searched up to that root (a sub-interval that reaches past it is cut there, so a
+    crossing just before it is not skipped).  The root is located by Brent's method on the dense
+    output.
     """
     t = step.t_old
     h = step.h
@@ -245,19 +247,23 @@ def first_root(step, t_new, M, ev, n_ev, vals, D, sw, dydt, W):
         ta = t
         fa = a
         for k in range(1, n_sub + 1):
-            if k == n_sub:
+            last = k == n_sub
+            if last:
                 tb = t_new
                 fb = b
             else:
                 tb = t + (t_new - t) * k / n_sub
-                if tb >= t_first:
-                    break
+                if tb >= t_first:  # an earlier event fires at t_first: search up to it, not past it
+                    tb = t_first
+                    last = True
                 fb = event_on_step(e, tb, step, M, ev, D, sw, dydt, W)
             if crosses(fa, fb, d):
                 root = brent(e, ta, tb, fa, fb, step, M, ev, D, sw, dydt, W)
                 if root < t_first:
                     t_first = root
                     fired = e
+                break
+            if last:
                 break
             ta = tb
             fa = fb

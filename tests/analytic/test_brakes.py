@@ -24,6 +24,8 @@ from runout_cases import GLOBAL, G, symmetric_car, tractor_semitrailer
 
 from crashsim.motion import Road, RunoutOptions, simulate_runout
 from crashsim.motion.brakes import DEFAULT_TIMING, AirBrakes, BrakeUnit, ramp_level, ramp_stopping_distance
+from crashsim.motion.hitches import RunoutModel
+from crashsim.motion.kernels.tyres import brake_piece
 from crashsim.motion.levels import simulate_level
 from crashsim.motion.wheels import WheelSetting, WheelSettings
 from crashsim.vehicles import BodyState, chain_states
@@ -75,6 +77,46 @@ def test_default_timing_meets_the_clauses():
         assert ramp_level(ta, tm["delay"], tm["rise"], math.inf, 1.0) == pytest.approx(0.6, rel=1e-12)
         # released from full at time 0: 5 % left at T_r
         assert ramp_level(trel, -10.0, tm["rise"], tm["release_delay"], tm["fall"]) == pytest.approx(0.05, rel=1e-12)
+
+
+@pytest.mark.parametrize("timing", [(0.3, 0.5, 2.0, 0.2), (0.3, 0.0, 2.0, 0.0), (0.3, 0.5, 0.4, 0.2),
+                                    (-0.2, 0.5, 0.1, 0.0), (0.3, 0.0, 0.2, 0.3)])
+def test_each_piece_of_the_ramp_is_linear_between_its_kinks(timing):
+    """The kernels' piece from a phase start (``brake_piece``: the kinks are phase boundaries) is the
+    ramp there and up to the next kink, a kink belonging to the piece it starts: rises and falls of
+    zero (steps), a release before full application, brakes applied before the run."""
+    on, rise, off, fall = timing
+    row = np.array([1.0, on, rise, off, fall, 1.0, 0.0])
+    kinks = sorted({on, on + rise, off, off + fall})
+    starts = [0.0] + [k for k in kinks if k > 0.0]
+    ends = starts[1:] + [5.0]
+    for t0, t1 in zip(starts, ends):
+        ref, base, slope = brake_piece(t0, row)
+        tt = np.linspace(t0, t1, 41)[:-1]
+        assert base + slope * (tt - ref) == pytest.approx(ramp_level(tt, on, rise, off, fall), abs=1e-12)
+
+
+def test_a_step_of_the_ramp_is_taken_by_the_phase_not_the_clock():
+    """A rise time of 0 is a step of the brake force at t_on: the segment that starts there brakes
+    fully even where the clock (integrated with the state) is a rounding error short of t_on, and
+    the one that ends there does not brake even a rounding error past it.  (Looked up by the clock,
+    the first evaluation after the step fell on the side before it: the compiled engine's
+    Runge-Kutta error estimate weighs that first stage almost equally in its two solutions, so the
+    wrong force went unnoticed into the step, 1e-6 of the energy in a fuzz scene.)"""
+    a, t_on = 0.4 * G, 0.3
+    car = symmetric_car()
+    ws = WheelSettings(default=ROLL, brakes=AirBrakes({"car": BrakeUnit((a * MASS / 2,), "tractor", delay=t_on,
+                                                                         rise=0.0)}))
+    for engine in ("scipy", "compiled"):  # both engines end a segment there (their loops stop at segment_stops)
+        model = RunoutModel(car, ws.resolve(car), Road(0.8), RunoutOptions(engine=engine))
+        assert t_on in model.scene.phase_times and t_on in model.scene.segment_stops
+    y = model.layout.pack({"car": BodyState((0.0, 0.0), 0.0, (20.0, 0.0))})
+    no_zones = np.zeros((len(model.specs), 0), dtype=bool)
+    for t_seg, clock, force in ((t_on, math.nextafter(t_on, -1.0), -a * MASS), (0.0, math.nextafter(t_on, 1.0), 0.0)):
+        y[model.layout.clock_index] = clock
+        fx = model.evaluate(y[:, None], model.segment(t_seg, no_zones)).body_force[0, 0]
+        # the tyre law's regularised direction u / sqrt(u^2 + eps^2) is 1 - 1.25e-7 at 20 m/s (eps 0.01 m/s)
+        assert fx == pytest.approx(force, abs=1e-6 * a * MASS)
 
 
 @pytest.mark.parametrize("engine", ["scipy", "compiled"])

@@ -6,9 +6,9 @@ trailer, a tractor-semitrailer or a tractor with two trailers; mixed wheel state
 braked, locked, jammed, with steer and mu factors), scheduled wheel changes, friction zones
 placed across the expected path, load transfer on some cases, a road slope on about a third of
 the cases and scenes (grade within 6 %, cross-slope within 4 %, half the zones with a grade
-of their own within 8 %), air brakes on about a
-third of the single-vehicle cases (timing, capacities below and above the tyres' limit, brakes
-out of adjustment, releases, ABS; :func:`_air_braked`), the wheel-lift and
+of their own within 8 %), air brakes on about a third of the single-vehicle cases and of the
+vehicles of a scene (timing, capacities below and above the tyres' limit, brakes out of
+adjustment, releases, ABS; :func:`_air_braked`), the wheel-lift and
 rollover check on every case with load transfer (half the bodies with a threshold of their own),
 hitch-consistent initial states
 with speeds up to 35 m/s, yaw rates, side slip and articulation (inside the articulation limit).
@@ -217,16 +217,18 @@ def _sloped(road: Road, seed: int, i: int) -> tuple[Road, str]:
     return Road(road.mu, zones, grade, cross), f", grade {100 * grade:.1f} %, cross-slope {100 * cross:.1f} %"
 
 
-def _air_braked(wheels: WheelSettings, vehicle, seed: int, i: int) -> tuple[WheelSettings, str]:
+def _air_braked(wheels: WheelSettings, vehicle, seed: int, i: int, tag: int = 121) -> tuple[WheelSettings, str]:
     """The wheel settings with air brakes in about a third of the cases: a random set of braked bodies
-    with random capacities (some below, some above the tyres' limit), timing, brakes out of
-    adjustment, a release on some, ABS on some (tractor and trailers drawn apart).
+    with random capacities (some below, some above the tyres' limit), timing (rise and fall times of 0,
+    steps of the brake force, among them), brakes out of adjustment, a release on some, ABS on some
+    (tractor and trailers drawn apart).
 
-    Drawn from a generator of its own (the other draws of a case stay those without air brakes).
+    Drawn from a generator of its own, ``(seed, i, tag)`` (the other draws of a case stay those
+    without air brakes; a scene's vehicles each have a tag of their own).
     The wheel states are made valid for them: a ``braked`` fraction becomes ``rolling`` (the air
     brakes give the force) and, where a unit has ABS, a ``locked`` wheel too.
     """
-    rng = np.random.default_rng([seed, i, 121])
+    rng = np.random.default_rng([seed, i, tag])
     if rng.random() >= 0.35:
         return wheels, ""
     tractor_abs, trailer_abs = rng.random() < 0.5, rng.random() < 0.4
@@ -364,11 +366,14 @@ def _apart(polys_a, polys_b, margin) -> bool:
     return True
 
 
-def random_scene(seed: int, i: int, *, engine: str = "scipy", kinds=KINDS, n_vehicles=None) -> SceneCase:
+def random_scene(seed: int, i: int, *, engine: str = "scipy", kinds=KINDS, n_vehicles=None,
+                 air_brakes: bool = True) -> SceneCase:
     """Random scene ``i`` of ``seed``: 2 or 3 vehicles on crossing paths, some obstacles.
 
     Vehicles start apart (no overlap, more than 0.5 m between outlines) and move towards a
-    common area, so that many scenes have impacts and contacts; some start at rest.
+    common area, so that many scenes have impacts and contacts; some start at rest.  With
+    ``air_brakes`` False the vehicles keep the wheel settings drawn for them (the scene as it was
+    drawn before air brakes: every other draw is the same).
     """
     from crashsim.motion import Obstacle
 
@@ -426,7 +431,12 @@ def random_scene(seed: int, i: int, *, engine: str = "scipy", kinds=KINDS, n_veh
     # sloped roads as in the single cases (drawn from a stream of their own: the other draws are those of
     # the level scenes). Scene 2 of seed 20261124 is the regression case of the shared event search: its
     # pup strikes a car 0.9 ms before its semitrailer would, and a search that stopped a sub-interval
-    # short of the semitrailer's root stepped over the pup's crossing (one engine or the other, by rtol)
+    # short of the semitrailer's root stepped over the pup's crossing (one engine or the other, by rtol);
+    # its test draws it without air brakes (air_brakes=False): with them the truck brakes, the strikes part.
     road, slope = _sloped(_road(rng, np.zeros(2), 0.0, 10.0), seed, i)
     vehicles, options, roll = _rollover(tuple(vehicles), options, seed, i, 24)
-    return SceneCase(label + slope + roll, tuple(vehicles), initial, wheels, road, options, tuple(obstacles))
+    air = ""
+    for k, v in enumerate(vehicles if air_brakes else ()):  # on about a third of the vehicles (a stream each)
+        wheels[v.name], more = _air_braked(wheels[v.name], v, seed, i, 1210 + k)
+        air += more
+    return SceneCase(label + slope + roll + air, tuple(vehicles), initial, wheels, road, options, tuple(obstacles))

@@ -8,6 +8,7 @@ error (one measured scene moved 1.1 m on the compiled engine at rtol 1e-6, 4 cm 
 below the impact threshold): if the engines disagree at 1e-8, both are run again at 1e-10 and
 must then agree -- the difference was integration error, not a difference of the models.
 
+The scenes draw air brakes too (about a third of their vehicles: :func:`random_runouts._air_braked`).
 On every scene both engines report the same later impacts (the same pairs in the same order,
 within 1 ms); on every case with load transfer (the rollover check is on there) both report the
 same wheel-lift and rollover events (the same kinds of the same bodies, within 1 ms). The
@@ -122,7 +123,19 @@ def test_dollies_and_self_steering_axles_engines_agree(i):
 
 @pytest.mark.parametrize("i", range(N_SCENES))
 def test_scene_engines_agree_and_the_ledger_closes(i):
-    c = random_scene(SEED, i)
+    check_scene(random_scene(SEED, i))
+
+
+def test_event_search_regression_scene():
+    """Scene 2 of the seed without its air brakes: its pup strikes a car 0.9 ms before its semitrailer
+    would (the regression case of the shared event search; with the air brakes the scene draws now,
+    the truck brakes and the two strikes no longer come so close)."""
+    check_scene(random_scene(SEED, 2, air_brakes=False))
+
+
+def check_scene(c):
+    """Both engines agree on scene ``c``, and every ledger closes with no negative line, impacts booked as
+    impacts, contacts bounded (:func:`check_contacts`)."""
     runs = _check_engines(lambda o: simulate_scene(c.vehicles, c.initial, c.wheels, c.road, o, obstacles=c.obstacles),
                           c.options, c.label)
     for engine, r in runs.items():
@@ -155,6 +168,18 @@ def test_the_single_sample_draws_air_brakes():
     assert any(len(c.vehicle.bodies) > 1 for c in braked)
 
 
+def test_the_scene_sample_draws_air_brakes():
+    """The whole-scene sample has vehicles with air brakes, with and without ABS, articulated ones among
+    them, and steps of the brake force (a rise or fall time of 0)."""
+    braked = [(v, c.wheels[v.name].brakes) for c in (random_scene(SEED, i) for i in range(N_SCENES)) for v in c.vehicles
+              if c.wheels[v.name].brakes is not None]
+    assert len(braked) >= 5
+    units = [u for _, b in braked for u in b.units.values()]
+    assert any(u.abs for u in units) and any(not u.abs for u in units)
+    assert any(len(v.bodies) > 1 for v, _ in braked)
+    assert any(u.rise == 0.0 for u in units)
+
+
 def test_the_sample_has_impacts_contacts_and_articulated_vehicles():
     """The fuzz sample is not trivial: impacts, sustained contacts, stops and obstacles occur."""
     kinds, impacts, hitched, obstacles, restrikes = set(), 0, 0, 0, 0
@@ -175,7 +200,7 @@ def test_the_sample_has_impacts_contacts_and_articulated_vehicles():
 def test_the_scene_sample_draws_slopes_with_impacts_and_zones_of_their_own():
     """Scenes on sloped roads are drawn, some with zones of their own grade (the ledger's gravity work
     across zone edges) and among them the regression scene of the event search (scene 2: two bodies
-    reaching one car 0.9 ms apart)."""
+    reaching one car 0.9 ms apart, without its air brakes: :func:`test_event_search_regression_scene`)."""
     scenes = [random_scene(SEED, i) for i in range(N_SCENES)]
     sloped = [c for c in scenes if c.road.sloped]
     assert len(sloped) >= 4

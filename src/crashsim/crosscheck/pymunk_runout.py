@@ -163,7 +163,7 @@ def simulate_runout_pymunk(
     state = {"step": -1, "forces": None, "seg": None, "key": None}
     nb = L.n_bodies
 
-    phase_times = np.array([p[0] for p in model.wheels.phases])
+    phase_times = model.scene.phase_times  # the settings' changes and the kinks of the air brakes' ramps
     no_zones = np.zeros((len(model.specs), 0), dtype=bool)
 
     def road_mu(yy: np.ndarray) -> np.ndarray:

@@ -542,11 +542,15 @@ def gravity_work(model, Y: np.ndarray, seg_of: np.ndarray, memb: np.ndarray) -> 
     L = model.layout
     x, y = Y[L.x], Y[L.y]  # (nb, K)
     force = np.zeros((memb.shape[0], nb, 2))  # per segment: the gravity force on each body [N]
-    for seg in range(memb.shape[0]):
-        for w in range(model.n_wheels):
-            inside = np.nonzero(memb[seg, w])[0]
-            g = zone_g[inside[-1]] if inside.size else road_g
-            force[seg, M.wheel_body[w]] += M.wheel_mass[w] * g
+    # per segment and wheel the gravity where it stands: the last zone it is in, else the road's
+    if memb.shape[2]:
+        inside = memb.any(axis=2)
+        last = memb.shape[2] - 1 - np.argmax(memb[:, :, ::-1], axis=2)
+        g = np.where(inside[:, :, None], zone_g[last], road_g)  # (nseg, nw, 2)
+    else:
+        g = np.broadcast_to(road_g, (memb.shape[0], model.n_wheels, 2))
+    for w in range(model.n_wheels):  # summed wheel by wheel, as the force of one segment always was
+        force[:, M.wheel_body[w]] += M.wheel_mass[w] * g[:, w]
     # the force of the segment a step starts in: a step ends at the next sample, which is the next
     # segment's start where the membership changes, so its whole displacement is under that force
     fm = force[seg_of[:-1]]  # (K - 1, nb, 2)

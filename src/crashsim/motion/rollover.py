@@ -146,6 +146,7 @@ class RollMonitor:
         self.ax_left = np.array([a.left for a in self.axles], dtype=np.int64)
         self.ax_right = np.array([a.right for a in self.axles], dtype=np.int64)
         self.ax_body = np.array([a.body for a in self.axles], dtype=np.int64)
+        self.ax_rows = [np.flatnonzero(self.ax_body == i) for i in range(self.nb)]  # each body's axles
         #: (nb, nw): which contacts are the body's, and the same with the side's sign (right +)
         self.member = (self.wheel_body[None, :] == np.arange(self.nb)[:, None]).astype(float).reshape(self.nb, nw)
         self.signed = self.member * self.side[None, :]
@@ -180,7 +181,7 @@ class RollMonitor:
             static = np.maximum(n0[self.ax_left] + n0[self.ax_right], 1e-12)
             g = -np.minimum(N[self.ax_left], N[self.ax_right]) / static[:, None]  # (n_axles, K)
             for i in range(nb):
-                rows = np.flatnonzero(self.ax_body == i)
+                rows = self.ax_rows[i]
                 if rows.size:
                     k = np.argmax(g[rows], axis=0)
                     lift[i] = g[rows][k, np.arange(K)]
@@ -243,13 +244,21 @@ class RollMonitor:
                 gns[s] = self.normal_factor(memb[s]) if len(memb) else np.ones(self.n0.shape[0])
             return gns[s]
 
-        # the normal factor is constant in a segment: evaluate segment by segment
-        ind = {k: np.empty((nb, len(T))) for k in ROLL_EVENT_KINDS}
+        # the normal factor is constant in a segment: evaluate the samples of segments of one normal factor
+        # together (on a road without zones of their own slope, all at once: segments also end at the wheel
+        # changes and the air brakes' kinks, which change no load)
+        groups: dict[bytes, list[int]] = {}
         for s in np.unique(seg_of):
-            cols = seg_of == s
-            part, _, _, _ = self.indicators(Y[:, cols], gn_of(int(s)))
-            for k in ROLL_EVENT_KINDS:
-                ind[k][:, cols] = part[k]
+            groups.setdefault(gn_of(int(s)).tobytes(), []).append(int(s))
+        if len(groups) == 1:
+            ind, _, _, _ = self.indicators(Y, gn_of(int(seg_of[0])))
+        else:
+            ind = {k: np.empty((nb, len(T))) for k in ROLL_EVENT_KINDS}
+            for segs in groups.values():
+                cols = np.isin(seg_of, segs)
+                part, _, _, _ = self.indicators(Y[:, cols], gn_of(segs[0]))
+                for k in ROLL_EVENT_KINDS:
+                    ind[k][:, cols] = part[k]
         out = []
         names = [b.name for b in model.bodies]
         vehicles = [model.vehicle_of_body(i).name for i in range(nb)]

@@ -184,21 +184,23 @@ class SceneModel:
         self.air_brakes = bool(np.any(wheel_brake[:, k.B_HAS] != 0.0))
         self.layout = StateLayout(tuple(body_names), accel_filter=options.load_transfer, clock=self.air_brakes)
         self.static_load = np.concatenate([self.loads[v.name].wheel for v in self.vehicles])
-        times = sorted({0.0} | {t for r in self.resolved.values() for t in r.change_times})
-        self.phase_times = np.array(times, dtype=float)
-        self.change_times = tuple(times[1:])
+        changes = {t for r in self.resolved.values() for t in r.change_times} - {0.0}
+        #: Times [s] at which wheel settings change (scheduled changes after 0).
+        self.change_times = tuple(sorted(changes))
         # the kinks of the air brakes' ramps: where the brake force starts or stops changing
         rows = wheel_brake[wheel_brake[:, k.B_HAS] != 0.0]
         kinks = np.concatenate([rows[:, k.B_ON], rows[:, k.B_ON] + rows[:, k.B_RISE], rows[:, k.B_OFF],
                                 rows[:, k.B_OFF] + rows[:, k.B_FALL]]) if len(rows) else np.zeros(0)
-        #: Times at which the air brakes' force starts or stops changing (segment boundaries, no wheel change).
+        #: Times at which the air brakes' force starts or stops changing (no wheel change).
         self.brake_kinks = tuple(sorted({float(x) for x in kinks if 0.0 < x < options.t_max}))
-        #: Where the integration must stop and restart: the scheduled changes before t_max (and for the compiled
-        #: engine the air brakes' kinks: its explicit Runge-Kutta steps lose their order across a kink, while
-        #: LSODA's error control finds them at less cost than a restart of the SciPy engine), then t_max.
-        kink_stops = set(self.brake_kinks) if options.engine == "compiled" else set()
-        self.segment_stops = tuple(sorted({tc for tc in self.change_times if tc < options.t_max}
-                                          | kink_stops | {options.t_max}))
+        # Phases: one from 0, from each scheduled change and from each kink of the ramps (a kink's phase keeps
+        # the settings; its wheels take the next piece of their ramps, kernels.tyres.brake_piece), so that no
+        # phase holds a kink or a step of a ramp.  Both engines end a segment at every phase boundary before
+        # t_max: no step straddles one, and the brake force of a segment is one linear piece of the clock.
+        times = sorted({0.0} | changes | set(self.brake_kinks))
+        self.phase_times = np.array(times, dtype=float)
+        #: Where the integration must stop and restart: the phase boundaries before t_max, then t_max.
+        self.segment_stops = tuple(sorted({tc for tc in times[1:] if tc < options.t_max} | {options.t_max}))
 
         phase_w = np.zeros((len(times), nw, k.N_P))
         for p, t in enumerate(times):

@@ -33,7 +33,9 @@ from .jit import JIT
 #: * ``load_transfer`` (nw, 2 nb): load-transfer matrix [N per m/s^2] on the filtered
 #:   body-axes accelerations; ``inv_mass`` (3 nb,): inverse masses [1/kg] and inertias
 #:   [1/(kg m^2)] in z order (x.., y.., psi..);
-#: * ``phase_times`` (P,) [s], ``phase_wheels`` (P, nw, N_P): wheel-setting phases (``P_*`` columns);
+#: * ``phase_times`` (P,) [s], ``phase_wheels`` (P, nw, N_P): wheel-setting phases (``P_*`` columns): a
+#:   phase starts at each scheduled change and at each kink of the air brakes' ramps (a kink's phase
+#:   keeps the settings; only the piece of the ramp changes), so that no phase holds a kink;
 #: * ``zone_mu`` (nz,), ``zone_ptr`` (nz + 1,), ``zone_edges`` (ne, 5: start x, y, edge x, y,
 #:   1/|edge|^2 [m, 1/m^2]), ``zone_box`` (nz, 4: xmin, ymin, xmax, ymax [m]): friction zones
 #:   (:func:`crashsim.motion.road._edges`);
@@ -127,9 +129,12 @@ N_P = 9
 # segment wheel columns (sw); S_N0: the static load on the road's slope [N]; S_GX, S_GY: the
 # in-plane gravity force the wheel's share of its body's mass carries, world frame [N]; S_CASTOR as P_CASTOR;
 # S_AIR: 1 where the wheel's brake force comes from the air brakes in this segment (a rolling wheel of a
-# braked unit)
-S_MU, S_MULOAD, S_DEMAND, S_CALPHA, S_DCOEF, S_CFIX, S_CCOEF, S_CD, S_SD, S_LOCKED, S_N0, S_GX, S_GY, S_CASTOR, S_AIR = range(15)
-N_S = 15
+# braked unit); S_BREF, S_BBASE, S_BSLOPE: the piece of the brake's ramp in force in the segment, its
+# application level ``S_BBASE + S_BSLOPE (clock - S_BREF)`` (reference time [s], level, level per second;
+# :func:`crashsim.motion.kernels.tyres.brake_piece`)
+(S_MU, S_MULOAD, S_DEMAND, S_CALPHA, S_DCOEF, S_CFIX, S_CCOEF, S_CD, S_SD, S_LOCKED, S_N0, S_GX, S_GY, S_CASTOR, S_AIR,
+ S_BREF, S_BBASE, S_BSLOPE) = range(18)
+N_S = 18
 # air-brake columns (wheel_brake): has air brakes (1/0), brakes start building [s], rise time [s],
 # release starts [s] (inf: held), fall time [s], brake force at full application [N], ABS efficiency (0: none)
 B_HAS, B_ON, B_RISE, B_OFF, B_FALL, B_FORCE, B_ABS = range(7)

@@ -16,8 +16,9 @@ from .jit import HOT, INLINE
 from .arrays import (B_HAS, C_GN, C_GX, C_GY, C_ROADMU, C_TAU, I_BRAKE, I_CLOCK, I_LT, I_SLOPE, S_AIR, S_GX, S_GY, S_N0, PS_CONTACT, P_BRAKE, P_CCOEF, P_CD, P_CFIX, P_FROLL, P_LOCKED, P_MUF, P_CASTOR, S_CASTOR,
     P_SD, S_CALPHA, S_CCOEF, S_CD, S_CFIX, S_DCOEF, S_DEMAND, S_LOCKED, S_MU, S_MULOAD, S_SD, W_FX, W_FY, W_SLIDE,
     W_U, W_V)
+from .arrays import S_BBASE, S_BREF, S_BSLOPE
 from .geometry import body_trig, constraint_rows, solve_spd
-from .tyres import tyre_eval
+from .tyres import brake_piece, tyre_eval
 from .contacts import contact_forces
 
 
@@ -29,7 +30,9 @@ def segment_params(t_phase, memb, M, sw):
     the slope under it, and ``S_GX, S_GY`` hold the in-plane gravity on its share of its body's
     mass (world frame [N]); on a level road they are 0 and the static load is used as it is.
     ``S_AIR`` is 1 for a rolling wheel of a unit with air brakes (``icfg[I_BRAKE]``): its brake force
-    then follows the clock (:func:`crashsim.motion.kernels.tyres.air_demand`).
+    then follows the clock (:func:`crashsim.motion.kernels.tyres.air_demand`) on the piece of its ramp
+    that the phase holds (``S_BREF, S_BBASE, S_BSLOPE``; :func:`crashsim.motion.kernels.tyres.brake_piece`:
+    the ramp's kinks are phase boundaries).
     """
     wheel, phase_w, zone_mu, cfg = M.wheel, M.phase_wheels, M.zone_mu, M.cfg
     nw = wheel.shape[0]
@@ -71,6 +74,8 @@ def segment_params(t_phase, memb, M, sw):
         sw[k, S_LOCKED] = pw[P_LOCKED]
         sw[k, S_CASTOR] = pw[P_CASTOR]
         sw[k, S_AIR] = 1.0 if air and M.wheel_brake[k, B_HAS] != 0.0 and pw[P_LOCKED] == 0.0 else 0.0
+        if sw[k, S_AIR] != 0.0:
+            sw[k, S_BREF], sw[k, S_BBASE], sw[k, S_BSLOPE] = brake_piece(M.phase_times[t_phase], M.wheel_brake[k])
 
 
 @njit(**INLINE)

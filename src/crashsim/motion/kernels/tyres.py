@@ -17,6 +17,7 @@ from .. import tyres as law
 from .jit import INLINE, JIT
 from .arrays import (B_ABS, B_FALL, B_FORCE, B_OFF, B_ON, B_RISE, C_EPS, I_CASTOR, I_CLOCK, I_FIALA, I_LT, I_SLOPE, S_AIR, S_CASTOR, S_GX, S_GY, S_N0, S_CALPHA, S_CCOEF, S_CD, S_CFIX, S_DCOEF, S_DEMAND, S_LOCKED, S_MU,
     S_MULOAD, S_SD, W_FX, W_FY, W_LOAD, W_SLIDE, W_U, W_V)
+from .arrays import S_BBASE, S_BREF, S_BSLOPE
 from .geometry import body_trig
 
 
@@ -60,33 +61,45 @@ def _tyre_scalar(u, w, mu_load, demand, cornering_stiffness, locked, eps, fiala)
 
 
 @njit(**INLINE)
-def brake_level(t, b):
-    """Application level in [0, 1] of a brake at time ``t`` [s] (``b``: its ``B_*`` row;
-    :func:`crashsim.motion.brakes.ramp_level`)."""
+def brake_piece(t, b):
+    """The piece of a brake's ramp in force from time ``t`` [s] until its next kink (``b``: its ``B_*``
+    row; :func:`crashsim.motion.brakes.ramp_level`): ``(t_ref, base, slope)``, the application level
+    being ``base + slope (clock - t_ref)`` on the piece.
+
+    A kink at ``t`` belongs to the piece that starts there.  The kinks are phase boundaries of the
+    run (segments end at them), so a segment evaluates one linear piece, never a kink or a jump:
+    the clock, integrated with the state, may sit a rounding error off ``t`` at a segment's start,
+    and a step of the ramp (``rise`` or ``fall`` 0) looked up by the clock would fall on the wrong
+    side of it there.
+    """
     on, rise, off, fall = b[B_ON], b[B_RISE], b[B_OFF], b[B_FALL]
-    tt = min(t, off)
-    if rise > 0.0:
-        up = min(max((tt - on) / rise, 0.0), 1.0)
-    else:
-        up = 1.0 if tt >= on else 0.0
     if t < off:
-        return up
-    if fall > 0.0:
-        return up * (1.0 - min((t - off) / fall, 1.0))
-    return 0.0
+        if t < on:
+            return on, 0.0, 0.0
+        if rise > 0.0 and t < on + rise:
+            return on, 0.0, 1.0 / rise
+        return on, 1.0, 0.0
+    # released: from the level held at t_off down to zero over fall
+    if rise > 0.0:
+        held = min(max((off - on) / rise, 0.0), 1.0)
+    else:
+        held = 1.0 if off >= on else 0.0
+    if fall > 0.0 and t < off + fall:
+        return off, held, -held / fall
+    return off, 0.0, 0.0
 
 
 @njit(**INLINE)
-def air_demand(t, b, u, v, roll, mu_load, eps):
-    """Longitudinal demand [N] of a rolling wheel with air brakes (``b``: its ``B_*`` row) at time ``t``,
-    and whether the wheel locks.
+def air_demand(level, b, u, v, roll, mu_load, eps):
+    """Longitudinal demand [N] of a rolling wheel with air brakes (``b``: its ``B_*`` row) at the brake's
+    application ``level`` (in [0, 1]), and whether the wheel locks.
 
-    The demand is ``F_b + roll`` with the brake force ``F_b = r(t) F_full``; where it reaches the
+    The demand is ``F_b + roll`` with the brake force ``F_b = level F_full``; where it reaches the
     tyre's limit ``mu N`` the wheel locks (slides).  With ABS (``b[B_ABS] = eta > 0``) the demand is
     held to ``eta mu N sqrt(u^2 + eps^2) / sqrt(|v|^2 + eps^2)``, so that the tyre law's longitudinal
     force is ``eta`` times the sliding force's longitudinal component: the wheel never locks.
     """
-    demand = brake_level(t, b) * b[B_FORCE] + roll
+    demand = level * b[B_FORCE] + roll
     eta = b[B_ABS]
     if eta > 0.0:
         cap = eta * mu_load * math.sqrt(u * u + eps * eps) / math.sqrt(u * u + v * v + eps * eps)
@@ -108,7 +121,7 @@ def tyre_eval(y, M, sw, D, W):
     self-steering wheel (``S_CASTOR >= 0``, only looked at when ``icfg[I_CASTOR]`` is set) takes
     the steer angle of :func:`crashsim.motion.tyres.castor_angle` instead of its fixed one.  A rolling
     wheel with air brakes (``S_AIR``) takes its longitudinal demand from :func:`air_demand` at the
-    state's clock.
+    application level of the segment's piece of its ramp (``S_BREF, S_BBASE, S_BSLOPE``) at the state's clock.
     """
     body, wheel, wbody, transfer, cfg, icfg, bveh = M.body, M.wheel, M.wheel_body, M.load_transfer, M.cfg, M.icfg, M.body_vehicle
     parked = D.parked
@@ -170,7 +183,9 @@ def tyre_eval(y, M, sw, D, W):
                 demand = sw[k, S_DEMAND]
                 c_alpha = sw[k, S_CALPHA]
             if sw[k, S_AIR] != 0.0:
-                demand, locked = air_demand(y[icfg[I_CLOCK]], M.wheel_brake[k], u, v, demand, mu_load, eps)
+                # the segment's piece of the ramp (brake_piece) at the state's clock
+                level = min(max(sw[k, S_BBASE] + sw[k, S_BSLOPE] * (y[icfg[I_CLOCK]] - sw[k, S_BREF]), 0.0), 1.0)
+                demand, locked = air_demand(level, M.wheel_brake[k], u, v, demand, mu_load, eps)
         if locked:
             fx, fy = law.sliding_force(u, v, mu_load, eps)
             sliding = True

@@ -82,14 +82,19 @@ def measure(repeats: int) -> list[dict]:
     init = chain_states(veh, (0.0, 0.0), 0.0, (22.0, 1.0), yaw_rates=(0.2, 0.0))
     rows = []
     for engine in ("compiled", "scipy"):
+        cases = []
         for name, base, ws, road_kw, opt_kw in runs():
             opts, road = RunoutOptions(engine=engine, **opt_kw), Road(0.8, **road_kw)
-            simulate_runout(veh, init, ws, road, opts)  # warm-up (compile, caches)
-            times = []
-            for _ in range(repeats):
+            res = simulate_runout(veh, init, ws, road, opts)  # warm-up (compile, caches)
+            cases.append((name, base, ws, road, opts, res, []))
+        # the repeats interleaved (one run of every case per round): a drift of the machine's load
+        # weighs on every case alike, so the ratios hold on a shared machine
+        for _ in range(repeats):
+            for _, _, ws, road, opts, _, times in cases:
                 t0 = time.process_time()
-                res = simulate_runout(veh, init, ws, road, opts)
+                simulate_runout(veh, init, ws, road, opts)
                 times.append(time.process_time() - t0)
+        for name, base, _, _, _, res, times in cases:
             rows.append(dict(engine=engine, case=name, base=base, median=statistics.median(times), min=min(times),
                              nfev=res.nfev, t_end=res.t_end))
     return rows

@@ -9,7 +9,8 @@ the cases and scenes (grade within 6 %, cross-slope within 4 %, half the zones w
 of their own within 8 %), air brakes on about a third of the single-vehicle cases and of the
 vehicles of a scene (timing, capacities below and above the tyres' limit, brakes out of
 adjustment, releases, ABS; :func:`_air_braked`), the wheel-lift and
-rollover check on every case with load transfer (half the bodies with a threshold of their own),
+rollover check on every case with load transfer (half the bodies with a threshold of their own;
+in scenes half the bodies with a contact height of their own),
 hitch-consistent initial states
 with speeds up to 35 m/s, yaw rates, side slip and articulation (inside the articulation limit).
 Case ``i`` of seed ``s`` depends only on ``(s, i)``.
@@ -286,6 +287,24 @@ def _rollover(vehicles, options: RunoutOptions, seed: int, i: int, tag: int):
     return tuple(out), dataclasses.replace(options, rollover=True), ", rollover check"
 
 
+def _contact_heights(vehicles, options: RunoutOptions, seed: int, i: int, tag: int):
+    """With load transfer, about half the bodies with a contact height of their own (0.2-1.5 times their CG
+    height; the others take contact at the CG): ``(vehicles, label)``. A stream of its own, as above."""
+    if not options.load_transfer:
+        return vehicles, ""
+    rng = np.random.default_rng([seed, i, tag])
+    out, n = [], 0
+    for v in vehicles:
+        bodies = []
+        for b in v.bodies:
+            if rng.random() < 0.5:
+                b = dataclasses.replace(b, contact_height=_u(rng, 0.2, 1.5) * b.cg_height)
+                n += 1
+            bodies.append(b)
+        out.append(dataclasses.replace(v, bodies=tuple(bodies)))
+    return tuple(out), f", {n} contact height(s)" if n else ""
+
+
 def random_case(seed: int, i: int, *, engine: str = "scipy", kinds=KINDS) -> Case:
     """Random run-out ``i`` of ``seed`` (independent of every other case).
 
@@ -435,6 +454,8 @@ def random_scene(seed: int, i: int, *, engine: str = "scipy", kinds=KINDS, n_veh
     # its test draws it without air brakes (air_brakes=False): with them the truck brakes, the strikes part.
     road, slope = _sloped(_road(rng, np.zeros(2), 0.0, 10.0), seed, i)
     vehicles, options, roll = _rollover(tuple(vehicles), options, seed, i, 24)
+    vehicles, heights = _contact_heights(vehicles, options, seed, i, 26)
+    roll += heights
     air = ""
     for k, v in enumerate(vehicles if air_brakes else ()):  # on about a third of the vehicles (a stream each)
         wheels[v.name], more = _air_braked(wheels[v.name], v, seed, i, 1210 + k)

@@ -206,6 +206,8 @@ def test_the_scene_sample_draws_slopes_with_impacts_and_zones_of_their_own():
     assert len(sloped) >= 4
     assert any(any(z.grade is not None for z in c.road.zones) for c in sloped)
     assert scenes[2].road.sloped
+    heights = [b.contact_height for c in scenes if c.options.load_transfer for v in c.vehicles for b in v.bodies]
+    assert any(h is not None for h in heights) and any(h is None for h in heights)
 
 
 def test_the_sample_has_rollover_events():

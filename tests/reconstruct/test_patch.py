@@ -162,7 +162,8 @@ def test_unchanged_objects_keep_their_identity(shipped):
     # friction zones: the road friction is patched around the zones (the scene model keeps their arrays)
     ("verge_run_off.toml", ["runout.road_friction", "vehicles.{v}.speed"]),
     # a sloped road: the road friction is patched and the grade and cross-slope kept (they were lost)
-    ("truck_downgrade_abs.toml", ["runout.road_friction", "vehicles.car.speed", "impact.restitution"]),
+    ("truck_downgrade_abs.toml", ["runout.road_friction", "vehicles.car.speed", "impact.restitution",
+                                  "vehicles.truck.approach.speed"]),
 ])
 def test_shipped_scenes_with_a_barrier_or_zones(name, paths):
     """The fast path on other shipped scenes: the same scenario and the same scene as the full build."""

@@ -201,6 +201,28 @@ def test_export_dxf_round_trip(shipped_scene, tmp_path):
     assert any(t.startswith("pre-impact skid, tractor/1/left: PASS") for t in texts)
 
 
+@pytest.mark.parametrize("name, unit", [("truck_brakes_into_car", "ft"), ("barrier_15deg", "m")])
+def test_a_scene_without_a_survey_exports_in_its_report_units(name, unit, tmp_path):
+    """No [survey]: the scene's own axes, in feet for a scene in US units ($INSUNITS 2) and metres
+    otherwise (6); read back, the same geometry."""
+    import ezdxf
+
+    from crashsim.reconstruct import run_scene
+    from crashsim.scenario import load_scenario
+    from crashsim.survey.dxf import read_dxf
+    from crashsim.survey.export import export_frame, export_items, write_dxf
+
+    scene = run_scene(load_scenario(ROOT / "scenarios" / "scenes" / f"{name}.toml"))
+    frame, got = export_frame(scene.scenario)
+    assert got == unit and frame == SceneFrame()
+    items = export_items(scene)
+    path = write_dxf(items, tmp_path / "out.dxf", frame, got)
+    assert ezdxf.readfile(path).header["$INSUNITS"] == {"ft": 2, "m": 6}[unit]
+    back = read_dxf(path)
+    for it, e in zip(items, back.entities):
+        assert np.max(np.abs(frame.to_scene(e.points) - it.points)) < 1e-9
+
+
 def test_export_geojson_round_trip(shipped_scene, tmp_path):
     from crashsim.survey.export import export_frame, export_items, write_geojson
 

@@ -48,16 +48,18 @@ class ExportItem:
 
 
 def export_frame(scenario) -> tuple[SceneFrame, str]:
-    """(scene frame, survey unit) of a scenario: its [survey] section's, or the scene's own axes in m."""
+    """(scene frame, survey unit) of a scenario: its [survey] section's; without survey files or
+    ``survey.units``, the length unit of its reports (``scenario.units``: ft for "US", else m)."""
+    own = "ft" if getattr(scenario, "units", "SI") == "US" else "m"
     s = scenario.data.get("survey") if isinstance(scenario.data, dict) else None
     if not isinstance(s, dict):
-        return SceneFrame(), "m"
+        return SceneFrame(), own
     unit = s.get("units")
     if unit is None:
         files = s.get("files") or []
         unit = next((f["units"] for f in files if f.get("units")), None)
         if unit is None:
-            unit = "m"
+            unit = "m" if files else own
             for f in files:
                 if str(f.get("file", "")).lower().endswith(".dxf"):
                     unit = read_survey_file(f, s.get("crs"), file=scenario.path).unit

@@ -2230,6 +2230,9 @@ def history_panels(scene) -> int:
     return 4 if joint is not None and any(p.contact_time > 0 for p in joint.pairs) else 3
 
 
+#: Impacts closer in time than this share of the histories' time axis get their labels on separate rows.
+IMPACT_LABEL_GAP = 0.03
+
 #: An articulation limit is drawn on the histories' articulation panel once a hitch's articulation
 #: reaches this share of it (below, the legend names it without the lines).
 LIMIT_SHOWN_FROM = 0.3
@@ -2343,11 +2346,17 @@ def plot_histories(scene, axes=None, *, system: str | None = None):
         ax_f.set_ylim(bottom=0.0)
         ax_f.legend(fontsize=8, loc="best", title="sustained contact", title_fontsize=7)
     if joint is not None:
+        # impacts closer in time than a label's width: each label one row lower than the one it would cover
+        near = IMPACT_LABEL_GAP * (t_max if t_max > 0 else 1.0)
+        rows: list[tuple[float, int]] = []
         for n, imp in enumerate(joint.impacts, start=2):
             for ax in axes:
                 ax.axvline(imp.t, color="0.45", lw=0.7, ls=":")
-            ax_v.annotate(f"#{n}", (imp.t, 1.0), xycoords=("data", "axes fraction"), xytext=(2, -10),
-                          textcoords="offset points", fontsize=7, color="0.3")
+            taken = {r for t, r in rows if abs(imp.t - t) < near}
+            row = next(r for r in range(len(rows) + 1) if r not in taken)
+            rows.append((imp.t, row))
+            ax_v.annotate(f"#{n}", (imp.t, 1.0), xycoords=("data", "axes fraction"), xytext=(2, -10 - 9 * row),
+                          textcoords="offset points", fontsize=7, color="0.3", gid=f"histories:impact:{n}")
     for ax in axes:
         ax.grid(True, alpha=0.4)
         ax.set_xlim(0.0, t_max * 1.02 if t_max > 0 else 1.0)

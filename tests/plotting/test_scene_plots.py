@@ -379,3 +379,18 @@ def test_cli_plot_rejects_bad_suffix(tmp_path, capsys):
     scene = Path(__file__).resolve().parents[2] / "scenarios" / "scenes" / "barrier_15deg.toml"
     assert main(["plot", str(scene), "-o", str(tmp_path / "s.bmp")]) == 2
     assert ".bmp" in capsys.readouterr().err
+
+
+def test_labels_of_impacts_close_in_time_do_not_cover_each_other():
+    """The histories' impact labels: two impacts closer than IMPACT_LABEL_GAP of the time axis are on
+    different rows (the glance scene's re-strikes come milliseconds apart)."""
+    from crashsim.plotting import IMPACT_LABEL_GAP
+
+    scene = _scene(ROOT / "scenarios" / "scenes" / "barrier_glance_15deg.toml")
+    ax = plot_histories(scene).axes[0]
+    labels = sorted((a.xy[0], a.xyann[1]) for a in ax.texts if (a.get_gid() or "").startswith("histories:impact:"))
+    assert len(labels) == len(scene.joint.impacts) >= 2
+    t_span = ax.get_xlim()[1] / 1.02
+    close = [(a, b) for i, a in enumerate(labels) for b in labels[i + 1:] if abs(a[0] - b[0]) < IMPACT_LABEL_GAP * t_span]
+    assert close, "the scene should have impacts close in time"
+    assert all(a[1] != b[1] for a, b in close)

@@ -32,7 +32,7 @@ from dataclasses import replace
 from typing import Sequence
 
 from ..errors import ScenarioError
-from ..motion.road import Road, point_distance
+from ..motion.road import point_distance
 from ..scenario import contact_outlines, frame_point, frame_xform, vehicle_states
 from ..schema import in_range
 from .patch import LAW_KEY, patch_kind, set_validated

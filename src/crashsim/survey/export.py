@@ -50,7 +50,7 @@ class ExportItem:
 def export_frame(scenario) -> tuple[SceneFrame, str]:
     """(scene frame, survey unit) of a scenario: its [survey] section's; without survey files or
     ``survey.units``, the length unit of its reports (``scenario.units``: ft for "US", else m)."""
-    own = "ft" if getattr(scenario, "units", "SI") == "US" else "m"
+    own = "ft" if scenario.units == "US" else "m"
     s = scenario.data.get("survey") if isinstance(scenario.data, dict) else None
     if not isinstance(s, dict):
         return SceneFrame(), own

@@ -540,21 +540,25 @@ def gravity_work(model, Y: np.ndarray, seg_of: np.ndarray, memb: np.ndarray) -> 
     road_g = M.cfg[[k.C_GX, k.C_GY]]
     zone_g = M.zone_slope[:, :2]
     L = model.layout
-    x, y = Y[L.x], Y[L.y]  # (nb, K)
+    dx, dy = np.diff(Y[L.x], axis=1), np.diff(Y[L.y], axis=1)  # (nb, K - 1): each sampled step of the CGs
+    if not memb.shape[2] or bool(np.all(zone_g == road_g)):
+        # one gravity under every wheel (no zone has a slope of its own): one force per body, for every step
+        force = np.zeros((nb, 2))
+        for w in range(model.n_wheels):  # summed wheel by wheel, as the kernels sum it
+            force[M.wheel_body[w]] += M.wheel_mass[w] * road_g
+        out += np.sum(force[:, 0:1] * dx + force[:, 1:2] * dy, axis=1)
+        return out
     force = np.zeros((memb.shape[0], nb, 2))  # per segment: the gravity force on each body [N]
     # per segment and wheel the gravity where it stands: the last zone it is in, else the road's
-    if memb.shape[2]:
-        inside = memb.any(axis=2)
-        last = memb.shape[2] - 1 - np.argmax(memb[:, :, ::-1], axis=2)
-        g = np.where(inside[:, :, None], zone_g[last], road_g)  # (nseg, nw, 2)
-    else:
-        g = np.broadcast_to(road_g, (memb.shape[0], model.n_wheels, 2))
-    for w in range(model.n_wheels):  # summed wheel by wheel, as the force of one segment always was
+    inside = memb.any(axis=2)
+    last = memb.shape[2] - 1 - np.argmax(memb[:, :, ::-1], axis=2)
+    g = np.where(inside[:, :, None], zone_g[last], road_g)  # (nseg, nw, 2)
+    for w in range(model.n_wheels):  # summed wheel by wheel, as the kernels sum it
         force[:, M.wheel_body[w]] += M.wheel_mass[w] * g[:, w]
     # the force of the segment a step starts in: a step ends at the next sample, which is the next
     # segment's start where the membership changes, so its whole displacement is under that force
     fm = force[seg_of[:-1]]  # (K - 1, nb, 2)
-    out += np.sum(fm[:, :, 0].T * np.diff(x, axis=1) + fm[:, :, 1].T * np.diff(y, axis=1), axis=1)
+    out += np.sum(fm[:, :, 0].T * dx + fm[:, :, 1].T * dy, axis=1)
     return out
 
 
@@ -580,7 +584,7 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
     sol = integrator.solution(y_end, t_end)
     roll = model.options.rollover
     if roll:  # wheel lift and rollover (places set): merged into the events by time, in lean runs too
-        monitor = RollMonitor(model)
+        monitor = RollMonitor.of(model)
         starts = np.array([a for a, _, _ in table], dtype=float)
         events[:] = with_events(events, monitor.events(T, seg_of, Y, arrays.memb if table else [], starts, sol))
     if lean is None:

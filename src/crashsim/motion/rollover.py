@@ -93,7 +93,7 @@ def static_stability_factor(body: Body) -> float:
     if not body.axles:
         raise ScenarioError("the default rollover threshold 0.75 t / (2 h) needs the track t of the body's axles",
                             field=f"{body.name}.axles")
-    track = float(np.mean([a.track for a in body.axles]))
+    track = sum(a.track for a in body.axles) / len(body.axles)  # the mean (summed in order, as np.mean for < 8)
     return track / (2.0 * body.cg_height)
 
 
@@ -138,6 +138,7 @@ class RollMonitor:
         for k, s in enumerate(model.specs):
             d = axles.setdefault((s.body_index, s.axle_index), {"name": s.axle_name})
             d[s.side] = k
+        # sorted by body, then axle: each body's axles are one run of rows
         self.axles = tuple(_Axle(bi, d["name"], d["left"], d["right"]) for (bi, _), d in sorted(axles.items())
                            if "left" in d and "right" in d)
         self.wheel_body = np.array([s.body_index for s in model.specs], dtype=np.int64)
@@ -147,9 +148,22 @@ class RollMonitor:
         self.ax_right = np.array([a.right for a in self.axles], dtype=np.int64)
         self.ax_body = np.array([a.body for a in self.axles], dtype=np.int64)
         self.ax_rows = [np.flatnonzero(self.ax_body == i) for i in range(self.nb)]  # each body's axles
+        #: the bodies with axles, and the first of each one's run of axle rows (for np.maximum.reduceat)
+        self.ax_bodies = np.array([i for i in range(self.nb) if self.ax_rows[i].size], dtype=np.int64)
+        self.ax_first = np.array([self.ax_rows[i][0] for i in self.ax_bodies], dtype=np.int64)
         #: (nb, nw): which contacts are the body's, and the same with the side's sign (right +)
         self.member = (self.wheel_body[None, :] == np.arange(self.nb)[:, None]).astype(float).reshape(self.nb, nw)
         self.signed = self.member * self.side[None, :]
+        self.weight = self.member @ self.n0  # each body's static load on a level road [N]
+
+    @classmethod
+    def of(cls, model) -> "RollMonitor":
+        """The monitor of ``model``, built once per model (a model reused across the runs of a fit or
+        Monte Carlo study keeps it)."""
+        monitor = model.__dict__.get("_roll_monitor")
+        if monitor is None:
+            monitor = model.__dict__["_roll_monitor"] = cls(model)
+        return monitor
 
     # ---------------------------------------------------------------- indicators
     def normal_factor(self, memb) -> np.ndarray:
@@ -168,31 +182,39 @@ class RollMonitor:
         acc = Y[6 * self.nb: 8 * self.nb]
         return (self.n0 * gn)[:, None] + self.transfer @ acc
 
-    def indicators(self, Y: np.ndarray, gn: np.ndarray):
-        """``(ind, ltr, ay_g, axle_of)``: per kind the indicator (nb, K), >= 0 where the condition holds;
-        the unit LTR (nb, K), the lateral acceleration [g] (nb, K), the lifting axle (nb, K)."""
+    def values(self, Y: np.ndarray, gn: np.ndarray):
+        """``(ind, ltr, ay, N, g)``: per kind the indicator (nb, K), >= 0 where the condition holds; the
+        unit LTR (nb, K), the lateral acceleration [g] (nb, K), the unclamped loads (nw, K) and each
+        axle's lift indicator (n_axles, K) (None without axles)."""
         nb = self.nb
         N = self.loads(Y, gn)
         K = N.shape[1]
         lift = np.full((nb, K), -np.inf)
-        axle_of = np.full((nb, K), -1, dtype=np.int64)
+        g = None
         if self.axles:
             n0 = self.n0 * gn
             static = np.maximum(n0[self.ax_left] + n0[self.ax_right], 1e-12)
             g = -np.minimum(N[self.ax_left], N[self.ax_right]) / static[:, None]  # (n_axles, K)
-            for i in range(nb):
-                rows = self.ax_rows[i]
-                if rows.size:
-                    k = np.argmax(g[rows], axis=0)
-                    lift[i] = g[rows][k, np.arange(K)]
-                    axle_of[i] = rows[k]
+            lift[self.ax_bodies] = np.maximum.reduceat(g, self.ax_first, axis=0)  # each body's largest
         tot = self.member @ N
         ltr = np.divide(self.signed @ N, tot, out=np.zeros((nb, K)), where=tot > 0)
-        w = self.member @ self.n0
+        w = self.weight
         gn_body = np.divide(self.member @ (self.n0 * gn), w, out=np.ones(nb), where=w > 0)
         ay = Y[7 * nb: 8 * nb] / (STANDARD_GRAVITY * gn_body[:, None])
         ind = {"wheel_lift": lift, "unit_lift": np.abs(ltr) - 1.0,
                "rollover_threshold": np.abs(ay) - self.thresholds[:, None]}
+        return ind, ltr, ay, N, g
+
+    def indicators(self, Y: np.ndarray, gn: np.ndarray):
+        """``(ind, ltr, ay_g, axle_of)``: per kind the indicator (nb, K), >= 0 where the condition holds;
+        the unit LTR (nb, K), the lateral acceleration [g] (nb, K), the lifting axle (nb, K)."""
+        ind, ltr, ay, _, g = self.values(Y, gn)
+        K = ltr.shape[1]
+        axle_of = np.full((self.nb, K), -1, dtype=np.int64)
+        if g is not None:
+            for i in self.ax_bodies:
+                rows = self.ax_rows[i]
+                axle_of[i] = rows[np.argmax(g[rows], axis=0)]
         return ind, ltr, ay, axle_of
 
     def indicator(self, y: np.ndarray, gn: np.ndarray, i: int, kind: str) -> float:
@@ -251,12 +273,12 @@ class RollMonitor:
         for s in np.unique(seg_of):
             groups.setdefault(gn_of(int(s)).tobytes(), []).append(int(s))
         if len(groups) == 1:
-            ind, _, _, _ = self.indicators(Y, gn_of(int(seg_of[0])))
+            ind = self.values(Y, gn_of(int(seg_of[0])))[0]
         else:
             ind = {k: np.empty((nb, len(T))) for k in ROLL_EVENT_KINDS}
             for segs in groups.values():
                 cols = np.isin(seg_of, segs)
-                part, _, _, _ = self.indicators(Y[:, cols], gn_of(segs[0]))
+                part = self.values(Y[:, cols], gn_of(segs[0]))[0]
                 for k in ROLL_EVENT_KINDS:
                     ind[k][:, cols] = part[k]
         out = []

@@ -132,3 +132,20 @@ def test_unknown_lateral_model_is_a_scenario_error():
 
     with pytest.raises(ScenarioError, match="lateral_model"):
         lateral_force(0.1, 1.0, 1.0, "magic")
+
+
+@settings(max_examples=400, deadline=None)
+@given(speed, speed, st.floats(1.0, 60000.0), mu_st, brake_st, c_alpha, eps_st, st.booleans())
+def test_switch_margins_say_which_side_of_each_switch_the_wheel_is(u, w, n, mu, b, c, eps, fiala):
+    """tyre_parts: the force of tyre_kernel, and margins whose signs are the law's own switches: saturated
+    where m_sat >= 0, sliding like a locked wheel where both are >= 0 (the lock-up)."""
+    from crashsim.motion.tyres import sliding_force, tyre_kernel, tyre_parts
+
+    mu_load, demand = mu * n, b * mu * n
+    fx, fy, sliding, m_sat, m_lock = tyre_parts(u, w, mu_load, demand, c, False, eps, fiala)
+    assert (fx, fy, sliding) == tuple(tyre_kernel(u, w, mu_load, demand, c, False, eps, fiala))
+    assert bool(sliding) == bool(m_sat >= 0.0)
+    if m_sat >= 0.0 and m_lock >= 0.0:
+        assert (fx, fy) == tuple(sliding_force(u, w, mu_load, eps))
+    else:
+        assert fx == u * (-demand / np.sqrt(u * u + eps * eps))  # the braked rolling wheel's demand

@@ -87,6 +87,7 @@ __all__ = [
     "tyre_forces",
     "tyre_forces_core",
     "tyre_kernel",
+    "tyre_parts",
     "sliding_force",
     "fiala_curve",
     "linear_curve",
@@ -264,6 +265,20 @@ def tyre_kernel(u, w, mu_load, demand, cornering_stiffness, locked, eps, fiala):
         Force in wheel axes [N].
     sliding : bool or ndarray of bool
     """
+    fx, fy, sliding, _, _ = tyre_parts(u, w, mu_load, demand, cornering_stiffness, locked, eps, fiala)
+    return fx, fy, sliding
+
+
+def tyre_parts(u, w, mu_load, demand, cornering_stiffness, locked, eps, fiala):
+    """:func:`tyre_kernel` with the margins of the law's two switches: ``(fx, fy, sliding, m_sat, m_lock)``.
+
+    ``m_sat = |Fy0| - sqrt(R^2 - Fx^2)`` [N], >= 0 where the lateral demand is saturated (on the
+    friction circle); ``m_lock = |Fx_roll| - |Fx_lock|`` [N], >= 0 where a braked wheel would
+    transmit along its heading at least what a locked wheel does (it locks where both are >= 0).
+    The force is continuous across both switches, its slope is not: the compiled integrator
+    aims a step at the switch where a rejected step crossed one
+    (:func:`crashsim.motion.kernels.integrator.kink_fraction`).
+    """
     u2 = u * u
     v2 = u2 + w * w
     eps2 = eps * eps
@@ -288,7 +303,7 @@ def tyre_kernel(u, w, mu_load, demand, cornering_stiffness, locked, eps, fiala):
     slide = locked | lock_up
     fx = _select(slide, fx_lock, fx_roll)
     fy = _select(slide, fy_lock, fy_roll)
-    return fx, fy, locked | saturated
+    return fx, fy, locked | saturated, np.abs(fy_demand) - available, np.abs(fx_roll) - np.abs(fx_lock)
 
 
 def castor_angle(vx, vy, limit):

@@ -80,7 +80,8 @@ Mode = namedtuple("Mode", ["memb", "lk_j", "lk_th", "lk_n", "shift", "pstate", "
 
 #: Work arrays ``W`` of one evaluation (:func:`crashsim.motion.kernels.equations.evaluate` fills them):
 #:
-#: * ``wheel_out`` (nw, N_W): per-wheel wheel-axes velocity [m/s], force [N], sliding flag, load [N];
+#: * ``wheel_out`` (nw, N_W): per-wheel wheel-axes velocity [m/s], force [N], sliding flag, load [N], and
+#:   the margins of its switches [N] (``W_MSAT`` ..: where the force law's slope jumps);
 #: * ``body_force`` (3 nb,): world-frame force and moment sums per body (z order) [N, N m];
 #: * ``jacobian`` (m_max, 3 nb), ``gram`` (m_max, m_max): constraint Jacobian G and G M^-1 G^T;
 #: * ``multipliers`` (m_max,): hitch forces on the front body [N], then stop moments [N m];
@@ -139,9 +140,13 @@ N_S = 18
 # release starts [s] (inf: held), fall time [s], brake force at full application [N], ABS efficiency (0: none)
 B_HAS, B_ON, B_RISE, B_OFF, B_FALL, B_FORCE, B_ABS = range(7)
 N_B = 7
-# per-wheel outputs of an evaluation (Work.wheel_out)
-W_U, W_V, W_FX, W_FY, W_SLIDE, W_LOAD = range(6)
-N_W = 6
+# per-wheel outputs of an evaluation (Work.wheel_out); then the margins of the wheel's switches [N], each
+# >= 0 on its far side, NaN where the switch does not apply (crashsim.motion.kernels.tyres.tyre_eval): the
+# lateral demand's saturation, the lock-up of a braked rolling wheel, the ABS limit, the wheel's lift
+W_U, W_V, W_FX, W_FY, W_SLIDE, W_LOAD, W_MSAT, W_MLOCK, W_MABS, W_MLIFT = range(10)
+N_W = 10
+#: The margin columns of ``Work.wheel_out`` (first and end).
+W_M0, W_M1 = W_MSAT, W_MLIFT + 1
 # pair parameters (pair_par columns): contact stiffness [N/m], damping [N s/m], contact friction,
 # arming distance [m], impulse threshold [m/s], event resolution [m]
 R_K, R_C, R_MU, R_ARM, R_VTHR, R_RES = range(6)

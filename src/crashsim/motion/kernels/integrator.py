@@ -16,7 +16,7 @@ from numba import njit, objmode
 
 from ..options import MAX_STILL_SEGMENTS
 from .jit import HOT, INLINE, JIT, STAGE
-from .arrays import (C_ATOL, C_FIRST, C_MAXSTEP, C_RTOL, C_TMAX, I_LT, I_MAXEVAL, I_MAXSEG, I_ORDER, LOG_SCHEDULE,
+from .arrays import (W_M0, W_M1, W_MLOCK, W_MSAT, C_ATOL, C_FIRST, C_MAXSTEP, C_RTOL, C_TMAX, I_LT, I_MAXEVAL, I_MAXSEG, I_ORDER, LOG_SCHEDULE,
                      MAX_FACTOR, MIN_FACTOR, N_A, N_S, SAFETY, ST_IMPACT, ST_MAX_EVAL, ST_MAX_SEGMENTS, ST_NONFINITE,
                      ST_NO_PROGRESS, ST_REST, ST_STEP_TOO_SMALL, ST_TIME_LIMIT, ST_WALL_TIME, WALL_CHECK_STEPS,
                      EventValues, Events, Step, make_work)
@@ -164,9 +164,10 @@ def start(y, M, D, t):
 #: zone membership ``new_memb``, log records ``rec`` and impact geometry ``geo`` (6,), the work
 #: arrays ``W`` (:class:`Work`), the segment's events ``ev`` (:class:`Events`) and their values
 #: ``vals`` (:class:`EventValues`), Gauss-Legendre nodes and weights ``gl_x``, ``gl_w`` on
-#: [-1, 1], the path integrals ``quad`` (accumulated) and the wall-clock ``deadline``.
+#: [-1, 1], the path integrals ``quad`` (accumulated), the wall-clock ``deadline`` and the margins of
+#: the wheels' switches at the current step's start ``margins`` (nw, W_M1 - W_M0; :func:`kink_fraction`).
 RunContext = namedtuple("RunContext", ["sw", "K", "gq", "gtmp", "ytmp", "ytmp2", "y_new", "dydt", "err", "new_memb",
-                                       "rec", "geo", "W", "ev", "vals", "gl_x", "gl_w", "quad", "deadline"])
+                                       "rec", "geo", "W", "ev", "vals", "gl_x", "gl_w", "quad", "deadline", "margins"])
 #: The stored steps (growable): start time ``t`` [s], size ``h`` [s], start state ``y`` (n,)
 #: and dense-output matrix ``q`` (n, degree) of each.
 StepStore = namedtuple("StepStore", ["t", "h", "y", "q"])
@@ -197,7 +198,7 @@ def run_context(M, D, n, gl_x, gl_w, quad, deadline):
     return RunContext(np.zeros((nw, N_S)), np.zeros((ns + 1, n)), np.zeros((ns + 1, nq + nw)), np.zeros(nq + nw),
                       np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros((nw, nz), np.bool_),
                       np.zeros((nw * max(nz, 1) + nv + 8, 5)), np.zeros(6), make_work(M), ev, vals, gl_x, gl_w, quad,
-                      deadline)
+                      deadline, np.full((nw, W_M1 - W_M0), np.nan))
 
 
 @njit(**STAGE)
@@ -261,6 +262,7 @@ def first_step(t, t_stop, y, M, D, X):
     the first step size: ``C_FIRST`` if set, else solve_ivp's initial step.  Returns
     ``(h_abs, evaluations)``."""
     evaluate(y, M, X.sw, D, X.K[0], X.W)
+    keep_margins(X.W.wheel_out, X.margins)
     quad_integrand(y, M, D, X.W, X.gq[0])
     if M.cfg[C_FIRST] > 0.0:
         return min(M.cfg[C_FIRST], t_stop - t), 1
@@ -268,9 +270,59 @@ def first_step(t, t_stop, y, M, D, X):
 
 
 @njit(**INLINE)
+def keep_margins(wk, margins):
+    """Copy the margins of the wheels' switches of the last evaluation (``W.wheel_out``) into ``margins``."""
+    for k in range(margins.shape[0]):
+        for c in range(W_M1 - W_M0):
+            margins[k, c] = wk[k, W_M0 + c]
+
+
+#: A rejected step is aimed at a switch of the tyre law only where the switch lies in this part of it
+#: (fractions of the step): one nearer its start does not spoil the step, one nearer its end is as well
+#: met by the error control's own shrinking.
+KINK_MIN, KINK_MAX = 0.02, 0.98
+
+
+@njit(**HOT)
+def kink_fraction(m0, wk):
+    """Where in a step a switch of the tyre law lies, as a fraction of the step, or -1 if none.
+
+    ``m0`` holds each wheel's switch margins at the step's start (:func:`keep_margins`), ``wk`` the
+    evaluation at its end (``W.wheel_out``): a margin that changes sign (each >= 0 on its far side;
+    NaN where the switch does not apply) crossed its switch, which the straight line between the two
+    values places at ``m0 / (m0 - m1)``.  The lock-up margin counts only where the wheel is saturated at
+    one end (it locks only then).  The earliest crossing within ``[KINK_MIN, KINK_MAX]``.
+
+    At a switch the force law keeps its value but not its slope (the friction circle's lateral
+    cut as a braked wheel nears its lock, the ABS limit taking hold, a wheel lifting, ...), so an
+    explicit step across one has an error of the first order in the step; the error control
+    would shrink the step by its factor again and again around it (issue 22: half the run-out's
+    rejected steps with air brakes).  Aimed at the switch, the step ends there and the next one
+    starts on it, each on one smooth piece.
+    """
+    best = -1.0
+    for k in range(m0.shape[0]):
+        sat = (m0[k, 0] >= 0.0) or (wk[k, W_MSAT] >= 0.0)
+        for c in range(W_M1 - W_M0):
+            if c == W_MLOCK - W_M0 and not sat:
+                continue
+            a = m0[k, c]
+            b = wk[k, W_M0 + c]
+            if not (a < 0.0 <= b or b < 0.0 <= a):  # no crossing (or a NaN)
+                continue
+            f = a / (a - b)
+            if KINK_MIN <= f <= KINK_MAX and (best < 0.0 or f < best):
+                best = f
+    return best
+
+
+@njit(**INLINE)
 def attempt_step(t, t_stop, h_abs, min_step, y, M, D, X, nfev):
     """Steps from ``(t, y)`` until one is accepted (solve_ivp's RK error control, its constants
     ``SAFETY``, ``MIN_FACTOR``, ``MAX_FACTOR``): the stages in ``K``, the end state in ``y_new``.
+
+    A rejected step across a switch of the tyre law is retried up to the switch
+    (:func:`kink_fraction`); the step after one accepted so keeps the size first tried.
 
     Returns ``(status, t_new, h, h_abs, nfev)``: status 0 accepted, else minus the failure
     (``ST_STEP_TOO_SMALL``, ``ST_MAX_EVAL``, ``ST_NONFINITE``); ``h_abs`` the next step size.
@@ -285,6 +337,8 @@ def attempt_step(t, t_stop, h_abs, min_step, y, M, D, X, nfev):
     t_new = t
     h = 0.0
     rejected = False
+    aimed = False
+    h_first = h_abs
     while True:
         if h_abs < min_step:
             return -ST_STEP_TOO_SMALL, t_new, h, h_abs, nfev
@@ -310,11 +364,22 @@ def attempt_step(t, t_stop, h_abs, min_step, y, M, D, X, nfev):
                 factor = MAX_FACTOR
             else:
                 factor = min(MAX_FACTOR, SAFETY * err_norm**err_exp)
-            if rejected:
-                factor = min(1.0, factor)
-            h_abs *= factor
+            if aimed:
+                # ended on a switch: the rest is smooth again, the size first tried fits it
+                h_abs = h_first
+            else:
+                if rejected:
+                    factor = min(1.0, factor)
+                h_abs *= factor
+            keep_margins(X.W.wheel_out, X.margins)  # the end state's (rk_step's last evaluation)
             return 0, t_new, h, h_abs, nfev
-        h_abs *= max(MIN_FACTOR, SAFETY * err_norm**err_exp)
+        f = kink_fraction(X.margins, X.W.wheel_out)
+        if f > 0.0:
+            h_abs *= f
+            aimed = True
+        else:
+            h_abs *= max(MIN_FACTOR, SAFETY * err_norm**err_exp)
+            aimed = False
         rejected = True
 
 

@@ -16,7 +16,7 @@ from numba.extending import overload
 from .. import tyres as law
 from .jit import INLINE, JIT
 from .arrays import (B_ABS, B_FALL, B_FORCE, B_OFF, B_ON, B_RISE, C_EPS, I_CASTOR, I_CLOCK, I_FIALA, I_LT, I_SLOPE, S_AIR, S_CASTOR, S_GX, S_GY, S_N0, S_CALPHA, S_CCOEF, S_CD, S_CFIX, S_DCOEF, S_DEMAND, S_LOCKED, S_MU,
-    S_MULOAD, S_SD, W_FX, W_FY, W_LOAD, W_SLIDE, W_U, W_V)
+    S_MULOAD, S_SD, W_FX, W_FY, W_LOAD, W_M0, W_M1, W_MABS, W_MLIFT, W_MLOCK, W_MSAT, W_SLIDE, W_U, W_V)
 from .arrays import S_BBASE, S_BREF, S_BSLOPE
 from .geometry import body_trig
 
@@ -60,6 +60,11 @@ def _tyre_scalar(u, w, mu_load, demand, cornering_stiffness, locked, eps, fiala)
     return law.tyre_kernel
 
 
+@overload(law.tyre_parts, jit_options=_OV)
+def _tyre_parts_scalar(u, w, mu_load, demand, cornering_stiffness, locked, eps, fiala):
+    return law.tyre_parts
+
+
 @njit(**INLINE)
 def brake_piece(t, b):
     """The piece of a brake's ramp in force from time ``t`` [s] until its next kink (``b``: its ``B_*``
@@ -98,13 +103,16 @@ def air_demand(level, b, u, v, roll, mu_load, eps):
     tyre's limit ``mu N`` the wheel locks (slides).  With ABS (``b[B_ABS] = eta > 0``) the demand is
     held to ``eta mu N sqrt(u^2 + eps^2) / sqrt(|v|^2 + eps^2)``, so that the tyre law's longitudinal
     force is ``eta`` times the sliding force's longitudinal component: the wheel never locks.
+
+    Returns ``(demand, locked, margin)``: ``margin`` [N] is the demand minus the ABS limit (>= 0 where
+    the limit holds it), NaN without ABS.
     """
     demand = level * b[B_FORCE] + roll
     eta = b[B_ABS]
     if eta > 0.0:
         cap = eta * mu_load * math.sqrt(u * u + eps * eps) / math.sqrt(u * u + v * v + eps * eps)
-        return min(demand, cap), False
-    return demand, demand >= mu_load and demand > 0.0
+        return min(demand, cap), False, demand - cap
+    return demand, demand >= mu_load and demand > 0.0, math.nan
 
 
 @njit(**INLINE)
@@ -144,6 +152,8 @@ def tyre_eval(y, M, sw, D, W):
             wk[k, W_FY] = 0.0
             wk[k, W_SLIDE] = 0.0
             wk[k, W_LOAD] = wheel[k, 2]
+            for c in range(W_M0, W_M1):
+                wk[k, c] = math.nan
             continue
         c = cs[0, i]
         s = cs[1, i]
@@ -169,12 +179,15 @@ def tyre_eval(y, M, sw, D, W):
                 n += transfer[k, j] * y[6 * nb + j]
             load = max(n, 0.0)
             mu_load = sw[k, S_MU] * load
+            wk[k, W_MLIFT] = -n
         else:
             load = sw[k, S_N0]
             mu_load = sw[k, S_MULOAD]
+            wk[k, W_MLIFT] = math.nan
         locked = sw[k, S_LOCKED] != 0.0
         demand = 0.0
         c_alpha = 0.0
+        m_abs = math.nan
         if not locked:
             if lt:
                 demand = sw[k, S_DCOEF] * load
@@ -185,12 +198,17 @@ def tyre_eval(y, M, sw, D, W):
             if sw[k, S_AIR] != 0.0:
                 # the segment's piece of the ramp (brake_piece) at the state's clock
                 level = min(max(sw[k, S_BBASE] + sw[k, S_BSLOPE] * (y[icfg[I_CLOCK]] - sw[k, S_BREF]), 0.0), 1.0)
-                demand, locked = air_demand(level, M.wheel_brake[k], u, v, demand, mu_load, eps)
+                demand, locked, m_abs = air_demand(level, M.wheel_brake[k], u, v, demand, mu_load, eps)
         if locked:
             fx, fy = law.sliding_force(u, v, mu_load, eps)
             sliding = True
+            m_sat = math.nan
+            m_lock = math.nan
         else:
-            fx, fy, sliding = law.tyre_kernel(u, v, mu_load, demand, c_alpha, False, eps, fiala)
+            fx, fy, sliding, m_sat, m_lock = law.tyre_parts(u, v, mu_load, demand, c_alpha, False, eps, fiala)
+        wk[k, W_MSAT] = m_sat
+        wk[k, W_MLOCK] = m_lock
+        wk[k, W_MABS] = m_abs
         wk[k, W_U] = u
         wk[k, W_V] = v
         wk[k, W_FX] = fx

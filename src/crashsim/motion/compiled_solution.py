@@ -24,7 +24,11 @@ Design
   controller, initial-step selection and tableaux: ``scheme="dopri5"`` (Dormand-Prince 5(4),
   RK45's tableau and 4th-order dense output, the default) or ``"bs3"`` (Bogacki-Shampine
   3(2), RK23's).  ``rtol``, ``atol``, ``max_step`` and ``first_step`` mean what they mean for
-  solve_ivp.
+  solve_ivp.  One addition: a rejected step across a switch of a wheel's force law (lateral
+  saturation, a braked wheel's lock-up, the ABS limit, a wheel lifting: the force keeps its
+  value there, not its slope) is retried up to the switch instead of being shrunk by the error
+  control's factor again and again (:func:`crashsim.motion.kernels.integrator.kink_fraction`);
+  a run that crosses no switch in a rejected step takes solve_ivp's steps.
 * **Stiffness.**  Free-rolling tyres make the equations stiff at low speed (eigenvalue
   ``~ -sum C_alpha / (m |u|)``); the slip denominator ``sqrt(u^2 + eps^2)`` caps it at
   ``sum C_alpha / (m eps)`` and the rest event ends a vehicle's run at ``v_stop``, so the

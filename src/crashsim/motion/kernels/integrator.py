@@ -1,6 +1,7 @@
 """Kernel stage: the compiled engine's explicit Runge-Kutta integrator and its segment loop.
 
-solve_ivp's RK driver (step, error control, initial step) re-written in numba, and
+solve_ivp's RK driver (step, error control, initial step) re-written in numba (a rejected step
+across a switch of the tyre law is retried up to the switch: :func:`kink_fraction`), and
 :func:`run`, the segment loop cut into its stages (start a segment, take a step, locate
 the event, record the segment, handle the event).
 """

@@ -322,8 +322,10 @@ def attempt_step(t, t_stop, h_abs, min_step, y, M, D, X, nfev):
     """Steps from ``(t, y)`` until one is accepted (solve_ivp's RK error control, its constants
     ``SAFETY``, ``MIN_FACTOR``, ``MAX_FACTOR``): the stages in ``K``, the end state in ``y_new``.
 
-    A rejected step across a switch of the tyre law is retried up to the switch
-    (:func:`kink_fraction`); the step after one accepted so keeps the size first tried.
+    A step rejected at its first try across a switch of the tyre law is retried up to the switch
+    (:func:`kink_fraction`; once: where that retry fails too, the error control's factor takes over,
+    as the margins are not straight enough there to aim again); the step after one accepted so
+    keeps the size first tried.
 
     Returns ``(status, t_new, h, h_abs, nfev)``: status 0 accepted, else minus the failure
     (``ST_STEP_TOO_SMALL``, ``ST_MAX_EVAL``, ``ST_NONFINITE``); ``h_abs`` the next step size.
@@ -374,7 +376,7 @@ def attempt_step(t, t_stop, h_abs, min_step, y, M, D, X, nfev):
                 h_abs *= factor
             keep_margins(X.W.wheel_out, X.margins)  # the end state's (rk_step's last evaluation)
             return 0, t_new, h, h_abs, nfev
-        f = kink_fraction(X.margins, X.W.wheel_out)
+        f = kink_fraction(X.margins, X.W.wheel_out) if not rejected else -1.0
         if f > 0.0:
             h_abs *= f
             aimed = True

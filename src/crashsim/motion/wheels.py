@@ -515,18 +515,21 @@ class ResolvedWheels:
     def brake_rows(self, vehicle: Vehicle) -> np.ndarray:
         """Per wheel ``(has air brakes, t_on, rise, t_off, fall, brake force at full application [N],
         ABS efficiency (0: none))``, shape (nw, 7); all zero without air brakes."""
-        out = np.zeros((len(self.specs), 7))
         if self.brakes is None:
-            return out
-        for k, s in enumerate(self.specs):
-            unit = self.brakes.units.get(s.body)
+            return np.zeros((len(self.specs), 7))
+        units = self.brakes.units
+        timing = {name: self.brakes.times(name) for name in units}
+        none = (0.0,) * 7
+        rows = []
+        for s in self.specs:
+            unit = units.get(s.body)
             if unit is None:
+                rows.append(none)
                 continue
             cap = unit.capacity[0] if len(unit.capacity) == 1 else unit.capacity[s.axle_index]
-            t_on, rise, t_off, fall = self.brakes.times(s.body)
-            out[k] = (1.0, t_on, rise, t_off, fall, 0.5 * cap * (1.0 - unit.out_of_adjustment),
-                      self.brakes.abs_efficiency if unit.abs else 0.0)
-        return out
+            rows.append((1.0, *timing[s.body], 0.5 * cap * (1.0 - unit.out_of_adjustment),
+                         self.brakes.abs_efficiency if unit.abs else 0.0))
+        return np.array(rows, dtype=float).reshape(-1, 7)
 
     @property
     def change_times(self) -> tuple[float, ...]:

@@ -537,16 +537,18 @@ def gravity_work(model, Y: np.ndarray, seg_of: np.ndarray, memb: np.ndarray) -> 
         return out
     k = kernels()
     M = model.M
-    road_g = M.cfg[[k.C_GX, k.C_GY]]
+    gx, gy = float(M.cfg[k.C_GX]), float(M.cfg[k.C_GY])
+    road_g = np.array([gx, gy])
     zone_g = M.zone_slope[:, :2]
     L = model.layout
     dx, dy = np.diff(Y[L.x], axis=1), np.diff(Y[L.y], axis=1)  # (nb, K - 1): each sampled step of the CGs
     if not memb.shape[2] or bool(np.all(zone_g == road_g)):
         # one gravity under every wheel (no zone has a slope of its own): one force per body, for every step
-        force = np.zeros((nb, 2))
-        for w in range(model.n_wheels):  # summed wheel by wheel, as the kernels sum it
-            force[M.wheel_body[w]] += M.wheel_mass[w] * road_g
-        out += np.sum(force[:, 0:1] * dx + force[:, 1:2] * dy, axis=1)
+        fx, fy = [0.0] * nb, [0.0] * nb
+        for b, m in zip(M.wheel_body.tolist(), M.wheel_mass.tolist()):  # summed wheel by wheel, as the kernels sum it
+            fx[b] += m * gx
+            fy[b] += m * gy
+        out += np.sum(np.array(fx)[:, None] * dx + np.array(fy)[:, None] * dy, axis=1)
         return out
     force = np.zeros((memb.shape[0], nb, 2))  # per segment: the gravity force on each body [N]
     # per segment and wheel the gravity where it stands: the last zone it is in, else the road's

@@ -73,13 +73,11 @@ def split_track(t: np.ndarray, points: np.ndarray, sliding: np.ndarray, starts=N
     n = len(t)
     if n == 0:
         return ()
-    change = np.flatnonzero(sliding[1:] != sliding[:-1]) + 1 if starts is None else starts
-    if len(change) == 0:
+    change = (np.flatnonzero(sliding[1:] != sliding[:-1]) + 1 if starts is None else np.asarray(starts)).tolist()
+    if not change:
         return (TrackSegment(kind="sliding" if sliding[0] else "rolling", t=t, points=points),)
-    starts = np.concatenate([[0], change])
-    ends = np.concatenate([change, [n - 1]])
     out = []
-    for a, b in zip(starts.tolist(), ends.tolist()):
+    for a, b in zip([0] + change, change + [n - 1]):
         b = max(b, a)
         out.append(
             TrackSegment(kind="sliding" if sliding[a] else "rolling", t=t[a : b + 1].copy(), points=points[a : b + 1].copy())

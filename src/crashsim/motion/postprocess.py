@@ -252,6 +252,9 @@ class ResultInputs(NamedTuple):
         The wheels' static loads [N] (default: the model's).
     options : dict, optional
         The options recorded in the result (default: the model's).
+    rollover : dict, optional
+        The vehicle's rollover verdict (:func:`~crashsim.motion.rollover.roll_summary`), with the
+        check on.
     """
 
     t: np.ndarray
@@ -284,6 +287,7 @@ class ResultInputs(NamedTuple):
     gravity_work: float = 0.0
     static_load: np.ndarray | None = None
     options: dict | None = None
+    rollover: dict | None = None
 
 
 def build_result(model, inputs: ResultInputs | None = None, **fields) -> RunoutResult:
@@ -309,7 +313,7 @@ def build_result(model, inputs: ResultInputs | None = None, **fields) -> RunoutR
         raise TypeError("build_result takes a ResultInputs or keywords, not both")
     (t, Y, points, sliding, load, hitch_force, stop_moment, distance, path_length, sliding_length, energy, max_gap,
      status, message, t_end, y_initial, y_final, sol, events, method, nfev, njev, nlu, n_segments, missed,
-     kinetic_energies, energy_dissipated, gravity_work, static_load, options) = inputs
+     kinetic_energies, energy_dissipated, gravity_work, static_load, options, rollover) = inputs
     L = model.layout
     nh = hitch_force.shape[1] // 2  # the hitches modelled (none at the rigid level)
     specs = model.specs
@@ -430,6 +434,7 @@ def build_result(model, inputs: ResultInputs | None = None, **fields) -> RunoutR
         options=dict(options) if options is not None else model.options.to_dict(),
         sol=sol,
         layout=L,
+        rollover=rollover,
     )
 
 
@@ -653,10 +658,8 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
             nlu=integrator.nlu, n_segments=len(table), method=integrator.method,
             kinetic_energies=(_ke(model, y_initial, b0, b1), _ke(model, y_end, b0, b1)),
             energy_dissipated=float(quad[nb + 2 * nw + w0: nb + 2 * nw + w1].sum()),
-            gravity_work=float(w_grav[b0:b1].sum())))
-        if roll:
-            vehicles[v.name] = replace(vehicles[v.name], rollover=roll_summary(
-                v_events, [b.name for b in v.bodies], monitor.thresholds[b0:b1]))
+            gravity_work=float(w_grav[b0:b1].sum()),
+            rollover=roll_summary(v_events, [b.name for b in v.bodies], monitor.thresholds[b0:b1]) if roll else None))
 
     # ---- pairs and the ledger
     n_imp = {}

@@ -54,6 +54,7 @@ combination's tilt-table value (SAE J2180 tests the combination).
 from __future__ import annotations
 
 import math
+from bisect import bisect_left, bisect_right
 from dataclasses import dataclass
 
 import numpy as np
@@ -134,25 +135,28 @@ class RollMonitor:
         self.transfer = np.asarray(M.load_transfer)
         self.n0 = np.asarray(M.wheel[:, 2], dtype=float)
         self.thresholds = np.array([rollover_threshold(b) for b in model.bodies])
+        specs = model.specs
+        nb, nw = self.nb, len(specs)
         axles: dict[tuple[int, int], dict] = {}
-        for k, s in enumerate(model.specs):
+        for k, s in enumerate(specs):
             d = axles.setdefault((s.body_index, s.axle_index), {"name": s.axle_name})
             d[s.side] = k
-        # sorted by body, then axle: each body's axles are one run of rows
+        # sorted by body, then axle: each body's axles are one run of rows, ax_span[i] = (first, end) of body i's
         self.axles = tuple(_Axle(bi, d["name"], d["left"], d["right"]) for (bi, _), d in sorted(axles.items())
                            if "left" in d and "right" in d)
-        self.wheel_body = np.array([s.body_index for s in model.specs], dtype=np.int64)
-        self.side = np.array([1.0 if s.side == "right" else -1.0 for s in model.specs])
-        nw = self.n0.shape[0]
+        body_of = [a.body for a in self.axles]
+        self.ax_span = [(bisect_left(body_of, i), bisect_right(body_of, i)) for i in range(nb)]
         self.ax_left = np.array([a.left for a in self.axles], dtype=np.int64)
         self.ax_right = np.array([a.right for a in self.axles], dtype=np.int64)
-        self.ax_body = np.array([a.body for a in self.axles], dtype=np.int64)
-        self.ax_rows = [np.flatnonzero(self.ax_body == i) for i in range(self.nb)]  # each body's axles
+        self.ax_body = np.array(body_of, dtype=np.int64)
         #: the bodies with axles, and the first of each one's run of axle rows (for np.maximum.reduceat)
-        self.ax_bodies = np.array([i for i in range(self.nb) if self.ax_rows[i].size], dtype=np.int64)
-        self.ax_first = np.array([self.ax_rows[i][0] for i in self.ax_bodies], dtype=np.int64)
+        self.ax_bodies = np.array([i for i, (a, b) in enumerate(self.ax_span) if b > a], dtype=np.int64)
+        self.ax_first = np.array([a for a, b in self.ax_span if b > a], dtype=np.int64)
+        self.wheel_body = np.array([s.body_index for s in specs], dtype=np.int64)
+        self.side = np.array([1.0 if s.side == "right" else -1.0 for s in specs])
         #: (nb, nw): which contacts are the body's, and the same with the side's sign (right +)
-        self.member = (self.wheel_body[None, :] == np.arange(self.nb)[:, None]).astype(float).reshape(self.nb, nw)
+        self.member = np.zeros((nb, nw))
+        self.member[self.wheel_body, np.arange(nw)] = 1.0
         self.signed = self.member * self.side[None, :]
         self.weight = self.member @ self.n0  # each body's static load on a level road [N]
         self._gn_statics: dict[bytes, tuple] = {}
@@ -226,9 +230,9 @@ class RollMonitor:
         K = ltr.shape[1]
         axle_of = np.full((self.nb, K), -1, dtype=np.int64)
         if g is not None:
-            for i in self.ax_bodies:
-                rows = self.ax_rows[i]
-                axle_of[i] = rows[np.argmax(g[rows], axis=0)]
+            for i in self.ax_bodies.tolist():
+                first, end = self.ax_span[i]
+                axle_of[i] = first + np.argmax(g[first:end], axis=0)
         return ind, ltr, ay, axle_of
 
     def indicator(self, y: np.ndarray, gn: np.ndarray, i: int, kind: str) -> float:

@@ -296,6 +296,7 @@ def enumerate_wheels(vehicle: Vehicle) -> tuple[WheelSpec, ...]:
     out = []
     for bi, body in enumerate(vehicle.bodies):
         for ai, axle in enumerate(body.axles):
+            label = axle_label(body, ai)
             for side in SIDES:
                 y = axle.track / 2 if side == "left" else -axle.track / 2
                 out.append(
@@ -308,7 +309,7 @@ def enumerate_wheels(vehicle: Vehicle) -> tuple[WheelSpec, ...]:
                         side=side,
                         position=(float(axle.x), float(y)),
                         tyres=2 if axle.dual else 1,
-                        label=f"{body.name}/{axle_label(body, ai)}/{side}",
+                        label=f"{body.name}/{label}/{side}",
                     )
                 )
     return tuple(out)

@@ -64,7 +64,7 @@ import numpy as np
 from ..errors import ScenarioError
 from ..units import G0 as STANDARD_GRAVITY
 from ..vehicles import Vehicle
-from .wheels import enumerate_wheels
+from .wheels import SIDES, enumerate_wheels
 
 __all__ = ["STANDARD_GRAVITY", "StaticLoads", "static_loads", "load_transfer_matrix"]
 
@@ -174,7 +174,14 @@ def _chain(vehicle: Vehicle, groups, weights, moments) -> tuple[dict[str, np.nda
 
 
 def _wheel_vector(vehicle: Vehicle, axle_loads: dict[str, np.ndarray]) -> np.ndarray:
-    return np.array([axle_loads[s.body][s.axle_index] / 2 for s in enumerate_wheels(vehicle)])
+    """Half of each axle's load on each of its contacts, in :func:`~crashsim.motion.wheels.enumerate_wheels`
+    order (body by body, axle by axle, left then right)."""
+    out = []
+    for body in vehicle.bodies:
+        loads = axle_loads[body.name]
+        for ai in range(len(body.axles)):
+            out += [loads[ai] / 2] * len(SIDES)
+    return np.array(out)
 
 
 def static_loads(vehicle: Vehicle, gravity: float = STANDARD_GRAVITY) -> StaticLoads:

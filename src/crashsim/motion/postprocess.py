@@ -73,13 +73,11 @@ def split_track(t: np.ndarray, points: np.ndarray, sliding: np.ndarray, starts=N
     n = len(t)
     if n == 0:
         return ()
-    change = np.flatnonzero(sliding[1:] != sliding[:-1]) + 1 if starts is None else starts
-    if len(change) == 0:
+    change = (np.flatnonzero(sliding[1:] != sliding[:-1]) + 1 if starts is None else np.asarray(starts)).tolist()
+    if not change:
         return (TrackSegment(kind="sliding" if sliding[0] else "rolling", t=t, points=points),)
-    starts = np.concatenate([[0], change])
-    ends = np.concatenate([change, [n - 1]])
     out = []
-    for a, b in zip(starts.tolist(), ends.tolist()):
+    for a, b in zip([0] + change, change + [n - 1]):
         b = max(b, a)
         out.append(
             TrackSegment(kind="sliding" if sliding[a] else "rolling", t=t[a : b + 1].copy(), points=points[a : b + 1].copy())
@@ -254,6 +252,9 @@ class ResultInputs(NamedTuple):
         The wheels' static loads [N] (default: the model's).
     options : dict, optional
         The options recorded in the result (default: the model's).
+    rollover : dict, optional
+        The vehicle's rollover verdict (:func:`~crashsim.motion.rollover.roll_summary`), with the
+        check on.
     """
 
     t: np.ndarray
@@ -286,6 +287,7 @@ class ResultInputs(NamedTuple):
     gravity_work: float = 0.0
     static_load: np.ndarray | None = None
     options: dict | None = None
+    rollover: dict | None = None
 
 
 def build_result(model, inputs: ResultInputs | None = None, **fields) -> RunoutResult:
@@ -311,7 +313,7 @@ def build_result(model, inputs: ResultInputs | None = None, **fields) -> RunoutR
         raise TypeError("build_result takes a ResultInputs or keywords, not both")
     (t, Y, points, sliding, load, hitch_force, stop_moment, distance, path_length, sliding_length, energy, max_gap,
      status, message, t_end, y_initial, y_final, sol, events, method, nfev, njev, nlu, n_segments, missed,
-     kinetic_energies, energy_dissipated, gravity_work, static_load, options) = inputs
+     kinetic_energies, energy_dissipated, gravity_work, static_load, options, rollover) = inputs
     L = model.layout
     nh = hitch_force.shape[1] // 2  # the hitches modelled (none at the rigid level)
     specs = model.specs
@@ -432,6 +434,7 @@ def build_result(model, inputs: ResultInputs | None = None, **fields) -> RunoutR
         options=dict(options) if options is not None else model.options.to_dict(),
         sol=sol,
         layout=L,
+        rollover=rollover,
     )
 
 
@@ -537,16 +540,18 @@ def gravity_work(model, Y: np.ndarray, seg_of: np.ndarray, memb: np.ndarray) -> 
         return out
     k = kernels()
     M = model.M
-    road_g = M.cfg[[k.C_GX, k.C_GY]]
+    gx, gy = float(M.cfg[k.C_GX]), float(M.cfg[k.C_GY])
+    road_g = np.array([gx, gy])
     zone_g = M.zone_slope[:, :2]
     L = model.layout
     dx, dy = np.diff(Y[L.x], axis=1), np.diff(Y[L.y], axis=1)  # (nb, K - 1): each sampled step of the CGs
     if not memb.shape[2] or bool(np.all(zone_g == road_g)):
         # one gravity under every wheel (no zone has a slope of its own): one force per body, for every step
-        force = np.zeros((nb, 2))
-        for w in range(model.n_wheels):  # summed wheel by wheel, as the kernels sum it
-            force[M.wheel_body[w]] += M.wheel_mass[w] * road_g
-        out += np.sum(force[:, 0:1] * dx + force[:, 1:2] * dy, axis=1)
+        fx, fy = [0.0] * nb, [0.0] * nb
+        for b, m in zip(M.wheel_body.tolist(), M.wheel_mass.tolist()):  # summed wheel by wheel, as the kernels sum it
+            fx[b] += m * gx
+            fy[b] += m * gy
+        out += np.sum(np.array(fx)[:, None] * dx + np.array(fy)[:, None] * dy, axis=1)
         return out
     force = np.zeros((memb.shape[0], nb, 2))  # per segment: the gravity force on each body [N]
     # per segment and wheel the gravity where it stands: the last zone it is in, else the road's
@@ -653,10 +658,8 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
             nlu=integrator.nlu, n_segments=len(table), method=integrator.method,
             kinetic_energies=(_ke(model, y_initial, b0, b1), _ke(model, y_end, b0, b1)),
             energy_dissipated=float(quad[nb + 2 * nw + w0: nb + 2 * nw + w1].sum()),
-            gravity_work=float(w_grav[b0:b1].sum())))
-        if roll:
-            vehicles[v.name] = replace(vehicles[v.name], rollover=roll_summary(
-                v_events, [b.name for b in v.bodies], monitor.thresholds[b0:b1]))
+            gravity_work=float(w_grav[b0:b1].sum()),
+            rollover=roll_summary(v_events, [b.name for b in v.bodies], monitor.thresholds[b0:b1]) if roll else None))
 
     # ---- pairs and the ledger
     n_imp = {}

@@ -54,6 +54,7 @@ combination's tilt-table value (SAE J2180 tests the combination).
 from __future__ import annotations
 
 import math
+from bisect import bisect_left, bisect_right
 from dataclasses import dataclass
 
 import numpy as np
@@ -134,27 +135,31 @@ class RollMonitor:
         self.transfer = np.asarray(M.load_transfer)
         self.n0 = np.asarray(M.wheel[:, 2], dtype=float)
         self.thresholds = np.array([rollover_threshold(b) for b in model.bodies])
+        specs = model.specs
+        nb, nw = self.nb, len(specs)
         axles: dict[tuple[int, int], dict] = {}
-        for k, s in enumerate(model.specs):
+        for k, s in enumerate(specs):
             d = axles.setdefault((s.body_index, s.axle_index), {"name": s.axle_name})
             d[s.side] = k
-        # sorted by body, then axle: each body's axles are one run of rows
+        # sorted by body, then axle: each body's axles are one run of rows, ax_span[i] = (first, end) of body i's
         self.axles = tuple(_Axle(bi, d["name"], d["left"], d["right"]) for (bi, _), d in sorted(axles.items())
                            if "left" in d and "right" in d)
-        self.wheel_body = np.array([s.body_index for s in model.specs], dtype=np.int64)
-        self.side = np.array([1.0 if s.side == "right" else -1.0 for s in model.specs])
-        nw = self.n0.shape[0]
+        body_of = [a.body for a in self.axles]
+        self.ax_span = [(bisect_left(body_of, i), bisect_right(body_of, i)) for i in range(nb)]
         self.ax_left = np.array([a.left for a in self.axles], dtype=np.int64)
         self.ax_right = np.array([a.right for a in self.axles], dtype=np.int64)
-        self.ax_body = np.array([a.body for a in self.axles], dtype=np.int64)
-        self.ax_rows = [np.flatnonzero(self.ax_body == i) for i in range(self.nb)]  # each body's axles
+        self.ax_body = np.array(body_of, dtype=np.int64)
         #: the bodies with axles, and the first of each one's run of axle rows (for np.maximum.reduceat)
-        self.ax_bodies = np.array([i for i in range(self.nb) if self.ax_rows[i].size], dtype=np.int64)
-        self.ax_first = np.array([self.ax_rows[i][0] for i in self.ax_bodies], dtype=np.int64)
+        self.ax_bodies = np.array([i for i, (a, b) in enumerate(self.ax_span) if b > a], dtype=np.int64)
+        self.ax_first = np.array([a for a, b in self.ax_span if b > a], dtype=np.int64)
+        self.wheel_body = np.array([s.body_index for s in specs], dtype=np.int64)
+        self.side = np.array([1.0 if s.side == "right" else -1.0 for s in specs])
         #: (nb, nw): which contacts are the body's, and the same with the side's sign (right +)
-        self.member = (self.wheel_body[None, :] == np.arange(self.nb)[:, None]).astype(float).reshape(self.nb, nw)
+        self.member = np.zeros((nb, nw))
+        self.member[self.wheel_body, np.arange(nw)] = 1.0
         self.signed = self.member * self.side[None, :]
         self.weight = self.member @ self.n0  # each body's static load on a level road [N]
+        self._gn_statics: dict[bytes, tuple] = {}
 
     @classmethod
     def of(cls, model) -> "RollMonitor":
@@ -187,23 +192,36 @@ class RollMonitor:
         unit LTR (nb, K), the lateral acceleration [g] (nb, K), the unclamped loads (nw, K) and each
         axle's lift indicator (n_axles, K) (None without axles)."""
         nb = self.nb
-        N = self.loads(Y, gn)
+        n0, static, g_body = self._statics(gn)
+        N = n0[:, None] + self.transfer @ Y[6 * nb: 8 * nb]  # the loads (as loads())
         K = N.shape[1]
         lift = np.full((nb, K), -np.inf)
         g = None
         if self.axles:
-            n0 = self.n0 * gn
-            static = np.maximum(n0[self.ax_left] + n0[self.ax_right], 1e-12)
-            g = -np.minimum(N[self.ax_left], N[self.ax_right]) / static[:, None]  # (n_axles, K)
+            g = -np.minimum(N[self.ax_left], N[self.ax_right]) / static  # (n_axles, K)
             lift[self.ax_bodies] = np.maximum.reduceat(g, self.ax_first, axis=0)  # each body's largest
         tot = self.member @ N
         ltr = np.divide(self.signed @ N, tot, out=np.zeros((nb, K)), where=tot > 0)
-        w = self.weight
-        gn_body = np.divide(self.member @ (self.n0 * gn), w, out=np.ones(nb), where=w > 0)
-        ay = Y[7 * nb: 8 * nb] / (STANDARD_GRAVITY * gn_body[:, None])
+        ay = Y[7 * nb: 8 * nb] / g_body
         ind = {"wheel_lift": lift, "unit_lift": np.abs(ltr) - 1.0,
                "rollover_threshold": np.abs(ay) - self.thresholds[:, None]}
         return ind, ltr, ay, N, g
+
+    def _statics(self, gn: np.ndarray):
+        """``(n0 gn (nw,), each axle's static load (n_axles, 1), each body's normal gravity (nb, 1))`` under
+        the normal factors ``gn``: what :meth:`values` divides by, kept per value of ``gn`` (a run has one
+        or a few)."""
+        key = gn.tobytes()
+        got = self._gn_statics.get(key)
+        if got is None:
+            n0 = self.n0 * gn
+            static = np.maximum(n0[self.ax_left] + n0[self.ax_right], 1e-12)[:, None] if self.axles else None
+            w = self.weight
+            gn_body = np.divide(self.member @ n0, w, out=np.ones(self.nb), where=w > 0)
+            if len(self._gn_statics) >= 64:  # many zones' slopes in a long study: keep the memory bounded
+                self._gn_statics.clear()
+            got = self._gn_statics[key] = (n0, static, (STANDARD_GRAVITY * gn_body)[:, None])
+        return got
 
     def indicators(self, Y: np.ndarray, gn: np.ndarray):
         """``(ind, ltr, ay_g, axle_of)``: per kind the indicator (nb, K), >= 0 where the condition holds;
@@ -212,9 +230,9 @@ class RollMonitor:
         K = ltr.shape[1]
         axle_of = np.full((self.nb, K), -1, dtype=np.int64)
         if g is not None:
-            for i in self.ax_bodies:
-                rows = self.ax_rows[i]
-                axle_of[i] = rows[np.argmax(g[rows], axis=0)]
+            for i in self.ax_bodies.tolist():
+                first, end = self.ax_span[i]
+                axle_of[i] = first + np.argmax(g[first:end], axis=0)
         return ind, ltr, ay, axle_of
 
     def indicator(self, y: np.ndarray, gn: np.ndarray, i: int, kind: str) -> float:
@@ -267,12 +285,13 @@ class RollMonitor:
             return gns[s]
 
         # the normal factor is constant in a segment: evaluate the samples of segments of one normal factor
-        # together (on a road without zones of their own slope, all at once: segments also end at the wheel
-        # changes and the air brakes' kinks, which change no load)
+        # together (on a road without zones, all at once: segments also end at the wheel changes and the air
+        # brakes' kinks, which change no load)
         groups: dict[bytes, list[int]] = {}
-        for s in np.unique(seg_of):
-            groups.setdefault(gn_of(int(s)).tobytes(), []).append(int(s))
-        if len(groups) == 1:
+        if len(memb) and memb.shape[2]:
+            for s in np.unique(seg_of).tolist():
+                groups.setdefault(gn_of(s).tobytes(), []).append(s)
+        if len(groups) <= 1:
             ind = self.values(Y, gn_of(int(seg_of[0])))[0]
         else:
             ind = {k: np.empty((nb, len(T))) for k in ROLL_EVENT_KINDS}
@@ -281,19 +300,23 @@ class RollMonitor:
                 part = self.values(Y[:, cols], gn_of(segs[0]))[0]
                 for k in ROLL_EVENT_KINDS:
                     ind[k][:, cols] = part[k]
+        # each body's first sample of each kind at or past its threshold, in body order, then kind order
+        first = []
+        for n, kind in enumerate(ROLL_EVENT_KINDS):
+            over = ind[kind] >= 0.0
+            first += [(i, n, int(np.argmax(over[i]))) for i in np.flatnonzero(over.any(axis=1)).tolist()]
+        if not first:
+            return []
+        first.sort()
         out = []
         names = [b.name for b in model.bodies]
         vehicles = [model.vehicle_of_body(i).name for i in range(nb)]
-        for i in range(nb):
-            for kind in ROLL_EVENT_KINDS:
-                hit = np.flatnonzero(ind[kind][i] >= 0.0)
-                if not hit.size:
-                    continue
-                j = int(hit[0])
-                t = float(T[j])
-                if j > 0:
-                    t = self._root(i, kind, float(T[j - 1]), t, starts, gn_of, sol)
-                out.append(self._event(i, kind, t, starts, gn_of, sol, names, vehicles))
+        for i, n, j in first:
+            kind = ROLL_EVENT_KINDS[n]
+            t = float(T[j])
+            if j > 0:
+                t = self._root(i, kind, float(T[j - 1]), t, starts, gn_of, sol)
+            out.append(self._event(i, kind, t, starts, gn_of, sol, names, vehicles))
         out.sort(key=lambda e: e.t)
         return out
 

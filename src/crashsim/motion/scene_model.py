@@ -79,6 +79,24 @@ def contact_levers(bodies, load_transfer: bool) -> np.ndarray:
     return out
 
 
+#: The ``phase_wheels`` columns :func:`phase_rows` fills, in the order of its values.
+_PHASE_COLUMNS = (kernel_package.P_MUF, kernel_package.P_BRAKE, kernel_package.P_FROLL, kernel_package.P_CFIX,
+                  kernel_package.P_CCOEF, kernel_package.P_CD, kernel_package.P_SD, kernel_package.P_LOCKED,
+                  kernel_package.P_CASTOR)
+
+
+def phase_rows(res: ResolvedWheels) -> np.ndarray:
+    """The kernels' wheel rows (``P_*`` columns) of every phase of a vehicle's resolved wheel
+    settings, shape (n_phases, n_wheels, N_P)."""
+    values = [[(s.mu_factor, s.brake, s.rolling_resistance or 0.0, (s.cornering_stiffness or 0.0) * spec.tyres,
+                s.cornering_coefficient or 0.0, math.cos(s.steer), math.sin(s.steer), 1.0 if s.is_sliding else 0.0,
+                -1.0 if s.self_steer_limit is None else s.self_steer_limit)
+               for s, spec in zip(settings, res.specs)] for _, settings in res.phases]
+    out = np.zeros((len(res.phases), len(res.specs), kernel_package.N_P))
+    out[:, :, _PHASE_COLUMNS] = np.array(values, dtype=float).reshape(len(res.phases), len(res.specs), -1)
+    return out
+
+
 def kernels():
     """The run-out kernel package (:mod:`crashsim.motion.kernels`)."""
     return kernel_package
@@ -192,7 +210,7 @@ class SceneModel:
         kinks = np.concatenate([rows[:, k.B_ON], rows[:, k.B_ON] + rows[:, k.B_RISE], rows[:, k.B_OFF],
                                 rows[:, k.B_OFF] + rows[:, k.B_FALL]]) if len(rows) else np.zeros(0)
         #: Times at which the air brakes' force starts or stops changing (no wheel change).
-        self.brake_kinks = tuple(sorted({float(x) for x in kinks if 0.0 < x < options.t_max}))
+        self.brake_kinks = tuple(sorted({x for x in kinks.tolist() if 0.0 < x < options.t_max}))
         # Phases: one from 0, from each scheduled change and from each kink of the ramps (a kink's phase keeps
         # the settings; its wheels take the next piece of their ramps, kernels.tyres.brake_piece), so that no
         # phase holds a kink or a step of a ramp.  Both engines end a segment at every phase boundary before
@@ -203,21 +221,12 @@ class SceneModel:
         self.segment_stops = tuple(sorted({tc for tc in times[1:] if tc < options.t_max} | {options.t_max}))
 
         phase_w = np.zeros((len(times), nw, k.N_P))
-        for p, t in enumerate(times):
-            for v in self.vehicles:
-                lo, hi = self.wheel_range[v.name]
-                res = self.resolved[v.name]
-                for i, (s, spec) in enumerate(zip(res.at(t), res.specs)):
-                    row = phase_w[p, lo + i]
-                    row[k.P_MUF] = s.mu_factor
-                    row[k.P_BRAKE] = s.brake
-                    row[k.P_FROLL] = s.rolling_resistance or 0.0
-                    row[k.P_CFIX] = (s.cornering_stiffness or 0.0) * spec.tyres
-                    row[k.P_CCOEF] = s.cornering_coefficient or 0.0
-                    row[k.P_CD] = math.cos(s.steer)
-                    row[k.P_SD] = math.sin(s.steer)
-                    row[k.P_LOCKED] = 1.0 if s.is_sliding else 0.0
-                    row[k.P_CASTOR] = -1.0 if s.self_steer_limit is None else s.self_steer_limit
+        for v in self.vehicles:
+            lo, hi = self.wheel_range[v.name]
+            res = self.resolved[v.name]
+            # each phase takes the rows of the settings in force at its start (a kink's phase repeats them)
+            in_force = np.searchsorted([t for t, _ in res.phases], times, side="right") - 1
+            phase_w[:, lo:hi] = phase_rows(res)[in_force]
 
         # ---- bodies and hitches
         self.mass = np.array([b.mass for b in self.bodies], dtype=float)

@@ -296,6 +296,7 @@ def enumerate_wheels(vehicle: Vehicle) -> tuple[WheelSpec, ...]:
     out = []
     for bi, body in enumerate(vehicle.bodies):
         for ai, axle in enumerate(body.axles):
+            label = axle_label(body, ai)
             for side in SIDES:
                 y = axle.track / 2 if side == "left" else -axle.track / 2
                 out.append(
@@ -308,7 +309,7 @@ def enumerate_wheels(vehicle: Vehicle) -> tuple[WheelSpec, ...]:
                         side=side,
                         position=(float(axle.x), float(y)),
                         tyres=2 if axle.dual else 1,
-                        label=f"{body.name}/{axle_label(body, ai)}/{side}",
+                        label=f"{body.name}/{label}/{side}",
                     )
                 )
     return tuple(out)
@@ -515,18 +516,21 @@ class ResolvedWheels:
     def brake_rows(self, vehicle: Vehicle) -> np.ndarray:
         """Per wheel ``(has air brakes, t_on, rise, t_off, fall, brake force at full application [N],
         ABS efficiency (0: none))``, shape (nw, 7); all zero without air brakes."""
-        out = np.zeros((len(self.specs), 7))
         if self.brakes is None:
-            return out
-        for k, s in enumerate(self.specs):
-            unit = self.brakes.units.get(s.body)
+            return np.zeros((len(self.specs), 7))
+        units = self.brakes.units
+        timing = {name: self.brakes.times(name) for name in units}
+        none = (0.0,) * 7
+        rows = []
+        for s in self.specs:
+            unit = units.get(s.body)
             if unit is None:
+                rows.append(none)
                 continue
             cap = unit.capacity[0] if len(unit.capacity) == 1 else unit.capacity[s.axle_index]
-            t_on, rise, t_off, fall = self.brakes.times(s.body)
-            out[k] = (1.0, t_on, rise, t_off, fall, 0.5 * cap * (1.0 - unit.out_of_adjustment),
-                      self.brakes.abs_efficiency if unit.abs else 0.0)
-        return out
+            rows.append((1.0, *timing[s.body], 0.5 * cap * (1.0 - unit.out_of_adjustment),
+                         self.brakes.abs_efficiency if unit.abs else 0.0))
+        return np.array(rows, dtype=float).reshape(-1, 7)
 
     @property
     def change_times(self) -> tuple[float, ...]:

@@ -325,7 +325,7 @@ def attempt_step(t, t_stop, h_abs, min_step, y, M, D, X, nfev):
     A step rejected at its first try across a switch of the tyre law is retried up to the switch
     (:func:`kink_fraction`; once: where that retry fails too, the error control's factor takes over,
     as the margins are not straight enough there to aim again); the step after one accepted so
-    keeps the size first tried.
+    grows by the error control's factor up to the size first tried.
 
     Returns ``(status, t_new, h, h_abs, nfev)``: status 0 accepted, else minus the failure
     (``ST_STEP_TOO_SMALL``, ``ST_MAX_EVAL``, ``ST_NONFINITE``); ``h_abs`` the next step size.
@@ -368,8 +368,9 @@ def attempt_step(t, t_stop, h_abs, min_step, y, M, D, X, nfev):
             else:
                 factor = min(MAX_FACTOR, SAFETY * err_norm**err_exp)
             if aimed:
-                # ended on a switch: the rest is smooth again, the size first tried fits it
-                h_abs = h_first
+                # ended on a switch: the rest is smooth again, so the error control's factor is not held
+                # to 1 as after a rejection; at most back to the size first tried
+                h_abs = min(h_abs * factor, h_first)
             else:
                 if rejected:
                     factor = min(1.0, factor)

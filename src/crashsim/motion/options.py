@@ -60,15 +60,14 @@ class RunoutOptions:
         are robust but cost 1.5-2x at rtol 1e-6 in pure Python.
     rtol, atol : float
         Relative and absolute local error tolerances (atol in the state's SI units: m, rad,
-        m/s, rad/s), the same for both engines.  Default 1e-8 / 1e-10.  Measured on 160
+        m/s, rad/s), the same for both engines.  Default 1e-8 / 1e-10.  Measured on 190
         random valid inputs against a converged reference (``benchmarks/engine_fuzz.py``,
-        ``plots/engine_fuzz.md``): at 1e-8 the largest rest-position error was 1.6 mm
-        (compiled) / 0.2 mm (SciPy) for single vehicles and 3.5 / 1.1 mm for scenes of 2-3
-        vehicles with secondary impacts.  At the former default 1e-6 the compiled engine's
-        errors reached 6 cm on single vehicles, and in one scene an impact cascade tipped
-        the other way (21 m); 1e-8 costs 1.2-1.4x the CPU time of 1e-6 (compiled) and
-        1.4-1.6x (SciPy).  SciPy's own default rtol 1e-3 gave 1-2 cm errors on the simplest
-        run-outs.
+        ``plots/engine_fuzz.md``): at 1e-8 the largest rest-position error was 1.3 mm
+        (compiled) / 0.2 mm (SciPy) for single vehicles, 0.4 / 0.2 mm for scenes of 2-3
+        vehicles with secondary impacts and 7 / 0.0 mm for doubles on dollies.  At the former
+        default 1e-6 the compiled engine's errors reached 3.6 cm; 1e-8 costs 1.2-1.3x the CPU
+        time of 1e-6 (compiled) and 1.4-1.5x (SciPy).  SciPy's own default rtol 1e-3 gave
+        1-2 cm errors on the simplest run-outs.
     eps : float
         Low-speed regularisation speed [m/s] of the friction laws, default 0.01.  Error in
         stopping distance O(eps^2/(mu g)) (~0.1 mm at 20 m/s); larger eps biases results,

@@ -283,3 +283,27 @@ def test_samples_at_the_tolerance_of_their_evidence_checks(data):
         assert np.max(np.abs(a.outputs[k] - b.outputs[k])) < 0.01 * tol, k
     for k in a.checks:
         assert np.array_equal(a.checks[k][1], b.checks[k][1]), k
+
+
+def test_tornado_of_a_scene_with_an_approach_starts_from_the_approach():
+    """With an approach the impact speeds come from the approach: the one-at-a-time swings run it (they used the
+    file's impact as written, with no speed for the approaching vehicle: 0 delta-v and 0 swings)."""
+    from crashsim.reconstruct.montecarlo import _swings
+    from crashsim.reconstruct.overrides import ScenarioOverrides
+    from crashsim.scene.run import run_scene
+
+    from test_approach_fit import approach_scene
+
+    data = approach_scene()
+    spec = UncertaintySpec.from_dict({"inputs": [
+        {"path": "vehicles.A.approach.speed", "distribution": "normal", "mean": "17 m/s", "sd": "0.5 m/s"},
+        {"path": "vehicles.A.approach.reaction_time", "distribution": "uniform", "lower": "0.8 s", "upper": "1.2 s"}]})
+    swings, nominal = _swings(data, spec, ENGINE, None)
+    median = run_scene(ScenarioOverrides(data, spec.paths, engine=ENGINE).scenario(
+        np.array([d.median for d in spec.inputs])))
+    for key, (base, lowhigh) in swings.items():
+        body = key.split(".", 1)[1]
+        assert base == pytest.approx(median.impact.bodies[body].delta_v_magnitude, rel=1e-12) and base > 1.0
+        speed_low, speed_high = lowhigh[0]
+        assert speed_high - speed_low > 0.1  # a faster approach hits harder
+        assert lowhigh[1] == (base, base)  # the reaction time before braking does not change the impact speed

@@ -58,7 +58,7 @@ from ..geometry import circular_mean, unwrap_about_mean
 from ..impact import solve_impact
 from ..inverse_schema import DISTRIBUTIONS, validate_uncertainty
 from ..report import fmt
-from ..scene.run import run_scene
+from ..scene.run import run_scene, simulate_approaches
 from ..schema import interval_text
 from .overrides import INVERSE_SECTIONS, ScenarioOverrides, default_engine, file_contents, parse_value, resolve_path
 from .parallel import Executor, Progress, child_seed, choose_backend, chunk_size as default_chunk_size, chunks
@@ -861,12 +861,13 @@ def _median_scene(ov: ScenarioOverrides, med: np.ndarray):
 
 
 def _swings(data, spec: UncertaintySpec, engine, file, q=(0.05, 0.95)) -> tuple[dict, Any]:
-    """One-at-a-time swings of the contact bodies' delta-v (impact only) and the median scene."""
+    """One-at-a-time swings of the contact bodies' delta-v (the impact only, after the vehicles' approaches where
+    the scene has them: their speeds at the impact come from there) and the median scene."""
     ov = ScenarioOverrides(data, spec.paths, engine=engine, file=file, cache=1, field_prefix="uncertainty.inputs")
     med = np.array([d.median for d in spec.inputs])
     nominal = _median_scene(ov, med)
     try:
-        base_imp = solve_impact(ov.scenario(med).impact)
+        base_imp = solve_impact(simulate_approaches(ov.scenario(med)).impact)
     except CrashsimError:
         return {}, nominal
     keys = [f"delta_v.{base_imp.body1}", f"delta_v.{base_imp.body2}"]
@@ -874,7 +875,7 @@ def _swings(data, spec: UncertaintySpec, engine, file, q=(0.05, 0.95)) -> tuple[
 
     def dv(x):
         try:
-            imp = solve_impact(ov.scenario(x).impact)
+            imp = solve_impact(simulate_approaches(ov.scenario(x)).impact)
         except CrashsimError:
             return {k: float("nan") for k in keys}
         return {k: imp.bodies[k.split(".", 1)[1]].delta_v_magnitude for k in keys}

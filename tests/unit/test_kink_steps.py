@@ -31,7 +31,8 @@ NM = A.W_M1 - A.W_M0
 
 
 def _ends(start, end):
-    """Margins at a step's start (nw, NM) and the evaluation at its end (nw, N_W), from rows of (sat, lock, abs, lift)."""
+    """Margins at a step's start (nw, NM) and the evaluation at its end (nw, N_W), from rows of
+    (sat, lock, abs, lift)."""
     m0 = np.array(start, dtype=float)
     wk = np.zeros((m0.shape[0], A.N_W))
     wk[:, A.W_M0:A.W_M1] = np.array(end, dtype=float)
@@ -78,7 +79,8 @@ def test_braking_into_lock_with_abs_and_load_transfer_stays_accurate():
     init = chain_states(veh, (0.0, 0.0), 0.0, (22.0, 1.0), yaw_rates=(0.2, 0.0))
     brakes = AirBrakes({"tractor": BrakeUnit((40e3, 100e3, 100e3), "tractor", abs=True),
                         "trailer": BrakeUnit((90e3,), "last_trailer")}, abs_efficiency=0.85)
-    ws = WheelSettings(default=WheelSetting("rolling", cornering_coefficient=6.0, rolling_resistance=0.007), brakes=brakes)
+    tyre = WheelSetting("rolling", cornering_coefficient=6.0, rolling_resistance=0.007)
+    ws = WheelSettings(default=tyre, brakes=brakes)
     road = Road(0.8, grade=-0.04, cross_slope=0.02)
     rest, dist = {}, 0.0
     for engine, rtol in (("compiled", 1e-8), ("compiled", 1e-11), ("scipy", 1e-8)):

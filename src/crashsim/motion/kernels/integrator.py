@@ -17,10 +17,10 @@ from numba import njit, objmode
 
 from ..options import MAX_STILL_SEGMENTS
 from .jit import HOT, INLINE, JIT, STAGE
-from .arrays import (W_M0, W_M1, W_MLOCK, W_MSAT, C_ATOL, C_FIRST, C_MAXSTEP, C_RTOL, C_TMAX, I_LT, I_MAXEVAL, I_MAXSEG, I_ORDER, LOG_SCHEDULE,
+from .arrays import (C_ATOL, C_FIRST, C_MAXSTEP, C_RTOL, C_TMAX, I_LT, I_MAXEVAL, I_MAXSEG, I_ORDER, LOG_SCHEDULE,
                      MAX_FACTOR, MIN_FACTOR, N_A, N_S, SAFETY, ST_IMPACT, ST_MAX_EVAL, ST_MAX_SEGMENTS, ST_NONFINITE,
-                     ST_NO_PROGRESS, ST_REST, ST_STEP_TOO_SMALL, ST_TIME_LIMIT, ST_WALL_TIME, WALL_CHECK_STEPS,
-                     EventValues, Events, Step, make_work)
+                     ST_NO_PROGRESS, ST_REST, ST_STEP_TOO_SMALL, ST_TIME_LIMIT, ST_WALL_TIME, W_M0, W_M1, W_MLOCK,
+                     W_MSAT, WALL_CHECK_STEPS, EventValues, Events, Step, make_work)
 from .geometry import membership
 from .equations import consistent_accelerations, evaluate, phase_at, quad_integrand, segment_params
 from .events import build_events, event_rate, event_value, first_root, handle_event, interpolate, log_record, settle
@@ -297,9 +297,9 @@ def kink_fraction(m0, wk):
     At a switch the force law keeps its value but not its slope (the friction circle's lateral
     cut as a braked wheel nears its lock, the ABS limit taking hold, a wheel lifting, ...), so an
     explicit step across one has an error of the first order in the step; the error control
-    would shrink the step by its factor again and again around it (issue 22: half the run-out's
-    rejected steps with air brakes).  Aimed at the switch, the step ends there and the next one
-    starts on it, each on one smooth piece.
+    would shrink the step by its factor again and again around it (most of the rejected steps of
+    ``benchmarks/air_brakes_cost.py``'s all-on run were there).  Aimed at the switch, the step ends
+    there and the next one starts on it, each on one smooth piece.
     """
     best = -1.0
     for k in range(m0.shape[0]):

@@ -31,12 +31,12 @@ NM = A.W_M1 - A.W_M0
 
 
 def _ends(start, end):
-    """Margins at a step's start (nw, NM) and the evaluation at its end (nw, N_W), from rows of
-    (sat, lock, abs, lift)."""
-    m0 = np.array(start, dtype=float)
-    wk = np.zeros((m0.shape[0], A.N_W))
-    wk[:, A.W_M0:A.W_M1] = np.array(end, dtype=float)
-    return m0, wk
+    """The tyres' evaluation at a step's start (nw, N_W) and the margins at its end (nw, NM), from rows
+    of (sat, lock, abs, lift)."""
+    m1 = np.array(end, dtype=float)
+    wk = np.zeros((m1.shape[0], A.N_W))
+    wk[:, A.W_M0:A.W_M1] = np.array(start, dtype=float)
+    return wk, m1
 
 
 def test_a_crossing_is_placed_on_the_line_between_the_margins():

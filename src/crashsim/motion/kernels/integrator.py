@@ -23,6 +23,7 @@ from .arrays import (C_ATOL, C_FIRST, C_MAXSTEP, C_RTOL, C_TMAX, I_LT, I_MAXEVAL
                      W_MSAT, WALL_CHECK_STEPS, EventValues, Events, Step, make_work)
 from .geometry import membership
 from .equations import consistent_accelerations, evaluate, phase_at, quad_integrand, segment_params
+from .tyres import tyre_eval
 from .events import build_events, event_rate, event_value, first_root, handle_event, interpolate, log_record, settle
 
 
@@ -165,8 +166,8 @@ def start(y, M, D, t):
 #: zone membership ``new_memb``, log records ``rec`` and impact geometry ``geo`` (6,), the work
 #: arrays ``W`` (:class:`Work`), the segment's events ``ev`` (:class:`Events`) and their values
 #: ``vals`` (:class:`EventValues`), Gauss-Legendre nodes and weights ``gl_x``, ``gl_w`` on
-#: [-1, 1], the path integrals ``quad`` (accumulated), the wall-clock ``deadline`` and the margins of
-#: the wheels' switches at the current step's start ``margins`` (nw, W_M1 - W_M0; :func:`kink_fraction`).
+#: [-1, 1], the path integrals ``quad`` (accumulated), the wall-clock ``deadline`` and scratch for the
+#: margins of the wheels' switches at a rejected step's end ``margins`` (nw, W_M1 - W_M0; :func:`kink_fraction`).
 RunContext = namedtuple("RunContext", ["sw", "K", "gq", "gtmp", "ytmp", "ytmp2", "y_new", "dydt", "err", "new_memb",
                                        "rec", "geo", "W", "ev", "vals", "gl_x", "gl_w", "quad", "deadline", "margins"])
 #: The stored steps (growable): start time ``t`` [s], size ``h`` [s], start state ``y`` (n,)
@@ -263,7 +264,6 @@ def first_step(t, t_stop, y, M, D, X):
     the first step size: ``C_FIRST`` if set, else solve_ivp's initial step.  Returns
     ``(h_abs, evaluations)``."""
     evaluate(y, M, X.sw, D, X.K[0], X.W)
-    keep_margins(X.W.wheel_out, X.margins)
     quad_integrand(y, M, D, X.W, X.gq[0])
     if M.cfg[C_FIRST] > 0.0:
         return min(M.cfg[C_FIRST], t_stop - t), 1
@@ -285,14 +285,14 @@ KINK_MIN, KINK_MAX = 0.02, 0.98
 
 
 @njit(**HOT)
-def kink_fraction(m0, wk):
+def kink_fraction(wk, m1):
     """Where in a step a switch of the tyre law lies, as a fraction of the step, or -1 if none.
 
-    ``m0`` holds each wheel's switch margins at the step's start (:func:`keep_margins`), ``wk`` the
-    evaluation at its end (``W.wheel_out``): a margin that changes sign (each >= 0 on its far side;
-    NaN where the switch does not apply) crossed its switch, which the straight line between the two
-    values places at ``m0 / (m0 - m1)``.  The lock-up margin counts only where the wheel is saturated at
-    one end (it locks only then).  The earliest crossing within ``[KINK_MIN, KINK_MAX]``.
+    ``wk`` is the evaluation of the tyres at the step's start (``W.wheel_out``), ``m1`` each wheel's
+    switch margins at its end (:func:`keep_margins`): a margin that changes sign (each >= 0 on its far
+    side; NaN where the switch does not apply) crossed its switch, which the straight line between the
+    two values places at ``m0 / (m0 - m1)``.  The lock-up margin counts only where the wheel is
+    saturated at one end (it locks only then).  The earliest crossing within ``[KINK_MIN, KINK_MAX]``.
 
     At a switch the force law keeps its value but not its slope (the friction circle's lateral
     cut as a braked wheel nears its lock, the ABS limit taking hold, a wheel lifting, ...), so an
@@ -302,13 +302,13 @@ def kink_fraction(m0, wk):
     there and the next one starts on it, each on one smooth piece.
     """
     best = -1.0
-    for k in range(m0.shape[0]):
-        sat = (m0[k, 0] >= 0.0) or (wk[k, W_MSAT] >= 0.0)
+    for k in range(m1.shape[0]):
+        sat = (wk[k, W_MSAT] >= 0.0) or (m1[k, 0] >= 0.0)
         for c in range(W_M1 - W_M0):
             if c == W_MLOCK - W_M0 and not sat:
                 continue
-            a = m0[k, c]
-            b = wk[k, W_M0 + c]
+            a = wk[k, W_M0 + c]
+            b = m1[k, c]
             if not (a < 0.0 <= b or b < 0.0 <= a):  # no crossing (or a NaN)
                 continue
             f = a / (a - b)
@@ -375,9 +375,14 @@ def attempt_step(t, t_stop, h_abs, min_step, y, M, D, X, nfev):
                 if rejected:
                     factor = min(1.0, factor)
                 h_abs *= factor
-            keep_margins(X.W.wheel_out, X.margins)  # the end state's (rk_step's last evaluation)
             return 0, t_new, h, h_abs, nfev
-        f = kink_fraction(X.margins, X.W.wheel_out) if not rejected else -1.0
+        f = -1.0
+        if not rejected:
+            # the margins at the end (rk_step's last evaluation), then the tyres at the start (work arrays
+            # only: the stages are kept): none of this in an accepted step
+            keep_margins(X.W.wheel_out, X.margins)
+            tyre_eval(y, M, X.sw, D, X.W)
+            f = kink_fraction(X.W.wheel_out, X.margins)
         if f > 0.0:
             h_abs *= f
             aimed = True

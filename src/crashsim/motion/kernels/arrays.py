@@ -81,7 +81,8 @@ Mode = namedtuple("Mode", ["memb", "lk_j", "lk_th", "lk_n", "shift", "pstate", "
 #: Work arrays ``W`` of one evaluation (:func:`crashsim.motion.kernels.equations.evaluate` fills them):
 #:
 #: * ``wheel_out`` (nw, N_W): per-wheel wheel-axes velocity [m/s], force [N], sliding flag, load [N], and
-#:   the margins of its switches [N] (``W_MSAT`` ..: where the force law's slope jumps);
+#:   the margins of its switches [N] (``W_MSAT`` ..: where the force law's slope jumps; written only by
+#:   ``tyre_eval(..., margins=True)``, for a rejected step);
 #: * ``body_force`` (3 nb,): world-frame force and moment sums per body (z order) [N, N m];
 #: * ``jacobian`` (m_max, 3 nb), ``gram`` (m_max, m_max): constraint Jacobian G and G M^-1 G^T;
 #: * ``multipliers`` (m_max,): hitch forces on the front body [N], then stop moments [N m];

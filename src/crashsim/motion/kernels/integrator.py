@@ -272,7 +272,8 @@ def first_step(t, t_stop, y, M, D, X):
 
 @njit(**INLINE)
 def keep_margins(wk, margins):
-    """Copy the margins of the wheels' switches of the last evaluation (``W.wheel_out``) into ``margins``."""
+    """Copy the margins of the wheels' switches of the last tyre evaluation with margins (``W.wheel_out``)
+    into ``margins``."""
     for k in range(margins.shape[0]):
         for c in range(W_M1 - W_M0):
             margins[k, c] = wk[k, W_M0 + c]
@@ -303,7 +304,7 @@ def kink_fraction(wk, m1):
     """
     best = -1.0
     for k in range(m1.shape[0]):
-        sat = (wk[k, W_MSAT] >= 0.0) or (m1[k, 0] >= 0.0)
+        sat = (wk[k, W_MSAT] >= 0.0) or (m1[k, W_MSAT - W_M0] >= 0.0)
         for c in range(W_M1 - W_M0):
             if c == W_MLOCK - W_M0 and not sat:
                 continue
@@ -378,10 +379,11 @@ def attempt_step(t, t_stop, h_abs, min_step, y, M, D, X, nfev):
             return 0, t_new, h, h_abs, nfev
         f = -1.0
         if not rejected:
-            # the margins at the end (rk_step's last evaluation), then the tyres at the start (work arrays
-            # only: the stages are kept): none of this in an accepted step
+            # the tyres' switch margins at the end, then at the start (work arrays only: the stages are
+            # kept); the right-hand side does not compute them, an accepted step never needs them
+            tyre_eval(X.y_new, M, X.sw, D, X.W, True)
             keep_margins(X.W.wheel_out, X.margins)
-            tyre_eval(y, M, X.sw, D, X.W)
+            tyre_eval(y, M, X.sw, D, X.W, True)
             f = kink_fraction(X.W.wheel_out, X.margins)
         if f > 0.0:
             h_abs *= f

@@ -116,7 +116,7 @@ def air_demand(level, b, u, v, roll, mu_load, eps):
 
 
 @njit(**INLINE)
-def tyre_eval(y, M, sw, D, W):
+def tyre_eval(y, M, sw, D, W, margins=False):
     """Tyre forces of state ``y``: per-wheel results in ``W.wheel_out`` (``W_*`` columns), world-frame body sums in ``W.body_force``.
 
     The tyre law of the README ("Run-out model"): rolling tyres on the Fiala (or linear)
@@ -130,6 +130,9 @@ def tyre_eval(y, M, sw, D, W):
     the steer angle of :func:`crashsim.motion.tyres.castor_angle` instead of its fixed one.  A rolling
     wheel with air brakes (``S_AIR``) takes its longitudinal demand from :func:`air_demand` at the
     application level of the segment's piece of its ramp (``S_BREF, S_BBASE, S_BSLOPE``) at the state's clock.
+    With ``margins`` it also writes each wheel's switch margins (``W_MSAT`` .. ``W_MLIFT``), which only a
+    rejected step reads (:func:`crashsim.motion.kernels.integrator.kink_fraction`): not in the
+    right-hand side.
     """
     body, wheel, wbody, transfer, cfg, icfg, bveh = M.body, M.wheel, M.wheel_body, M.load_transfer, M.cfg, M.icfg, M.body_vehicle
     parked = D.parked
@@ -152,8 +155,9 @@ def tyre_eval(y, M, sw, D, W):
             wk[k, W_FY] = 0.0
             wk[k, W_SLIDE] = 0.0
             wk[k, W_LOAD] = wheel[k, 2]
-            for c in range(W_M0, W_M1):
-                wk[k, c] = math.nan
+            if margins:
+                for c in range(W_M0, W_M1):
+                    wk[k, c] = math.nan
             continue
         c = cs[0, i]
         s = cs[1, i]
@@ -179,11 +183,11 @@ def tyre_eval(y, M, sw, D, W):
                 n += transfer[k, j] * y[6 * nb + j]
             load = max(n, 0.0)
             mu_load = sw[k, S_MU] * load
-            wk[k, W_MLIFT] = -n
+            m_lift = -n
         else:
             load = sw[k, S_N0]
             mu_load = sw[k, S_MULOAD]
-            wk[k, W_MLIFT] = math.nan
+            m_lift = math.nan
         locked = sw[k, S_LOCKED] != 0.0
         demand = 0.0
         c_alpha = 0.0
@@ -202,13 +206,18 @@ def tyre_eval(y, M, sw, D, W):
         if locked:
             fx, fy = law.sliding_force(u, v, mu_load, eps)
             sliding = True
-            m_sat = math.nan
-            m_lock = math.nan
-        else:
+            if margins:
+                for c in range(W_M0, W_M1):
+                    wk[k, c] = math.nan
+                wk[k, W_MLIFT] = m_lift
+        elif margins:
             fx, fy, sliding, m_sat, m_lock = law.tyre_parts(u, v, mu_load, demand, c_alpha, False, eps, fiala)
-        wk[k, W_MSAT] = m_sat
-        wk[k, W_MLOCK] = m_lock
-        wk[k, W_MABS] = m_abs
+            wk[k, W_MSAT] = m_sat
+            wk[k, W_MLOCK] = m_lock
+            wk[k, W_MABS] = m_abs
+            wk[k, W_MLIFT] = m_lift
+        else:
+            fx, fy, sliding = law.tyre_kernel(u, v, mu_load, demand, c_alpha, False, eps, fiala)
         wk[k, W_U] = u
         wk[k, W_V] = v
         wk[k, W_FX] = fx

@@ -116,6 +116,85 @@ def air_demand(level, b, u, v, roll, mu_load, eps):
 
 
 @njit(**INLINE)
+def redistribute_loads(M, wk):
+    """Wheel loads that sum to the weight where load transfer lifts wheels (in place in ``wk[:, W_LOAD]``,
+    which holds the linear loads ``N_static + T a_f``).
+
+    Body by body (its axles are consecutive, each a left then a right wheel):
+
+    * an axle whose load ``S = N_left + N_right`` would be negative (the body pitching over the
+      others) carries none, and the other axles of the body with load give up that deficit in
+      proportion to their loads (the body's vertical balance holds while any axle is on the ground);
+    * an axle's roll transfer ``R = (N_right - N_left) / 2`` is at most ``S / 2`` (the inner wheel
+      at zero, the outer carrying the axle); the roll moment ``(R - S/2) t`` it cannot carry goes to
+      the axles of the body that can, in proportion to what each can still take, so the body's roll
+      moment ``m a_y h`` is balanced until every inner wheel is off the ground.  Beyond that the unit
+      rolls (the rollover check's ``unit_lift``): no planar load balances it, and the loads are those
+      of all inner wheels lifted.
+
+    So a lifted wheel carries exactly zero and the others carry the weight (clamping the negative
+    loads at zero instead would add the lifted wheels' share to the weight).
+    """
+    wheel, wbody = M.wheel, M.wheel_body
+    na = wheel.shape[0] // 2
+    a0 = 0
+    while a0 < na:
+        i = wbody[2 * a0]
+        a1 = a0
+        while a1 < na and wbody[2 * a1] == i:
+            a1 += 1
+        deficit = 0.0
+        carrying = 0.0
+        for a in range(a0, a1):
+            s = wk[2 * a, W_LOAD] + wk[2 * a + 1, W_LOAD]
+            if s < 0.0:
+                deficit -= s
+            else:
+                carrying += s
+        if deficit > 0.0:
+            keep = max(1.0 - deficit / carrying, 0.0) if carrying > 0.0 else 0.0
+            for a in range(a0, a1):
+                left = wk[2 * a, W_LOAD]
+                right = wk[2 * a + 1, W_LOAD]
+                s = left + right
+                half = 0.5 * (right - left)
+                s = s * keep if s > 0.0 else 0.0
+                wk[2 * a, W_LOAD] = 0.5 * s - half
+                wk[2 * a + 1, W_LOAD] = 0.5 * s + half
+        excess = 0.0
+        for a in range(a0, a1):
+            left = wk[2 * a, W_LOAD]
+            right = wk[2 * a + 1, W_LOAD]
+            cap = 0.5 * (left + right)
+            half = 0.5 * (right - left)
+            if abs(half) > cap:
+                track = wheel[2 * a, 1] - wheel[2 * a + 1, 1]
+                held = math.copysign(cap, half)
+                excess += (half - held) * track
+                wk[2 * a, W_LOAD] = cap - held
+                wk[2 * a + 1, W_LOAD] = cap + held
+        if excess != 0.0:
+            side = 1.0 if excess > 0.0 else -1.0
+            room = 0.0
+            for a in range(a0, a1):
+                left = wk[2 * a, W_LOAD]
+                right = wk[2 * a + 1, W_LOAD]
+                track = wheel[2 * a, 1] - wheel[2 * a + 1, 1]
+                room += (0.5 * (left + right) - side * 0.5 * (right - left)) * track
+            if room > 0.0:
+                frac = min(abs(excess) / room, 1.0)
+                for a in range(a0, a1):
+                    left = wk[2 * a, W_LOAD]
+                    right = wk[2 * a + 1, W_LOAD]
+                    cap = 0.5 * (left + right)
+                    half = 0.5 * (right - left)
+                    half += side * frac * (cap - side * half)
+                    wk[2 * a, W_LOAD] = max(cap - half, 0.0)
+                    wk[2 * a + 1, W_LOAD] = max(cap + half, 0.0)
+        a0 = a1
+
+
+@njit(**INLINE)
 def tyre_eval(y, M, sw, D, W, margins=False):
     """Tyre forces of state ``y``: per-wheel results in ``W.wheel_out`` (``W_*`` columns), world-frame body sums in ``W.body_force``.
 
@@ -146,6 +225,15 @@ def tyre_eval(y, M, sw, D, W, margins=False):
     body_trig(y, nb, cs)
     for i in range(3 * nb):
         f[i] = 0.0
+    if lt:
+        # every wheel's linear load first, then the lifted wheels' share passed to the others
+        for k in range(nw):
+            n = sw[k, S_N0]
+            for j in range(2 * nb):
+                n += transfer[k, j] * y[6 * nb + j]
+            wk[k, W_MLIFT] = -n
+            wk[k, W_LOAD] = n
+        redistribute_loads(M, wk)
     for k in range(nw):
         i = wbody[k]
         if parked[bveh[i]] != 0:
@@ -178,12 +266,9 @@ def tyre_eval(y, M, sw, D, W, margins=False):
         u = cd * cvx + sd * cvy
         v = -sd * cvx + cd * cvy
         if lt:
-            n = sw[k, S_N0]
-            for j in range(2 * nb):
-                n += transfer[k, j] * y[6 * nb + j]
-            load = max(n, 0.0)
+            load = wk[k, W_LOAD]
             mu_load = sw[k, S_MU] * load
-            m_lift = -n
+            m_lift = wk[k, W_MLIFT]
         else:
             load = sw[k, S_N0]
             mu_load = sw[k, S_MULOAD]
@@ -222,7 +307,7 @@ def tyre_eval(y, M, sw, D, W, margins=False):
         wk[k, W_V] = v
         wk[k, W_FX] = fx
         wk[k, W_FY] = fy
-        wk[k, W_SLIDE] = 1.0 if sliding else 0.0
+        wk[k, W_SLIDE] = 1.0 if sliding and load > 0.0 else 0.0  # a lifted wheel leaves no mark
         wk[k, W_LOAD] = load
         bx = cd * fx - sd * fy
         by = sd * fx + cd * fy

@@ -332,10 +332,10 @@ def _figures(scene, system: str) -> list[dict]:
 def _impacts(scene, system: str) -> list[dict]:
     s = system
     out = []
-    for k, imp in enumerate(scene.impacts):
+    for imp in scene.impacts:
         dv = imp.get("delta_v") or {}
         out.append({
-            "n": k + 1, "time": format_value(imp["time"], "time", s), "bodies": f"{imp['body1']} / {imp['body2']}",
+            "n": imp["event"], "time": format_value(imp["time"], "time", s), "bodies": f"{imp['body1']} / {imp['body2']}",
             "closing_speed": format_value(imp.get("closing_speed"), "speed", s) if imp.get("closing_speed") is not None
             else "",
             "normal_impulse": format_value(imp["normal_impulse"], "impulse", s),

@@ -1165,16 +1165,16 @@ def plot_time_distance(scene, axes=None, *, system: str | None = None):
             drawn["perception"] |= a.reaction_time > 0
         if scene.runout and v.name in scene.runout:
             drawn["rest"] |= scene.runout[v.name].bodies[v.bodies[0].name].time_to_rest is not None
-    impacts = [0.0] + [float(i.t) for i in (scene.joint.impacts if scene.joint is not None else ())]
+    impacts = [(1, 0.0)] + [(ev.number, ev.t) for ev in (scene.joint.impact_events() if scene.joint is not None else ())]
     impact_labels = []
-    for k, ti in enumerate(impacts):
-        color = "#b30000" if k == 0 else "#e07b00"
+    for number, ti in impacts:
+        color = "#b30000" if number == 1 else "#e07b00"
         for axx in (ax_s, ax_v):
-            axx.axvline(ti, color=color, lw=1.0, ls="-" if k == 0 else "--", zorder=1)
+            axx.axvline(ti, color=color, lw=1.0, ls="-" if number == 1 else "--", zorder=1)
         # one row lower for every label it would overlap (impacts close in time)
-        label = ax_s.annotate("impact" if k == 0 else f"impact {k + 1}", (ti, 1.0), xycoords=("data", "axes fraction"),
-                              xytext=(3, -10), textcoords="offset points", fontsize=7, color=color,
-                              gid=f"td:impact:{k + 1}", path_effects=_halo(2.0))
+        label = ax_s.annotate("impact" if number == 1 else f"impact {number}", (ti, 1.0),
+                              xycoords=("data", "axes fraction"), xytext=(3, -10), textcoords="offset points",
+                              fontsize=7, color=color, gid=f"td:impact:{number}", path_effects=_halo(2.0))
         impact_labels.append(label)
     ax_s.axhline(0.0, color="0.6", lw=0.6)
     ax_s.set_ylabel(f"distance from the impact [{lu}]")
@@ -1389,12 +1389,16 @@ def _draw_impacts(S: SceneDrawing) -> None:
     from matplotlib.lines import Line2D
 
     joint = getattr(S.scene, "joint", None)
-    later = joint.impacts if joint is not None else ()
-    points = [S.scene.impact.point] + [i.point for i in later]
-    if len(points) < 2:
+    marks = [(1, S.scene.impact.point, 0.0)]
+    for ev in (joint.impact_events() if joint is not None else ()):
+        seen = set()
+        for r in ev.records:  # an event's number once at each of its pairs (not at every bounce)
+            if (r.body1, r.body2) not in seen:
+                seen.add((r.body1, r.body2))
+                marks.append((ev.number, r.point, float(r.t)))
+    if len(marks) < 2:
         return
-    times = [0.0] + [float(i.t) for i in later]
-    for n, p in enumerate(points, start=1):
+    for n, p, t_mark in marks:
         xy = S.d(np.asarray(p, dtype=float))
         first = (len(S.ax.lines), len(S.texts))
         # the point itself, and its number in a yellow disc on it (moved aside with a leader line
@@ -1404,7 +1408,7 @@ def _draw_impacts(S: SceneDrawing) -> None:
                zorder=_Z_ARROW + 2, bbox=dict(boxstyle="circle,pad=0.25", facecolor="#ffd54f", edgecolor="0.1", lw=1.0))
         S.add(xy)
         if n > 1:  # a later impact appears (in the animation) when it happens
-            S.appear += [(a, times[n - 1]) for a in (*S.ax.lines[first[0]:], *S.texts[first[1]:])]
+            S.appear += [(a, t_mark) for a in (*S.ax.lines[first[0]:], *S.texts[first[1]:])]
     S.legend_entry("impacts in time order (1: the first; the report lists them)",
                    Line2D([], [], ls="none", marker="o", ms=9, mfc="#ffd54f", mec="0.1"))
 
@@ -2227,7 +2231,7 @@ def history_panels(scene) -> int:
     """Panels of :func:`plot_histories` for ``scene``: 3, or 4 when bodies stayed in sustained
     contact during the run-out (the contact-force panel)."""
     joint = getattr(scene, "joint", None)
-    return 4 if joint is not None and any(p.contact_time > 0 for p in joint.pairs) else 3
+    return 4 if joint is not None and any(p.sustained for p in joint.pairs) else 3
 
 
 #: Impacts closer in time than this share of the histories' time axis get their labels on separate rows.
@@ -2340,7 +2344,7 @@ def plot_histories(scene, axes=None, *, system: str | None = None):
     if n_panels == 4:
         ax_f = axes[3]
         kf, funit = to_unit(1.0, Kind.FORCE, system)
-        for k, p in enumerate(q for q in joint.pairs if q.contact_time > 0):
+        for k, p in enumerate(q for q in joint.pairs if q.sustained):
             ax_f.plot(p.t, kf * np.asarray(p.force), styles[k % len(styles)], lw=1.3, label=p.name.replace("|", " \N{EN DASH} "))
         ax_f.set_ylabel(f"contact force [{funit}]")
         ax_f.set_ylim(bottom=0.0)
@@ -2349,13 +2353,14 @@ def plot_histories(scene, axes=None, *, system: str | None = None):
         # impacts closer in time than a label's width: each label one row lower than the one it would cover
         near = IMPACT_LABEL_GAP * (t_max if t_max > 0 else 1.0)
         rows: list[tuple[float, int]] = []
-        for n, imp in enumerate(joint.impacts, start=2):
+        for ev in joint.impact_events():
+            n = ev.number
             for ax in axes:
-                ax.axvline(imp.t, color="0.45", lw=0.7, ls=":")
-            taken = {r for t, r in rows if abs(imp.t - t) < near}
+                ax.axvline(ev.t, color="0.45", lw=0.7, ls=":")
+            taken = {r for t, r in rows if abs(ev.t - t) < near}
             row = next(r for r in range(len(rows) + 1) if r not in taken)
-            rows.append((imp.t, row))
-            ax_v.annotate(f"#{n}", (imp.t, 1.0), xycoords=("data", "axes fraction"), xytext=(2, -10 - 9 * row),
+            rows.append((ev.t, row))
+            ax_v.annotate(f"#{n}", (ev.t, 1.0), xycoords=("data", "axes fraction"), xytext=(2, -10 - 9 * row),
                           textcoords="offset points", fontsize=7, color="0.3", gid=f"histories:impact:{n}")
     for ax in axes:
         ax.grid(True, alpha=0.4)

@@ -180,28 +180,49 @@ def validity_text(r, system: str = "SI") -> str:
             f"thresholds {thr}")
 
 
+def _impact_line(i, s: str, energy: bool = True) -> str:
+    """One pair's part of an impact: bodies, approach, point, impulses, (energy,) delta-v, law."""
+    dv = ", ".join(f"{b} {fmt(float(np.hypot(*d)), 'speed', s)}" for b, d in i.delta_v.items() if b in (i.body1, i.body2))
+    approach = (f"closing {fmt(i.closing_speed, 'speed', s)}" if i.closing_speed >= 0 else
+                f"separating at {fmt(-i.closing_speed, 'speed', s)} before it (pushed by the others)")
+    lost = f"energy lost {fmt(i.energy_loss, 'energy', s)}; " if energy else ""
+    return (f"{i.body1} against {i.body2}, {approach}, point {_vec(i.point, 'length', s)}, normal impulse "
+            f"{fmt(i.normal_impulse, 'impulse', s)}, tangential {fmt(i.tangential_impulse, 'impulse', s)}, {lost}"
+            f"delta-v {dv} (e = {i.restitution:g}, {i.law}{'' if i.law == 'frictionless' else f' f = {i.friction:g}'})")
+
+
+def _impact_event_lines(ev, s: str) -> list[str]:
+    """The lines of one impact event: one line for a single pair at a single instant; else a heading with
+    the event's energy loss and a line per pair and instant (a pair's share of an instant's loss is not
+    printed: with several points pushing each other, a share can be of either sign)."""
+    first = ev.records[0]
+    if len(ev.records) == 1:
+        out = [f"  #{ev.number} at {fmt(first.t, 'time', s)}: {_impact_line(first, s)}"]
+    else:
+        when = (f"{len(ev.pairs)} pairs at once" if ev.instants == 1 else
+                f"{len(ev.records)} impulses over {fmt(ev.records[-1].t - first.t, 'time', s)}")
+        out = [f"  #{ev.number} at {fmt(first.t, 'time', s)} ({when}): energy lost {fmt(ev.energy_loss, 'energy', s)}"]
+        for r in ev.records:
+            at = "" if ev.instants == 1 else f"at {fmt(r.t, 'time', s)}: "
+            out.append(f"      {at}{_impact_line(r, s, energy=False)}")
+    out += [f"     {w}" for w in dict.fromkeys(r.warning for r in ev.records if r.warning)]
+    return out
+
+
 def format_joint(scene, system: str = "SI") -> str:
     """Later impacts, contacts, events and the energy ledger of a scene's joint run-out."""
     s = system
     j = scene.joint
     lines = []
     if j.impacts:
-        lines.append("Impacts after the first (solved by the impulse solver)")
-        for n, i in enumerate(j.impacts, start=2):
-            dv = ", ".join(f"{b} {fmt(float(np.hypot(*d)), 'speed', s)}" for b, d in i.delta_v.items()
-                           if b in (i.body1, i.body2))
-            lines.append(f"  #{n} at {fmt(i.t, 'time', s)}: {i.body1} against {i.body2}, closing "
-                         f"{fmt(i.closing_speed, 'speed', s)}, point {_vec(i.point, 'length', s)}, normal impulse "
-                         f"{fmt(i.normal_impulse, 'impulse', s)}, tangential {fmt(i.tangential_impulse, 'impulse', s)}, "
-                         f"energy lost {fmt(i.energy_loss, 'energy', s)}; delta-v {dv} (e = {i.restitution:g}, "
-                         f"{i.law}{'' if i.law == 'frictionless' else f' f = {i.friction:g}'})")
-            if i.warning:
-                lines.append(f"     {i.warning}")
+        lines.append("Impacts after the first (every point touching at an instant solved at once)")
+        for ev in j.impact_events():
+            lines += _impact_event_lines(ev, s)
     touched = [p for p in j.pairs if p.contact_time > 0 or p.impacts]
     if touched:
         lines.append("Contacts")
         for p in touched:
-            if p.peak_force > 0:
+            if p.sustained:
                 sustained = (f"sustained contact {fmt(p.contact_time, 'time', s)}, peak force "
                              f"{fmt(p.peak_force, 'force', s)}, deepest {fmt(p.max_penetration, 'length', s)} beyond "
                              f"the crush, work taken {fmt(-p.contact_work, 'energy', s)}")
@@ -286,8 +307,12 @@ def describe_event(e, system: str = "SI") -> str:
         return f"{d['body']} passes its rollover threshold {d['threshold_g']:.3g} g, {at}"
     if k == "impact" and "delta_v_m_s" in d:
         dv = ", ".join(f"{n} {fmt(v, 'speed', s)}" for n, v in d["delta_v_m_s"].items())
-        return (f"{a} strikes {b} at {fmt(d['speed_m_s'], 'speed', s)}: normal impulse "
-                f"{fmt(d['normal_impulse_N_s'], 'impulse', s)}, delta-v {dv}, {fmt(e.energy, 'energy', s)} lost")
+        how = (f"{a} strikes {b} at {fmt(d['speed_m_s'], 'speed', s)}" if d["speed_m_s"] >= 0 else
+               f"{a} is pushed against {b} (parting at {fmt(-d['speed_m_s'], 'speed', s)} before)")
+        many = d.get("pairs_at_once", 1)
+        lost = (f"{fmt(e.energy, 'energy', s)} lost" if many == 1 else
+                f"impact {d['event']}: {many} pairs at once, {fmt(d['instant_energy_J'], 'energy', s)} lost in all")
+        return f"{how}: normal impulse {fmt(d['normal_impulse_N_s'], 'impulse', s)}, delta-v {dv}, {lost}"
     return message_in(e.detail, s)
 
 

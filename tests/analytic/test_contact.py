@@ -63,15 +63,17 @@ def test_two_equal_cars_central_impact(engine, e):
 
 @pytest.mark.parametrize("engine", ENGINES)
 @pytest.mark.parametrize("e, f", [(0.2, 0.0), (0.2, 0.03), (0.0, 0.3)])
-def test_face_on_wall_impact_mirror_law_with_friction(engine, e, f):
+def test_face_on_wall_impact_two_corners_at_once(engine, e, f):
     """A car heading straight at a wall, moving along its heading at 15 deg to the wall normal
     (the wheels steered 15 deg so that no tyre force acts): its front face meets the wall face
-    on.  The CG's normal velocity reverses by e (the normal impulse acts on the CG's line,
-    P_n = m (1 + e) v_n).  Stopping the contact point's slip v_t takes the tangential impulse
-    P_stop = v_t / (1/m + (L/2)^2 / I) (it acts L/2 ahead of the CG): below f P_n the surfaces
-    stick (P_t = P_stop), else they slide with P_t = f P_n (Eq. 8).  The yaw rate changes by
-    -P_t (L/2) / I."""
-    m, inertia, length = 1500.0, 2500.0, 4.5
+    on, both front corners at once.  Solved together, each corner separates at e times its
+    approach speed (Newton's law at each point), so the face stays parallel to the wall: the yaw
+    rate stays 0 and the CG's normal velocity reverses by e (P_n = m (1 + e) v_n).  Stopping the
+    slip v_t takes P_stop = m v_t: below f P_n the corners stick (P_t = P_stop), else they slide
+    with P_t = f P_n.  The friction's moment P_t L / 2 about the CG is taken by the corners' normal
+    impulses (P_1 - P_2 = P_t L / W, both >= 0 while P_t / P_n <= W / L), which moves the centre of
+    the normal impulse P_t L / (2 P_n) along the face."""
+    m, inertia, length, width = 1500.0, 2500.0, 4.5, 1.8
     beta = math.radians(15.0)
     v = 8.0
     steer = WheelSettings(default=WheelSetting("rolling", steer=beta, cornering_coefficient=8.6,
@@ -84,17 +86,21 @@ def test_face_on_wall_impact_mirror_law_with_friction(engine, e, f):
     hit = run.impacts[0]
     vn, vt = v * math.cos(beta), v * math.sin(beta)
     assert hit.t == pytest.approx(0.4 / vn, rel=1e-9)  # the face reaches the wall face (0.5 - 0.1 m away)
-    assert hit.point[0] == pytest.approx(length / 2 + 0.4, abs=1e-9) and abs(hit.point[1] - vt * hit.t) < 1e-9
-    r = hit.result.bodies["car"]
+    assert hit.points == 2
     pn = m * (1 + e) * vn
-    p_stop = vt / (1 / m + (length / 2) ** 2 / inertia)
+    p_stop = m * vt
     pt = min(p_stop, f * pn)
+    assert pt / pn <= width / length  # both corners take an impulse (the closed form's premise)
+    assert hit.point[0] == pytest.approx(length / 2 + 0.4, abs=1e-9)
+    # the impulses' centre: the face's middle, moved along the face by the friction's moment
+    assert hit.point[1] - vt * hit.t == pytest.approx(pt * length / (2 * pn), abs=1e-9)
+    r = hit.result.bodies["car"]
     assert (p_stop < f * pn) == (hit.result.sliding is False) or f == 0.0
     assert hit.normal_impulse == pytest.approx(pn, rel=1e-9)
     assert abs(hit.tangential_impulse) == pytest.approx(pt, rel=1e-9, abs=1e-9)
     assert r.velocity[0] == pytest.approx(-e * vn, rel=1e-9, abs=1e-12)
-    assert r.velocity[1] == pytest.approx(vt - pt / m, rel=1e-9)
-    assert r.yaw_rate == pytest.approx(-pt * (length / 2) / inertia, rel=1e-9, abs=1e-12)
+    assert r.velocity[1] == pytest.approx(vt - pt / m, rel=1e-9, abs=1e-12)
+    assert r.yaw_rate == pytest.approx(0.0, abs=1e-9)
 
 
 @pytest.mark.parametrize("engine", ENGINES)

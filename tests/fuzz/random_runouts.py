@@ -29,7 +29,7 @@ from crashsim.motion import (FrictionZone, Road, RunoutOptions, ScheduledChange,
 from crashsim.motion.brakes import AirBrakes, BrakeUnit, unit_type_default
 from crashsim.vehicles import Axle, Body, BodyState, Hitch, Vehicle, chain_states
 
-__all__ = ["Case", "KINDS", "DOLLY_KINDS", "random_case"]
+__all__ = ["Case", "KINDS", "DOLLY_KINDS", "random_case", "random_scene", "random_tangle"]
 
 #: Vehicle kinds, each drawn equally often.
 KINDS = ("car", "car+trailer", "tractor-semitrailer", "doubles")
@@ -461,3 +461,82 @@ def random_scene(seed: int, i: int, *, engine: str = "scipy", kinds=KINDS, n_veh
         wheels[v.name], more = _air_braked(wheels[v.name], v, seed, i, 1210 + k)
         air += more
     return SceneCase(label + slope + roll + air, tuple(vehicles), initial, wheels, road, options, tuple(obstacles))
+
+
+def random_tangle(seed: int, i: int, *, engine: str = "scipy") -> SceneCase:
+    """Random tangle ``i`` of ``seed``: three vehicles in contact at once at the start of the run-out.
+
+    A first vehicle (any kind) moves off; a car lies against the side of one of its bodies, touching or
+    overlapping it by up to 0.4 m (the crush of an impact), and a third vehicle lies against the car's
+    other side the same way, the car pinned between them; the outer two move into it, the car drifts.
+    Sometimes a guardrail lies beyond the third vehicle.  Every pair of bodies of different vehicles
+    is apart except those two contacts.
+    """
+    from crashsim.motion import Obstacle
+
+    rng = np.random.default_rng([seed, i, 31])
+    for attempt in range(200):
+        v0 = _renamed(_vehicle(rng, KINDS[int(rng.integers(len(KINDS)))]), "v0")
+        h0 = _u(rng, -math.pi, math.pi)
+        art = [float(rng.uniform(-0.4, 0.4) * h.articulation_limit) for h in v0.hitches]
+        s0 = _u(rng, 3.0, 25.0)
+        st0 = make_hitch_consistent(v0, chain_states(v0, np.zeros(2), h0, s0 * np.array([math.cos(h0), math.sin(h0)]),
+                                                     [float(rng.normal(0, 0.3)) for _ in v0.bodies], art))
+        host = v0.bodies[int(rng.integers(len(v0.bodies)))]
+        hs = st0[host.name]
+        side = 1.0 if rng.random() < 0.5 else -1.0  # left or right of the host body
+        nx, ny = -math.sin(hs.heading) * side, math.cos(hs.heading) * side  # out of its side
+        tx, ty = math.cos(hs.heading), math.sin(hs.heading)
+        car_body, _ = _car(rng, "car")
+        v1 = Vehicle("v1", (dataclasses.replace(car_body, name="v1_car"),))
+        w0, w1 = host.width, car_body.width
+        along = _u(rng, -0.35, 0.35) * host.length
+        gap1 = -_u(rng, 0.0, 0.4) if rng.random() < 0.6 else 0.0  # overlap (crush) or touching
+        h1 = hs.heading + _u(rng, -0.15, 0.15)
+        c1 = np.array(hs.position) + along * np.array([tx, ty]) + (w0 / 2 + w1 / 2 + gap1) * np.array([nx, ny])
+        vel1 = np.array(hs.velocity) * _u(rng, 0.0, 1.0) + _u(rng, -2.0, 2.0) * np.array([nx, ny])
+        st1 = {"v1_car": BodyState(tuple(c1), h1, tuple(vel1), float(rng.normal(0, 0.3)))}
+        v2 = _renamed(_vehicle(rng, KINDS[int(rng.integers(len(KINDS)))]), "v2")
+        first = v2.bodies[0]
+        gap2 = -_u(rng, 0.0, 0.4) if rng.random() < 0.6 else 0.0
+        h2 = h1 + _u(rng, -0.3, 0.3) + (math.pi if rng.random() < 0.5 else 0.0)
+        c2 = c1 + (w1 / 2 + first.width / 2 + gap2) * np.array([nx, ny]) + _u(rng, -1.0, 1.0) * np.array([tx, ty])
+        s2 = _u(rng, 0.0, 15.0)
+        into = -_u(rng, 0.5, 4.0) * np.array([nx, ny])  # into the car
+        vel2 = s2 * np.array([math.cos(h2), math.sin(h2)]) + into
+        art2 = [float(rng.uniform(-0.3, 0.3) * h.articulation_limit) for h in v2.hitches]
+        st2 = make_hitch_consistent(v2, chain_states(v2, tuple(c2), h2, vel2, [0.0] * len(v2.bodies), art2))
+        # the first vehicle pushes into the car too
+        st0 = {n: BodyState(s.position, s.heading, tuple(np.array(s.velocity) + _u(rng, 0.5, 3.0) * np.array([nx, ny])),
+                            s.yaw_rate) for n, s in st0.items()}
+        st0 = make_hitch_consistent(v0, st0)
+        polys = {n: _outline_world(b, st[n]) for v, st in ((v0, st0), (v1, st1), (v2, st2)) for b in v.bodies
+                 for n in [b.name]}
+        owner = {b.name: v.name for v in (v0, v1, v2) for b in v.bodies}
+        touching = {(host.name, "v1_car"), ("v1_car", first.name)}
+        ok = True
+        for a in polys:
+            for b in polys:
+                if a < b and owner[a] != owner[b] and (a, b) not in touching and (b, a) not in touching:
+                    if not _apart([polys[a]], [polys[b]], 0.3):
+                        ok = False
+        if ok:
+            break
+    vehicles = (v0, v1, v2)
+    initial = {**st0, **st1, **st2}
+    wheels = {v.name: _wheels(rng, v) for v in vehicles}
+    obstacles = []
+    if rng.random() < 0.4:  # a guardrail beyond the third vehicle
+        off = np.dot(c2, [nx, ny]) + first.width / 2 + _u(rng, 1.0, 4.0)
+        a = off * np.array([nx, ny]) - 40 * np.array([tx, ty])
+        b = off * np.array([nx, ny]) + 40 * np.array([tx, ty])
+        rail = Obstacle("rail", (tuple(a), tuple(b)), thickness=0.3)
+        if all(_apart([p], rail.pieces(), 0.3) for p in polys.values()):
+            obstacles.append(rail)
+    lt = rng.random() < 0.3
+    options = RunoutOptions(engine=engine, load_transfer=lt)
+    road = _road(rng, np.zeros(2), h0, s0)
+    vehicles, options, roll = _rollover(vehicles, options, seed, i, 33)
+    label = (f"seed {seed} tangle {i}: {', '.join(str(len(v.bodies)) + ' bodies' for v in vehicles)}, overlaps "
+             f"{-gap1:.2f} / {-gap2:.2f} m, {len(obstacles)} obstacle(s)" + (", load transfer" if lt else "") + roll)
+    return SceneCase(label, vehicles, initial, wheels, road, options, tuple(obstacles))

@@ -25,16 +25,18 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import numpy as np
 import pytest
 
 from crashsim.motion import ContactModel, simulate_runout, simulate_scene
 from crashsim.motion.rollover import ROLL_EVENT_KINDS
-from random_runouts import DOLLY_KINDS, random_case, random_scene
+from random_runouts import DOLLY_KINDS, random_case, random_scene, random_tangle
 
 SEED = 20261124
 N_SINGLE = 16
 N_SCENES = 20
 N_DOLLIES = 8
+N_TANGLES = 12
 POS_TOL = 0.01  # m
 HEADING_TOL = math.radians(0.1)
 IMPACT_TOL = 1e-3  # s
@@ -126,6 +128,47 @@ def test_scene_engines_agree_and_the_ledger_closes(i):
     check_scene(random_scene(SEED, i))
 
 
+@pytest.mark.parametrize("i", range(N_TANGLES))
+def test_tangles_run_to_rest_and_nothing_makes_energy(i):
+    """Three vehicles in contact at once from the start (a car pinned between two, overlapping by up to
+    0.4 m: :func:`random_runouts.random_tangle`): both engines agree as on the other scenes, every ledger
+    line is >= 0, no point closes at the threshold outside an impact, the instants solved stay few (no
+    chatter), and with load transfer every vehicle's wheel loads sum to its weight at every sample."""
+    c = random_tangle(SEED, i)
+    runs = check_scene(c)
+    for engine, r in runs.items():
+        assert r.status == "rest", (c.label, engine, r.status, r.message)
+        assert len({m.t for m in r.impacts}) <= 40, (c.label, engine, len(r.impacts))
+        if c.options.load_transfer:
+            check_loads(r, c, (c.label, engine))
+
+
+def check_loads(run, c, label):
+    """Each vehicle's wheel loads sum to its weight at every sample (wheels that lift carry zero, the
+    others the rest: :func:`crashsim.motion.kernels.tyres.redistribute_loads`)."""
+    from crashsim.motion.loads import STANDARD_GRAVITY
+
+    for v in c.vehicles:
+        res = run.vehicles[v.name]
+        total = np.sum([w.load for w in res.wheels.values()], axis=0)
+        assert total == pytest.approx(v.mass * STANDARD_GRAVITY, rel=1e-9), (label, v.name)
+        assert np.all(np.concatenate([w.load for w in res.wheels.values()]) >= 0.0), (label, v.name)
+
+
+def test_the_tangles_are_tangles():
+    """Every drawn tangle starts with three bodies in contact at once (two pairs disarmed), most overlap,
+    and the sample has impacts of several pairs at one instant."""
+    simultaneous = 0
+    for i in range(N_TANGLES):
+        c = random_tangle(SEED, i)
+        r = simulate_scene(c.vehicles, c.initial, c.wheels, c.road, dataclasses.replace(c.options, engine="compiled"),
+                           obstacles=c.obstacles)
+        assert sum(e.kind == "armed" for e in r.events) <= 2
+        times = [m.t for m in r.impacts]
+        simultaneous += len(times) - len(set(times))
+    assert simultaneous >= 1
+
+
 def test_event_search_regression_scene():
     """Scene 2 of the seed without its air brakes: its pup strikes a car 0.9 ms before its semitrailer
     would (the regression case of the shared event search; with the air brakes the scene draws now,
@@ -145,6 +188,7 @@ def check_scene(c):
         assert abs(e["closing_error"]) <= LEDGER_TOL * e["initial"], (c.label, engine, e)
         assert e["impacts"] == pytest.approx(sum(m.energy_loss for m in r.impacts), abs=1e-6)
         check_contacts(r, (c.label, engine))
+    return runs
 
 
 def check_contacts(run, label, contact=ContactModel()):

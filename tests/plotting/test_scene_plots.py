@@ -240,7 +240,7 @@ def test_histories(path):
     scene = _scene(path)
     fig = plot_histories(scene, system="SI")
     axes = fig.axes
-    assert len(axes) == history_panels(scene) == 3 + any(p.contact_time > 0 for p in scene.joint.pairs)
+    assert len(axes) == history_panels(scene) == 3 + any(p.sustained for p in scene.joint.pairs)
     assert axes[0].get_ylabel() == "CG speed [m/s]"
     assert axes[1].get_ylabel() == "yaw rate [deg/s]"
     assert axes[2].get_ylabel() == "articulation [deg]"
@@ -296,23 +296,23 @@ def test_contact_force_panel_and_impact_lines():
     """The median-barrier slide: both bodies stay in sustained contact; the fourth panel draws
     each pair's sampled force (the pair's force track; the report's peak force, read off the
     solution at every integrator step, is at least its largest sample) and every panel marks
-    each later impact (#2 the trailer's side slap, then the re-strikes) with a vertical line at
+    each later impact event (#2 the trailer's side slap, then the re-strikes) with a vertical line at
     its time."""
     scene = _scene(ROOT / "scenarios" / "scenes" / "median_barrier_slide.toml")
     fig = plot_histories(scene)
     assert len(fig.axes) == 4 and fig.axes[3].get_ylabel() == "contact force [N]"
-    pairs = {p.name.replace("|", " \N{EN DASH} "): p for p in scene.joint.pairs if p.contact_time > 0}
+    pairs = {p.name.replace("|", " \N{EN DASH} "): p for p in scene.joint.pairs if p.sustained}
     lines = {ln.get_label(): ln for ln in fig.axes[3].get_lines() if not ln.get_label().startswith("_")}
     assert lines.keys() == pairs.keys()
     for name, ln in lines.items():
         np.testing.assert_array_equal(ln.get_ydata(), pairs[name].force)
         assert max(ln.get_ydata()) <= pairs[name].peak_force * (1 + 1e-12)
-    times = [i.t for i in scene.joint.impacts]
-    assert len(times) >= 2
+    events = scene.joint.impact_events()
+    assert len(events) >= 2
     for ax in fig.axes:
-        for t in times:
-            assert any(np.allclose(ln.get_xdata(), t) for ln in ax.get_lines())
-    assert sorted(t.get_text() for t in fig.axes[0].texts) == sorted(f"#{n}" for n in range(2, len(times) + 2))
+        for ev in events:
+            assert any(np.allclose(ln.get_xdata(), ev.t) for ln in ax.get_lines())
+    assert sorted(t.get_text() for t in fig.axes[0].texts) == sorted(f"#{ev.number}" for ev in events)
 
 
 def test_histories_need_a_runout():
@@ -382,14 +382,14 @@ def test_cli_plot_rejects_bad_suffix(tmp_path, capsys):
 
 
 def test_labels_of_impacts_close_in_time_do_not_cover_each_other():
-    """The histories' impact labels: two impacts closer than IMPACT_LABEL_GAP of the time axis are on
-    different rows (the glance scene's re-strikes come milliseconds apart)."""
+    """The histories' impact labels: two impact events closer than IMPACT_LABEL_GAP of the time axis are
+    on different rows (the pinned car's: the tractor strikes it again 4 ms before it strikes the van)."""
     from crashsim.plotting import IMPACT_LABEL_GAP
 
-    scene = _scene(ROOT / "scenarios" / "scenes" / "barrier_glance_15deg.toml")
+    scene = _scene(ROOT / "scenarios" / "scenes" / "pinned_car.toml")
     ax = plot_histories(scene).axes[0]
     labels = sorted((a.xy[0], a.xyann[1]) for a in ax.texts if (a.get_gid() or "").startswith("histories:impact:"))
-    assert len(labels) == len(scene.joint.impacts) >= 2
+    assert len(labels) == len(scene.joint.impact_events()) >= 2
     t_span = ax.get_xlim()[1] / 1.02
     close = [(a, b) for i, a in enumerate(labels) for b in labels[i + 1:] if abs(a[0] - b[0]) < IMPACT_LABEL_GAP * t_span]
     assert close, "the scene should have impacts close in time"

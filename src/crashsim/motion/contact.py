@@ -11,32 +11,33 @@ different vehicles, and every body with every fixed obstacle.
   and a step long enough to carry a body through a thin obstacle (or a corner through a
   corner) is searched at points no further apart than a fraction of the thinner piece, so
   nothing tunnels.
-* **The rule: a point that closes at ``velocity_threshold`` or faster is an impact**, solved by
-  crashsim's impulse solver (Brach's equations, hitch impulses included: a trailer that strikes
-  a car loads the kingpin and moves the tractor) with this pair's restitution e, the friction
-  law with coefficient f, and no moment impulse.  Whatever the pair was doing: apart (the
-  touch), in sustained contact (a new point arriving, or a point in contact driven in that
-  fast), or overlapped by the crush of the first impact (beyond that crush plus
-  ``arm_distance``).  Contact point and normal come from the touching geometry: the penetrating
-  vertex and the normal of the face it meets (the middle of the touching edge when an edge meets
-  a face).  An impulse that leaves another point striking at that instant is followed by that
-  impact (sequential impulses).  Where the no-slide solution of an impact needs a tensile
-  normal impulse, the contact slides throughout with Coulomb friction against the initial slip
-  (:mod:`crashsim.impact.admissible`).  If e and f are still inadmissible for the geometry,
-  the impact is solved frictionless (always admissible) and the record says so.
+* **The rule: a point that closes at ``velocity_threshold`` or faster is an impact**, whatever
+  the pair was doing: apart (the touch), in sustained contact (a new point arriving), or
+  overlapped by the crush of the first impact (pressed ``arm_distance`` beyond that crush).  A
+  point already pressed ``d`` deep counts its closing speed less ``omega d`` (``omega =
+  sqrt(k / m)``, the contact's natural frequency): its force stops that much within about as much
+  depth again, so a point driven in slowly deepens its contact instead of striking again and
+  again.  **Every point touching at that instant is solved with it, at once** (:mod:`crashsim.motion.impacts`, :func:`crashsim.impact.multicontact.solve_contacts`):
+  Newton's restitution e and Coulomb friction f at each point, the hitches as pins that hold, the
+  closed articulation stops as one-sided rows, no moment impulse; with one point this is crashsim's
+  impulse solver (Brach's equations with the friction law).  The points that strike are solved
+  first, then those they drive in, then every point at once.  A car pinned between two vehicles is
+  one problem of two pairs, not impulses chattering from one pair to the other.
 * **Sustained contact** (below the threshold: resting and sliding contact): a penalty force at
-  each contact point on the depth ``d``, ``F_n = max(0, k d + c d')`` with
-  ``c = 2 zeta sqrt(k m)`` (``m`` the pair's reduced mass; ``zeta = 1``: no bounce), and
-  Coulomb friction ``f F_n`` against the sliding.  This is the force model of SMAC-type
-  programs (EDSMAC, HVE's DyMESH) used only below the impulse threshold, so a car pinned
-  against a trailer or a truck sliding along a guardrail does not chatter into thousands of
-  impulses.  Bodies in contact stay within ``F_n / k`` of each other: 1 cm per 100 kN of
-  contact force at the default stiffness.  The pair leaves contact when the gap exceeds
-  ``arm_distance``.
+  each contact point on the depth ``d`` beyond its allowance,
+  ``F_n = max(0, k d + c d' min(1, d / DAMPER_DEPTH))`` with ``c = 2 zeta sqrt(k m)`` (``m`` the
+  pair's reduced mass; ``zeta = 1``: no bounce; the damper takes hold over the first 2 mm, so a
+  slow touch starts from zero force), and Coulomb friction ``f F_n`` against the sliding.  This is
+  the force model of SMAC-type programs (EDSMAC, HVE's DyMESH) used only below the impulse
+  threshold, so a car pinned against a trailer or a truck sliding along a guardrail does not
+  chatter into thousands of impulses.  Bodies in contact stay within ``F_n / k`` of each other:
+  1 cm per 100 kN of contact force at the default stiffness.  The pair leaves contact when the gap
+  exceeds ``arm_distance``.
 * **The crush of the impact that starts the run-out** is not a contact: a pair that overlaps
-  (or nearly touches) at separation is *disarmed*; it is armed once its outlines have separated
-  by ``arm_distance``, and if instead it is pressed ``arm_distance`` deeper into the crush, it
-  enters sustained contact with the crush as an allowance (force only on the further depth),
+  (or nearly touches) at separation is *disarmed* (no force); it is armed once its outlines have
+  separated by ``arm_distance``, and if instead it is pressed ``arm_distance`` deeper into the
+  crush, it enters sustained contact with the crush as an allowance attached to the material
+  (:func:`crashsim.motion.kernels.contacts.piece_points`), the force starting from zero there,
   or, closing at the threshold there, strikes.
 
 Defaults and where they come from

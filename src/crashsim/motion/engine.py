@@ -11,9 +11,9 @@ pair), located on the integrator's dense output, or at a scheduled change.  What
 event is the kernels' :func:`~crashsim.motion.kernels.handle_event` and
 :func:`~crashsim.motion.kernels.settle`, the same code for both engines.
 
-A touch at speed stops the integration: the impact is solved here by the impulse solver
-(:func:`_secondary_impact`), the velocities jump, the pair enters sustained contact, and the
-integration goes on.  A vehicle whose bodies are all below ``v_stop`` is parked (frozen) until
+A touch at speed stops the integration: the impact of every point touching at that instant is
+solved at once (:func:`crashsim.motion.impacts.impact_instant`), the velocities jump, the pairs
+enter sustained contact, and the integration goes on.  A vehicle whose bodies are all below ``v_stop`` is parked (frozen) until
 a contact or an impact moves it again; the run ends when every vehicle is parked.
 
 The engines differ only in the integrator of a segment: SciPy's ``LSODA`` (or another
@@ -50,11 +50,10 @@ from numba.core import event as numba_event
 from scipy.integrate import BDF, DOP853, LSODA, RK45, Radau
 from scipy.optimize import brentq
 
-from ..errors import InadmissibleImpactError, ScenarioError, SolverError
-from ..impact import CrushSurface, ImpactProblem, TangentialLaw, solve_impact
-from ..vehicles import Body, BodyState, Vehicle
-from .hitches import make_hitch_consistent
+from ..errors import ScenarioError, SolverError
+from ..vehicles import BodyState
 from .compiled_solution import CompiledSolution
+from .impacts import impact_instant
 from .scene_model import SceneModel, kernels
 from .options import MAX_STILL_SEGMENTS
 from .postprocess import GL_NODES, GL_WEIGHTS, assemble_scene, mode_snapshot, segment_arrays, split_track
@@ -75,11 +74,6 @@ _YAW_LOCK_TOL = 1e-3
 #: Absolute tolerance of the contact work integrated with the state (SciPy engine), relative to
 #: the kinetic energy at the start of the run: the ledger is to close to 1e-6 of it.
 _WORK_ATOL = 1e-9
-#: Impacts solved at one instant after a touch, one point after another (sequential impulses:
-#: an impulse at one point can leave another point still striking). Beyond this number a
-#: remaining strike is left to the penalty force (a point that cannot be stopped by impulses
-#: at one instant: pinned between two bodies).
-MAX_STRIKES_AT_ONCE = 8
 
 
 def _status_names():
@@ -448,6 +442,23 @@ def _first_root(k, M, phase, D, t, t_new, dense, g_old, g_new, r_old, r_new, ev_
                         root = ta
                     elif gb != 0.0 and (ga < 0) != (gb < 0):
                         root = brentq(g, ta, tb, xtol=eps4, rtol=eps4)
+                        # the crossed side of the root, as the kernels' brent returns it: the handler sees
+                        # the state past a jump of the value. Where the root found lies before the jump
+                        # (a value that flickers as a point arrives), bisection on [root, tb] to the
+                        # tolerance: a crossed time within it of one not crossed, not the step's end
+
+                        def crossed(v):
+                            return v == 0.0 or (v < 0) == (gb < 0)
+
+                        if not crossed(g(root)):
+                            lo, hi = root, tb
+                            while hi - lo > 2 * eps4 * (1 + abs(hi)):
+                                mid = 0.5 * (lo + hi)
+                                if crossed(g(mid)):
+                                    hi = mid
+                                else:
+                                    lo = mid
+                            root = hi
                 if root < t_first:
                     t_first, fired = root, e
                 break
@@ -573,93 +584,6 @@ def _pair_vehicles(model: SceneModel, pair) -> tuple:
     return tuple(out)
 
 
-# ============================================================================= secondary impacts
-def _secondary_impact(model: SceneModel, t: float, y: np.ndarray, geo: np.ndarray, D, offsets: np.ndarray,
-                      log: list) -> tuple[SecondaryImpact, RunoutEvent]:
-    """Solve the impact of a touch with the impulse solver; update ``y`` and the mode ``D`` in place.
-
-    The impulse solver takes the hitches as free pins.  A closed articulation stop of an involved
-    vehicle is then reconciled at the same instant (:func:`crashsim.motion.kernels.reconcile_stops`):
-    released if the impact turns the articulation away from it, else a plastic stop impact whose
-    loss goes to the stop-impact line of the energy ledger (appended to ``log`` after the
-    returned impact event).  The impact's delta-v includes that stop reaction (the velocity
-    change of the instant); its energy loss is the crush impulse's alone.
-    """
-    p = int(geo[0])
-    pair = model.pairs[p]
-    names = model.layout.bodies
-    ia = names.index(pair.a)
-    va = model.vehicle_of_body(ia)
-    states = model.layout.unpack(y)
-    involved = [va]
-    if pair.obstacle:
-        vb = Vehicle(pair.b, (Body(pair.b, math.inf, math.inf),))
-        states[pair.b] = BodyState((float(geo[1]), float(geo[2])), 0.0, (0.0, 0.0), 0.0)
-    else:
-        vb = model.vehicle_of_body(names.index(pair.b))
-        involved.append(vb)
-    sub = {}
-    for v in involved:
-        sub.update(make_hitch_consistent(v, {b.name: states[b.name] for b in v.bodies}, position_tol=0.05))
-    if pair.obstacle:
-        sub[pair.b] = states[pair.b]
-    point = (float(geo[1]), float(geo[2]))
-    angle = math.atan2(float(geo[4]), float(geo[3]))
-    c = pair.contact
-    law, warning = "friction", ""
-
-    def problem(tangential):
-        return ImpactProblem((va, vb), sub, pair.a, pair.b, CrushSurface(point, angle, c.restitution, tangential, -1.0, 1))
-
-    try:
-        result = solve_impact(problem(TangentialLaw("friction", c.friction)))
-    except InadmissibleImpactError as exc:
-        law = "frictionless"
-        warning = (f"the contact coefficients are inadmissible for this geometry ({exc.reason}); solved "
-                   "frictionless (mu = 0) instead")
-        result = solve_impact(problem(TangentialLaw("ratio", 0.0)))
-    L = model.layout
-    k = kernels()
-    ke_before = model.kinetic_energy(y)
-    v_before = {b.name: (y[L.vx][names.index(b.name)], y[L.vy][names.index(b.name)]) for v in involved for b in v.bodies}
-    for v in involved:
-        for b in v.bodies:
-            i = names.index(b.name)
-            bi = result.bodies[b.name]
-            y[L.vx.start + i], y[L.vy.start + i], y[L.w.start + i] = bi.velocity[0], bi.velocity[1], bi.yaw_rate
-    loss = ke_before - model.kinetic_energy(y)
-    mask = np.zeros(len(model.vehicles), dtype=np.int64)
-    for v in involved:
-        mask[model.vehicles.index(v)] = 1
-    stop_records = k.reconcile_stops(y, model.M, D, offsets, mask)
-    delta_v = {}
-    for name, (vx0, vy0) in v_before.items():
-        i = names.index(name)
-        delta_v[name] = (float(y[L.vx][i] - vx0), float(y[L.vy][i] - vy0))
-    if D.pstate[p] == k.PS_DISARMED:  # struck outside the crush: the force starts from this depth, as a press
-        D.pref[p, k.A_DEPTH] = max(D.pref[p, k.A_DEPTH], -float(k.pair_geometry(y, model.M, p)[0]))
-    D.pstate[p] = k.PS_CONTACT  # the allowance (the crush of the first impact, if any) is kept
-    for v in involved:
-        D.parked[model.vehicles.index(v)] = 0
-    record = SecondaryImpact(t=t, body1=pair.a, body2=pair.b, point=np.array(point), normal=np.array(geo[3:5]),
-                             closing_speed=float(-geo[5]), normal_impulse=result.normal_impulse,
-                             tangential_impulse=result.tangential_impulse, energy_loss=float(loss), delta_v=delta_v,
-                             law=law, restitution=c.restitution, friction=0.0 if law == "frictionless" else c.friction,
-                             result=result, warning=warning)
-    dv = ", ".join(f"{n} {math.hypot(*d):.3g} m/s" for n, d in delta_v.items() if n in (pair.a, pair.b))
-    event = RunoutEvent(t, "impact", f"{pair.a} strikes {pair.b} at {-geo[5]:.3g} m/s: normal impulse "
-                                     f"{result.normal_impulse:.4g} N s, delta-v {dv}, {loss:.4g} J lost"
-                                     + (f" ({warning})" if warning else ""),
-                        float(loss), tuple(v.name for v in involved),
-                        {"pair": pair.name, "speed_m_s": float(-geo[5]), "normal_impulse_N_s": result.normal_impulse,
-                         "delta_v_m_s": {n: math.hypot(*d) for n, d in delta_v.items() if n in (pair.a, pair.b)},
-                         "energy_J": float(loss), "bodies": [pair.a, pair.b]},
-                        place=(float(point[0]), float(point[1])))
-    log.append(event)
-    _log_records(model, t, stop_records, log)
-    return record, event
-
-
 # ============================================================================= the run
 def check_scene_hitches(model: SceneModel, y: np.ndarray) -> None:
     """Pins together, pin velocities equal, articulation inside its limit, for every hitch (else ScenarioError)."""
@@ -729,6 +653,7 @@ def run_model(model: SceneModel, initial: Mapping[str, BodyState], *, lean=None)
     npairs = len(model.pairs)
     quad = np.zeros(model.n_bodies + 3 * model.n_wheels + npairs)
     impacts: list[SecondaryImpact] = []
+    events_done = 0  # instants solved after the first impact
     t = 0.0
     names = _status_names()
     while True:
@@ -736,22 +661,15 @@ def run_model(model: SceneModel, initial: Mapping[str, BodyState], *, lean=None)
             code, t, y, geo = integrator.integrate(t, y, D, offsets, clock, counters, quad, log)
         if code != k.ST_IMPACT:
             break
-        if len(impacts) >= o.max_impacts:
+        if events_done >= o.max_impacts:
             status = "event_limit"
             message = (f"stopped at t = {t:.4g} s (simulated) before rest: more than max_impacts = {o.max_impacts} "
-                       f"secondary impacts; the last between {model.pairs[int(geo[0])].name}")
+                       f"later impacts; the last between {model.pairs[int(geo[0])].name}")
             code = None
             break
-        record, _ = _secondary_impact(model, t, y, geo, D, offsets, log)
-        impacts.append(record)
-        # an impulse can leave another point striking at this instant (the other end of an
-        # edge, a pair of the bodies it moved): each is an impact too, up to MAX_STRIKES_AT_ONCE
-        for _ in range(MAX_STRIKES_AT_ONCE):
-            nxt = k.pending_strike(y, M, D)
-            if nxt[0] < 0 or len(impacts) >= o.max_impacts:
-                break
-            record, _ = _secondary_impact(model, t, y, nxt, D, offsets, log)
-            impacts.append(record)
+        # every point touching at this instant, solved at once (one impact event)
+        events_done += 1
+        impacts += impact_instant(model, t, y, geo, D, offsets, log, impacts)
         _log_records(model, t, k.settle_at(y, M, D), log)
     if code is not None:
         status = names[code]

@@ -30,9 +30,15 @@ __all__ = [
     "STATUS_MEANING",
     "limit_message",
     "SecondaryImpact",
+    "PairImpulse",
+    "ImpactEvent",
+    "impact_events",
     "PairSummary",
     "SceneRunout",
 ]
+
+#: A sustained-contact force below this [N] is no force (round-off at a contact that carries nothing).
+FORCE_FLOOR = 1.0
 
 #: Why a run-out stopped: at rest, or which limit or failure ended it (only ``"rest"`` is a success).
 STATUSES = ("rest", "time_limit", "event_limit", "evaluation_limit", "wall_time_limit", "solver_failure")
@@ -544,8 +550,61 @@ class RunoutResult:
 
 
 @dataclass(frozen=True, eq=False)
+class PairImpulse:
+    """One pair's share of a simultaneous impact, as the evidence checks read an impact (SI, world frame).
+
+    Attributes
+    ----------
+    body1, body2 : str
+        The pair (``body2`` may be a fixed obstacle); impulses act on body1, minus them on body2.
+    normal_impulse, tangential_impulse : float
+        Sums over the pair's contact points [N s].
+    bodies : dict of str to BodyImpact
+        Every body of the pair's vehicles: velocities before and after the instant, and the velocity
+        change this pair's impulses alone caused (``delta_v``; the shares of all pairs and closed stops
+        of the instant sum to its whole change); the PDOF of the pair's impulse on body1 and body2.
+    energy_loss_normal, energy_loss_tangential : float
+        The work the pair's normal and friction impulses took [J] (:class:`crashsim.impact.multicontact.ContactSolution`).
+    kinetic_energy : dict
+        ``{"system": {"before": ..., "after": ...}}`` [J]: the kinetic energy before the instant and
+        that less this pair's share of the loss.
+    sliding : bool
+        A point of the pair still slides along the other body after the impact (its friction at f).
+    closing_velocity, separation_normal_velocity, separation_tangential_velocity : float
+        The normal relative velocity of the pair's points before the impact (< 0: approaching) and their
+        normal and tangential relative velocities after it [m/s], means weighted by the points' normal
+        impulses (as :class:`crashsim.impact.ImpactResult` gives them for its one point).
+    """
+
+    body1: str
+    body2: str
+    normal_impulse: float
+    tangential_impulse: float
+    bodies: dict
+    energy_loss_normal: float
+    energy_loss_tangential: float
+    kinetic_energy: dict
+    sliding: bool = False
+    closing_velocity: float = 0.0
+    separation_normal_velocity: float = 0.0
+    separation_tangential_velocity: float = 0.0
+    energy_loss_moment: float = 0.0
+    #: Work of impulses other than the contacts' [J] (none here: :attr:`crashsim.impact.ImpactResult.work`'s keys)
+    work: dict = field(default_factory=dict)
+
+    @property
+    def energy_loss_crush(self) -> float:
+        """Work of the pair's impulses [J] (normal, tangential and moment parts)."""
+        return self.energy_loss_normal + self.energy_loss_tangential + self.energy_loss_moment
+
+
+@dataclass(frozen=True, eq=False)
 class SecondaryImpact:
-    """An impact during the run-out, solved by the impulse solver (SI, world frame).
+    """One pair's part of an impact during the run-out (SI, world frame).
+
+    Every impact of the run-out is simultaneous: all the points of any bodies touching at its
+    instant are solved together (:func:`crashsim.impact.multicontact.solve_contacts`); a record is
+    one pair's share of it, and the records of one instant share their ``event`` number.
 
     Attributes
     ----------
@@ -555,23 +614,30 @@ class SecondaryImpact:
         The bodies in contact (``body2`` may be a fixed obstacle); the normal points from body2
         into body1 and the impulse acts on body1.
     point, normal : ndarray (2,)
-        Contact point [m] and crush-surface normal.
+        Contact point [m] (the mean of the pair's points, weighted by their normal impulses) and
+        the mean normal.
     closing_speed : float
-        Approach speed of the contact points along the normal before the impact [m/s].
+        Approach speed of the pair's fastest point along its normal before the impact [m/s].
     normal_impulse, tangential_impulse : float
         [N s].
     energy_loss : float
-        Kinetic energy lost in the impact [J].
+        Kinetic energy this pair's impulses took [J] (the records of an instant sum to its loss).
     delta_v : dict
-        Velocity change of every body of the two vehicles [m/s], world frame, ``{body: (dvx, dvy)}``.
+        Velocity change of every body of the two vehicles that this pair's impulses caused [m/s],
+        world frame, ``{body: (dvx, dvy)}``.
     law : str
-        ``"friction"`` with the pair's coefficients, or ``"frictionless"`` where those were
-        inadmissible for the geometry (``warning`` says why).
+        ``"friction"`` with the pair's coefficients; ``"plastic"`` (e = 0) or ``"frictionless"``
+        where Newton's law would have made energy for the geometry (``warning`` says so).
     restitution, friction : float
         The coefficients used.
-    result : ImpactResult
-        The impulse solver's full answer.
+    result : PairImpulse
+        What the evidence checks read of it.
     warning : str
+    event : int
+        The impact event the record belongs to: 2 for the first instant after the first impact,
+        then 3, ... (the figures and reports number events).
+    points : int
+        Contact points of the pair in the solve.
     """
 
     t: float
@@ -589,10 +655,13 @@ class SecondaryImpact:
     friction: float
     result: Any = None
     warning: str = ""
+    event: int = 2
+    points: int = 1
 
     def to_dict(self) -> dict:
         return jsonable({
-            "time": self.t, "body1": self.body1, "body2": self.body2, "point": self.point, "normal": self.normal,
+            "time": self.t, "event": self.event, "points": self.points,
+            "body1": self.body1, "body2": self.body2, "point": self.point, "normal": self.normal,
             "closing_speed": self.closing_speed, "normal_impulse": self.normal_impulse,
             "tangential_impulse": self.tangential_impulse, "energy_loss": self.energy_loss,
             "delta_v": {k: {"vector": list(v), "magnitude": float(np.hypot(*v))} for k, v in self.delta_v.items()},
@@ -611,6 +680,64 @@ def _work_split(result) -> dict:
 
 
 @dataclass(frozen=True, eq=False)
+class ImpactEvent:
+    """The impacts reports and figures number as one: every pair of one instant, and the instants that
+    follow within :data:`crashsim.motion.impacts.IMPACT_EVENT_WINDOW` between the same bodies (the
+    bounces of one collision).
+
+    Attributes
+    ----------
+    number : int
+        2 for the first event after the first impact, then 3, ...
+    t : float
+        Its first instant [s].
+    records : tuple of SecondaryImpact
+        The pairs' shares, in time order.
+    """
+
+    number: int
+    t: float
+    records: tuple
+
+    @property
+    def energy_loss(self) -> float:
+        """Kinetic energy the event took [J]."""
+        return float(sum(r.energy_loss for r in self.records))
+
+    @property
+    def instants(self) -> int:
+        return len({r.t for r in self.records})
+
+    @property
+    def pairs(self) -> tuple:
+        return tuple(dict.fromkeys(f"{r.body1}|{r.body2}" for r in self.records))
+
+    def delta_v(self) -> dict:
+        """Velocity change of every body the event moved [m/s] (world frame, the sum of its records)."""
+        out: dict = {}
+        for r in self.records:
+            for b, d in r.delta_v.items():
+                a = out.get(b, (0.0, 0.0))
+                out[b] = (a[0] + d[0], a[1] + d[1])
+        return out
+
+    def to_dict(self) -> dict:
+        return jsonable({"event": self.number, "time": self.t, "instants": self.instants, "pairs": list(self.pairs),
+                         "energy_loss": self.energy_loss,
+                         "normal_impulse": float(sum(r.normal_impulse for r in self.records)),
+                         "delta_v": {k: {"vector": list(v), "magnitude": float(np.hypot(*v))}
+                                     for k, v in self.delta_v().items()}})
+
+
+def impact_events(impacts) -> list[ImpactEvent]:
+    """``impacts`` (SecondaryImpact records with their ``event`` numbers) grouped as ImpactEvent objects."""
+    groups: dict = {}
+    for r in impacts:
+        groups.setdefault(r.event, []).append(r)
+    return [ImpactEvent(n, float(rs[0].t), tuple(rs)) for n, rs in sorted(groups.items())]
+
+
+@dataclass(frozen=True, eq=False)
 class PairSummary:
     """What happened between two bodies (or a body and an obstacle) during the run-out.
 
@@ -618,7 +745,7 @@ class PairSummary:
     ----------
     name, body1, body2 : str
     impacts : int
-        Secondary impacts of the pair.
+        Impact instants in which the pair took an impulse.
     contact_time : float
         Time spent in sustained contact [s]: the span of the pair's contact events (from a
         touch, a press or an impact to the contact's end, or to the end of the run).
@@ -636,9 +763,11 @@ class PairSummary:
     t, force : ndarray
         The sampled sustained-contact force on body1 [N] against time [s].
     max_closing : float
-        Fastest closing speed [m/s] of a point pressed beyond the allowance while the pair was
-        in contact or disarmed, outside its impacts (from the solution): below the pair's
-        impulse threshold, since a faster one is an impact (the re-strike rule).
+        Largest strike measure [m/s] of a point pressed beyond the allowance while the pair was
+        in contact or disarmed, outside its impacts (from the solution): its closing speed less
+        the speed its depth ``e`` holds, ``omega e`` (``omega = sqrt(k / m_eff)``; the closing
+        speed itself for a point at the surface). Below the pair's impulse threshold, since a
+        larger one is an impact (the re-strike rule).
     """
 
     name: str
@@ -652,6 +781,12 @@ class PairSummary:
     t: np.ndarray = field(default_factory=lambda: np.zeros(0))
     force: np.ndarray = field(default_factory=lambda: np.zeros(0))
     max_closing: float = 0.0
+
+    @property
+    def sustained(self) -> bool:
+        """The pair pressed on each other with a force (a peak above :data:`FORCE_FLOOR`: less is round-off
+        of the integration at a contact that carries nothing)."""
+        return self.peak_force > FORCE_FLOOR
 
     def to_dict(self, history: bool = False) -> dict:
         d = {k: v for k, v in self.__dict__.items() if k not in ("t", "force")}
@@ -703,11 +838,16 @@ class SceneRunout:
     def success(self) -> bool:
         return self.status == "rest"
 
+    def impact_events(self) -> list["ImpactEvent"]:
+        """The impacts grouped into the events reports and figures number (:class:`ImpactEvent`)."""
+        return impact_events(self.impacts)
+
     def to_dict(self, *, history: bool = True) -> dict:
         return jsonable({
             "status": self.status, "message": self.message, "t_end_s": self.t_end, "method": self.method,
             "nfev": self.nfev, "n_segments": self.n_segments,
             "impacts": [i.to_dict() for i in self.impacts],
+            "impact_events": [e.to_dict() for e in self.impact_events()],
             "pairs": [p.to_dict() for p in self.pairs],
             "energy_J": self.energy,
             "events": [{"t_s": e.t, "kind": e.kind, "detail": e.detail, "energy_J": e.energy,

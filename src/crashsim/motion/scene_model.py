@@ -340,7 +340,8 @@ class SceneModel:
             pr_body.append((ia, ib))
             res = min(CONTACT_RESOLUTION, 0.25 * min([thick[q] for q in body_pieces[ia]] + [thick[q] for q in ib_pieces]))
             pr_par.append([model.stiffness, 2.0 * model.damping_ratio * math.sqrt(model.stiffness * m_eff),
-                           model.friction, model.arm_distance, model.velocity_threshold, res])
+                           model.friction, model.arm_distance, model.velocity_threshold, res,
+                           math.sqrt(model.stiffness / m_eff)])
             self.pairs.append(Pair(self.bodies[ia].name, name_b, obstacle, model))
 
         for ia in sorted(body_pieces):

@@ -338,7 +338,7 @@ def scene_outputs(scene) -> dict[str, float]:
         out[f"energy_loss.{k}"] = float(v)
     joint = getattr(scene, "joint", None)
     if joint is not None:
-        out["impacts.later"] = float(len(joint.impacts))
+        out["impacts.later"] = float(len(joint.impact_events()))
         for r in scene.runout.values():
             for name in r.bodies:
                 own = body_impacts(name, imp, joint.impacts)

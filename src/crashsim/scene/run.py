@@ -126,14 +126,15 @@ class SceneResult:
     def impacts(self) -> list[dict]:
         """Every impact in time order, the first (t = 0) and those of the run-out (SI, world frame).
 
-        Each: ``time`` [s] after the first separation, ``body1``, ``body2``, ``point`` [m],
+        Each: ``time`` [s] after the first separation, ``event`` (the number reports and figures give it: 1
+        for the first; the pairs of one instant, and its bounces, share one), ``body1``, ``body2``, ``point`` [m],
         ``normal``, ``normal_impulse`` and ``tangential_impulse`` [N s], ``energy_loss`` [J] (kinetic)
         and its parts by the work of the impulses ``energy_loss_normal``, ``energy_loss_tangential``,
         ``energy_loss_moment`` [J], ``delta_v`` (per body of the two vehicles: ``vector`` [m/s] and ``magnitude``).
         """
         imp = self.impact
         ke = imp.kinetic_energy["system"]
-        first = {"time": 0.0, "body1": imp.body1, "body2": imp.body2, "point": [float(v) for v in imp.point],
+        first = {"time": 0.0, "event": 1, "body1": imp.body1, "body2": imp.body2, "point": [float(v) for v in imp.point],
                  "normal": [float(v) for v in imp.normal], "normal_impulse": imp.normal_impulse,
                  "tangential_impulse": imp.tangential_impulse, "energy_loss": ke["before"] - ke["after"],
                  "closing_speed": -imp.closing_velocity, "law": imp.tangential_law,

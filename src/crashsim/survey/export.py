@@ -108,10 +108,10 @@ def export_items(scene, times=()) -> list[ExportItem]:
                 if len(seg.points) >= 2:
                     out.append(ExportItem("CRASHSIM-TRACK-" + ("SLIDING" if seg.kind == "sliding" else "ROLLING"),
                                           "line", np.asarray(seg.points, dtype=float)))
-    for i, imp in enumerate(scene.impacts):
+    for imp in scene.impacts:  # numbered by event, as the figures and the report number them
         p = np.asarray(imp["point"], dtype=float)[None]
         out.append(ExportItem("CRASHSIM-IMPACTS", "point", p))
-        out.append(ExportItem("CRASHSIM-IMPACTS", "text", p, text=f"{i + 1}"))
+        out.append(ExportItem("CRASHSIM-IMPACTS", "text", p, text=f"{imp['event']}"))
     rep = scene.evidence
     if rep is not None:
         checks = {(c.kind, c.name): c for c in rep.checks}

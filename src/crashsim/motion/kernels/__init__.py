@@ -45,24 +45,31 @@ Contact (between bodies of different vehicles, and between a body and a fixed ob
   0 touching, < 0 overlapping (minus the smallest penetration along a face normal).  The gap
   of a pair is the least over its piece pairs: continuous, so its sign change is a solver
   event like any other.
-* **Manifold** (the contact points of overlapping or touching pieces, as Box2D builds it):
-  reference face = the face of largest separation; incident edge = the other polygon's edge
-  most opposed to it, clipped to the reference face's side planes; the clipped points below
-  the face are the contact points, each with its depth.  The normal points from B into A.
-* **States.**  ``PS_DISARMED`` (overlapping at separation, the crush of the primary impact:
-  no contact force until the pieces have separated by ``R_ARM`` (-> armed), or pressed more
-  than ``R_ARM`` deeper than the allowance ``pref`` (-> contact, the allowance kept));
-  ``PS_ARMED`` (apart: the gap event detects the next touch); ``PS_CONTACT`` (sustained
-  contact: a penalty force at every manifold point, ``F_n = max(0, k e + c e')`` on the depth
-  ``e`` beyond the allowance, with Coulomb friction ``mu_c F_n`` against the tangential
-  slip, regularised like the tyres; left when the gap exceeds ``R_ARM``).
+* **Contact points** (:func:`~crashsim.motion.kernels.contacts.piece_points`).  A pair without a
+  crush allowance: the Box2D-style manifold of touching or shallowly overlapping pieces
+  (reference face = the face of largest separation; incident edge = the other polygon's edge most
+  opposed to it, clipped to the reference face's side planes; the clipped points below the face,
+  each with its depth).  A pair with one (the crush of the first impact): every vertex of either
+  piece inside the other, its depth beyond the allowance of its material (how deep it lay there
+  when the allowance was set), so that the penalty derives from a potential.  The normal points
+  from B into A.
+* **States.**  ``PS_DISARMED`` (overlapping or within ``R_ARM`` at separation, the crush of the
+  primary impact: no contact force; armed once the pieces have separated by ``R_ARM``; pressed
+  ``R_ARM`` beyond the crush allowance -> contact, the allowance set again where the bodies are
+  then, so the force starts from zero); ``PS_ARMED`` (apart: the gap event detects the next touch);
+  ``PS_CONTACT`` (sustained contact: a penalty force at every contact point,
+  ``F_n = max(0, k e + c e' min(1, e / DAMPER_DEPTH))`` on the depth ``e`` beyond the allowance,
+  with Coulomb friction ``mu_c F_n`` against the tangential slip, regularised like the tyres; left
+  when the gap exceeds ``R_ARM``).
 * **Strikes.**  A pair in contact or disarmed carries the strike event (``EV_STRIKE``,
-  :func:`~crashsim.motion.kernels.contacts.strike_speed`): the closing speed of its points pressed beyond the allowance (a
-  disarmed pair's: the crush plus ``R_ARM``) minus ``R_VTHR``.  It crosses zero where a point
-  arrives that fast (the value jumps; the root is the arrival) or a point in contact is driven
-  in that fast: an impact, as the touch of an armed pair at that speed is.  After any velocity
-  jump (an impulse, an articulation-stop impact) :func:`~crashsim.motion.kernels.contacts.find_strike` looks for points left
-  striking.
+  :func:`~crashsim.motion.kernels.contacts.strike_speed`): the largest closing speed of its points
+  pressed beyond the allowance, each less ``R_OMEGA`` times its depth (a disarmed pair's points of
+  the crush left out: pressing on into it is the crush going on), minus ``R_VTHR``.  It crosses zero
+  where a point arrives that fast (the value jumps; the root is the arrival, located on the crossed
+  side) or a point in contact is driven in faster than its depth holds: an impact, as the touch of
+  an armed pair at that speed is.  The impact is solved in
+  Python for every point touching at that instant at once
+  (:func:`~crashsim.motion.kernels.contacts.contact_rows`, :mod:`crashsim.motion.impacts`).
 """
 
 from __future__ import annotations

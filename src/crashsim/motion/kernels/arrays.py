@@ -74,7 +74,7 @@ KernelModel = namedtuple("KernelModel", [
 #:   articulation stops (hitch, locked angle) and their count;
 #: * ``shift`` (max(nh, 1),) [rad]: raised thresholds of stops that were left;
 #: * ``pstate`` (np,) int: contact state of every pair (``PS_*``); ``pref`` (np, N_A): its
-#:   allowance (``A_*``: depth allowance [m], crush circle of the first impact [m]);
+#:   crush allowance (``A_*``: a flag and the poses of its bodies when the run-out started);
 #: * ``parked`` (nv,) int: 1 for a vehicle at rest (its bodies frozen).
 Mode = namedtuple("Mode", ["memb", "lk_j", "lk_th", "lk_n", "shift", "pstate", "pref", "parked"])
 
@@ -88,11 +88,12 @@ Mode = namedtuple("Mode", ["memb", "lk_j", "lk_th", "lk_n", "shift", "pstate", "
 #: * ``multipliers`` (m_max,): hitch forces on the front body [N], then stop moments [N m];
 #: * ``trig`` (2, nb): cos and sin of the body headings;
 #: * ``pair_power`` (np,): power of each pair's contact forces on the bodies [W];
-#: * ``manifold_pts`` (2, 3): scratch for a contact manifold (x, y, depth) [m];
+#: * ``contact_pts`` (2 x the most vertices of a piece, N_Q): scratch for the contact points of two pieces
+#:   (:func:`crashsim.motion.kernels.contacts.piece_points`, ``Q_*`` columns);
 #: * ``contact_force`` (2 nb,): the contacts' share of ``body_force``, world-frame x.., y.. [N]
 #:   (written only in scenes with contact pairs; the load transfer reads it).
 Work = namedtuple("Work", ["wheel_out", "body_force", "jacobian", "gram", "multipliers", "trig", "pair_power",
-                           "manifold_pts", "contact_force"])
+                           "contact_pts", "contact_force"])
 
 #: The modes of a run's stored segments, stacked (segment first), for the post-processing
 #: kernels: ``phase`` (ns,) wheel-setting phase, ``nlk`` (ns,) the number of closed stops, and
@@ -149,19 +150,44 @@ N_W = 10
 #: The margin columns of ``Work.wheel_out`` (first and end).
 W_M0, W_M1 = W_MSAT, W_MLIFT + 1
 # pair parameters (pair_par columns): contact stiffness [N/m], damping [N s/m], contact friction,
-# arming distance [m], impulse threshold [m/s], event resolution [m]
-R_K, R_C, R_MU, R_ARM, R_VTHR, R_RES = range(6)
-N_R = 6
+# arming distance [m], impulse threshold [m/s], event resolution [m], and the contact's natural
+# frequency sqrt(k / m_eff) [1/s] (m_eff the pair's reduced mass: the closing speed a point pressed e
+# deep is held at, omega e, counts against its strike, crashsim.motion.kernels.contacts.strike_scan)
+R_K, R_C, R_MU, R_ARM, R_VTHR, R_RES, R_OMEGA = range(7)
+N_R = 7
 # pair states
 PS_DISARMED, PS_ARMED, PS_CONTACT = 0, 1, 2
-# pair allowance columns (D.pref, one row per pair): the depth allowance [m], and the crush of the
-# first impact as a circle in body A's axes: centre x, y and radius [m] (radius 0: none)
-A_DEPTH, A_CX, A_CY, A_R = range(4)
-N_A = 4
-# Reach of the crush of the first impact beyond the extent of its overlap [m]: points of a
-# disarmed pair within it are the crush (pressing on is sustained contact, not a new impact);
-# points farther away meet the other body anew (a strike counts from the surface)
+# pair allowance columns (D.pref, one row per pair): whether the pair has a crush allowance (1.0: its
+# outlines overlapped or lay within the arming distance at the start of the run-out, the crush of the first
+# impact), and the poses of its
+# bodies A and B at that start (x, y [m], heading [rad]; B's unused for an obstacle): a point of one body
+# that lay inside the other then is crushed material, allowed as deep as it lay
+# (:func:`crashsim.motion.kernels.contacts.crush_allowance`)
+A_CRUSH, A_XA, A_YA, A_PA, A_XB, A_YB, A_PB = range(7)
+N_A = 7
+# A_CRUSH of a pair pressed on beyond its crush at this instant (its allowance just set there): an impact
+# solved now is the first impact's crush going on, e = 0 at its points (crashsim.motion.impacts)
+PRESSED = 2.0
+# contact point columns (Work.contact_pts rows, crashsim.motion.kernels.contacts.piece_points): world x, y [m],
+# the normal from B into A, the depth beyond the allowance [m], the allowance [m], and 1.0 for a point of the
+# crush of the first impact (its material point lay inside the other piece at the start, or within
+# CRUSH_REACH of it)
+Q_X, Q_Y, Q_NX, Q_NY, Q_DEPTH, Q_ALLOW, Q_CRUSH = range(7)
+N_Q = 7
+# Reach of the crush of the first impact [m]: a point of a disarmed pair whose material point lay inside the
+# other body at the start of the run-out, or within this distance of it, is the first impact's crush (pressing
+# on is sustained contact, not a new impact); points farther away meet the other body anew (a strike counts
+# from the surface)
 CRUSH_REACH = 0.5
+# Depth [m] over which the damper of a sustained contact takes hold: its force is
+# c x rate x min(1, depth / DAMPER_DEPTH), so a slow touch starts from zero force (no jump of c x rate at
+# the surface, as a Hunt-Crossley damper proportional to the depth gives) and bodies resting a few
+# millimetres deep are damped at the pair's ratio
+DAMPER_DEPTH = 2e-3
+# Points of every pair within this distance of touching [m] take part in a simultaneous impact
+# (:func:`crashsim.motion.kernels.contacts.contact_rows`): the touching points the event is located on
+# lie within round-off of the surface, and pressed points within the depth sustained contact allows
+ROW_MARGIN = 1e-3
 # event kinds of a segment
 EV_REST, EV_ZONE, EV_STOP, EV_RELEASE, EV_GAP, EV_ARM, EV_PRESS, EV_STRIKE = range(8)
 # log record kinds
@@ -200,6 +226,9 @@ def make_work(M):
     nw = M.wheel.shape[0]
     nh = M.hitch.shape[0]
     mmax = max(3 * nh, 1)
+    nv = 1
+    for i in range(M.piece_ptr.shape[0] - 1):
+        nv = max(nv, M.piece_ptr[i + 1] - M.piece_ptr[i])
     return Work(
         np.zeros((nw, N_W)),
         np.zeros(3 * nb),
@@ -208,7 +237,7 @@ def make_work(M):
         np.zeros(mmax),
         np.zeros((2, nb)),
         np.zeros(M.pair_body.shape[0]),
-        np.zeros((2, 3)),
+        np.zeros((2 * nv, N_Q)),
         np.zeros(2 * nb),
     )
 

@@ -1,8 +1,9 @@
 """Kernel stage: contact between bodies (and with fixed obstacles).
 
-Penalty forces of pairs in sustained contact, the touch geometry at a gap event, the
-strike scan (closing speeds of points pressed beyond the allowance) and the crush circle
-of the first impact set at arming (package docstring: gap, manifold, states, strikes).
+The contact points of two convex pieces, the crush allowance of the first impact, penalty forces
+of pairs in sustained contact, the touch geometry at a gap event, the strike scan (closing speeds
+of points pressed beyond the allowance), the contact points of a simultaneous impact, and the
+initial contact states (package docstring: gap, contact points, states, strikes).
 """
 
 from __future__ import annotations
@@ -12,37 +13,119 @@ import math
 from numba import njit
 
 from .jit import HOT, INLINE, JIT
-from .arrays import (A_CX, A_CY, A_DEPTH, A_R, CRUSH_REACH, C_EPS, N_A, PS_ARMED, PS_CONTACT, PS_DISARMED, R_ARM,
-    R_C, R_K, R_MU, R_VTHR, make_work)
-from .geometry import body_trig, deepest_pieces, manifold, pair_gap, piece_gap, point_velocity
+from .arrays import (A_CRUSH, A_PA, A_PB, A_XA, A_XB, A_YA, A_YB, C_EPS, CRUSH_REACH, DAMPER_DEPTH, N_A, N_Q,
+    PS_ARMED, PS_CONTACT, PS_DISARMED, Q_ALLOW, Q_CRUSH, Q_DEPTH, Q_NX, Q_NY, Q_X, Q_Y, R_ARM, R_C, R_K, R_MU,
+    R_OMEGA, R_VTHR, ROW_MARGIN, make_work)
+from .geometry import (body_trig, deepest_pieces, inside_depth, manifold, max_separation, pair_gap, piece_gap,
+    piece_vertex, point_velocity)
+
 
 
 @njit(**INLINE)
-def in_crush(y, M, D, cs, p, ia, px, py):
-    """Whether the world point (px, py) lies in pair ``p``'s crush circle (body ``ia``'s axes)."""
+def body_pose(y, M, cs, i):
+    """Pose ``(x, y, cos, sin)`` of body ``i`` in state ``y`` (an obstacle, ``i < 0``: the world's)."""
+    if i < 0:
+        return 0.0, 0.0, 1.0, 0.0
     nb = M.body.shape[0]
-    dx = px - y[ia]
-    dy = py - y[nb + ia]
-    lx = cs[0, ia] * dx + cs[1, ia] * dy - D.pref[p, A_CX]
-    ly = -cs[1, ia] * dx + cs[0, ia] * dy - D.pref[p, A_CY]
-    return lx * lx + ly * ly <= D.pref[p, A_R] * D.pref[p, A_R]
+    return y[i], y[nb + i], cs[0, i], cs[1, i]
+
+
+@njit(**INLINE)
+def start_pose(M, pr, p, i):
+    """Pose ``(x, y, cos, sin)`` of body ``i`` of pair ``p`` when the run-out started, from the pair's
+    allowance row ``pr`` (an obstacle: the world's)."""
+    if i < 0:
+        return 0.0, 0.0, 1.0, 0.0
+    c = A_XA if i == M.pair_body[p, 0] else A_XB
+    return pr[c], pr[c + 1], math.cos(pr[c + 2]), math.sin(pr[c + 2])
 
 
 @njit(**HOT)
-def pair_forces(y, M, D, cs, p, f, mf, fc):
-    """Penalty forces of pair ``p`` (in contact) added to the world-frame body forces ``f`` (z order),
-    and their x, y components to the contact share ``fc`` (2 nb: x.., y..) for the load transfer.
+def piece_points(y, M, pr, cs, p, a, b, margin, out):
+    """The contact points of pieces ``a`` (of pair ``p``'s body A) and ``b`` (of body B or an obstacle)
+    beyond their allowance, to within ``margin`` [m] of touching (``pr``: the pair's row of
+    ``Mode.pref``).
+
+    * A pair without a crush allowance (apart at the start of the run-out, or armed since): the
+      Box2D-style manifold (:func:`~crashsim.motion.kernels.geometry.manifold`): the incident edge
+      clipped to the reference face, up to two points, the normal of that face.
+    * A pair with one (its outlines overlapped or lay within the arming distance at the start, the
+      crush of the first impact; or it was pressed on beyond it): every vertex of either piece inside
+      the other (a deep overlap has no meaningful manifold: its reference face flips and its points
+      jump).  A vertex lies ``d`` deep in the other piece (the distance to its boundary; the normal
+      that of the nearest face, or of the pieces' separating axis where that face is as near to within
+      :data:`ROW_MARGIN`); its allowance ``d0`` is how deep that material vertex lay in the other piece
+      in the poses of the allowance (``pr``), and the depth beyond it is ``d - d0``: a crushed corner
+      may lie as deep again without a force, wherever it slides (a car's corner along a barrier, a
+      trailer's in the pocket it crushed into a car).  Both are functions of the configuration, so the
+      penalty ``k max(0, d - d0)`` at each vertex derives from a potential (its force along the
+      gradient of ``d``): no contact makes energy, and no point springs out of the crush.
+
+    ``out`` (rows, N_Q) receives ``Q_*`` columns (the depth beyond the allowance, the allowance, and
+    the crush flag: the vertex's material point lay inside the other piece at the start, or within
+    :data:`CRUSH_REACH` of it); returns the number of points.
+    """
+    if pr[A_CRUSH] == 0.0:
+        count, nx, ny = manifold(y, M, cs, a, b, out, margin)
+        for m in range(count):
+            depth = out[m, 2]
+            out[m, Q_NX] = nx
+            out[m, Q_NY] = ny
+            out[m, Q_DEPTH] = depth
+            out[m, Q_ALLOW] = 0.0
+            out[m, Q_CRUSH] = 0.0
+        return count
+    pc_body, pc_ptr = M.piece_body, M.piece_ptr
+    sa, fa = max_separation(y, M, cs, a, b)
+    sb, fb = max_separation(y, M, cs, b, a)
+    n = 0
+    for side in range(2):
+        inc = a if side == 0 else b  # the piece whose vertices are tested
+        ref = b if side == 0 else a  # the piece they press into
+        # the separating axis: a face of ref if it is the pieces' face of largest separation
+        prefer = (fb if sb >= sa else -1) if side == 0 else (fa if sa >= sb else -1)
+        ox, oy, c, s = body_pose(y, M, cs, pc_body[ref])
+        ix0, iy0, ic0, is0 = start_pose(M, pr, p, pc_body[inc])
+        rx0, ry0, rc0, rs0 = start_pose(M, pr, p, pc_body[ref])
+        for v in range(pc_ptr[inc], pc_ptr[inc + 1]):
+            px, py = piece_vertex(y, M, cs, inc, v)
+            d, fx, fy = inside_depth(M, ref, ox, oy, c, s, px, py, prefer, ROW_MARGIN)
+            # the material vertex in the poses of the allowance, in the other piece as it was then
+            lx = M.piece_verts[v, 0]
+            ly = M.piece_verts[v, 1]
+            d0, _, _ = inside_depth(M, ref, rx0, ry0, rc0, rs0, ix0 + ic0 * lx - is0 * ly, iy0 + is0 * lx + ic0 * ly,
+                                    -1, 0.0)
+            allowance = d0 if d0 > 0.0 else 0.0
+            if d - allowance < -margin or n >= out.shape[0]:
+                continue
+            if side == 1:  # a vertex of B (or the obstacle) in A: the normal from B into A is minus A's face's
+                fx = -fx
+                fy = -fy
+            out[n, Q_X] = px
+            out[n, Q_Y] = py
+            out[n, Q_NX] = fx
+            out[n, Q_NY] = fy
+            out[n, Q_DEPTH] = d - allowance
+            out[n, Q_ALLOW] = allowance
+            out[n, Q_CRUSH] = 1.0 if d0 >= -CRUSH_REACH else 0.0
+            n += 1
+    return n
+
+
+@njit(**HOT)
+def pair_forces(y, M, D, cs, p, f, pts, fc):
+    """Penalty forces of pair ``p`` (in sustained contact) added to the world-frame body forces ``f``
+    (z order), and their x, y components to the contact share ``fc`` (2 nb: x.., y..) for the load
+    transfer.
 
     Sustained contact as the README states it ("Contact model"; package docstring, "States"):
-    at each manifold point ``F_n = max(0, k e + c e')`` on the depth ``e`` beyond the
-    allowance, with Coulomb friction ``mu_c F_n`` against the tangential slip, regularised
-    like the tyres (``v_t / sqrt(v_t^2 + eps^2)``).  A receives the force at each manifold point, B minus it; an obstacle receives nothing.
-    ``cs`` holds the bodies' heading cosines and sines, ``mf`` (2, 3) is scratch for the
-    manifold.  Returns the power of the forces on the bodies [W] (their work on the system:
-    dissipation by the damper and the friction, and the spring's change of stored energy).
-    The bodies of parked vehicles count as still.  The depth allowance applies within the
-    pair's crush circle (the crush of the first impact); elsewhere the depth counts from the
-    surface, as for any other contact.
+    at each contact point (:func:`piece_points`) ``F_n = max(0, k e + c e' min(1, e / DAMPER_DEPTH))``
+    on the depth ``e`` beyond the allowance, with Coulomb friction ``mu_c F_n`` against the
+    tangential slip, regularised like the tyres (``v_t / sqrt(v_t^2 + eps^2)``).  A receives the
+    force at each point, B minus it; an obstacle receives nothing.  ``cs`` holds the bodies' heading
+    cosines and sines, ``pts`` is scratch for the points.  Returns the power of the forces on the
+    bodies [W] (their work on the system: dissipation by the damper and the friction, and the
+    spring's change of stored energy).  The bodies of parked vehicles count as still.
     """
     pr_body, pr_ptr, pp, pr_par, cfg = M.pair_body, M.pair_ptr, M.piece_pairs, M.pair_par, M.cfg
     nb = M.body.shape[0]
@@ -52,9 +135,7 @@ def pair_forces(y, M, D, cs, p, f, mf, fc):
     k = pr_par[p, R_K]
     c = pr_par[p, R_C]
     mu = pr_par[p, R_MU]
-    crush = D.pref[p, A_DEPTH]
-    radius = D.pref[p, A_R]
-    least = 0.0 if radius > 0.0 else crush  # the smallest allowance of any point
+    pr = D.pref[p]
     # a parked body does not move: its frozen velocity (<= v_stop) neither damps nor does work
     bveh, parked = M.body_vehicle, D.parked
     still_a = parked[bveh[ia]] != 0
@@ -63,24 +144,23 @@ def pair_forces(y, M, D, cs, p, f, mf, fc):
     for q in range(pr_ptr[p], pr_ptr[p + 1]):
         a = pp[q, 0]
         b = pp[q, 1]
-        if piece_gap(y, M, cs, a, b) >= -least:
+        if piece_gap(y, M, cs, a, b) >= 0.0:
             continue
-        count, nx, ny = manifold(y, M, cs, a, b, mf, 0.0)
+        count = piece_points(y, M, pr, cs, p, a, b, 0.0, pts)
         for m in range(count):
-            px = mf[m, 0]
-            py = mf[m, 1]
-            allowance = crush
-            if radius > 0.0 and not in_crush(y, M, D, cs, p, ia, px, py):
-                allowance = 0.0
-            depth = mf[m, 2] - allowance
+            depth = pts[m, Q_DEPTH]
             if depth <= 0.0:
                 continue
+            px = pts[m, Q_X]
+            py = pts[m, Q_Y]
+            nx = pts[m, Q_NX]
+            ny = pts[m, Q_NY]
             vax, vay = (0.0, 0.0) if still_a else point_velocity(y, M, ia, px, py)
             vbx, vby = (0.0, 0.0) if still_b else point_velocity(y, M, ib, px, py)
             rvx = vax - vbx
             rvy = vay - vby
             rate = -(rvx * nx + rvy * ny)  # penetration rate
-            fn = k * depth + c * rate
+            fn = k * depth + c * rate * min(1.0, depth / DAMPER_DEPTH)
             if fn <= 0.0:
                 continue
             tx = -ny
@@ -105,37 +185,36 @@ def pair_forces(y, M, D, cs, p, f, mf, fc):
 
 
 @njit(**HOT)
-def contact_forces(y, M, D, cs, f, pf, mf, fc):
-    """Penalty forces of every pair in contact added to ``f``; ``pf[p]`` their power [W]; ``fc`` (2 nb)
-    their world-frame x, y sums per body alone [N] (:func:`pair_forces`)."""
+def contact_forces(y, M, D, cs, f, pf, pts, fc):
+    """Penalty forces of every pair in sustained contact added to ``f``; ``pf[p]`` their power [W];
+    ``fc`` (2 nb) their world-frame x, y sums per body alone [N] (:func:`pair_forces`).  A disarmed pair
+    (the crush of the first impact, not pressed on by the arming distance) has none."""
     pstate = D.pstate
     for i in range(fc.shape[0]):
         fc[i] = 0.0
     for p in range(M.pair_body.shape[0]):
-        pf[p] = pair_forces(y, M, D, cs, p, f, mf, fc) if pstate[p] == PS_CONTACT else 0.0
+        pf[p] = pair_forces(y, M, D, cs, p, f, pts, fc) if pstate[p] == PS_CONTACT else 0.0
 
 
 @njit(**HOT)
-def touch_geometry(y, M, p, cs, mf, geo):
-    """Contact point, normal (from B into A) and normal relative velocity of pair ``p`` at a touch.
-
-    The piece pair of least gap gives the manifold (points within 1 mm of touching); the point
-    is the mean of its points (the middle of an edge-on contact).  ``geo`` receives
-    ``(x, y, nx, ny, u_n)``, ``u_n = (v_A - v_B) . n`` at the point (< 0: approaching).
-    Returns False if no manifold point was found (a touch at a vertex, numerically).
-    """
-    pr_body = M.pair_body
-    best, qa, qb = deepest_pieces(y, M, cs, p)
-    count, nx, ny = manifold(y, M, cs, qa, qb, mf, max(1e-3, -best + 1e-3))
-    if count == 0:
-        return False
-    px = 0.0
-    py = 0.0
-    for m in range(count):
-        px += mf[m, 0] / count
-        py += mf[m, 1] / count
-    put_geometry(y, M, pr_body[p, 0], pr_body[p, 1], px, py, nx, ny, geo)
-    return True
+def pair_depth(y, M, D, cs, p, pts):
+    """Largest depth [m] of a point of pair ``p`` beyond its allowance (:func:`piece_points`); where no
+    piece pair overlaps (or none of its points lies inside), minus the pair's gap (finite, so an event
+    on it can be located)."""
+    pr_ptr, pp = M.pair_ptr, M.piece_pairs
+    pr = D.pref[p]
+    best = -math.inf
+    for q in range(pr_ptr[p], pr_ptr[p + 1]):
+        a = pp[q, 0]
+        b = pp[q, 1]
+        if piece_gap(y, M, cs, a, b) >= 0.0:
+            continue
+        count = piece_points(y, M, pr, cs, p, a, b, math.inf, pts)
+        for m in range(count):
+            best = max(best, pts[m, Q_DEPTH])
+    if best == -math.inf:
+        return -pair_gap(y, M, cs, p)
+    return best
 
 
 @njit(**INLINE)
@@ -152,114 +231,114 @@ def put_geometry(y, M, ia, ib, px, py, nx, ny, geo):
 
 
 @njit(**HOT)
-def strike_scan(y, M, D, cs, p, mf, margin, floor, geo, crush):
-    """Closing speeds of the manifold points of pair ``p`` pressed into each other beyond their
-    allowance (to within ``margin`` [m]).
+def strike_scan(y, M, D, cs, p, pts, margin, floor, geo, crush):
+    """Strike measure of the contact points of pair ``p`` (:func:`piece_points`) pressed into each
+    other beyond their allowance (to within ``margin`` [m]): each point's closing speed less the
+    speed its depth holds, ``-(v_A - v_B) . n - omega max(e, 0)`` (``e`` the depth beyond the
+    allowance, ``omega = sqrt(k / m_eff)`` the contact's natural frequency, ``R_OMEGA``).
 
-    The allowance of a point: within the pair's crush circle (the crush of the first impact,
-    :data:`CRUSH_REACH`) the pair's depth allowance, and while the pair is still disarmed such a
-    point is left out altogether (pressing on into the crush is the first impact's crush going
-    on: a press into sustained contact, not a new impact); elsewhere, for a pair with a crush
-    circle, 0 (a point that meets the other body anew strikes from the surface); for any other
-    pair its depth allowance.  ``crush`` False leaves out the points within the circle in every
-    state (the audit of :func:`contact_samples`).
+    A point arriving at the surface (``e`` = 0) strikes at its closing speed.  A point already pressed
+    ``e`` deep is held by its contact force, which stops a point closing at ``omega e`` within about as
+    much depth again (``k e^2 / 2`` against ``m_eff v^2 / 2``): so it strikes only when it closes faster
+    than that, plus the threshold.  A point driven in slowly (a car sliding along a turning tractor's
+    side, forced to follow it) deepens its contact and its force instead of striking at the threshold
+    again and again, each impulse leaving the force it must carry to the next (the chatter of a pinned
+    car).
 
-    Returns the largest closing speed ``-(v_A - v_B) . n`` [m/s] of those points (``-inf`` if
-    none).  With ``floor`` finite, ``geo`` receives ``(x, y, nx, ny, u_n)`` of the piece pair
-    whose point closes fastest: the mean of its points closing at ``floor`` or faster, the
-    normal from B into A and the normal relative velocity at that mean point.
+    A point of the crush of the first impact (``Q_CRUSH``) of a pair still disarmed is left out:
+    pressing on into the crush is the first impact's crush going on, a force, not a new impact.  ``crush`` False
+    leaves such points out in every state (the audit of
+    :func:`~crashsim.motion.kernels.samples.contact_samples`).  Any other point counts from its
+    allowance (0 for fresh material: a point that meets the other body anew strikes from the surface).
+
+    Returns the largest strike measure of those points [m/s] (``-inf`` if none).  With ``floor``
+    finite, ``geo`` receives ``(x, y, nx, ny, u_n)`` of the point whose measure is largest, if it is
+    ``floor`` or more (``u_n`` its normal velocity).
     """
     pr_body, pr_ptr, pp = M.pair_body, M.pair_ptr, M.piece_pairs
     ia = pr_body[p, 0]
     ib = pr_body[p, 1]
-    depth_allowance = D.pref[p, A_DEPTH]
-    radius = D.pref[p, A_R]
+    pr = D.pref[p]
+    omega = M.pair_par[p, R_OMEGA]
     disarmed = D.pstate[p] == PS_DISARMED
-    least = 0.0 if radius > 0.0 else depth_allowance  # the smallest allowance of any point
     best = -math.inf
     for q in range(pr_ptr[p], pr_ptr[p + 1]):
         a = pp[q, 0]
         b = pp[q, 1]
-        if piece_gap(y, M, cs, a, b) > margin - least:
+        if piece_gap(y, M, cs, a, b) > margin:
             continue
-        count, nx, ny = manifold(y, M, cs, a, b, mf, margin - least)
-        fastest = -math.inf
-        sx = 0.0
-        sy = 0.0
-        n_fast = 0
+        count = piece_points(y, M, pr, cs, p, a, b, margin, pts)
         for m in range(count):
-            px = mf[m, 0]
-            py = mf[m, 1]
-            allowance = depth_allowance
-            if radius > 0.0:
-                if in_crush(y, M, D, cs, p, ia, px, py):
-                    if disarmed or not crush:
-                        continue
-                else:
-                    allowance = 0.0
-            if mf[m, 2] - allowance < -margin:
+            if pts[m, Q_CRUSH] != 0.0 and (disarmed or not crush):
                 continue
+            px = pts[m, Q_X]
+            py = pts[m, Q_Y]
+            nx = pts[m, Q_NX]
+            ny = pts[m, Q_NY]
             vax, vay = point_velocity(y, M, ia, px, py)
             vbx, vby = point_velocity(y, M, ib, px, py)
-            closing = -((vax - vbx) * nx + (vay - vby) * ny)
-            if closing > fastest:
-                fastest = closing
-            if closing >= floor:
-                sx += px
-                sy += py
-                n_fast += 1
-        if fastest > best:
-            best = fastest
-            if n_fast > 0:
-                put_geometry(y, M, ia, ib, sx / n_fast, sy / n_fast, nx, ny, geo)
+            closing = -((vax - vbx) * nx + (vay - vby) * ny) - omega * max(pts[m, Q_DEPTH], 0.0)
+            if closing > best:
+                best = closing
+                if closing >= floor:
+                    put_geometry(y, M, ia, ib, px, py, nx, ny, geo)
     return best
 
 
 @njit(**HOT)
-def strike_speed(y, M, D, cs, p, mf, crush):
-    """Largest closing speed [m/s] of the points of pair ``p`` pressed beyond its allowance
-    (0 if none: a pair apart, or only in its crush allowance, does not strike).
+def touch_geometry(y, M, D, p, cs, pts, geo):
+    """Contact point, normal (from B into A) and normal relative velocity of pair ``p`` at a touch:
+    those of its point that closes fastest among the points within 1 mm of touching (``geo`` =
+    ``(x, y, nx, ny, u_n)``, ``u_n = (v_A - v_B) . n``, < 0: approaching).  Returns False if no point
+    was found (a touch at a vertex, numerically)."""
+    best, _, _ = deepest_pieces(y, M, cs, p)
+    return strike_scan(y, M, D, cs, p, pts, max(1e-3, -best + 1e-3), -math.inf, geo, True) > -math.inf
+
+
+@njit(**HOT)
+def strike_speed(y, M, D, cs, p, pts, crush):
+    """Largest strike measure [m/s] of the points of pair ``p`` pressed beyond its allowance
+    (:func:`strike_scan`: the closing speed less ``omega`` times the depth; 0 if none or if it is
+    negative: a pair apart, or only in its crush allowance, does not strike).
 
     The strike event of a pair in sustained contact or disarmed is this minus the impulse
     threshold: it crosses zero when a point arrives at the surface (or beyond the crush of the
     first impact) closing at the threshold or faster (the value jumps there; the root is the
-    arrival), or when a point already in contact is driven in that fast.  Either is an impact.
+    arrival), or when a point already in contact is driven in faster than its depth holds.
+    Either is an impact.
     """
-    # an infinite floor writes no geometry (mf[0] only stands in for the unused argument)
-    best = strike_scan(y, M, D, cs, p, mf, 0.0, math.inf, mf[0], crush)
+    # an infinite floor writes no geometry (pts[0] only stands in for the unused argument)
+    best = strike_scan(y, M, D, cs, p, pts, 0.0, math.inf, pts[0], crush)
     return best if best > 0.0 else 0.0
 
 
 @njit(**HOT)
-def strike_geometry(y, M, D, cs, p, mf, geo):
+def strike_geometry(y, M, D, cs, p, pts, geo):
     """Contact point, normal and normal relative velocity of a strike of pair ``p`` (``geo`` as
     :func:`touch_geometry`), at a state where :func:`strike_speed` reaches the threshold.
 
     The points count that lie within 1 mm of the surface (the root of a jump is located to
     round-off on either side of the arrival) and close at the threshold or faster (to a
-    relative 1e-6); the point is their mean in the piece pair of the fastest.  Returns False
-    if no point closes that fast.
+    relative 1e-6): the fastest of them.  Returns False if no point closes that fast.
     """
     thr = M.pair_par[p, R_VTHR]
     floor = thr * (1.0 - 1e-6)
     geo[4] = 0.0
-    best = strike_scan(y, M, D, cs, p, mf, 1e-3, floor, geo, True)
+    best = strike_scan(y, M, D, cs, p, pts, 1e-3, floor, geo, True)
     return best >= floor and geo[4] < 0.0
 
 
 @njit(**HOT)
-def find_strike(y, M, D, cs, mf, geo):
+def find_strike(y, M, D, cs, pts, geo):
     """The pair in sustained contact or disarmed whose points close fastest beyond its impulse
-    threshold at ``y`` (after a velocity jump: an impulse, an articulation-stop impact), with
-    its strike geometry in ``geo`` = (pair, x, y, nx, ny, u_n); False if none.
-
-    An impulse at one point can leave another point of the same pair, or a pair of the bodies
-    it moved, striking at that instant: each is an impact of its own."""
+    threshold at ``y`` (after a velocity jump: an articulation-stop impact, or round-off left by
+    a simultaneous impact), with its strike geometry in ``geo`` = (pair, x, y, nx, ny, u_n); False
+    if none."""
     pstate, pr_par = D.pstate, M.pair_par
     best = -math.inf
     hit = -1
     for p in range(pr_par.shape[0]):
-        if pstate[p] == PS_ARMED or not strike_geometry(y, M, D, cs, p, mf, geo[1:]):
+        if pstate[p] == PS_ARMED or not strike_geometry(y, M, D, cs, p, pts, geo[1:]):
             continue
         excess = -geo[5] - pr_par[p, R_VTHR]
         if excess > best:
@@ -268,7 +347,43 @@ def find_strike(y, M, D, cs, mf, geo):
     if hit < 0:
         return False
     geo[0] = hit
-    return strike_geometry(y, M, D, cs, hit, mf, geo[1:])
+    return strike_geometry(y, M, D, cs, hit, pts, geo[1:])
+
+
+@njit(**JIT)
+def contact_rows(y, M, D, out):
+    """The contact points of a simultaneous impact at state ``y``: every contact point
+    (:func:`piece_points`) within :data:`ROW_MARGIN` of touching beyond its allowance, of every pair
+    in contact or disarmed, and of every armed pair whose gap is within that margin (a touch).
+    Points of crushed material count too (in an impact the crush transmits the impulse like any
+    contact).
+
+    ``out`` (rows, 1 + N_Q) receives per point: the pair, then the ``Q_*`` columns.  Returns the number
+    of points.
+    """
+    pstate, pr_ptr, pp = D.pstate, M.pair_ptr, M.piece_pairs
+    W = make_work(M)
+    cs = W.trig
+    pts = W.contact_pts
+    body_trig(y, M.body.shape[0], cs)
+    n = 0
+    for p in range(M.pair_body.shape[0]):
+        if pstate[p] == PS_ARMED and pair_gap(y, M, cs, p) > ROW_MARGIN:
+            continue
+        for q in range(pr_ptr[p], pr_ptr[p + 1]):
+            a = pp[q, 0]
+            b = pp[q, 1]
+            if piece_gap(y, M, cs, a, b) > ROW_MARGIN:
+                continue
+            count = piece_points(y, M, D.pref[p], cs, p, a, b, ROW_MARGIN, pts)
+            for m in range(count):
+                if n >= out.shape[0]:
+                    return n
+                out[n, 0] = p
+                for c in range(N_Q):
+                    out[n, 1 + c] = pts[m, c]
+                n += 1
+    return n
 
 
 @njit(**HOT)
@@ -281,17 +396,32 @@ def unpark_pair(M, D, p):
         parked[bveh[pr_body[p, 1]]] = 0
 
 
+@njit(**INLINE)
+def set_reference(y, M, D, p):
+    """The crush allowance of pair ``p`` refers to the poses of its bodies in state ``y``."""
+    nb = M.body.shape[0]
+    ia = M.pair_body[p, 0]
+    ib = M.pair_body[p, 1]
+    pref = D.pref
+    pref[p, A_CRUSH] = 1.0
+    pref[p, A_XA] = y[ia]
+    pref[p, A_YA] = y[nb + ia]
+    pref[p, A_PA] = y[2 * nb + ia]
+    if ib >= 0:
+        pref[p, A_XB] = y[ib]
+        pref[p, A_YB] = y[nb + ib]
+        pref[p, A_PB] = y[2 * nb + ib]
+
+
 @njit(**JIT)
 def arming(y, M, D):
     """Initial contact states: a pair closer than its arming distance (the crush of the impact,
-    or bodies left touching) starts disarmed with its present depth as allowance and its crush
-    circle (in body A's axes: around the contact points of its deepest pieces, reaching
-    :data:`CRUSH_REACH` beyond them); the others armed."""
+    or bodies left touching) starts disarmed, with the crush allowance of its overlap
+    (:func:`piece_points`: the poses of its bodies now); the others armed."""
     pr_body, pr_par = M.pair_body, M.pair_par
     pstate, pref = D.pstate, D.pref
     W = make_work(M)
     cs = W.trig
-    mf = W.manifold_pts
     nb = M.body.shape[0]
     body_trig(y, nb, cs)
     for p in range(pr_body.shape[0]):
@@ -300,24 +430,6 @@ def arming(y, M, D):
             pref[p, c] = 0.0
         if g < pr_par[p, R_ARM]:
             pstate[p] = PS_DISARMED
-            pref[p, A_DEPTH] = max(-g, 0.0)
-            _, qa, qb = deepest_pieces(y, M, cs, p)
-            count, _, _ = manifold(y, M, cs, qa, qb, mf, pr_par[p, R_ARM])
-            if count == 0:
-                continue
-            ia = pr_body[p, 0]
-            cx = 0.0
-            cy = 0.0
-            for m in range(count):
-                cx += mf[m, 0] / count
-                cy += mf[m, 1] / count
-            spread = 0.0
-            for m in range(count):
-                spread = max(spread, math.sqrt((mf[m, 0] - cx) ** 2 + (mf[m, 1] - cy) ** 2))
-            dx = cx - y[ia]
-            dy = cy - y[nb + ia]
-            pref[p, A_CX] = cs[0, ia] * dx + cs[1, ia] * dy
-            pref[p, A_CY] = -cs[1, ia] * dx + cs[0, ia] * dy
-            pref[p, A_R] = spread + pref[p, A_DEPTH] + CRUSH_REACH
+            set_reference(y, M, D, p)
         else:
             pstate[p] = PS_ARMED

@@ -12,8 +12,8 @@ import math
 import numpy as np
 from numba import njit
 
-from .jit import HOT, INLINE
-from .arrays import (B_HAS, C_GN, C_GX, C_GY, C_ROADMU, C_TAU, I_BRAKE, I_CLOCK, I_LT, I_SLOPE, S_AIR, S_GX, S_GY, S_N0, PS_CONTACT, P_BRAKE, P_CCOEF, P_CD, P_CFIX, P_FROLL, P_LOCKED, P_MUF, P_CASTOR, S_CASTOR,
+from .jit import HOT, INLINE, JIT
+from .arrays import (I_YAWLOCK, B_HAS, C_GN, C_GX, C_GY, C_ROADMU, C_TAU, I_BRAKE, I_CLOCK, I_LT, I_SLOPE, S_AIR, S_GX, S_GY, S_N0, PS_CONTACT, P_BRAKE, P_CCOEF, P_CD, P_CFIX, P_FROLL, P_LOCKED, P_MUF, P_CASTOR, S_CASTOR,
     P_SD, S_CALPHA, S_CCOEF, S_CD, S_CFIX, S_DCOEF, S_DEMAND, S_LOCKED, S_MU, S_MULOAD, S_SD, W_FX, W_FY, W_SLIDE,
     W_U, W_V)
 from .arrays import S_BBASE, S_BREF, S_BSLOPE
@@ -161,7 +161,7 @@ def evaluate(y, M, sw, D, dydt, W):
     nh = hitch.shape[0]
     tyre_eval(y, M, sw, D, W)
     if M.pair_body.shape[0] > 0:
-        contact_forces(y, M, D, cs, f, W.pair_power, W.manifold_pts, W.contact_force)
+        contact_forces(y, M, D, cs, f, W.pair_power, W.contact_pts, W.contact_force)
     n3 = 3 * nb
     m = 0
     if nh > 0:
@@ -311,6 +311,23 @@ def project_velocities(y, M, lk_j, lk_th, nlk, G, A, b, cs):
         for a in range(m):
             s += G[a, col] * b[a]
         y[n3 + col] -= minv[col] * s
+
+
+@njit(**JIT)
+def hitch_jacobian(y, M):
+    """The hitch constraint Jacobian ``G`` (m, 3 nb) at ``y``: pin x, y rows of every hitch, then one row
+    per yaw-locked hitch (:func:`~crashsim.motion.kernels.geometry.constraint_rows` without closed
+    stops), on the velocities in z order (vx.., vy.., w..): what a simultaneous impact keeps at zero."""
+    nb = M.body.shape[0]
+    m = max(2 * M.hitch.shape[0] + M.icfg[I_YAWLOCK], 1)
+    G = np.zeros((m, 3 * nb))
+    cs = np.zeros((2, nb))
+    body_trig(y, nb, cs)
+    lk = np.zeros(1, np.int64)
+    th = np.zeros(1)
+    r = np.zeros(m)
+    n = constraint_rows(y, cs, M, lk, th, 0, G, r, False)
+    return G[:n].copy()
 
 
 @njit(**HOT)

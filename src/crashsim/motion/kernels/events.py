@@ -14,12 +14,12 @@ from numba import njit
 
 from ..options import STOP_HYSTERESIS
 from .jit import HOT, INLINE, JIT
-from .arrays import (A_DEPTH, C_VSTOP, C_ZRES, EPS, EV_ARM, EV_GAP, EV_PRESS, EV_RELEASE, EV_REST, EV_STOP,
+from .arrays import (A_CRUSH, PRESSED, C_VSTOP, C_ZRES, EPS, EV_ARM, EV_GAP, EV_PRESS, EV_RELEASE, EV_REST, EV_STOP,
     EV_STRIKE, EV_ZONE, LOG_ARMED, LOG_CONTACT, LOG_CONTACT_END, LOG_PRESS, LOG_REST, LOG_STOP_CLOSED,
     LOG_STOP_IMPACT, LOG_STOP_OPEN, LOG_ZONE_ENTER, LOG_ZONE_EXIT, MAX_SUBSAMPLES, N_A, PS_ARMED, PS_CONTACT,
     PS_DISARMED, R_ARM, R_RES, R_VTHR, ZONE_OVERSHOOT, make_work)
 from .geometry import body_trig, membership, pair_gap, signed_distance, wheel_velocity, wheel_xy
-from .contacts import find_strike, strike_geometry, strike_speed, touch_geometry, unpark_pair
+from .contacts import find_strike, pair_depth, set_reference, strike_geometry, strike_speed, touch_geometry, unpark_pair
 from .equations import contact_group, evaluate, group_rest_measure, kinetic_energy, project_velocities, rest_measure
 
 
@@ -57,14 +57,14 @@ def event_value(e, y, M, ev, D, sw, dydt, W):
         return W.multipliers[2 * nh + n] * ev_val[e]
     body_trig(y, nb, cs)
     if kind == EV_STRIKE:
-        return strike_speed(y, M, D, cs, ev_idx[e], W.manifold_pts, True) - M.pair_par[ev_idx[e], R_VTHR]
+        return strike_speed(y, M, D, cs, ev_idx[e], W.contact_pts, True) - M.pair_par[ev_idx[e], R_VTHR]
+    if kind == EV_PRESS:  # deeper than the allowance by the arming distance
+        return pair_depth(y, M, D, cs, ev_idx[e], W.contact_pts) - M.pair_par[ev_idx[e], R_ARM]
     g = pair_gap(y, M, cs, ev_idx[e])
     if kind == EV_GAP:
         return g
-    if kind == EV_ARM:
-        return g - M.pair_par[ev_idx[e], R_ARM]
-    # EV_PRESS: deeper than the allowance plus the arming distance
-    return -g - ev_val[e]
+    # EV_ARM
+    return g - M.pair_par[ev_idx[e], R_ARM]
 
 
 @njit(**HOT)
@@ -148,7 +148,10 @@ def brent(e, ta, tb, fa, fb, step, M, ev, D, sw, dydt, W):
     """Root of event ``e`` on a step's dense output in [ta, tb], values fa, fb: Brent's method as scipy's brentq.
 
     Tolerances ``xtol = rtol = 4 eps`` as solve_ivp's event location.  If the values do not
-    differ in sign (round-off at a root on the interval end), the interval end is returned.
+    differ in sign (round-off at a root on the interval end), the interval end is returned.  The
+    root returned lies on the crossed side (the sign of ``fb``): of the last bracket, the end whose
+    value has crossed, so that the event's handler sees the state past it (at a jump of the value,
+    a point arriving or a normal turning, the state just before it has nothing to handle).
     """
     xtol = 4.0 * EPS
     rtol = 4.0 * EPS
@@ -182,7 +185,7 @@ def brent(e, ta, tb, fa, fb, step, M, ev, D, sw, dydt, W):
         delta = (xtol + rtol * abs(xcur)) / 2.0
         sbis = (xblk - xcur) / 2.0
         if fcur == 0.0 or abs(sbis) < delta:
-            return xcur
+            return xcur if fcur == 0.0 or (fcur < 0.0) == (fb < 0.0) else xblk
         if abs(spre) > delta and abs(fcur) < abs(fpre):
             if xpre == xblk:
                 stry = -fcur * (xcur - xpre) / (fcur - fpre)
@@ -279,10 +282,10 @@ def build_events(M, D, offsets, ev):
     limit and is not closed (each side), the release of every closed stop, then per pair the
     gap (armed), the arming distance (disarmed or in contact), the press (disarmed) and the
     strike (disarmed or in contact: a point pressed beyond the allowance closing at the
-    impulse threshold or faster, :func:`strike_speed`).
+    impulse threshold or faster, less what its depth holds, :func:`strike_speed`).
     """
     hitch, zone_mu, pr_par, pr_body = M.hitch, M.zone_mu, M.pair_par, M.pair_body
-    lk_j, lk_th, nlk, shift, pstate, pref, parked = D.lk_j, D.lk_th, D.lk_n[0], D.shift, D.pstate, D.pref, D.parked
+    lk_j, lk_th, nlk, shift, pstate, parked = D.lk_j, D.lk_th, D.lk_n[0], D.shift, D.pstate, D.parked
     ev_kind, ev_idx, ev_val, ev_dir = ev.kind, ev.idx, ev.val, ev.dir
     n_ev = 0
     for v in range(parked.shape[0]):
@@ -334,7 +337,7 @@ def build_events(M, D, offsets, ev):
         if pstate[p] == PS_DISARMED:
             ev_kind[n_ev] = EV_PRESS
             ev_idx[n_ev] = p
-            ev_val[n_ev] = pref[p, A_DEPTH] + pr_par[p, R_ARM]
+            ev_val[n_ev] = pr_par[p, R_ARM]
             ev_dir[n_ev] = 1.0
             n_ev += 1
         if pstate[p] != PS_ARMED:
@@ -414,7 +417,7 @@ def handle_event(e, t, y, M, D, offsets, ev, sw, dydt, W, rec, geo):
             shift[j] = left_stop_shift(y, M, j, offsets[j], lim, shift[j])
             n = log_record(rec, n, LOG_STOP_IMPACT, j, 0, side * lim, loss)
         # the stop impact changed velocities: a point in contact may now strike
-        return find_strike(y, M, D, W.trig, W.manifold_pts, geo), n
+        return find_strike(y, M, D, W.trig, W.contact_pts, geo), n
     if kind == EV_RELEASE:
         q0 = idx
         jq = lk_j[q0]
@@ -430,7 +433,7 @@ def handle_event(e, t, y, M, D, offsets, ev, sw, dydt, W, rec, geo):
         p = idx
         cs = W.trig
         body_trig(y, M.body.shape[0], cs)
-        found = touch_geometry(y, M, p, cs, W.manifold_pts, geo[1:])
+        found = touch_geometry(y, M, D, p, cs, W.contact_pts, geo[1:])
         geo[0] = p
         if found and geo[5] < -pr_par[p, R_VTHR]:
             return True, n
@@ -440,13 +443,13 @@ def handle_event(e, t, y, M, D, offsets, ev, sw, dydt, W, rec, geo):
         unpark_pair(M, D, p)
         n = log_record(rec, n, LOG_CONTACT, p, 0, geo[5] if found else 0.0, 0.0)
         # slow at the middle of the touching edge, but one end may strike (a turning edge)
-        return strike_geometry(y, M, D, cs, p, W.manifold_pts, geo[1:]), n
+        return strike_geometry(y, M, D, cs, p, W.contact_pts, geo[1:]), n
     if kind == EV_STRIKE:
         p = idx
         cs = W.trig
         body_trig(y, M.body.shape[0], cs)
         geo[0] = p
-        return strike_geometry(y, M, D, cs, p, W.manifold_pts, geo[1:]), n
+        return strike_geometry(y, M, D, cs, p, W.contact_pts, geo[1:]), n
     if kind == EV_ARM:
         p = idx
         was = pstate[p]
@@ -456,16 +459,22 @@ def handle_event(e, t, y, M, D, offsets, ev, sw, dydt, W, rec, geo):
         n = log_record(rec, n, LOG_CONTACT_END if was == PS_CONTACT else LOG_ARMED, p, 0, 0.0, 0.0)
         return False, n
     if kind == EV_PRESS:
+        # pressed the arming distance beyond the crush of the first impact: sustained contact, its force
+        # from zero at this configuration (every point's allowance is how deep it lies now: the bodies'
+        # poses now are the allowance's reference), in which a point driven in faster than its depth
+        # holds strikes like any other; one pressing on at the threshold now is an impact at once
         p = idx
         cs = W.trig
         body_trig(y, M.body.shape[0], cs)
+        n = log_record(rec, n, LOG_PRESS, p, 0, pair_depth(y, M, D, cs, p, W.contact_pts), 0.0)
         pstate[p] = PS_CONTACT
-        pref[p, A_DEPTH] = max(-pair_gap(y, M, cs, p), 0.0)  # the force starts from zero at this depth
+        set_reference(y, M, D, p)
         unpark_pair(M, D, p)
-        n = log_record(rec, n, LOG_PRESS, p, 0, pref[p, A_DEPTH], 0.0)
-        # (pressing on into the crush is the first impact's crush going on, however fast: a
-        # force; a point outside the crush strikes from the surface, by the strike event)
-        return False, n
+        geo[0] = p
+        hit = strike_geometry(y, M, D, cs, p, W.contact_pts, geo[1:])
+        if hit:  # the impact of this instant is the crush going on (e = 0 at its points)
+            pref[p, A_CRUSH] = PRESSED
+        return hit, n
     return False, n
 
 
@@ -516,52 +525,17 @@ def settle(y, M, D, new_memb, W, rec, n):
 
 
 @njit(**JIT)
-def reconcile_stops(y, M, D, offsets, veh_mask):
-    """Closed articulation stops after an impulse on the vehicles of ``veh_mask`` (a secondary
-    impact, solved with the hitches as free pins); returns the log records.
-
-    A closed stop that the impulse turns away from its limit is released (``stop_open``).  Any
-    other closed stop of those vehicles takes a plastic stop impact at the same instant, as
-    an articulation that reaches its stop does: the velocities are projected onto the closed
-    stops (kinetic-energy metric) and the loss is logged as a ``stop_closed`` record of the
-    first of them (the stop stays closed).  The crush impulse and the stop's moment impulse
-    are thus applied one after the other, not solved together.
-    """
-    W = make_work(M)
+def release_stop(y, M, D, offsets, q):
+    """Open closed stop ``q`` (its entry in ``D.lk_j``) at state ``y``: removed from the closed stops,
+    its threshold raised past where it was left (:func:`left_stop_shift`); returns its hitch."""
     lk_j, lk_th, lk_n, shift = D.lk_j, D.lk_th, D.lk_n, D.shift
-    hitch, hbody, bveh = M.hitch, M.hitch_body, M.body_vehicle
-    nb = M.body.shape[0]
-    rec = np.zeros((2 * max(hitch.shape[0], 1) + 2, 5))
-    n = 0
-    q = 0
-    while q < lk_n[0]:
-        j = lk_j[q]
-        if veh_mask[bveh[hbody[j, 0]]] == 0:
-            q += 1
-            continue
-        side = 1.0 if lk_th[q] - offsets[j] > 0.0 else -1.0
-        rate = y[5 * nb + hbody[j, 0]] - y[5 * nb + hbody[j, 1]]
-        if rate * side < 0.0:
-            n = log_record(rec, n, LOG_STOP_OPEN, j, 0, 0.0, 0.0)
-            shift[j] = left_stop_shift(y, M, j, offsets[j], hitch[j, 4], shift[j])
-            for r in range(q, lk_n[0] - 1):
-                lk_j[r] = lk_j[r + 1]
-                lk_th[r] = lk_th[r + 1]
-            lk_n[0] -= 1
-        else:
-            q += 1
-    first = -1
-    for q in range(lk_n[0]):
-        if veh_mask[bveh[hbody[lk_j[q], 0]]] != 0:
-            first = q
-            break
-    if first >= 0:
-        ke_before = kinetic_energy(y, M)
-        project_velocities(y, M, lk_j, lk_th, lk_n[0], W.jacobian, W.gram, W.multipliers, W.trig)
-        j = lk_j[first]
-        side = 1.0 if lk_th[first] - offsets[j] > 0.0 else -1.0
-        n = log_record(rec, n, LOG_STOP_CLOSED, j, 0, side * hitch[j, 4], ke_before - kinetic_energy(y, M))
-    return rec[:n]
+    j = lk_j[q]
+    shift[j] = left_stop_shift(y, M, j, offsets[j], M.hitch[j, 4], shift[j])
+    for r in range(q, lk_n[0] - 1):
+        lk_j[r] = lk_j[r + 1]
+        lk_th[r] = lk_th[r + 1]
+    lk_n[0] -= 1
+    return j
 
 
 @njit(**JIT)
@@ -579,6 +553,6 @@ def pending_strike(y, M, D):
     W = make_work(M)
     body_trig(y, M.body.shape[0], W.trig)
     geo = np.zeros(6)
-    if not find_strike(y, M, D, W.trig, W.manifold_pts, geo):
+    if not find_strike(y, M, D, W.trig, W.contact_pts, geo):
         geo[0] = -1.0
     return geo

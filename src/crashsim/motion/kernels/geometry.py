@@ -1,7 +1,7 @@
 """Kernel stage: geometry of the bodies, hitches, contact pieces, wheels and friction zones.
 
 Heading trig, the hitch and stop constraint rows (Jacobian and Baumgarte terms), the
-separating-axis gap of convex pieces and their Box2D-style manifold, bounding circles,
+separating-axis gap of convex pieces and their Box2D-style manifold, how deep a point lies in one, bounding circles,
 wheel positions and velocities, and the signed distance to a friction zone (package
 docstring of :mod:`crashsim.motion.kernels` for the model arrays).
 """
@@ -268,8 +268,8 @@ def pair_gap(y, M, cs, p):
 def manifold(y, M, cs, a, b, out, margin):
     """Contact points of pieces ``a`` (of body A) and ``b`` (of body B or an obstacle).
 
-    Fills ``out`` (2, 3) with up to two points: world x, y and depth (> 0 below the reference
-    face; points up to ``margin`` [m] above it count too, for the touching geometry of an
+    Fills ``out`` (rows >= 2, >= 3 columns) with up to two points: world x, y and depth (> 0 below the
+    reference face; points up to ``margin`` [m] above it count too, for the touching geometry of an
     impact); returns ``(count, nx, ny)`` with the unit normal pointing from B into A.
     The reference face is the face of largest separation (A's unless B's is larger by more
     than 1 mm, so the choice does not flip on round-off); the incident edge of the other piece
@@ -332,6 +332,42 @@ def manifold(y, M, cs, a, b, out, margin):
     if flip:
         nx, ny = -nx, -ny
     return count, nx, ny
+
+
+@njit(**INLINE)
+def inside_depth(M, piece, ox, oy, c, s, px, py, prefer, tie):
+    """How deep the world point (px, py) lies inside the convex ``piece`` placed at origin
+    (ox, oy) with heading cosine and sine (c, s): ``min over its faces of -n . (p - v)`` [m] (> 0
+    inside: the distance to its boundary; < 0 outside: minus the largest separation from a
+    face), with the outward world normal of that nearest face: ``(depth, nx, ny)``.  Where the face
+    ``prefer`` (a global vertex index of ``piece``, -1: none) lies within ``tie`` [m] of the nearest,
+    its normal is taken (a point at a corner of the piece pushes along the pieces' separating axis,
+    not along whichever of the corner's faces comes first).  An obstacle's piece is in world
+    coordinates (pass 0, 0, 1, 0)."""
+    pc_ptr, pc_v, pc_n = M.piece_ptr, M.piece_verts, M.piece_normals
+    best = math.inf
+    bx = 0.0
+    by = 0.0
+    dp = math.inf
+    px_ = 0.0
+    py_ = 0.0
+    for v in range(pc_ptr[piece], pc_ptr[piece + 1]):
+        vx = ox + c * pc_v[v, 0] - s * pc_v[v, 1]
+        vy = oy + s * pc_v[v, 0] + c * pc_v[v, 1]
+        nx = c * pc_n[v, 0] - s * pc_n[v, 1]
+        ny = s * pc_n[v, 0] + c * pc_n[v, 1]
+        d = -(nx * (px - vx) + ny * (py - vy))
+        if d < best:
+            best = d
+            bx = nx
+            by = ny
+        if v == prefer:
+            dp = d
+            px_ = nx
+            py_ = ny
+    if dp <= best + tie:
+        return best, px_, py_
+    return best, bx, by
 
 
 @njit(**INLINE)

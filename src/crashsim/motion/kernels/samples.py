@@ -13,10 +13,10 @@ import numpy as np
 from numba import njit
 
 from .jit import JIT
-from .arrays import (Mode, A_DEPTH, N_S, N_W, PS_ARMED, PS_CONTACT, PS_DISARMED, P_BRAKE, P_FROLL, P_MUF, S_DCOEF,
+from .arrays import (Mode, N_A, N_S, N_W, PS_ARMED, PS_CONTACT, PS_DISARMED, P_BRAKE, P_FROLL, P_MUF, S_DCOEF,
     S_DEMAND, S_MU, S_MULOAD, S_N0, W_LOAD, W_SLIDE, make_work)
 from .geometry import body_trig, pair_gap, pin_gap, signed_distance, wheel_xy
-from .contacts import pair_forces, strike_speed, touch_geometry
+from .contacts import pair_depth, pair_forces, strike_speed, touch_geometry
 from .equations import evaluate, quad_integrand, segment_params
 from .events import interpolate
 
@@ -187,15 +187,14 @@ def evaluate_samples(Y, seg_of, M, S):
             max_gap = max(max_gap, pin_gap(yq, cs, hitch, hbody, j, nb))
         for q in range(npr):
             st = D.pstate[q]
-            if st == PS_DISARMED:
+            if st == PS_DISARMED:  # the crush of the first impact: no force, no depth to report
                 continue
-            g = pair_gap(yq, M, cs, q)
-            depth = -g - (D.pref[q, A_DEPTH] if st == PS_CONTACT else 0.0)
+            depth = -pair_gap(yq, M, cs, q) if st == PS_ARMED else pair_depth(yq, M, D, cs, q, W.contact_pts)
             pen[q] = max(pen[q], depth)
             if st == PS_CONTACT:  # the pair's force on A
                 for i in range(3 * nb):
                     f_scratch[i] = 0.0
-                pair_forces(yq, M, D, cs, q, f_scratch, W.manifold_pts, fc_scratch)
+                pair_forces(yq, M, D, cs, q, f_scratch, W.contact_pts, fc_scratch)
                 ia = M.pair_body[q, 0]
                 CF[p, q] = math.sqrt(f_scratch[ia] ** 2 + f_scratch[nb + ia] ** 2)
     return P, SL, LD, LAMH, STOPM, CF, max_gap, pen
@@ -208,10 +207,11 @@ def contact_samples(Y, seg_of, M, S):
 
     Returns ``(CF, pen, closing)``: the sustained-contact force magnitude on body A of every pair
     (K, np) [N]; per pair the largest depth beyond its allowance while in contact, or the largest
-    overlap while armed [m]; and the closing speed [m/s] of the fastest point pressed beyond the
-    allowance outside the crush of the first impact (:func:`strike_speed`; 0 for an armed pair),
-    (K, np): while a pair is in contact or disarmed this stays below its impulse threshold
-    except at the instants of its impacts (a strike there is an impact), an audit of the rule.
+    overlap while armed [m]; and the strike measure [m/s] of the points pressed beyond the
+    allowance outside the crush of the first impact (closing speed less ``omega`` times the depth,
+    :func:`strike_speed`; 0 for an armed pair), (K, np): while a pair is in contact or disarmed this
+    stays below its impulse threshold except at the instants of its impacts (a strike there is an
+    impact), an audit of the rule.
     """
     K = Y.shape[1]
     npr = M.pair_body.shape[0]
@@ -235,18 +235,18 @@ def contact_samples(Y, seg_of, M, S):
         body_trig(y, nb, cs)
         for q in range(npr):
             st = D.pstate[q]
-            if st != PS_ARMED:
-                closing[col, q] = strike_speed(y, M, D, cs, q, W.manifold_pts, False)
-            if st == PS_DISARMED:
+            if st == PS_ARMED:
+                pen[q] = max(pen[q], -pair_gap(y, M, cs, q))
                 continue
-            depth = -pair_gap(y, M, cs, q) - (D.pref[q, A_DEPTH] if st == PS_CONTACT else 0.0)
-            pen[q] = max(pen[q], depth)
-            if st == PS_CONTACT:  # the pair's force on A
-                for i in range(3 * nb):
-                    f_scratch[i] = 0.0
-                pair_forces(y, M, D, cs, q, f_scratch, W.manifold_pts, W.contact_force)  # the last not read
-                ia = M.pair_body[q, 0]
-                CF[col, q] = math.sqrt(f_scratch[ia] ** 2 + f_scratch[nb + ia] ** 2)
+            closing[col, q] = strike_speed(y, M, D, cs, q, W.contact_pts, False)
+            if st == PS_DISARMED:  # the crush of the first impact: no force
+                continue
+            pen[q] = max(pen[q], pair_depth(y, M, D, cs, q, W.contact_pts))
+            for i in range(3 * nb):  # the pair's force on A
+                f_scratch[i] = 0.0
+            pair_forces(y, M, D, cs, q, f_scratch, W.contact_pts, W.contact_force)  # the last not read
+            ia = M.pair_body[q, 0]
+            CF[col, q] = math.sqrt(f_scratch[ia] ** 2 + f_scratch[nb + ia] ** 2)
     return CF, pen, closing
 
 
@@ -289,11 +289,16 @@ def evaluate_state(y, M, phase, D):
 
 @njit(**JIT)
 def pair_geometry(y, M, p):
-    """Gap of pair ``p`` and, where pieces overlap or touch, its contact point and normal (tests, reports)."""
+    """Gap of pair ``p`` and, where pieces overlap or touch, its contact point and normal (tests, reports;
+    the points of the outlines as they are, without a crush allowance)."""
     W = make_work(M)
     cs = W.trig
     body_trig(y, M.body.shape[0], cs)
     geo = np.zeros(5)
     g = pair_gap(y, M, cs, p)
-    ok = touch_geometry(y, M, p, cs, W.manifold_pts, geo)
+    npr = M.pair_body.shape[0]
+    D = Mode(np.zeros((M.wheel.shape[0], M.zone_mu.shape[0]), np.bool_), np.zeros(1, np.int64), np.zeros(1),
+             np.zeros(1, np.int64), np.zeros(1), np.full(npr, PS_CONTACT, np.int64), np.zeros((npr, N_A)),
+             np.zeros(M.body_vehicle.max() + 1 if M.body_vehicle.shape[0] else 1, np.int64))
+    ok = touch_geometry(y, M, D, p, cs, W.contact_pts, geo)
     return g, ok, geo

@@ -61,7 +61,7 @@ SKIDS = {  # the hand-typed marks of truck_brakes_into_car.toml, ft -> m
 REST = {  # body: (CG [ft], heading [deg], length, width, outline centre [m]) from the hand-typed scene
     "tractor": ((38.4, 0.6), 4.0, 8.3, 2.5, -0.2),
     "trailer": ((14.6, -0.4), -3.0, 9.3, 2.5, 0.3),
-    "car": ((68.8, 32.4), -45.0, 4.8, 1.8, 0.15),
+    "car": ((67.0, 32.5), -50.0, 4.8, 1.8, 0.15),
 }
 
 

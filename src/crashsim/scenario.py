@@ -1306,6 +1306,12 @@ def apply_presets(data: dict, file: str | None) -> dict:
                 raise _err(f"unknown preset {name!r}{hint} Presets: {', '.join(library)}",
                            f"vehicles.{vname}.bodies[{i}].preset", file)
             base = {k: copy.deepcopy(val) for k, val in library[name].items() if k not in ("source", "crush")}
+            # a coupling the preset has but the body's place in the chain does not use (a tractor preset run
+            # bobtail, as the last body: its fifth wheel tows nothing); one the file gives is checked as given
+            if i == len(bodies) - 1 and "rear_hitch" not in b:
+                base.pop("rear_hitch", None)
+            if i == 0 and "front_hitch" not in b:
+                base.pop("front_hitch", None)
             base.update({k: val for k, val in b.items()})
             bodies[i] = base
     return data

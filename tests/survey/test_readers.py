@@ -273,7 +273,6 @@ def test_bulged_segments_are_exact_arcs(tmp_path, bulge):
 def test_fast_path_gives_the_entities_ezdxf_gives(tmp_path):
     """The fast reader of simple ASCII drawings against the full ezdxf reading, entity by entity
     (coordinates equal to the last bit); a drawing with another type goes through ezdxf."""
-    import time
 
     from crashsim.survey import dxf as m
 
@@ -292,18 +291,15 @@ def test_fast_path_gives_the_entities_ezdxf_gives(tmp_path):
     doc.paperspace().add_line((0, 0), (1, 1))  # paper space: not part of the scene
     path = tmp_path / "simple.dxf"
     doc.saveas(path)
-    t0 = time.perf_counter()
     fast = read_dxf(str(path))
-    t1 = time.perf_counter()
     full = read_dxf(str(path), fast=False)
-    t2 = time.perf_counter()
     assert len(fast.entities) == len(full.entities) == 1800
     for a, b in zip(fast.entities, full.entities):
         assert (a.layer, a.ref, a.geometry, a.closed, a.text, a.dxftype) == \
             (b.layer, b.ref, b.geometry, b.closed, b.text, b.dxftype)
         np.testing.assert_array_equal(a.points, b.points)
     assert fast.unit == full.unit == "ft" and fast.notes == full.notes
-    assert t1 - t0 < t2 - t1  # the point of it
+    # its speed against ezdxf's document is measured by benchmarks/survey_import.py, not here
     # the fast path declines what it does not read, and ezdxf reads it
     msp.add_blockref("X", (0, 0)) if "X" in doc.blocks else (doc.blocks.new("X").add_point((0, 0)),
                                                              msp.add_blockref("X", (0, 0)))

@@ -106,11 +106,12 @@ class _Timers:
 SPLIT_ROWS = [
     ("physics: impact equations (`solve_packed`, the compiled solve; `solve_arrays` where it defers)", "impact_eq"),
     ("physics: run-out integration (the compiled kernel, `kernels.run`)", "kernel"),
+    ("physics: the contact problem of later impacts (`solve_contacts`, the LCP; interpreted Python)", "later_lcp"),
     ("**physics alone**", "physics"),
     ("scenario from the sample's inputs (`ScenarioOverrides.scenario`)", "scenario"),
     ("impact result objects (`solve_impact` beyond the equations)", "impact_obj"),
     ("run-out scene model (`SceneModel`: wheels, loads, contact pieces as arrays)", "model"),
-    ("run-out driver around the kernel (events, secondary impacts, hitch checks)", "driver"),
+    ("run-out driver around the kernel (events, the later impacts' set-up, hitch checks)", "driver"),
     ("run-out results (sampled tracks, event places, result objects: `assemble_scene`)", "assemble"),
     ("evidence checks (`evaluate_evidence`; the tyre-mark check dominates)", "evidence"),
     ("rest of `run_scene` (separation states, hitch-consistent velocities, warnings)", "scene_rest"),
@@ -124,6 +125,7 @@ def _split(raw, spec, n: int, fast: bool) -> dict[str, float]:
     import crashsim.impact.solve as solve_mod
     import crashsim.motion.kernels as kernels_mod
     import crashsim.motion.engine as engine_mod
+    import crashsim.motion.impacts as impacts_mod
     import crashsim.motion.runout as runout_mod
     import crashsim.scene.models as models_mod
     import crashsim.reconstruct.overrides as overrides_mod
@@ -143,6 +145,7 @@ def _split(raw, spec, n: int, fast: bool) -> dict[str, float]:
             if hasattr(solve_mod, name):
                 tm.wrap(solve_mod, name, "impact_eq")
         tm.wrap(kernels_mod, "run", "kernel")
+        tm.wrap(impacts_mod, "solve_contacts", "later_lcp")
         tm.wrap(overrides_mod.ScenarioOverrides, "scenario", "scenario")
         tm.wrap(scene_mod, "solve_impact", "impact_all")
         # each function wrapped where its caller looks it up (the modules import these names at their top)
@@ -163,20 +166,21 @@ def _split(raw, spec, n: int, fast: bool) -> dict[str, float]:
         models_mod.clear()
     T = {k: v / n for k, v in tm.total.items()}
     total /= n
-    out = {"impact_eq": T["impact_eq"], "kernel": T["kernel"], "scenario": T["scenario"],
+    out = {"impact_eq": T["impact_eq"], "kernel": T["kernel"], "later_lcp": T["later_lcp"], "scenario": T["scenario"],
            "impact_obj": T["impact_all"] - T["impact_eq"], "model": T["model"],
-           "driver": T["run_model"] - T["kernel"] - T["assemble"], "assemble": T["assemble"],
+           "driver": T["run_model"] - T["kernel"] - T["later_lcp"] - T["assemble"], "assemble": T["assemble"],
            "evidence": T["evidence"],
            "scene_rest": T["run_scene"] - T["impact_all"] - T["model"] - T["run_model"] - T["evidence"],
            "record": total - T["scenario"] - T["run_scene"], "total": total}
-    out["physics"] = out["impact_eq"] + out["kernel"]
+    out["physics"] = out["impact_eq"] + out["kernel"] + out["later_lcp"]
     return out
 
 
 def _fit_physics(raw, spec) -> dict[str, float]:
     """CPU seconds of one fit run in this process (``workers=1``): in all, and in its physics (the
-    impact equations and the run-out kernel of every scene evaluation)."""
+    impact equations, the run-out kernel and the later impacts' contact problem of every scene evaluation)."""
     import crashsim.impact.solve as solve_mod
+    import crashsim.motion.impacts as impacts_mod
     import crashsim.motion.kernels as kernels_mod
     from crashsim.reconstruct.fit import fit_scene
 
@@ -185,13 +189,15 @@ def _fit_physics(raw, spec) -> dict[str, float]:
         if hasattr(solve_mod, name):
             tm.wrap(solve_mod, name, "impact_eq")
     tm.wrap(kernels_mod, "run", "kernel")
+    tm.wrap(impacts_mod, "solve_contacts", "later_lcp")
     try:
         c = time.process_time()
         res = fit_scene(raw, spec, workers=1)
         total = time.process_time() - c
     finally:
         tm.restore()
-    return {"total": total, "physics": tm.total["impact_eq"] + tm.total["kernel"], "kernel": tm.total["kernel"],
+    return {"total": total, "physics": tm.total["impact_eq"] + tm.total["kernel"] + tm.total["later_lcp"],
+            "kernel": tm.total["kernel"],
             "evaluations": res.evaluations}
 
 
@@ -415,7 +421,8 @@ def main(argv=None) -> int:
            f"| 4-unknown fit, warm, {workers} workers | {warm.elapsed:.2f} s | {fit_alone:.2f} s | "
            f"<= 1 s | {verdict(warm.elapsed, 1.0)} |", "",
            f"Why, Monte Carlo: one sample costs {1e3 * split['total']:.2f} ms of CPU here, of which "
-           f"{1e3 * phys:.2f} ms is physics (the run-out kernel alone {1e3 * split['kernel']:.2f} ms) and "
+           f"{1e3 * phys:.2f} ms is physics (the run-out kernel alone {1e3 * split['kernel']:.2f} ms, the later "
+           f"impacts' complementarity problem {1e3 * split['later_lcp']:.2f} ms, solved in interpreted Python) and "
            f"{1e3 * overhead:.2f} ms overhead ({overhead / split['total']:.0%}; on the full path "
            f"{1e3 * (split_full['total'] - split_full['physics']):.2f} ms). The largest overhead parts: {top}. "
            f"The physics alone of the {n:,} samples takes {n * phys / mc.workers:.1f} s on {mc.workers} workers "
@@ -426,7 +433,7 @@ def main(argv=None) -> int:
            f"({fit_alone:.2f} s on {workers} workers{', beyond the goal by itself' if fit_alone > 1.0 else ''}) and "
            f"{fphys['total'] - fphys['physics']:.2f} s of everything else (overhead, the optimiser, the analysis at "
            f"the best point): {(fphys['total'] - fphys['physics']) / fphys['total']:.0%} of its CPU time. The number "
-           "of evaluations (8 starts, forward-difference Jacobians) follows from the local fits' stop rule (ftol "
+           f"of evaluations ({spec.starts} starts, forward-difference Jacobians) follows from the local fits' stop rule (ftol "
            "1e-6, xtol 1e-5: the same best point, chi^2 and uncertainties as at 1e-8 / 1e-7, with about two thirds "
            "of the evaluations).", ""]
     (PLOTS / "fit_mc.md").write_text("\n".join(md))

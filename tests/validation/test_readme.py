@@ -208,10 +208,18 @@ def test_level_table_numbers_come_from_speed_accuracy():
 
 def test_fit_paragraph_numbers_come_from_the_fit_report():
     text = (ROOT / "plots" / "fit_report.md").read_text()
-    para = _section("## Unknowns from the evidence")
-    for n in ("30.71", "30.4", "0.05535", "0.999", "29.91", "0.27"):
-        assert n in para and n in text, n
-    assert "2 of 8 agreed" in text
+    section = _section("## Unknowns from the evidence")
+    start = section.index("For the shipped intersection the truth is")
+    para = section[start:section.index("Monte Carlo of the same scene", start)]
+    fitted = re.search(r"The fit\s+returns ([\d.]+) and ([\d.]+) mph and e = ([\d.]+)", para)
+    assert fitted, para
+    corr = re.search(r"correlation ([\d.]+)", para).group(1)
+    measured = re.search(r"comes back as ([\d.]+) \+- ([\d.]+) mph", para)
+    for n in (*fitted.groups(), corr, *measured.groups()):
+        assert n in text, n
+    agreed = re.search(r"Only (\d+) of the (\d+) starts", " ".join(para.split()))
+    assert agreed, para
+    assert f"{agreed.group(1)} of {agreed.group(2)} agreed" in text
 
 
 def test_python_example_runs_as_a_doctest(monkeypatch, tmp_path):

@@ -1149,8 +1149,10 @@ def plot_time_distance(scene, axes=None, *, system: str | None = None):
         if vn is None:
             continue
         t = np.asarray(x.times, dtype=float) + x.time_offset
-        v = kv * np.asarray(x.speeds, dtype=float)
-        low = np.asarray(x.lower_bound, dtype=bool)
+        keep = t <= 0.0  # the samples the check compares (pre-crash with the item's own offset)
+        t = t[keep]
+        v = kv * np.asarray(x.speeds, dtype=float)[keep]
+        low = np.asarray(x.lower_bound, dtype=bool)[keep]
         ax_v.errorbar(t, v, yerr=kv * x.tolerance, fmt="none", ecolor=_EVIDENCE, elinewidth=0.8, capsize=2.5,
                       alpha=0.6, zorder=6)
         for mask, marker, key in ((~low, "o", "recorded"), (low, "^", "lower")):
@@ -1283,7 +1285,8 @@ def _draw_evidence(S: SceneDrawing, checks: dict) -> None:
         name = x.name or f"recorder in {x.body}"
         detail = ""
         if c is not None and "times" in c.details:
-            detail = (f"{len(x.times)} pre-crash speeds, worst {_residual_text(c, system)}")
+            detail = (f"{c.details.get('n_compared', len(x.times))} pre-crash speeds, worst "
+                      f"{_residual_text(c, system)}")
         S.legend_entry(_wrap(f"recorded speeds \u201c{name}\u201d: {verdict}", 52)
                        + (f"\n  {detail}" if detail else ""),
                        Line2D([], [], ls="none"), color)

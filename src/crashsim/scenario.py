@@ -525,9 +525,10 @@ EV_CRUSH = Section("crush", [
 ], description="The measured crush of one face of one body (CRASH3): its energy is compared with the impact "
                "model's energy loss")
 EV_RECORDER_SAMPLE = Section("sample", [
-    Field("time", Kind.TIME, maximum=0, example="-2.5 s",
-          description="Time of the sample relative to the impact (negative: before it; pre-crash data end at the "
-                      "impact)"),
+    Field("time", Kind.TIME, maximum=5, example="-2.5 s",
+          description="Time of the sample relative to the impact (negative: before it). Pre-crash data end at the "
+                      "impact: a sample is compared only where time + time_offset <= 0, decided with the offset of "
+                      "each evaluation (a fitted time_offset moves the window)"),
     Field("speed", Kind.SPEED, minimum=0, maximum=MAX_SPEED, example="52 mph", description="Recorded speed"),
     Field("brake", "bool", default=False,
           description="Service brake on at this sample: wheel-speed recorders under-read while braking (locked or "
@@ -1938,6 +1939,15 @@ def _recorder_item(x: dict, i: int, body, vehicles, d_approach, file: str | None
         raise _err(f"recorder samples are compared with the approach of vehicle {veh.name!r}, which has none: add "
                    f"[vehicles.{veh.name}.approach]", f"{key}.body", file)
     smp = x["samples"]
+    first: dict = {}
+    for j, p in enumerate(smp):
+        if p["time"] in first:
+            raise _err(f"samples[{first[p['time']]}] and samples[{j}] have the same time ({p['time']:g} s); a "
+                       "recorder takes one sample at a time", f"{key}.samples[{j}].time", file)
+        first[p["time"]] = j
+    if not any(p["time"] + x["time_offset"] <= 0 for p in smp):
+        raise _err(f"no sample is before the impact: every time + time_offset ({x['time_offset']:g} s) is > 0; "
+                   "allowed at least one sample at or before it", f"{key}.samples", file)
     return RecorderEvidence(name, tuple(p["time"] for p in smp), tuple(p["speed"] for p in smp),
                             tuple(bool(p["brake"]) for p in smp), x["tolerance"], x["time_offset"], x["name"],
                             sigma=x.get("sigma"))

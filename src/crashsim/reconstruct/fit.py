@@ -63,7 +63,7 @@ from scipy.optimize import least_squares
 
 from .._version import __version__
 from ..errors import ScenarioError, SolverError, UnreachableImpactError, failure_reason, in_file
-from ..evidence.checks import (approach_of_body, approach_tracks, recorder_residuals,
+from ..evidence.checks import (approach_of_body, approach_tracks, recorder_residuals, recorder_window,
                                signed_distance_to_polyline, wheel_matches)
 from ..evidence.crush import GROUP_TITLES, crush_groups
 from ..geometry import wrap_angle
@@ -382,14 +382,18 @@ class EvidenceModel:
                 out.append(np.array([float(wrap_angle(b.rest_heading - it.measured))]))
                 det.append({"computed": float(wrap_angle(b.rest_heading))})
             elif it.kind == "recorder":
+                # this evaluation's own item: its time_offset (a fit unknown) moves the samples and
+                # which of them are before the impact; the file's item is only the shape of the vector
+                x = scene.scenario.evidence.recorder[it.index]
                 a = approach_of_body(approaches, it.body)
                 if a is None:
                     out.append(np.full(it.size, np.nan))
                     det.append({"computed": None})
                 else:
-                    computed, res = recorder_residuals(it.measured, a)
+                    computed, res = recorder_residuals(x, a)
                     out.append(res)
-                    det.append({"computed": computed.tolist()})
+                    det.append({"computed": [None if not math.isfinite(v) else float(v) for v in computed],
+                                "time_offset": float(x.time_offset), "compared": recorder_window(x).tolist()})
             elif it.kind == "mark" and it.mark.phase == "approach":
                 if pre_tracks is None:
                     pre_tracks = approach_tracks(approaches)

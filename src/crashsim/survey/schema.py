@@ -93,7 +93,7 @@ RECORDER = Section("recorder", [
     Field("time_offset", Kind.TIME, default="0 s", minimum=-5, maximum=5,
           description="As evidence.recorder.time_offset (a fit unknown by its path evidence.recorder[i].time_offset)"),
     Field("time", "str", example="Time (s)", description="Column of the sample time (impact at 0, before it "
-                                                         "negative; later samples are left out)"),
+                                                         "negative; samples more than 5 s after it are left out)"),
     Field("speed", "str", example="Speed, vehicle indicated (km/h)", description="Column of the speed"),
     Field("time_unit", "str", default="s", description="Unit of the time column (s, ms)"),
     Field("speed_unit", "str", default="km/h", description="Unit of the speed column (km/h, mph, m/s)"),

@@ -297,7 +297,7 @@ def _cmd_export(args) -> int:
     if args.geojson:
         crs = (scenario.data.get("survey") or {}).get("crs")
         sys.stdout.write(f"wrote {write_geojson(items, args.geojson, frame, unit, crs)} ({len(items)} features, "
-                         f"{unit})\n")
+                         + (f"WGS 84 longitude/latitude from {crs})\n" if crs else f"{unit})\n"))
     return 0
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from pathlib import Path
 
@@ -22,7 +23,7 @@ from .casereport import load_json, survey_files, write_case_report
 from .errors import CrashsimError, ScenarioError, SolverError
 from .motion.result import jsonable as _clean  # JSON-safe copy: numpy to Python, NaN/inf to None
 from .outputs import check_output_dir, check_output_file, check_workers
-from .plotting import LABEL_KINDS, LEGEND_MODES, PAPER_SIZES, check_hide, parse_scale, save_scene_figures
+from .plotting import LABEL_KINDS, LEGEND_MODES, PAPER_SIZES, check_hide, check_sheet, parse_scale, save_scene_figures
 from .reconstruct import run_scene
 from .reconstruct.fit import fit_scene, same_file
 from .reconstruct.mc_plots import save_mc_figures
@@ -75,9 +76,7 @@ def _dt(text: str | None) -> float | None:
 
 def _cmd_run(args) -> int:
     scenario = load_scenario(args.file)
-    dt = _dt(args.dt)
-    if dt is not None and not args.csv:
-        raise ScenarioError("--dt sets the time step of the --csv histories; give --csv DIR too", field="--dt")
+    dt = _dt(args.dt)  # checked before any work (_check_options)
     result = run_scene(scenario)
     if args.csv:
         result.write_csv(Path(args.csv), system=args.units, dt=dt)
@@ -237,7 +236,10 @@ def _add_inverse_commands(sub):
 
 def _cmd_plot(args) -> int:
     interval = None if args.interval is None else parse(args.interval, Kind.TIME, field="--interval")
-    scene = run_scene(load_scenario(args.file))
+    scenario = load_scenario(args.file)
+    if args.paper is not None or args.scale is not None:  # the sheet against what is known before the run
+        check_sheet(scenario, args.paper or "A4", args.scale, approach=not args.no_approach, field="--scale")
+    scene = run_scene(scenario)
     try:
         written = _save_figures(args, scene, interval)
     except ScenarioError as exc:  # a scale too large for the page: name the option as written
@@ -286,9 +288,7 @@ def _cmd_survey(args) -> int:
 
 
 def _cmd_export(args) -> int:
-    if not (args.dxf or args.geojson):
-        raise ScenarioError("give --dxf OUT.dxf and/or --geojson OUT.geojson", field="export")
-    times = [parse(t.strip(), Kind.TIME, field="--times") for t in (args.times or "").split(",") if t.strip()]
+    times = args.times_s  # checked before any work (_check_options), as the output paths
     scenario = load_scenario(args.file)
     frame, unit = export_frame(scenario)
     items = export_items(run_scene(scenario), times)
@@ -516,7 +516,8 @@ def _check_outputs(args) -> None:
             if path:
                 check_output_file(path, field=field, suffixes=figs, what="a figure")
     if c == "report":
-        check_output_file(args.output, field="-o", suffixes=(".html", ".htm"), what="the case report")
+        check_output_file(args.output, field="-o", suffixes=(".html", ".htm"), make_parents=False,
+                          what="the case report")
         for key in ("fit", "mc", "posterior"):
             path = getattr(args, key)
             if path and not Path(path).is_file():
@@ -532,6 +533,49 @@ def _check_outputs(args) -> None:
         if not parse(args.dt, Kind.TIME, field="--dt") > 0:
             raise ScenarioError(f"{args.dt!r} is not a positive time; allowed a time between frames > 0 s, "
                                 "e.g. \"0.05 s\"", field="--dt")
+        if not (math.isfinite(args.speed) and args.speed > 0):
+            raise ScenarioError(f"--speed = {args.speed:g}: allowed a playback speed > 0 (1 = real time, 0.5 = "
+                                "slow motion)", field="--speed")
+    _check_options(args)
+
+
+def _check_options(args) -> None:
+    """The option values of the command that need no scene, before any work (exit 2, one line)."""
+    c = args.command
+    if c == "run":
+        args.dt_s = _dt(args.dt)
+        if args.dt_s is not None and not args.csv:
+            raise ScenarioError("--dt sets the time step of the --csv histories; give --csv DIR too", field="--dt")
+    if c in ("plot", "animate") and args.dpi < 1:
+        raise ScenarioError(f"--dpi = {args.dpi}; allowed a resolution >= 1 dot per inch (e.g. 150)", field="--dpi")
+    if c == "plot" and args.interval is not None:
+        args.interval_s = parse(args.interval, Kind.TIME, field="--interval")
+        if not args.interval_s > 0:
+            raise ScenarioError(f"--interval = {args.interval!r}; allowed a time > 0 between ghost outlines, e.g. "
+                                "\"0.5 s\"", field="--interval")
+    if c == "export":
+        if not (args.dxf or args.geojson):
+            raise ScenarioError("give --dxf OUT.dxf and/or --geojson OUT.geojson", field="export")
+        if args.dxf:
+            check_output_file(args.dxf, field="--dxf", make_parents=False, suffixes=(".dxf",), what="the drawing")
+        if args.geojson:
+            check_output_file(args.geojson, field="--geojson", make_parents=False, suffixes=(".geojson", ".json"),
+                              what="the GeoJSON file")
+        args.times_s = []
+        for t in (args.times or "").split(","):
+            if t.strip():
+                v = parse(t.strip(), Kind.TIME, field="--times")
+                if not v > 0:
+                    raise ScenarioError(f"--times: {t.strip()!r}; allowed times > 0 after separation, e.g. "
+                                        "\"0.5 s, 1 s\"", field="--times")
+                args.times_s.append(v)
+    if c == "mc" and args.samples is not None and args.samples < 1:
+        raise ScenarioError(f"--samples = {args.samples}; allowed a number of samples >= 1", field="--samples")
+    if c == "posterior" and args.steps is not None and args.steps < 1:
+        raise ScenarioError(f"--steps = {args.steps}; allowed a number of steps >= 1", field="--steps")
+    if c in ("fit", "mc", "posterior") and not (math.isfinite(args.sample_time_limit) and args.sample_time_limit > 0):
+        raise ScenarioError(f"--sample-time-limit = {args.sample_time_limit:g}; allowed seconds > 0",
+                            field="--sample-time-limit")
 
 
 def _first_run(args, argv: list[str]) -> int | None:

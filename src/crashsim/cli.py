@@ -19,7 +19,7 @@ from . import first_run
 from ._jit import cache_dir, ready
 from ._version import __version__
 from .animation import ANIMATION_LEGENDS, VIEWS, animate_scene, check_animation_path, frame_times
-from .casereport import load_json, survey_files, write_case_report
+from .casereport import check_result_json, made_from, survey_files, write_case_report
 from .errors import CrashsimError, ScenarioError, SolverError
 from .motion.result import jsonable as _clean  # JSON-safe copy: numpy to Python, NaN/inf to None
 from .outputs import check_output_dir, check_output_file, check_workers
@@ -106,14 +106,22 @@ def _cmd_fit(args) -> int:
     result = fit_scene(load_scene_data(args.file), None, engine=args.engine, workers=args.workers,
                        progress=args.progress, file=args.file, sample_time_limit=args.sample_time_limit)
     if args.json:
-        json.dump(_clean(result.to_dict()), sys.stdout, indent=2)
-        sys.stdout.write("\n")
+        _dump_result(result, "fit", args.file)
     else:
         sys.stdout.write(result.report(system) + "\n")
     if args.write_best is not None:
         path = result.write_best(args.write_best)
         sys.stderr.write(f"crashsim: wrote the best-fit scenario to {path} (crashsim run {path})\n")
     return 0
+
+
+def _dump_result(result, command: str, file: str) -> None:
+    """The result as one JSON object (SI), with what it was made from (:func:`made_from`: the SHA-256
+    of the scene's inputs), so that a case report embeds it only beside the scene it belongs to."""
+    d = _clean(result.to_dict())
+    d["made_from"] = made_from(command, file)
+    json.dump(d, sys.stdout, indent=2)
+    sys.stdout.write("\n")
 
 
 def _cmd_mc(args) -> int:
@@ -136,8 +144,7 @@ def _cmd_mc(args) -> int:
 
         save_mc_figures(result, Path(args.plots), system=system)
     if args.json:
-        json.dump(_clean(result.to_dict()), sys.stdout, indent=2)
-        sys.stdout.write("\n")
+        _dump_result(result, "mc", args.file)
     else:
         sys.stdout.write(result.report(system) + "\n")
     return 0
@@ -180,8 +187,7 @@ def _cmd_posterior(args) -> int:
         for path in save_posterior_figures(result, Path(args.plots), system=system):
             sys.stderr.write(f"crashsim: wrote {path}\n")
     if args.json:
-        json.dump(_clean(result.to_dict()), sys.stdout, indent=2)
-        sys.stdout.write("\n")
+        _dump_result(result, "posterior", args.file)
     else:
         sys.stdout.write(result.report(system) + "\n")
     return 0
@@ -302,18 +308,7 @@ def _cmd_export(args) -> int:
 
 
 def _cmd_report(args) -> int:
-    extra = {}
-    for key in ("fit", "mc", "posterior"):
-        path = getattr(args, key)
-        if path:
-            try:
-                extra[key] = load_json(path)
-            except (OSError, ValueError) as exc:
-                raise ScenarioError(f"{path!r} is not readable JSON of crashsim {key} --json: {exc}",
-                                    field=f"--{key}") from None
-            if not isinstance(extra[key], dict):
-                raise ScenarioError(f"{path!r} is not a JSON object (crashsim {key} --json writes one)",
-                                    field=f"--{key}")
+    extra = args.results  # read and checked before any work (_check_outputs)
     scenario = load_scenario(args.file)
     scene = run_scene(scenario)
     inputs = [args.file] + survey_files(args.file) + [getattr(args, k) for k in ("fit", "mc", "posterior")
@@ -518,11 +513,14 @@ def _check_outputs(args) -> None:
     if c == "report":
         check_output_file(args.output, field="-o", suffixes=(".html", ".htm"), make_parents=False,
                           what="the case report")
+        args.results = {}
         for key in ("fit", "mc", "posterior"):
             path = getattr(args, key)
             if path and not Path(path).is_file():
                 raise ScenarioError(f"{path!r} is not a file; give the JSON that crashsim {key} FILE --json wrote",
                                     field=f"--{key}")
+            if path:  # of that command, made from this scene's inputs (their SHA-256)
+                args.results[key] = check_result_json(path, key, args.file, field=f"--{key}")
     if c == "presets" and (args.plot or args.output):
         if not (args.plot and args.output):
             raise ScenarioError("--plot NAME and -o FILE go together: the preset to draw and the figure to write",

@@ -984,7 +984,8 @@ def _rollover_check(r: dict, level: str, vehicles, file: str | None) -> bool:
 def _build_runout(r: dict, vehicles, raw_vehicles: dict, file: str | None, raw: dict | None = None) -> RunoutSpec:
     raw = raw or {}
     level = r["level"]
-    if r["load_transfer"] and level not in ("articulated", "load_transfer"):
+    if r["load_transfer"] and (level not in ("articulated", "load_transfer") or
+                               (level == "articulated" and "level" in raw)):  # a level written is never overruled
         raise _err(f"load_transfer = true asks for level \"load_transfer\", but level = {level!r}; give one of them",
                    "runout.load_transfer", file)
     if r["load_transfer"]:

@@ -77,6 +77,7 @@ from .montecarlo import DEFAULT_SAMPLE_TIME_LIMIT
 from .overrides import (ScenarioOverrides, default_engine, file_contents, forward_data, get_value, parse_value,
                         resolve_path, set_value)
 from .parallel import Executor, Progress
+from .write_best import edit_best
 
 __all__ = ["FitSpec", "Unknown", "FitProblem", "FitResult", "EvidenceResidual", "StartResult", "fit_scene",
            "RANK_TOL", "PENALTY"]
@@ -797,7 +798,9 @@ class FitResult:
     def write_best(self, path) -> "Path":
         """Write :meth:`best_scenario_dict` as a runnable TOML scenario file.
 
-        A header comment says what wrote it, from which file, the best values (with their
+        The input file itself with its values replaced in place (:mod:`crashsim.reconstruct.write_best`:
+        comments, order and layout kept, the survey a reference, paths relative to ``path``); a
+        header comment says what wrote it, from which file, the best values (with their
         intervals) and chi^2; the input's ``[fit]`` table follows at the end as comments.
 
         Parameters
@@ -821,12 +824,18 @@ class FitResult:
             raise ScenarioError(f"{str(path)!r} is the input file; the best fit is written to another file",
                                 field="--write-best", file=self.file)
         data = self.best_scenario_dict()
-        text = _best_header(self, data) + tomli_w.dumps(data)
         fit_table = (self.source_data or {}).get("fit")
+        trailer = ""
         if fit_table is not None:
-            text += ("\n# ---- The [fit] table of the input file (the fit that wrote this file) ----\n"
-                     + "".join(f"# {line}\n" if line else "#\n"
-                               for line in tomli_w.dumps({"fit": fit_table}).splitlines()))
+            trailer = ("\n# ---- The [fit] table of the input file (the fit that wrote this file) ----\n"
+                       + "".join(f"# {line}\n" if line else "#\n"
+                                 for line in tomli_w.dumps({"fit": fit_table}).splitlines()))
+        if self.file is not None and Path(self.file).is_file():
+            # the user's own file, its values replaced in place (comments, order, survey references kept)
+            text = edit_best(Path(self.file), path, data, [u.path for u in self.unknowns], engine=self.engine,
+                             header=_best_header(self, data), trailer=trailer)
+        else:  # a scenario given as a dict: no file to edit
+            text = _best_header(self, data) + tomli_w.dumps(data) + trailer
         path.write_text(text, encoding="utf-8")
         return path
 

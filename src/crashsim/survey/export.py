@@ -33,6 +33,7 @@ from ..errors import ScenarioError
 from ..geometry import rotate
 from ..units import Kind, format_value
 from .frame import INSUNITS, SceneFrame, unit_scale
+from .geojson import projected_crs
 from .mapping import read_survey_file
 
 __all__ = ["ExportItem", "export_items", "export_frame", "write_dxf", "write_geojson"]
@@ -190,8 +191,6 @@ def write_geojson(items, path, frame: SceneFrame, unit: str, crs: str | None = N
     transform = None
     if crs:
         from pyproj import Transformer
-
-        from .geojson import projected_crs
 
         src, factor = projected_crs(crs)
         to_lonlat = Transformer.from_crs(src, "EPSG:4326", always_xy=True)

@@ -15,6 +15,7 @@ import copy
 import dataclasses
 import difflib
 import math
+import re
 import tomllib
 from dataclasses import dataclass, field, replace as _replace
 from importlib.resources import files
@@ -1362,6 +1363,10 @@ class _Problems:
         raise ScenarioValidationError(problems, file=self.file)
 
 
+class _Skip(Exception):
+    """A part left for the next run (lenient: what it needs could not be built)."""
+
+
 class _Keep:
     def __init__(self, owner: _Problems):
         self.owner = owner
@@ -1426,7 +1431,17 @@ def _later_problems(d, data, merged, source, file, schema_problems) -> list[tupl
     except Exception:  # noqa: BLE001 - a part built on a refused value: nothing more to report
         found = []
     bad = [p for p, _ in schema_problems]
-    return [(p, m) for p, m in found if not any(_related(p, b) for b in bad)]
+    return [(p, m) for p, m in found if not any(_related(p, b) or _about_sibling(p, m, b) for b in bad)]
+
+
+def _about_sibling(path: str, message: str, refused: str) -> bool:
+    """Whether a later error at ``path`` is about a key of the same table that the schema refused
+    (``evidence.crush[0].A``: "... or ees; given: none" when ``evidence.crush[0].ees`` was refused):
+    it names that key, whose value it cannot see."""
+    parent, _, key = refused.rpartition(".")
+    if not parent or path.rpartition(".")[0] != parent:
+        return False
+    return re.search(rf"(?<![\w.]){re.escape(key)}(?!\w)", message) is not None
 
 
 def _from_validated(d: dict, data: dict, merged: dict, source, file: str | None, approaches: bool,
@@ -1471,7 +1486,13 @@ def _from_validated(d: dict, data: dict, merged: dict, source, file: str | None,
     later = _Problems(file, lenient)
     imp = d["impact"]
     problem = None
-    if lenient:  # a file with schema errors: the evidence and the map are checked even if the impact fails
+    # lenient: a vehicle that could not be built (a value of it refused) leaves the checks that need it
+    # (the impact, the evidence) for the next run, and a [runout] not built says nothing of its options
+    vehicle_lost = lenient and len(vehicles) < len(d["vehicles"])
+    runout_failed = d["runout"] is not None and runout is None
+    if vehicle_lost:
+        pass
+    elif lenient:  # a file with schema errors: the evidence and the map are checked even if the impact fails
         with later.each():
             problem = _impact_problem(d, vehicles, states, file)
     else:
@@ -1486,13 +1507,15 @@ def _from_validated(d: dict, data: dict, merged: dict, source, file: str | None,
             runout = _with_contact(runout, d, vehicles, problem, file)
     evidence = map_lines = crush = None
     with later.each():
+        if vehicle_lost:
+            raise _Skip
         evidence = _build_evidence(d["evidence"], states, file, vehicles,
                                    {n: v["approach"] for n, v in d["vehicles"].items()})
-        if evidence.rollover and (runout is None or not runout.options.rollover):
+        if evidence.rollover and not runout_failed and (runout is None or not runout.options.rollover):
             raise _err("a rollover statement is checked against the wheel-lift and rollover check, which is off: add "
                        "runout.rollover = true (level \"load_transfer\")", "evidence.rollover[0].unit", file)
     with later.each():
-        if d["evidence"] is not None and d["evidence"]["crush"]:
+        if d["evidence"] is not None and d["evidence"]["crush"] and not vehicle_lost:
             crush = _build_crush(d["evidence"]["crush"], d, vehicles, file)
     if evidence is not None and crush is not None:
         evidence = dataclasses.replace(evidence, crush=crush)

@@ -227,9 +227,10 @@ def test_units_in_the_scene_file_contradicting_the_drawing(pair):
     data = copy.deepcopy(surv)
     data["survey"]["files"][0]["units"] = "m"
     mapping._CACHE.clear()
-    with pytest.raises(ScenarioError, match=r"survey.files.units: .*units = 'm', but the drawing's header says "
-                                            r"\$INSUNITS = 21 \(us_ft\)"):
+    with pytest.raises(ScenarioError, match=r"survey.files\[0\].units: .*units = 'm', but the drawing's header says "
+                                            r"\$INSUNITS = 21 \(us_ft\)") as info:
         scenario_from_dict(data, file="scene.toml")
+    assert "remove units" not in str(info.value)  # that advice moved the scene without a word
 
 
 def test_unsupported_entities_warned_once_in_the_sources(pair, tmp_path, caplog):

@@ -66,6 +66,8 @@ class SurveyData:
     unit: str
     entities: list = field(default_factory=list)
     skipped: Counter = field(default_factory=Counter)
+    #: The entities not taken, by (layer, type): what ``crashsim survey`` lists beside the others
+    skipped_layers: Counter = field(default_factory=Counter)
     notes: list = field(default_factory=list)
 
     def layers(self) -> dict[str, Counter]:

@@ -103,9 +103,13 @@ def read_survey_file(entry: dict, crs: str | None, *, key: str = "survey.files[0
         else:
             data = read_geojson(path, crs, crs=entry["crs"], layer_property=entry["layer_property"], file=file)
     except ScenarioError as exc:
-        if exc.field is None:
-            raise ScenarioError(str(exc).removeprefix(f"{file}: ") if file else str(exc), field=f"{key}.file",
-                                file=file) from None
+        if exc.field is None:  # the reader's own error: the file named as the scene file writes it
+            text = str(exc).removeprefix(f"{file}: ") if file else str(exc)
+            raise ScenarioError(text.replace(path, entry["file"]), field=f"{key}.file", file=file) from None
+        if exc.field.startswith("survey.files."):  # a reader's key: this entry's, with its index
+            text = str(exc).removeprefix(f"{file}: " if file else "").removeprefix(f"{exc.field}: ")
+            raise ScenarioError(text.replace(path, entry["file"]),
+                                field=f"{key}.{exc.field.removeprefix('survey.files.')}", file=file) from None
         raise
     if len(_CACHE) > 32:
         _CACHE.clear()

@@ -1,0 +1,61 @@
+"""Survey mistakes that used to pass or mislead (issue 31, item 3): a truncated DXF, a listing of
+a drawing without units or with a TIN, US survey feet on an R12 drawing that can only say feet."""
+
+from __future__ import annotations
+
+import pytest
+
+ezdxf = pytest.importorskip("ezdxf")
+
+from crashsim.errors import ScenarioError  # noqa: E402
+from crashsim.survey.dxf import read_dxf  # noqa: E402
+from crashsim.survey.frame import UNIT_METRES  # noqa: E402
+from crashsim.survey.inspect import read_any, summary  # noqa: E402
+
+
+def _drawing(path, version="R2010", insunits=None, faces=0):
+    doc = ezdxf.new(version)
+    doc.header["$INSUNITS"] = 0 if insunits is None else insunits  # 0: unitless
+    msp = doc.modelspace()
+    msp.add_lwpolyline([(1000.0, 2000.0), (1100.0, 2000.0), (1100.0, 2050.0)], dxfattribs={"layer": "EDGE"})
+    msp.add_point((1050.0, 2020.0), dxfattribs={"layer": "POI"})
+    for i in range(faces):
+        msp.add_3dface([(i, 0, 0), (i + 1, 0, 0.1), (i + 1, 1, 0.12)], dxfattribs={"layer": "TIN"})
+    doc.saveas(path)
+    return path
+
+
+def test_a_truncated_drawing_is_damaged_at_its_line(tmp_path):
+    full = _drawing(tmp_path / "full.dxf", insunits=6)
+    lines = full.read_text().splitlines()
+    cut = tmp_path / "cut.dxf"
+    cut.write_text("\n".join(lines[: len(lines) // 2]) + "\n")
+    with pytest.raises(ScenarioError, match=rf"damaged at line {len(lines) // 2}"):
+        read_dxf(str(cut))
+    with pytest.raises(ScenarioError, match="damaged at line"):
+        read_any(str(cut))  # crashsim survey says so too, not "0 entities"
+
+
+def test_listing_needs_no_units_and_names_every_type(tmp_path):
+    p = _drawing(tmp_path / "tin.dxf", faces=3)
+    with pytest.raises(ScenarioError, match="does not state its units"):
+        read_dxf(str(p))  # a scene needs them
+    text = summary(read_any(str(p)))
+    assert "does not state its units" in text and "note:" in text
+    tin = next(ln for ln in text.splitlines() if ln.strip().startswith("TIN"))
+    assert "3 3DFACE" in tin
+    assert any(ln.strip().startswith("EDGE") and "LWPOLYLINE" in ln for ln in text.splitlines())
+
+
+def test_us_survey_feet_on_an_r12_drawing_in_feet(tmp_path):
+    """R12 has no $INSUNITS code for the US survey foot: units = "us_ft" on a drawing whose header
+    says feet is taken (the scene file knows better), with a note; other contradictions stay errors."""
+    p = _drawing(tmp_path / "ft.dxf", insunits=2)
+    d = read_dxf(str(p), "us_ft")
+    assert d.unit == "us_ft"
+    e = next(e for e in d.entities if e.layer == "POI")
+    assert e.points[0, 0] == pytest.approx(1050.0 * UNIT_METRES["us_ft"], rel=1e-15)
+    assert any("no $INSUNITS code for the US survey foot" in n for n in d.notes)
+    with pytest.raises(ScenarioError, match=r"\$INSUNITS = 2 \(ft\): one of them is wrong") as info:
+        read_dxf(str(p), "m")
+    assert "remove units" not in str(info.value)

@@ -8,6 +8,7 @@ run-out did not reach rest (a limit ended it; the results are still printed or w
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import sys
@@ -74,8 +75,25 @@ def _dt(text: str | None) -> float | None:
     return dt
 
 
+def _load(path: str):
+    """The scenario of ``path``; in an interpreted first run without the run-out's wall-time limit
+    (a budget for compiled kernels: a result must not depend on whether they were compiled yet), said
+    on stderr."""
+    scenario = load_scenario(path)
+    ro = scenario.runout
+    if first_run.interpreted() and ro is not None and ro.options.max_wall_time < first_run.INTERPRETED_WALL_TIME:
+        sys.stderr.write(f"crashsim: interpreted run: the run-out's wall-time limit (runout.max_wall_time = "
+                         f"{ro.options.max_wall_time:g} s) is lifted, so that it ends as the compiled run would\n")
+        opts = dataclasses.replace(ro.options, max_wall_time=first_run.INTERPRETED_WALL_TIME)
+        data = scenario.file_data
+        scenario = dataclasses.replace(scenario, runout=dataclasses.replace(ro, options=opts))
+        if data is not None:
+            object.__setattr__(scenario, "_file_data", data)
+    return scenario
+
+
 def _cmd_run(args) -> int:
-    scenario = load_scenario(args.file)
+    scenario = _load(args.file)
     dt = _dt(args.dt)  # checked before any work (_check_options)
     result = run_scene(scenario)
     if args.csv:
@@ -242,7 +260,7 @@ def _add_inverse_commands(sub):
 
 def _cmd_plot(args) -> int:
     interval = None if args.interval is None else parse(args.interval, Kind.TIME, field="--interval")
-    scenario = load_scenario(args.file)
+    scenario = _load(args.file)
     if args.paper is not None or args.scale is not None:  # the sheet against what is known before the run
         check_sheet(scenario, args.paper or "A4", args.scale, approach=not args.no_approach, field="--scale")
     scene = run_scene(scenario)
@@ -269,7 +287,7 @@ def _cmd_animate(args) -> int:
     out = check_animation_path(args.output, field="-o")  # before anything long
     dt = parse(args.dt, Kind.TIME, field="--dt")
     frame_times(0.0, dt, field="--dt")  # dt > 0; the frame count is checked once the run-out's end is known
-    scene = run_scene(load_scenario(args.file))
+    scene = run_scene(_load(args.file))
     if scene.runout:
         frame_times(max(r.t_end for r in scene.runout.values()), dt, field="--dt")
     with tqdm(total=None, file=sys.stderr, unit="frame", desc="rendering", disable=args.quiet) as bar:
@@ -295,7 +313,7 @@ def _cmd_survey(args) -> int:
 
 def _cmd_export(args) -> int:
     times = args.times_s  # checked before any work (_check_options), as the output paths
-    scenario = load_scenario(args.file)
+    scenario = _load(args.file)
     frame, unit = export_frame(scenario)
     items = export_items(run_scene(scenario), times)
     if args.dxf:
@@ -309,7 +327,7 @@ def _cmd_export(args) -> int:
 
 def _cmd_report(args) -> int:
     extra = args.results  # read and checked before any work (_check_outputs)
-    scenario = load_scenario(args.file)
+    scenario = _load(args.file)
     scene = run_scene(scenario)
     inputs = [args.file] + survey_files(args.file) + [getattr(args, k) for k in ("fit", "mc", "posterior")
                                                       if getattr(args, k)]
@@ -583,6 +601,9 @@ def _first_run(args, argv: list[str]) -> int | None:
     if args.command not in _COMPUTING or ready() or first_run.interpreted():
         return None
     how = first_run.policy()
+    dead = first_run.dead_compile()
+    if dead is not None:  # say so once, and compile again (below: in the background or here)
+        sys.stderr.write(f"crashsim: {dead}; compiling again\n")
     if how != "wait" and args.command in first_run.SINGLE_SCENE:
         log = first_run.start_background_compile() if how == "background" else None
         sys.stderr.write("crashsim: first run on this machine: this scene runs interpreted (seconds) "

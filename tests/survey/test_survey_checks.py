@@ -59,3 +59,32 @@ def test_us_survey_feet_on_an_r12_drawing_in_feet(tmp_path):
     with pytest.raises(ScenarioError, match=r"\$INSUNITS = 2 \(ft\): one of them is wrong") as info:
         read_dxf(str(p), "m")
     assert "remove units" not in str(info.value)
+
+
+def test_point_file_mistakes_name_their_rows(tmp_path):
+    from crashsim.survey.points import read_points
+
+    p = tmp_path / "ts.txt"
+    p.write_text("501,1000.0,2000.0,10.0,TRREST\n502,1001.0,2000.0,10.0,TRREST\n502,1002.0,2001.0,10.0,EP\n")
+    with pytest.raises(ScenarioError, match=r"rows 2 and 3 have the same point number '502'"):
+        read_points(str(p), "m", "PNEZD")
+    p.write_text("501,1000.0,2000.0,10.0\n502,1001.0,2000.0,10.0\n")
+    with pytest.raises(ScenarioError, match=r"the rows have 4 fields where columns = 'PNEZD' declares 5"):
+        read_points(str(p), "m", "PNEZD")
+    with pytest.raises(ScenarioError, match=r"gives both N/E and X/Y"):
+        read_points(str(p), "m", "PNEZX")
+    d = read_points(str(p), "m", "PNEZ")
+    assert "no D (description, the code) column" in d.empty_layers
+
+
+def test_a_geojson_layer_property_no_feature_has(tmp_path):
+    import json
+
+    from crashsim.survey.geojson import read_geojson
+
+    p = tmp_path / "r.geojson"
+    p.write_text(json.dumps({"type": "FeatureCollection", "features": [
+        {"type": "Feature", "properties": {"FEATCODE": "EP", "OFFSET_FT": 0},
+         "geometry": {"type": "LineString", "coordinates": [[500000, 4300000], [500010, 4300000]]}}]}))
+    d = read_geojson(str(p), "EPSG:32617", crs="EPSG:32617", layer_property="FEATURECODE")
+    assert "no feature has a property 'FEATURECODE'" in d.empty_layers and "FEATCODE, OFFSET_FT" in d.empty_layers

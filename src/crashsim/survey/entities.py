@@ -68,6 +68,9 @@ class SurveyData:
     skipped: Counter = field(default_factory=Counter)
     #: The entities not taken, by (layer, type): what ``crashsim survey`` lists beside the others
     skipped_layers: Counter = field(default_factory=Counter)
+    #: Why every entity's layer or code is empty, where the reader can tell (no D column, no feature
+    #: with the layer property): said where a map entry matches nothing
+    empty_layers: str = ""
     notes: list = field(default_factory=list)
 
     def layers(self) -> dict[str, Counter]:

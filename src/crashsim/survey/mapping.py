@@ -220,6 +220,9 @@ def _map_entries(out: _Out, sd, entry: dict, raw_entry: dict, frame: SceneFrame,
             near = difflib.get_close_matches(m["match"], layers, n=1, cutoff=0.3)
             hint = f"; nearest: {near[0]!r}" if near else ""
             shown = ", ".join(map(repr, layers[:40])) + (f" and {len(layers) - 40} more" if len(layers) > 40 else "")
+            if sd.empty_layers and layers == [""]:
+                raise ScenarioError(f"{src} has no layer or code matching {m['match']!r}: {sd.empty_layers}",
+                                    field=f"{mkey}.match", file=file)
             raise ScenarioError(f"{src} has no layer or code matching {m['match']!r}{hint}. It has: "
                                 f"{shown or 'none'}", field=f"{mkey}.match", file=file)
         taken[idx] = True

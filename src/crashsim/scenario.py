@@ -806,6 +806,9 @@ class Scenario:
     survey_frame: SceneFrame | None = None
     north: float | None = None
     barrier_extent: tuple[float, float] | None = None
+    #: Doubtful values the loader accepted (an angle of more than a turn: "192 rad" meant as
+    #: degrees?); the run's warnings carry them
+    load_warnings: tuple[str, ...] = ()
 
     @property
     def approaches_simulated(self) -> bool:
@@ -1531,11 +1534,38 @@ def _from_validated(d: dict, data: dict, merged: dict, source, file: str | None,
                    evidence, d, map_lines, {}, approach_inputs,
                    descriptions={n: v.get("description") or "" for n, v in d["vehicles"].items()},
                    survey_frame=survey_frame(survey) if placed else None,
-                   north=(d.get("map") or {}).get("north"), barrier_extent=_barrier_extent(d.get("barrier")))
+                   north=(d.get("map") or {}).get("north"), barrier_extent=_barrier_extent(d.get("barrier")),
+                   load_warnings=tuple(_angle_warnings(data)))
     object.__setattr__(out, "_file_data", source)  # the file contents it was built from (Scenario.file_data)
     if not approaches:
         return out
     return simulate_approaches(out)
+
+
+_ANGLE = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(rad|radians?|deg|degrees?)\s*$",
+                    re.IGNORECASE)
+
+
+def _angle_warnings(data, path: str = "") -> list[str]:
+    """A warning for every angle of the file beyond one turn: in rad most likely degrees meant
+    ("192 rad" is 30.6 turns), in deg a doubtful value (a rotation of 1e9 deg)."""
+    out: list[str] = []
+    if isinstance(data, dict):
+        for k, v in data.items():
+            if k != "imported":
+                out += _angle_warnings(v, f"{path}.{k}" if path else str(k))
+    elif isinstance(data, list):
+        for i, v in enumerate(data):
+            out += _angle_warnings(v, f"{path}[{i}]")
+    elif isinstance(data, str):
+        m = _ANGLE.match(data)
+        if m:
+            x, unit = float(m[1]), m[2].lower()
+            turns = abs(x) / (2 * math.pi) if unit.startswith("rad") else abs(x) / 360.0
+            if turns > 1.0:
+                hint = f"; did you mean \"{m[1]} deg\"?" if unit.startswith("rad") else ""
+                out.append(f"{path} = {data!r} is {turns:.4g} turns (more than 2 pi rad){hint}")
+    return out
 
 
 def _barrier_extent(barrier: dict | None) -> tuple[float, float] | None:
@@ -1969,6 +1999,10 @@ def _recorder_item(x: dict, i: int, body, vehicles, d_approach, file: str | None
             raise _err(f"samples[{first[p['time']]}] and samples[{j}] have the same time ({p['time']:g} s); a "
                        "recorder takes one sample at a time", f"{key}.samples[{j}].time", file)
         first[p["time"]] = j
+    if len(smp) == 1 and smp[0]["time"] + x["time_offset"] > 0:
+        raise _err(f"time = {smp[0]['time']:g} s is after the impact (time + time_offset = "
+                   f"{smp[0]['time'] + x['time_offset']:g} s); allowed <= {-x['time_offset']:g} s: pre-crash data "
+                   "end at the impact", f"{key}.samples[0].time", file)
     if not any(p["time"] + x["time_offset"] <= 0 for p in smp):
         raise _err(f"no sample is before the impact: every time + time_offset ({x['time_offset']:g} s) is > 0; "
                    "allowed at least one sample at or before it", f"{key}.samples", file)

@@ -88,3 +88,52 @@ def test_a_geojson_layer_property_no_feature_has(tmp_path):
          "geometry": {"type": "LineString", "coordinates": [[500000, 4300000], [500010, 4300000]]}}]}))
     d = read_geojson(str(p), "EPSG:32617", crs="EPSG:32617", layer_property="FEATURECODE")
     assert "no feature has a property 'FEATURECODE'" in d.empty_layers and "FEATCODE, OFFSET_FT" in d.empty_layers
+
+
+def _shipped(tmp_path, *changes):
+    import shutil
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2] / "scenarios" / "survey"
+    shutil.copytree(root / "files", tmp_path / "files")
+    text = (root / "truck_brakes_survey.toml").read_text()
+    for old, new in changes:
+        assert old in text
+        text = text.replace(old, new, 1)
+    f = tmp_path / "scene.toml"
+    f.write_text(text)
+    return f
+
+
+def test_an_item_far_from_every_vehicle_is_a_warning_naming_it(tmp_path):
+    """Swapped N/E columns put the car's rest corners thousands of km off: a warning naming the
+    item and its source, in the run's warnings; the other items are where they belong."""
+    from crashsim.scenario import load_scenario
+    from crashsim.scene.run import run_scene
+
+    f = _shipped(tmp_path, ('file = "files/points.csv"         # PNEZD', 'file = "files/points.csv"\ncolumns = "PENZD"'))
+    scene = run_scene(load_scenario(f))
+    far = [w for w in scene.warnings if "km from every vehicle" in w]
+    assert far and all("files/points.csv" in w for w in far), scene.warnings
+    assert any("evidence.rest[" in w for w in far)
+
+
+def test_a_survey_placed_off_the_scene_is_an_error_at_its_origin(tmp_path):
+    from crashsim.scenario import load_scenario
+
+    f = _shipped(tmp_path, ('origin = ["1455000 survey_foot", "538400 survey_foot"]',
+                            'origin = ["538400 survey_foot", "1455000 survey_foot"]'))
+    with pytest.raises(ScenarioError, match=r"survey.origin: every item imported from the survey \(\d+\) lies at "
+                                            r"least [\d.]+ km from every vehicle"):
+        load_scenario(f)
+
+
+def test_an_angle_beyond_a_turn_is_a_warning(tmp_path):
+    from crashsim.scenario import load_scenario
+
+    f = _shipped(tmp_path, ('heading = "90 deg"', 'heading = "1.5708 rad"'), ('rotation = "30 deg"',
+                                                                             'rotation = "390 deg"'))
+    assert load_scenario(f).load_warnings == ("survey.rotation = '390 deg' is 1.083 turns (more than 2 pi rad)",)
+    f = _shipped(tmp_path / "b", ('heading = "90 deg"', 'heading = "192 rad"'))
+    (w,) = load_scenario(f).load_warnings
+    assert w.startswith("vehicles.car.heading = '192 rad' is 30.56 turns") and 'did you mean "192 deg"' in w

@@ -25,6 +25,7 @@ import numpy as np
 
 from ..errors import ScenarioError
 from ..schema import Section, load_toml, validate
+from ..units import Kind, parse
 from .dxf import read_dxf
 from .frame import SceneFrame, unit_scale
 from .geojson import read_geojson
@@ -439,8 +440,76 @@ def expand_survey(data: dict, file: str | None = None) -> dict:
             note += "; control point residuals " + ", ".join(f"{r:.3g} m" for r in g.residuals)
         out.records.append({"file": s["underlay"]["image"], "layer": "", "ref": "", "type": "image",
                             "kind": "underlay", "target": "", "note": note})
+    _far_items(out, data, file)
     out.data["survey"]["imported"] = out.records
     return out.data
+
+
+#: An imported item farther than this from every vehicle at the impact is warned of [m]: a scene is
+#: tens to hundreds of metres across, a wrong origin or swapped columns put the survey kilometres off.
+FAR = 1000.0
+
+
+def _metres(node, out: list) -> None:
+    """The scene points [m] written in an item (pairs of "x m" strings), collected into ``out``."""
+    if isinstance(node, dict):
+        for v in node.values():
+            _metres(v, out)
+    elif isinstance(node, list):
+        if len(node) == 2 and all(isinstance(v, str) and v.endswith(" m") for v in node):
+            try:
+                out.append((float(node[0][:-2]), float(node[1][:-2])))
+            except ValueError:
+                pass
+        else:
+            for v in node:
+                _metres(v, out)
+
+
+def _far_items(out: _Out, data: dict, file: str | None) -> None:
+    """A warning record (in the report's warnings) for each imported item farther than :data:`FAR` from
+    every vehicle's position at the impact, naming it and its source."""
+    cars = []
+    for name, v in (data.get("vehicles") or {}).items():
+        try:
+            cars.append([parse(x, Kind.LENGTH, field=f"vehicles.{name}.position", file=file) for x in v["position"]])
+        except (ScenarioError, KeyError, TypeError, ValueError):
+            continue
+    if not cars:
+        return
+    cars = np.asarray(cars, dtype=float)
+    seen = set()
+    dists = []
+    for r in list(out.records):
+        t = r.get("target") or ""
+        if not t or t in seen or r["kind"] in ("note", "label", "ignore", "underlay", "warning", "recorder"):
+            continue
+        seen.add(t)
+        node = out.data
+        try:
+            for part in t.split("."):
+                name, _, idx = part.partition("[")
+                node = node[name] if not idx else node[name][int(idx.rstrip("]"))]
+        except (KeyError, IndexError, ValueError, TypeError):
+            continue
+        pts: list = []
+        _metres(node, pts)
+        if not pts:
+            continue
+        d = float(np.min(np.hypot(*(np.asarray(pts)[:, None, :] - cars[None, :, :]).transpose(2, 0, 1))))
+        dists.append(d)
+        if d > FAR:
+            out.records.append({"file": r["file"], "layer": r["layer"], "ref": r["ref"], "type": r["type"],
+                                "kind": "warning", "target": t,
+                                "note": f"survey item {t} ({r['kind']} from {r['file']}, {r['layer'] or '(no layer)'} "
+                                        f"{r['ref']}) lies {d / 1000:.4g} km from every vehicle at the impact: check "
+                                        "survey.origin, survey.rotation and the file's columns and units"})
+    if len(dists) >= 2 and min(dists) > FAR:  # the whole survey is off: its placement, not an item
+        o = (data.get("survey") or {}).get("origin")
+        raise ScenarioError(f"every item imported from the survey ({len(dists)}) lies at least {min(dists) / 1000:.4g} "
+                            f"km from every vehicle at the impact: survey.origin = {o!r} (easting or x first, then "
+                            "northing or y, in the survey's coordinates) or survey.rotation does not place the survey "
+                            "on the scene", field="survey.origin", file=file)
 
 
 def load_scene_data(path: str | os.PathLike) -> dict:

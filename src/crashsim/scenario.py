@@ -669,7 +669,7 @@ from .motion.road import signed_distance
 from .plotting import is_color
 from .scene.run import simulate_approaches
 from .survey.frame import SceneFrame
-from .survey.mapping import expand_survey, is_placed, survey_frame
+from .survey.mapping import as_written, expand_survey, is_placed, survey_frame
 
 SCHEMA = with_inverse_sections(SCHEMA)
 
@@ -917,6 +917,11 @@ def _build_wheels(vehicle: Vehicle, v: dict, file: str | None, prefix: str | Non
             ws = WheelSettings(default, overrides, schedule, brakes)
             ws.resolve(vehicle)
         except ScenarioError as exc:
+            if (exc.field or "").startswith("units[") and "is 'braked'" in str(exc) and \
+                    (v.get("tyres") or {}).get("state") == "braked":  # the key to change: the tyres' state
+                msg = str(exc).removeprefix(f"{exc.field}: ")
+                raise _err(f'state = "braked" on a body with air brakes: {msg}', f"{prefix}.tyres.state",
+                           file) from None
             raise _rewrap(exc, f"{prefix}.brakes", file) from None
     return ws
 
@@ -1403,12 +1408,15 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None, approac
     if isinstance(data, dict) and "survey" in data:
         data = expand_survey(data, file)
     data = _units_any_case(data)
-    merged = apply_presets(data, file)
-    d, schema_problems = validate_collect(merged, SCHEMA)
-    if schema_problems:  # the checks after the schema too, on the parts it found valid: every error in one run
-        raise ScenarioValidationError(schema_problems + _later_problems(d, data, merged, source, file, schema_problems),
-                                      file=file)
-    return _from_validated(d, data, merged, source, file, approaches)
+    try:
+        merged = apply_presets(data, file)
+        d, schema_problems = validate_collect(merged, SCHEMA)
+        if schema_problems:  # the checks after the schema too, on the parts it found valid: every error in one run
+            raise ScenarioValidationError(schema_problems + _later_problems(d, data, merged, source, file,
+                                                                            schema_problems), file=file)
+        return _from_validated(d, data, merged, source, file, approaches)
+    except ScenarioError as exc:  # an item the survey made: named by the key the user wrote
+        raise as_written(exc, data) from None
 
 
 def _related(a: str, b: str) -> bool:

@@ -137,3 +137,21 @@ def test_an_angle_beyond_a_turn_is_a_warning(tmp_path):
     f = _shipped(tmp_path / "b", ('heading = "90 deg"', 'heading = "192 rad"'))
     (w,) = load_scenario(f).load_warnings
     assert w.startswith("vehicles.car.heading = '192 rad' is 30.56 turns") and 'did you mean "192 deg"' in w
+
+
+def test_errors_of_imported_items_name_the_key_as_written(tmp_path):
+    """A mistake in a map entry is named by the map entry's key (the generated item in brackets)."""
+    from crashsim.scenario import load_scenario
+
+    f = _shipped(tmp_path, ('at = "front_left, rear_left, rear_right, front_right"',
+                            'at = "front_left, rear_left, rear_middle, front_right"'))
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(f)
+    import re
+
+    assert re.fullmatch(r"survey\.files\[\d+\]\.map\[\d+\]\.at", info.value.field), info.value.field
+    assert "imported as evidence.rest[" in str(info.value) and "rear_middle" in str(info.value)
+    f = _shipped(tmp_path / "r", ('body = "tractor"\ntime = "Time (sec)"', 'body = "car"\ntime = "Time (sec)"'))
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(f)
+    assert info.value.field == "survey.recorders[0].body" and "imported as evidence.recorder[0].body" in str(info.value)

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ScenarioError
-from ..schema import Section, load_toml, validate
+from ..schema import ScenarioValidationError, Section, load_toml, validate
 from ..units import Kind, parse
 from .dxf import read_dxf
 from .frame import SceneFrame, unit_scale
@@ -35,7 +35,7 @@ from .schema import MAP_LINE_STYLES, SURVEY
 from .underlay import georef_from_section
 
 __all__ = ["expand_survey", "load_scene_data", "read_survey_file", "survey_frame", "survey_section",
-           "is_expanded", "is_placed"]
+           "is_expanded", "is_placed", "as_written"]
 
 _log = logging.getLogger("crashsim")
 _ROOT = Section("root", subsections=[SURVEY], description="survey only")
@@ -155,9 +155,10 @@ class _Out:
         lst.append(item)
         return f"{'.'.join(where)}[{len(lst) - 1}]"
 
-    def record(self, path: str, e, kind: str, target: str, note: str = "") -> None:
+    def record(self, path: str, e, kind: str, target: str, note: str = "", key: str = "") -> None:
         self.records.append({"file": path, "layer": "" if e is None else e.layer, "ref": "" if e is None else e.ref,
-                             "type": "" if e is None else e.dxftype, "kind": kind, "target": target, "note": note})
+                             "type": "" if e is None else e.dxftype, "kind": kind, "target": target, "note": note,
+                             "key": key})
 
 
 def _need(m: dict, raw: dict, keys, mkey: str, file: str | None) -> None:
@@ -333,7 +334,7 @@ def _map_entries(out: _Out, sd, entry: dict, raw_entry: dict, frame: SceneFrame,
             if rm.get("sigma") is not None:
                 item["sigma"] = rm["sigma"]
             out.data.setdefault("evidence", {})["impact_point"] = item
-            out.record(src, e, kind, "evidence.impact_point")
+            out.record(src, e, kind, "evidence.impact_point", key=mkey)
         # labels: a text names the nearest item it made on its layer (nearest vertex, a k-d tree per layer)
         if texts:
             _name_by_labels(out, src, texts, made, scene)
@@ -341,9 +342,9 @@ def _map_entries(out: _Out, sd, entry: dict, raw_entry: dict, frame: SceneFrame,
             target = out.append(where, item)
             if isinstance(e, _Group):
                 for x in e.members:
-                    out.record(src, x, kind, target)
+                    out.record(src, x, kind, target, key=mkey)
             else:
-                out.record(src, e, kind, target)
+                out.record(src, e, kind, target, key=mkey)
     return taken
 
 
@@ -425,7 +426,7 @@ def expand_survey(data: dict, file: str | None = None) -> dict:
             item["sigma"] = raw_rec[i]["sigma"]
         target = out.append(("evidence", "recorder"), item)
         out.records.append({"file": r["file"], "layer": "", "ref": f"{len(samples)} samples", "type": "CSV",
-                            "kind": "recorder", "target": target, "note": "; ".join(notes)})
+                            "kind": "recorder", "target": target, "note": "; ".join(notes), "key": key})
     if s["underlay"]:  # placed now, so that a world file or control points that do not fit fail at load
 
         g = georef_from_section(s["underlay"], frame, file, file)
@@ -510,6 +511,41 @@ def _far_items(out: _Out, data: dict, file: str | None) -> None:
                             f"km from every vehicle at the impact: survey.origin = {o!r} (easting or x first, then "
                             "northing or y, in the survey's coordinates) or survey.rotation does not place the survey "
                             "on the scene", field="survey.origin", file=file)
+
+
+def _written(field: str, targets: dict) -> str | None:
+    """The key the user wrote for ``field`` of an item the survey generated (``evidence.rest[1].points[3].at``
+    -> ``survey.files[1].map[0].at (imported as evidence.rest[1].points[3].at)``), or None."""
+    for target, key in targets.items():
+        if field == target or field.startswith((target + ".", target + "[")):
+            rest = field[len(target):].lstrip(".")
+            last = rest.rsplit(".", 1)[-1].split("[", 1)[0] if rest else ""
+            return f"{key}.{last}" if last else key
+    return None
+
+
+def as_written(exc: ScenarioError, data: dict) -> ScenarioError:
+    """``exc`` with the keys of survey-generated items named as the user wrote them (the map entry or
+    recorder table that made the item, the generated key in brackets); ``exc`` itself if none."""
+    s = data.get("survey") if isinstance(data, dict) else None
+    records = (s or {}).get("imported") if isinstance(s, dict) else None
+    if not records or type(exc) not in (ScenarioError, ScenarioValidationError):
+        return exc
+    targets = {r["target"]: r["key"] for r in records if r.get("target") and r.get("key")}
+    if not targets:
+        return exc
+    if isinstance(exc, ScenarioValidationError):
+        problems, changed = [], False
+        for path, text in exc.problems:
+            w = _written(path, targets)
+            changed |= w is not None
+            problems.append((w, f"{text} (imported as {path})") if w else (path, text))
+        return ScenarioValidationError(problems, file=exc.file) if changed else exc
+    w = _written(exc.field or "", targets)
+    if w is None:
+        return exc
+    text = str(exc).removeprefix(f"{exc.file}: " if exc.file else "").removeprefix(f"{exc.field}: ")
+    return ScenarioError(f"{text} (imported as {exc.field})", field=w, file=exc.file)
 
 
 def load_scene_data(path: str | os.PathLike) -> dict:

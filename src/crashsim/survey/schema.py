@@ -138,6 +138,8 @@ IMPORTED = Section("imported", [
     Field("kind", "str", description="What it became"),
     Field("target", "str", default="", description="The scene item it became (map.lines[3], evidence.rest[0])"),
     Field("note", "str", default="", description="A warning or note of the import"),
+    Field("key", "str", default="", description="The key that made it (survey.files[1].map[0], survey.recorders[0]): "
+                                                "errors of the item name it"),
 ], description="Written by crashsim when the survey is read (fit --write-best keeps it): an imported item and its "
                "source; with these present the files are not read again")
 

@@ -155,3 +155,42 @@ def test_errors_of_imported_items_name_the_key_as_written(tmp_path):
     with pytest.raises(ScenarioError) as info:
         load_scenario(f)
     assert info.value.field == "survey.recorders[0].body" and "imported as evidence.recorder[0].body" in str(info.value)
+
+
+def test_a_tin_gives_the_roads_grade_and_cross_slope(tmp_path):
+    """kind = "surface": the plane through a TIN's 3DFACE vertices, in the scene frame (turned 30 deg
+    from the survey's axes here), is runout.grade and runout.cross_slope; listed as 3DFACE by layer."""
+    import math
+
+    import numpy as np
+
+    from crashsim.scenario import load_scenario
+
+    f = _shipped(tmp_path, ('  {match = "EDGE", kind = "line", style = "edge"},',
+                            '  {match = "EDGE", kind = "line", style = "edge"},\n  {match = "TIN", kind = "surface"},'))
+    dxf = tmp_path / "files" / "scene.dxf"
+    doc = ezdxf.readfile(dxf)
+    gx, gy = 0.03, -0.05  # dz/dE, dz/dN of the road plane in the survey's axes
+    e0, n0 = 1455000.0, 538400.0
+    rng = np.random.default_rng(3)
+    for _ in range(12):
+        c = np.array([e0, n0]) + rng.uniform(-150, 150, 2)
+        tri = [c, c + (20, 0), c + (0, 20)]
+        doc.modelspace().add_3dface([(x, y, 100 + gx * (x - e0) + gy * (y - n0)) for x, y in tri],
+                                    dxfattribs={"layer": "TIN"})
+    doc.saveas(dxf)
+    sc = load_scenario(f)
+    r = math.radians(30)
+    want_grade = gx * math.cos(r) + gy * math.sin(r)  # along the scene's +x (30 deg north of east)
+    want_cross = -gx * math.sin(r) + gy * math.cos(r)
+    assert sc.runout.road.grade == pytest.approx(want_grade, abs=1e-9)
+    assert sc.runout.road.cross_slope == pytest.approx(want_cross, abs=1e-9)
+    assert any(r["kind"] == "surface" and "12 faces" in r["ref"] for r in sc.data["survey"]["imported"])
+    assert "12 3DFACE" in summary(read_any(str(dxf)))
+    # the file's own grade beside the TIN: one of them
+    g = _shipped(tmp_path / "b", ('  {match = "EDGE", kind = "line", style = "edge"},',
+                                  '  {match = "EDGE", kind = "line", style = "edge"},\n  {match = "TIN", kind = "surface"},'),
+                 ("road_friction = 0.7\n", 'road_friction = 0.7\ngrade = "2 %"\n'))
+    (tmp_path / "b" / "files" / "scene.dxf").write_bytes(dxf.read_bytes())
+    with pytest.raises(ScenarioError, match=r"kind = 'surface' gives runout.grade .* the file gives runout.grade too"):
+        load_scenario(g)

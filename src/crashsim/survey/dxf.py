@@ -1,6 +1,7 @@
 """DXF drawings (R12 to current, ASCII or binary) read with ezdxf.
 
-Taken: LINE, LWPOLYLINE, POLYLINE (2-D and 3-D; polyface and mesh are not), ARC, CIRCLE,
+Taken: LINE, LWPOLYLINE, POLYLINE (2-D and 3-D; polyface and mesh are not), 3DFACE (the faces of a
+TIN, with their elevations: the road's grade and cross-slope, kind = "surface"), ARC, CIRCLE,
 ELLIPSE and SPLINE (as polylines whose chords lie within ``chord_tolerance`` of the curve),
 POINT, TEXT and MTEXT (labels), and INSERT (the block's entities placed, scaled and turned by
 ezdxf's virtual entities, on the INSERT's layer where they lie on layer 0). Z is dropped (the
@@ -258,6 +259,13 @@ def read_dxf(path: str, units: str | None = None, *, chord_tolerance: float = 0.
                 clayer = child.dxf.layer if child.dxf.layer not in ("0", "") else layer
                 take(child, clayer, f"{ref}/{j + 1}")
             return
+        if kind == "3DFACE":  # a TIN face: its vertices with their elevation (kind = "surface")
+            v = np.asarray([(p[0], p[1], p[2]) for p in (e.dxf.vtx0, e.dxf.vtx1, e.dxf.vtx2, e.dxf.vtx3)], dtype=float)
+            if np.allclose(v[3], v[2], rtol=0, atol=0):
+                v = v[:3]  # a triangle (its fourth vertex repeats the third)
+            if np.all(np.isfinite(v)):
+                data.faces.append((layer, ref, v * scale))
+                return
         got = _entity_points(e, kind, sagitta)
         if got is None:
             skipped[kind if kind != "POLYLINE" else "POLYLINE (mesh)"] += 1

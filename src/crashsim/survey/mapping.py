@@ -146,6 +146,7 @@ class _Out:
     def __init__(self, data: dict):
         self.data = data
         self.records: list[dict] = []
+        self.faces_taken: set = set()  # (id of the SurveyData, face index) of the TIN faces a surface took
 
     def append(self, where: tuple, item: dict) -> str:
         node = self.data
@@ -181,6 +182,7 @@ _ALLOWED = {
     "impact_point": _COMMON | {"tolerance", "sigma"},
     "gouge": _COMMON | {"color", "size"},
     "debris": _COMMON | {"color", "size"},
+    "surface": _COMMON,
     "ignore": _COMMON,
 }
 
@@ -192,6 +194,10 @@ def _map_file(out: _Out, sd, entry: dict, raw_entry: dict, frame: SceneFrame, ke
     for e, t in zip(sd.entities, taken):
         if not t:
             left[e.layer] = left.get(e.layer, 0) + 1
+    faces_taken = out.faces_taken
+    for j, (layer, _, _) in enumerate(sd.faces):
+        if (id(sd), j) not in faces_taken:
+            left[layer] = left.get(layer, 0) + 1
     if left:
         shown = ", ".join(f"{lay or '(empty)'} ({n})" for lay, n in sorted(left.items()))
         out.record(entry["file"], None, "note", "", f"{sum(left.values())} entities on layers or codes no map entry "
@@ -202,10 +208,14 @@ def _map_entries(out: _Out, sd, entry: dict, raw_entry: dict, frame: SceneFrame,
                  have_runout: bool) -> np.ndarray:
     """Apply the file's map entries; returns which entities were taken."""
     src = entry["file"]
-    layers = sorted({e.layer for e in sd.entities})
+    layers = sorted({e.layer for e in sd.entities} | {f[0] for f in sd.faces})
     taken = np.zeros(len(sd.entities), dtype=bool)
     for i, (m, rm) in enumerate(zip(entry["map"], raw_entry["map"])):
         mkey = f"{key}.map[{i}]"
+        if m["kind"] == "surface":
+            _need(m, rm, (), mkey, file)
+            _surface(out, sd, m, frame, mkey, src, file, have_runout)
+            continue
         _need(m, rm, {"line": ("style",), "zone": ("friction",), "mark": ("tolerance",),
                       "rest": ("body", "tolerance"), "impact_point": ("tolerance",)}.get(m["kind"], ()), mkey, file)
         if m["kind"] == "line" and m["style"] not in MAP_LINE_STYLES:
@@ -216,6 +226,10 @@ def _map_entries(out: _Out, sd, entry: dict, raw_entry: dict, frame: SceneFrame,
         idx = [j for j, e in enumerate(sd.entities) if not taken[j] and _match(m["match"], e.layer)]
         if not idx:
             matched = [lay for lay in layers if _match(m["match"], lay)]
+            if matched and not any(e.layer in matched for e in sd.entities):
+                raise ScenarioError(f"{src}: {', '.join(map(repr, matched))} holds TIN faces (3DFACE) only: map it "
+                                    "as kind = \"surface\" (the road's grade and cross-slope)",
+                                    field=f"{mkey}.kind", file=file)
             if matched:  # its layers were taken by an earlier entry
                 raise ScenarioError(f"{src}: match = {m['match']!r}: every entity of {', '.join(map(repr, matched))} "
                                     "is taken by an earlier map entry", field=f"{mkey}.match", file=file)
@@ -346,6 +360,44 @@ def _map_entries(out: _Out, sd, entry: dict, raw_entry: dict, frame: SceneFrame,
             else:
                 out.record(src, e, kind, target, key=mkey)
     return taken
+
+
+def _surface(out: "_Out", sd, m: dict, frame: SceneFrame, mkey: str, src: str, file: str | None,
+             have_runout: bool) -> None:
+    """A TIN's faces (kind = "surface") as the road's plane: runout.grade and runout.cross_slope, rise over
+    run along the scene's +x and +y, from the least-squares plane through every vertex."""
+    idx = [j for j, (layer, _, _) in enumerate(sd.faces) if (id(sd), j) not in out.faces_taken and
+           _match(m["match"], layer)]
+    if not idx:
+        have = sorted({f[0] for f in sd.faces})
+        raise ScenarioError(f"{src} has no TIN faces (3DFACE) on a layer matching {m['match']!r}; layers with "
+                            f"faces: {', '.join(map(repr, have)) or 'none'}", field=f"{mkey}.match", file=file)
+    if not have_runout:
+        raise ScenarioError("a road surface (its grade and cross-slope) needs a [runout] section",
+                            field=f"{mkey}.kind", file=file)
+    given = [k for k in ("grade", "cross_slope") if k in (out.data.get("runout") or {})]
+    if given:
+        raise ScenarioError(f"kind = 'surface' gives runout.grade and runout.cross_slope from the TIN, but the file "
+                            f"gives runout.{given[0]} too; give one of them", field=f"{mkey}.kind", file=file)
+    v = np.vstack([sd.faces[j][2] for j in idx])
+    xy = frame.to_scene(v[:, :2])
+    a = np.column_stack([np.ones(len(xy)), xy - xy.mean(axis=0)])
+    if len(v) < 3 or np.linalg.matrix_rank(a[:, 1:]) < 2:
+        raise ScenarioError(f"{src}: the faces on {m['match']!r} do not span a plane (their vertices lie on a line)",
+                            field=f"{mkey}.match", file=file)
+    coef, *_ = np.linalg.lstsq(a, v[:, 2], rcond=None)
+    rms = float(np.sqrt(np.mean((a @ coef - v[:, 2]) ** 2)))
+    grade, cross = float(coef[1]), float(coef[2])
+    out.data["runout"]["grade"] = grade
+    out.data["runout"]["cross_slope"] = cross
+    out.faces_taken.update((id(sd), j) for j in idx)
+    note = (f"road plane of {len(idx)} faces ({len(v)} vertices): grade {100 * grade:.3g} %, cross-slope "
+            f"{100 * cross:.3g} %, RMS of the vertices about it {rms:.3g} m (one plane for the scene: no vertical "
+            "curve or changing banking)")
+    for target in ("runout.grade", "runout.cross_slope"):
+        out.records.append({"file": src, "layer": sd.faces[idx[0]][0], "ref": f"{len(idx)} faces", "type": "3DFACE",
+                            "kind": "surface", "target": target, "note": note if target == "runout.grade" else "",
+                            "key": mkey})
 
 
 def _name_by_labels(out: "_Out", src: str, texts, made: list, scene) -> None:

@@ -16,7 +16,7 @@ MAP_LINE_STYLES = ("edge", "lane", "centre", "kerb", "stop", "other")
 #: [[evidence.marks]] tyre mark; rest: an [[evidence.rest]] item (measured points of a body);
 #: impact_point: [evidence.impact_point]; gouge, debris: drawn only (map lines of style other);
 #: ignore: mapped on purpose and left out.
-KINDS = ("line", "obstacle", "zone", "mark", "rest", "impact_point", "gouge", "debris", "ignore")
+KINDS = ("line", "obstacle", "zone", "mark", "rest", "impact_point", "gouge", "debris", "surface", "ignore")
 FORMATS = ("dxf", "points", "geojson")
 
 MAPPING = Section("map", [
@@ -24,8 +24,9 @@ MAPPING = Section("map", [
           description="Which entities: a DXF layer name, a point code or a GeoJSON property value; * and ? are "
                       "wildcards; case is ignored. An entity is taken by the first entry that matches it"),
     Field("kind", choices=KINDS, example="obstacle",
-          description="What they are: line, obstacle, zone, mark, rest, impact_point, gouge, debris (drawn only) "
-                      "or ignore"),
+          description="What they are: line, obstacle, zone, mark, rest, impact_point, gouge, debris (drawn only), "
+                      "surface (a TIN of DXF 3DFACEs: the plane fitted to its vertices, in the scene frame, gives "
+                      "runout.grade and runout.cross_slope, which the file then does not give) or ignore"),
     Field("name", "str", default="", description="Name of the items made (default: the layer or code and the "
                                                   "entity handle or point numbers)"),
     Field("style", "str", required=False, example="kerb",

@@ -461,8 +461,8 @@ def expand_survey(data: dict, file: str | None = None) -> dict:
         _map_file(out, sd, entry, raw_files[i], frame, key, file, have_runout)
         msgs = ([sd.skipped_warning()] if sd.skipped else []) + list(sd.notes)
         for msg in msgs:
-            if msg:
-                out.record(entry["file"], None, "note", "", msg)
+            if msg:  # the file as the scene file writes it, not the analyst's absolute path
+                out.record(entry["file"], None, "note", "", msg.replace(sd.path, entry["file"]))
         if sd.skipped:
             _log.warning("%s", sd.skipped_warning())
     raw_rec = data["survey"].get("recorders", [])

@@ -194,3 +194,28 @@ def test_a_tin_gives_the_roads_grade_and_cross_slope(tmp_path):
     (tmp_path / "b" / "files" / "scene.dxf").write_bytes(dxf.read_bytes())
     with pytest.raises(ScenarioError, match=r"kind = 'surface' gives runout.grade .* the file gives runout.grade too"):
         load_scenario(g)
+
+
+def _rec_spec(**kw):
+    base = {"time": "t", "speed": "v", "time_unit": "s", "speed_unit": "mph", "brake": None, "abs": None,
+            "accelerator": None, "steering": None, "yaw_rate": None, "on": "on, 1", "time_offset": 0.0}
+    base.update(kw)
+    return base
+
+
+def test_recorder_tables_that_misled(tmp_path):
+    """A header without rows, decimal commas, two samples at one time: each said as what it is (they
+    were all 'no pre-crash samples')."""
+    from crashsim.survey.recorder import read_recorder
+
+    p = tmp_path / "r.csv"
+    p.write_text("t,v\n")
+    with pytest.raises(ScenarioError, match="a header row but no data rows"):
+        read_recorder(str(p), _rec_spec())
+    p.write_text("t;v\n-2,0;55\n-1,0;54,5\n0,0;50\n")
+    samples, notes = read_recorder(str(p), _rec_spec())
+    assert [s[0] for s in samples] == [-2.0, -1.0, 0.0] and samples[1][1] == pytest.approx(54.5 * 0.44704)
+    assert any("decimal commas" in n for n in notes)
+    p.write_text("t,v\n-2,55\n-1,54\n-1,53\n")
+    with pytest.raises(ScenarioError, match=r"rows 3 and 4 have the same time '-1'"):
+        read_recorder(str(p), _rec_spec())

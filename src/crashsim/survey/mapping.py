@@ -83,8 +83,8 @@ def read_survey_file(entry: dict, crs: str | None, *, key: str = "survey.files[0
     (memoised by path, modification time, size and reading options: read once per process)."""
     path = _resolve(entry["file"], file)
     if not os.path.isfile(path):
-        raise ScenarioError(f"survey file {entry['file']!r} not found (looked for {path})", field=f"{key}.file",
-                            file=file)
+        raise ScenarioError(f"survey file {entry['file']!r} not found (looked for {os.path.relpath(path)})",
+                            field=f"{key}.file", file=file)
     fmt = _format(entry, path, key, file)
     st = os.stat(path)
     brk = _resolve(entry["breaklines"], file) if entry.get("breaklines") else None
@@ -470,7 +470,11 @@ def expand_survey(data: dict, file: str | None = None) -> dict:
         key = f"survey.recorders[{i}]"
 
         path = _resolve(r["file"], file)
-        samples, notes = read_recorder(path, r, key=key, file=file)
+        try:
+            samples, notes = read_recorder(path, r, key=key, file=file)
+        except ScenarioError as exc:  # the table named as the scene file writes it
+            text = str(exc).removeprefix(f"{file}: " if file else "").removeprefix(f"{exc.field}: " if exc.field else "")
+            raise ScenarioError(text.replace(path, r["file"]), field=exc.field, file=file) from None
         item = {"name": r["name"] or f"recorder {Path(r['file']).name}", "body": r["body"],
                 "tolerance": raw_rec[i]["tolerance"], "time_offset": raw_rec[i].get("time_offset", "0 s"),
                 "samples": [{"time": f"{t!r} s", "speed": f"{v!r} m/s", "brake": low} for t, v, low in samples]}

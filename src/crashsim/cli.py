@@ -35,6 +35,7 @@ from .scenario import load_scenario, preset_geometry, presets, schema_document
 from .survey.export import export_frame, export_items, write_dxf, write_geojson
 from .survey.inspect import preview, read_any, summary
 from .survey.mapping import load_scene_data
+from .survey.underlay import scene_underlay
 from .units import Kind, format_value, parse, resolve_system
 from .vehicle_plan import geometry_lines, plot_body_plan
 from .warmup import COMPILE_STEPS, compile_kernels
@@ -90,6 +91,12 @@ def _load(path: str):
         if data is not None:
             object.__setattr__(scenario, "_file_data", data)
     return scenario
+
+
+def _figure_inputs(scenario) -> None:
+    """What a figure reads besides the scene, read before the run: the underlay image (a damaged one is
+    refused now, not after the run-out)."""
+    scene_underlay(scenario)
 
 
 def _cmd_run(args) -> int:
@@ -263,6 +270,7 @@ def _cmd_plot(args) -> int:
     scenario = _load(args.file)
     if args.paper is not None or args.scale is not None:  # the sheet against what is known before the run
         check_sheet(scenario, args.paper or "A4", args.scale, approach=not args.no_approach, field="--scale")
+    _figure_inputs(scenario)
     scene = run_scene(scenario)
     try:
         written = _save_figures(args, scene, interval)
@@ -287,7 +295,9 @@ def _cmd_animate(args) -> int:
     out = check_animation_path(args.output, field="-o")  # before anything long
     dt = parse(args.dt, Kind.TIME, field="--dt")
     frame_times(0.0, dt, field="--dt")  # dt > 0; the frame count is checked once the run-out's end is known
-    scene = run_scene(_load(args.file))
+    scenario = _load(args.file)
+    _figure_inputs(scenario)
+    scene = run_scene(scenario)
     if scene.runout:
         frame_times(max(r.t_end for r in scene.runout.values()), dt, field="--dt")
     with tqdm(total=None, file=sys.stderr, unit="frame", desc="rendering", disable=args.quiet) as bar:
@@ -328,6 +338,7 @@ def _cmd_export(args) -> int:
 def _cmd_report(args) -> int:
     extra = args.results  # read and checked before any work (_check_outputs)
     scenario = _load(args.file)
+    _figure_inputs(scenario)
     scene = run_scene(scenario)
     inputs = [args.file] + survey_files(args.file) + [getattr(args, k) for k in ("fit", "mc", "posterior")
                                                       if getattr(args, k)]

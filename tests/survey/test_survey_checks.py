@@ -219,3 +219,18 @@ def test_recorder_tables_that_misled(tmp_path):
     p.write_text("t,v\n-2,55\n-1,54\n-1,53\n")
     with pytest.raises(ScenarioError, match=r"rows 3 and 4 have the same time '-1'"):
         read_recorder(str(p), _rec_spec())
+
+
+def test_a_damaged_underlay_is_refused_before_the_run(tmp_path, monkeypatch, capsys):
+    import crashsim.cli as cli
+
+    f = _shipped(tmp_path)
+    (tmp_path / "files" / "ortho.png").write_text("not an image\n")
+
+    def refuse(*a, **k):
+        raise AssertionError("the run started before the underlay was read")
+
+    monkeypatch.setattr(cli, "run_scene", refuse)
+    assert cli.main(["plot", str(f), "-o", str(tmp_path / "p.png")]) == 2
+    err = capsys.readouterr().err
+    assert "survey.underlay.image" in err and "cannot read the underlay image" in err and "files/ortho.png" in err

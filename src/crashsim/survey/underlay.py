@@ -17,6 +17,8 @@ in the scene's metres; the figure's scale bar stays true because the image follo
 
 from __future__ import annotations
 
+import os
+
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -228,7 +230,8 @@ def load_image(u: dict, base: str | None, file: str | None = None) -> np.ndarray
     try:
         return mpimg.imread(image)
     except Exception as exc:
-        raise ScenarioError(f"cannot read the underlay image {u['image']!r}: {exc}", field="survey.underlay.image",
+        shown = os.path.relpath(image) if Path(u["image"]).is_absolute() else u["image"]
+        raise ScenarioError(f"cannot read the underlay image {shown!r}: {exc}", field="survey.underlay.image",
                             file=file) from None
 
 

@@ -190,3 +190,42 @@ def test_a_compile_killed_under_way_is_restarted_by_the_next_command(tmp_path):
             os.kill(int(lock.read_text()), signal.SIGKILL)
         except (OSError, ValueError):
             pass
+
+
+def test_the_ready_marker_follows_the_installed_files(tmp_path, monkeypatch):
+    """numba stamps a cached kernel by its file; the marker does too (where, when written, what), so a
+    reinstall is not taken for a ready cache that every process would recompile silently."""
+    from crashsim import _jit
+
+    src = tmp_path / "a" / "kernel.py"
+    src.parent.mkdir()
+    src.write_text("x = 1\n")
+    monkeypatch.setattr(_jit, "kernel_sources", lambda impact=True: [src])
+    d1 = _jit.digest()
+    os.utime(src, ns=(src.stat().st_atime_ns, src.stat().st_mtime_ns + 10**9))  # the same file written again
+    d2 = _jit.digest()
+    other = tmp_path / "b" / "kernel.py"
+    other.parent.mkdir()
+    other.write_bytes(src.read_bytes())
+    os.utime(other, ns=(src.stat().st_atime_ns, src.stat().st_mtime_ns))
+    monkeypatch.setattr(_jit, "kernel_sources", lambda impact=True: [other])
+    d3 = _jit.digest()  # the same bytes and time elsewhere (an editable install after a copy)
+    assert len({d1, d2, d3}) == 3
+
+
+def test_the_compile_names_its_sources_before_it_compiles(monkeypatch, tmp_path):
+    """A reinstall under a long compile removed its sources before it wrote its marker (it died with
+    FileNotFoundError after compiling); the marker is taken first now."""
+    import crashsim.warmup as warmup
+
+    order = []
+    monkeypatch.setattr(warmup, "marker", lambda: order.append("marker") or tmp_path / "numba" / "ready-x")
+
+    def stop():
+        order.append("compile")
+        raise RuntimeError("stop here")
+
+    monkeypatch.setattr(warmup, "kernels", stop)
+    with pytest.raises(RuntimeError):
+        warmup.compile_kernels()
+    assert order == ["marker", "compile"]

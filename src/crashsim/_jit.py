@@ -81,11 +81,16 @@ def kernel_sources(impact: bool = True) -> list[Path]:
 
 
 def digest() -> str:
-    """Hash of the kernel sources and the numba version (the cache's validity)."""
+    """Hash of the kernel sources and the numba version (the cache's validity): their contents, and
+    where they are and when they were written, as numba's own cache index stamps a kernel by its
+    file (a reinstall, editable or not, puts new files there: their kernels compile anew, and the
+    marker says so instead of a ready cache that every process would silently recompile)."""
     import numba
 
     h = hashlib.sha256(numba.__version__.encode())
     for path in kernel_sources():
+        st = path.stat()
+        h.update(f"{path.resolve()}\0{st.st_mtime_ns}\0{st.st_size}\0".encode())
         h.update(path.read_bytes())
     return h.hexdigest()[:16]
 

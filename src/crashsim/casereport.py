@@ -23,12 +23,14 @@ from pathlib import Path
 import jinja2
 
 from ._version import __version__
+from .errors import ScenarioError
 from .plotting import figure_system, plot_histories, plot_scene, plot_time_distance
 from .motion.wheels import wheel_labels
 from .report import closing_error_text, describe_event, format_approach, rollover_cells, validity_text
 from .units import format_value, toml_repr
 
-__all__ = ["toml_comments", "input_rows", "sha256_file", "survey_files", "load_json", "render_case_report", "write_case_report",
+__all__ = ["toml_comments", "input_rows", "sha256_file", "survey_files", "load_json", "inputs_sha256", "made_from",
+           "check_result_json", "MADE_FROM", "render_case_report", "write_case_report",
            "VALIDITY_NOTES", "FILE_COMMENT"]
 
 #: The model's assumptions and limits that every case report carries (README "Limits you should know").
@@ -283,6 +285,52 @@ def survey_files(scenario_path) -> list[str]:
 
     walk(raw.get("survey"))
     return out
+
+
+#: The JSON key under which ``crashsim fit/mc/posterior --json`` name what a result was made from.
+MADE_FROM = "made_from"
+
+
+def inputs_sha256(scenario_path) -> str:
+    """SHA-256 of a scene's inputs: the scenario file and every file its ``[survey]`` reads, in
+    order (each file's own SHA-256, hexadecimal, one a line): the same wherever the files lie."""
+    h = hashlib.sha256()
+    for p in [str(scenario_path)] + survey_files(scenario_path):
+        h.update((sha256_file(p) + "\n").encode())
+    return h.hexdigest()
+
+
+def made_from(command: str, scenario_path) -> dict:
+    """What a ``--json`` result of ``command`` (fit, mc, posterior) carries to say which inputs made it."""
+    return {"command": command, "scenario": Path(scenario_path).name, "inputs_sha256": inputs_sha256(scenario_path),
+            "crashsim": __version__}
+
+
+def check_result_json(path, command: str, scenario_path, *, field: str) -> dict:
+    """The ``--json`` result of ``crashsim <command>`` in ``path``, if it was made from the inputs of
+    ``scenario_path`` (:func:`inputs_sha256`); else a ScenarioError naming what it is."""
+    try:
+        obj = load_json(path)
+    except (OSError, ValueError) as exc:
+        raise ScenarioError(f"{str(path)!r} is not readable JSON of crashsim {command} --json: {exc}",
+                            field=field) from None
+    if not isinstance(obj, dict):
+        raise ScenarioError(f"{str(path)!r} is not a JSON object (crashsim {command} --json writes one)", field=field)
+    stamp = obj.get(MADE_FROM)
+    if not isinstance(stamp, dict) or "inputs_sha256" not in stamp:
+        raise ScenarioError(f"{str(path)!r} is not the JSON that crashsim {command} FILE --json writes (it has no "
+                            f"{MADE_FROM!r} naming its inputs); run crashsim {command} {Path(scenario_path).name} "
+                            "--json again", field=field)
+    if stamp.get("command") != command:
+        raise ScenarioError(f"{str(path)!r} is the result of crashsim {stamp.get('command')}, not of crashsim "
+                            f"{command}", field=field)
+    want = inputs_sha256(scenario_path)
+    if stamp["inputs_sha256"] != want:
+        raise ScenarioError(f"{str(path)!r} was made from other inputs ({stamp.get('scenario')!r}, SHA-256 "
+                            f"{str(stamp['inputs_sha256'])[:12]}...) than {Path(scenario_path).name!r} and its "
+                            f"survey files now ({want[:12]}...); run crashsim {command} again on this file",
+                            field=field)
+    return obj
 
 
 def sha256_file(path) -> str:

@@ -8,7 +8,9 @@ run-out did not reach rest (a limit ended it; the results are still printed or w
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
+import math
 import sys
 from pathlib import Path
 
@@ -18,11 +20,11 @@ from . import first_run
 from ._jit import cache_dir, ready
 from ._version import __version__
 from .animation import ANIMATION_LEGENDS, VIEWS, animate_scene, check_animation_path, frame_times
-from .casereport import load_json, survey_files, write_case_report
+from .casereport import check_result_json, made_from, survey_files, write_case_report
 from .errors import CrashsimError, ScenarioError, SolverError
 from .motion.result import jsonable as _clean  # JSON-safe copy: numpy to Python, NaN/inf to None
 from .outputs import check_output_dir, check_output_file, check_workers
-from .plotting import LABEL_KINDS, LEGEND_MODES, PAPER_SIZES, check_hide, parse_scale, save_scene_figures
+from .plotting import LABEL_KINDS, LEGEND_MODES, PAPER_SIZES, check_hide, check_sheet, parse_scale, save_scene_figures
 from .reconstruct import run_scene
 from .reconstruct.fit import fit_scene, same_file
 from .reconstruct.mc_plots import save_mc_figures
@@ -33,6 +35,7 @@ from .scenario import load_scenario, preset_geometry, presets, schema_document
 from .survey.export import export_frame, export_items, write_dxf, write_geojson
 from .survey.inspect import preview, read_any, summary
 from .survey.mapping import load_scene_data
+from .survey.underlay import scene_underlay
 from .units import Kind, format_value, parse, resolve_system
 from .vehicle_plan import geometry_lines, plot_body_plan
 from .warmup import COMPILE_STEPS, compile_kernels
@@ -73,11 +76,32 @@ def _dt(text: str | None) -> float | None:
     return dt
 
 
+def _load(path: str):
+    """The scenario of ``path``; in an interpreted first run without the run-out's wall-time limit
+    (a budget for compiled kernels: a result must not depend on whether they were compiled yet), said
+    on stderr."""
+    scenario = load_scenario(path)
+    ro = scenario.runout
+    if first_run.interpreted() and ro is not None and ro.options.max_wall_time < first_run.INTERPRETED_WALL_TIME:
+        sys.stderr.write(f"crashsim: interpreted run: the run-out's wall-time limit (runout.max_wall_time = "
+                         f"{ro.options.max_wall_time:g} s) is lifted, so that it ends as the compiled run would\n")
+        opts = dataclasses.replace(ro.options, max_wall_time=first_run.INTERPRETED_WALL_TIME)
+        data = scenario.file_data
+        scenario = dataclasses.replace(scenario, runout=dataclasses.replace(ro, options=opts))
+        if data is not None:
+            object.__setattr__(scenario, "_file_data", data)
+    return scenario
+
+
+def _figure_inputs(scenario) -> None:
+    """What a figure reads besides the scene, read before the run: the underlay image (a damaged one is
+    refused now, not after the run-out)."""
+    scene_underlay(scenario)
+
+
 def _cmd_run(args) -> int:
-    scenario = load_scenario(args.file)
-    dt = _dt(args.dt)
-    if dt is not None and not args.csv:
-        raise ScenarioError("--dt sets the time step of the --csv histories; give --csv DIR too", field="--dt")
+    scenario = _load(args.file)
+    dt = _dt(args.dt)  # checked before any work (_check_options)
     result = run_scene(scenario)
     if args.csv:
         result.write_csv(Path(args.csv), system=args.units, dt=dt)
@@ -107,14 +131,22 @@ def _cmd_fit(args) -> int:
     result = fit_scene(load_scene_data(args.file), None, engine=args.engine, workers=args.workers,
                        progress=args.progress, file=args.file, sample_time_limit=args.sample_time_limit)
     if args.json:
-        json.dump(_clean(result.to_dict()), sys.stdout, indent=2)
-        sys.stdout.write("\n")
+        _dump_result(result, "fit", args.file)
     else:
         sys.stdout.write(result.report(system) + "\n")
     if args.write_best is not None:
         path = result.write_best(args.write_best)
         sys.stderr.write(f"crashsim: wrote the best-fit scenario to {path} (crashsim run {path})\n")
     return 0
+
+
+def _dump_result(result, command: str, file: str) -> None:
+    """The result as one JSON object (SI), with what it was made from (:func:`made_from`: the SHA-256
+    of the scene's inputs), so that a case report embeds it only beside the scene it belongs to."""
+    d = _clean(result.to_dict())
+    d["made_from"] = made_from(command, file)
+    json.dump(d, sys.stdout, indent=2)
+    sys.stdout.write("\n")
 
 
 def _cmd_mc(args) -> int:
@@ -137,8 +169,7 @@ def _cmd_mc(args) -> int:
 
         save_mc_figures(result, Path(args.plots), system=system)
     if args.json:
-        json.dump(_clean(result.to_dict()), sys.stdout, indent=2)
-        sys.stdout.write("\n")
+        _dump_result(result, "mc", args.file)
     else:
         sys.stdout.write(result.report(system) + "\n")
     return 0
@@ -181,8 +212,7 @@ def _cmd_posterior(args) -> int:
         for path in save_posterior_figures(result, Path(args.plots), system=system):
             sys.stderr.write(f"crashsim: wrote {path}\n")
     if args.json:
-        json.dump(_clean(result.to_dict()), sys.stdout, indent=2)
-        sys.stdout.write("\n")
+        _dump_result(result, "posterior", args.file)
     else:
         sys.stdout.write(result.report(system) + "\n")
     return 0
@@ -237,7 +267,11 @@ def _add_inverse_commands(sub):
 
 def _cmd_plot(args) -> int:
     interval = None if args.interval is None else parse(args.interval, Kind.TIME, field="--interval")
-    scene = run_scene(load_scenario(args.file))
+    scenario = _load(args.file)
+    if args.paper is not None or args.scale is not None:  # the sheet against what is known before the run
+        check_sheet(scenario, args.paper or "A4", args.scale, approach=not args.no_approach, field="--scale")
+    _figure_inputs(scenario)
+    scene = run_scene(scenario)
     try:
         written = _save_figures(args, scene, interval)
     except ScenarioError as exc:  # a scale too large for the page: name the option as written
@@ -261,7 +295,9 @@ def _cmd_animate(args) -> int:
     out = check_animation_path(args.output, field="-o")  # before anything long
     dt = parse(args.dt, Kind.TIME, field="--dt")
     frame_times(0.0, dt, field="--dt")  # dt > 0; the frame count is checked once the run-out's end is known
-    scene = run_scene(load_scenario(args.file))
+    scenario = _load(args.file)
+    _figure_inputs(scenario)
+    scene = run_scene(scenario)
     if scene.runout:
         frame_times(max(r.t_end for r in scene.runout.values()), dt, field="--dt")
     with tqdm(total=None, file=sys.stderr, unit="frame", desc="rendering", disable=args.quiet) as bar:
@@ -286,10 +322,8 @@ def _cmd_survey(args) -> int:
 
 
 def _cmd_export(args) -> int:
-    if not (args.dxf or args.geojson):
-        raise ScenarioError("give --dxf OUT.dxf and/or --geojson OUT.geojson", field="export")
-    times = [parse(t.strip(), Kind.TIME, field="--times") for t in (args.times or "").split(",") if t.strip()]
-    scenario = load_scenario(args.file)
+    times = args.times_s  # checked before any work (_check_options), as the output paths
+    scenario = _load(args.file)
     frame, unit = export_frame(scenario)
     items = export_items(run_scene(scenario), times)
     if args.dxf:
@@ -297,24 +331,14 @@ def _cmd_export(args) -> int:
     if args.geojson:
         crs = (scenario.data.get("survey") or {}).get("crs")
         sys.stdout.write(f"wrote {write_geojson(items, args.geojson, frame, unit, crs)} ({len(items)} features, "
-                         f"{unit})\n")
+                         + (f"WGS 84 longitude/latitude from {crs})\n" if crs else f"{unit})\n"))
     return 0
 
 
 def _cmd_report(args) -> int:
-    extra = {}
-    for key in ("fit", "mc", "posterior"):
-        path = getattr(args, key)
-        if path:
-            try:
-                extra[key] = load_json(path)
-            except (OSError, ValueError) as exc:
-                raise ScenarioError(f"{path!r} is not readable JSON of crashsim {key} --json: {exc}",
-                                    field=f"--{key}") from None
-            if not isinstance(extra[key], dict):
-                raise ScenarioError(f"{path!r} is not a JSON object (crashsim {key} --json writes one)",
-                                    field=f"--{key}")
-    scenario = load_scenario(args.file)
+    extra = args.results  # read and checked before any work (_check_outputs)
+    scenario = _load(args.file)
+    _figure_inputs(scenario)
     scene = run_scene(scenario)
     inputs = [args.file] + survey_files(args.file) + [getattr(args, k) for k in ("fit", "mc", "posterior")
                                                       if getattr(args, k)]
@@ -516,12 +540,16 @@ def _check_outputs(args) -> None:
             if path:
                 check_output_file(path, field=field, suffixes=figs, what="a figure")
     if c == "report":
-        check_output_file(args.output, field="-o", suffixes=(".html", ".htm"), what="the case report")
+        check_output_file(args.output, field="-o", suffixes=(".html", ".htm"), make_parents=False,
+                          what="the case report")
+        args.results = {}
         for key in ("fit", "mc", "posterior"):
             path = getattr(args, key)
             if path and not Path(path).is_file():
                 raise ScenarioError(f"{path!r} is not a file; give the JSON that crashsim {key} FILE --json wrote",
                                     field=f"--{key}")
+            if path:  # of that command, made from this scene's inputs (their SHA-256)
+                args.results[key] = check_result_json(path, key, args.file, field=f"--{key}")
     if c == "presets" and (args.plot or args.output):
         if not (args.plot and args.output):
             raise ScenarioError("--plot NAME and -o FILE go together: the preset to draw and the figure to write",
@@ -532,6 +560,49 @@ def _check_outputs(args) -> None:
         if not parse(args.dt, Kind.TIME, field="--dt") > 0:
             raise ScenarioError(f"{args.dt!r} is not a positive time; allowed a time between frames > 0 s, "
                                 "e.g. \"0.05 s\"", field="--dt")
+        if not (math.isfinite(args.speed) and args.speed > 0):
+            raise ScenarioError(f"--speed = {args.speed:g}: allowed a playback speed > 0 (1 = real time, 0.5 = "
+                                "slow motion)", field="--speed")
+    _check_options(args)
+
+
+def _check_options(args) -> None:
+    """The option values of the command that need no scene, before any work (exit 2, one line)."""
+    c = args.command
+    if c == "run":
+        args.dt_s = _dt(args.dt)
+        if args.dt_s is not None and not args.csv:
+            raise ScenarioError("--dt sets the time step of the --csv histories; give --csv DIR too", field="--dt")
+    if c in ("plot", "animate") and args.dpi < 1:
+        raise ScenarioError(f"--dpi = {args.dpi}; allowed a resolution >= 1 dot per inch (e.g. 150)", field="--dpi")
+    if c == "plot" and args.interval is not None:
+        args.interval_s = parse(args.interval, Kind.TIME, field="--interval")
+        if not args.interval_s > 0:
+            raise ScenarioError(f"--interval = {args.interval!r}; allowed a time > 0 between ghost outlines, e.g. "
+                                "\"0.5 s\"", field="--interval")
+    if c == "export":
+        if not (args.dxf or args.geojson):
+            raise ScenarioError("give --dxf OUT.dxf and/or --geojson OUT.geojson", field="export")
+        if args.dxf:
+            check_output_file(args.dxf, field="--dxf", make_parents=False, suffixes=(".dxf",), what="the drawing")
+        if args.geojson:
+            check_output_file(args.geojson, field="--geojson", make_parents=False, suffixes=(".geojson", ".json"),
+                              what="the GeoJSON file")
+        args.times_s = []
+        for t in (args.times or "").split(","):
+            if t.strip():
+                v = parse(t.strip(), Kind.TIME, field="--times")
+                if not v > 0:
+                    raise ScenarioError(f"--times: {t.strip()!r}; allowed times > 0 after separation, e.g. "
+                                        "\"0.5 s, 1 s\"", field="--times")
+                args.times_s.append(v)
+    if c == "mc" and args.samples is not None and args.samples < 1:
+        raise ScenarioError(f"--samples = {args.samples}; allowed a number of samples >= 1", field="--samples")
+    if c == "posterior" and args.steps is not None and args.steps < 1:
+        raise ScenarioError(f"--steps = {args.steps}; allowed a number of steps >= 1", field="--steps")
+    if c in ("fit", "mc", "posterior") and not (math.isfinite(args.sample_time_limit) and args.sample_time_limit > 0):
+        raise ScenarioError(f"--sample-time-limit = {args.sample_time_limit:g}; allowed seconds > 0",
+                            field="--sample-time-limit")
 
 
 def _first_run(args, argv: list[str]) -> int | None:
@@ -541,6 +612,9 @@ def _first_run(args, argv: list[str]) -> int | None:
     if args.command not in _COMPUTING or ready() or first_run.interpreted():
         return None
     how = first_run.policy()
+    dead = first_run.dead_compile()
+    if dead is not None:  # say so once, and compile again (below: in the background or here)
+        sys.stderr.write(f"crashsim: {dead}; compiling again\n")
     if how != "wait" and args.command in first_run.SINGLE_SCENE:
         log = first_run.start_background_compile() if how == "background" else None
         sys.stderr.write("crashsim: first run on this machine: this scene runs interpreted (seconds) "

@@ -34,7 +34,12 @@ from .errors import ScenarioError
 from .warmup import compile_kernels
 
 __all__ = ["POLICIES", "SINGLE_SCENE", "ENV", "policy", "interpreted", "run_interpreted", "start_background_compile",
-           "compile_in_progress", "wait_for_background_compile", "background_main"]
+           "compile_in_progress", "wait_for_background_compile", "background_main", "dead_compile",
+           "INTERPRETED_WALL_TIME"]
+
+#: The run-out wall-time limit of an interpreted run [s] (the schema's largest): ``max_wall_time`` is a
+#: budget for compiled kernels, and a result must not depend on whether they were compiled yet.
+INTERPRETED_WALL_TIME = 1e6
 
 #: Environment variable that chooses the first-run policy.
 ENV = "CRASHSIM_FIRST_RUN"
@@ -81,6 +86,23 @@ def compile_in_progress() -> bool:
     except OSError:  # pragma: no cover - a live process of another user
         return True
     return True
+
+
+def dead_compile() -> str | None:
+    """One line on a background compile that stopped before it finished (its log without the closing
+    "compiled in" line, no compile under way, the kernels not ready): a reinstall under it, a kill;
+    None otherwise."""
+    log = cache_dir() / "compile.log"
+    if ready() or compile_in_progress() or not log.is_file():
+        return None
+    try:
+        lines = [ln.strip() for ln in log.read_text(errors="replace").splitlines() if ln.strip()]
+    except OSError:
+        return None
+    if lines and lines[-1].startswith("compiled in"):
+        return None
+    last = lines[-1][:160] if lines else "(empty)"
+    return f"the background compile started earlier stopped before it finished (its log {log} ends: {last})"
 
 
 def start_background_compile() -> Path | None:

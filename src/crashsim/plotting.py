@@ -31,7 +31,7 @@ _log = logging.getLogger("crashsim")
 __all__ = ["is_color", "LABEL_KINDS", "LINE_SHY", "line_ink", "LEGEND_MODES", "PAPER_SIZES", "PrintSheet", "place_labels", "check_hide",
            "legend_mode", "parse_scale", "replace_scale_bar", "north_direction", "print_sheet", "scene_drawing", "text_box", "BarrierAxes",
            "plot_barrier_sweep", "plot_barrier_figures", "plot_scene", "plot_histories",
-           "history_panels", "save_scene_figures", "SCENE_FIGURE_SUFFIXES"]
+           "history_panels", "save_scene_figures", "SCENE_FIGURE_SUFFIXES", "check_sheet"]
 
 
 def _plt():
@@ -638,6 +638,62 @@ def print_sheet(paper: str, lo, hi, per_metre: float, scale=None, *, legend_heig
                       box, centre - half, centre + half)
 
 
+def check_sheet(scenario, paper: str, scale: float | None, *, approach: bool = True, field: str = "scale") -> None:
+    """Refuse a paper and scale before the run when what is known before it already does not fit.
+
+    The extent of the scene figure is known only after the run-out (rest positions, tracks); the
+    vehicles at impact, the evidence (rest positions, marks, the point of impact) and the
+    approaches' paths are known at load, and a figure always holds them. Their extent, padded as
+    :func:`plot_scene` pads (without the room of the legend), is a lower bound of the figure's: a
+    scale refused here is refused by the figure too, a second and not minutes later.
+
+    Raises
+    ------
+    ScenarioError
+        Field ``field``: the scale, the extent known so far and the smallest N it needs.
+    """
+    pts = []
+    for v in scenario.vehicles:
+        for b in v.bodies:
+            st = scenario.states.get(b.name) if not b.is_fixed else None
+            if st is None:
+                continue
+            o = b.outline()
+            pts.append(np.asarray(st.position, dtype=float)[None] if o is None else
+                       np.asarray(st.position, dtype=float) + rotate(np.asarray(o, dtype=float), st.heading))
+    ev = scenario.evidence
+    if ev.impact_point is not None:
+        pts.append(np.asarray(ev.impact_point.position, dtype=float)[None])
+    for r in ev.rest:
+        pts.append(np.asarray(r.position, dtype=float)[None])
+    for m in ev.marks:
+        pts.append(np.asarray(m.points, dtype=float).reshape(-1, 2))
+    if approach:
+        for a in (getattr(scenario, "approaches", None) or {}).values():
+            for tr in a.tracks.values():
+                if len(tr.points):
+                    pts.append(np.asarray(tr.points, dtype=float).reshape(-1, 2))
+    if not pts:
+        return
+    p = np.vstack(pts)
+    lo, hi = p.min(axis=0), p.max(axis=0)
+    span = float(max((hi - lo).max(), 5.0))
+    pad = 0.03 * span + 0.6
+    lo, hi = lo - pad, hi + pad
+    lo[1] -= 0.05 * span
+    hi[1] += 0.05 * span
+    try:
+        print_sheet(paper, lo, hi, 1.0, scale, legend_height=0.0)
+    except ScenarioError as exc:
+        if exc.field != "scale":
+            raise
+        text = str(exc).removeprefix("scale: ").replace(
+            "its framed extent", "what is known before the run (the vehicles at impact, the evidence"
+            + (", the approaches" if approach else "") + ") spans at least").replace(
+            " fits at 1:N with N >= ", ", which needs 1:N with N >= ")
+        raise ScenarioError(text, field=field) from None
+
+
 def layout_print(ax, sheet: PrintSheet) -> None:
     """Size the figure to the sheet and put the axes on its drawing box (exactly 1:N)."""
     fig = ax.figure
@@ -1149,8 +1205,10 @@ def plot_time_distance(scene, axes=None, *, system: str | None = None):
         if vn is None:
             continue
         t = np.asarray(x.times, dtype=float) + x.time_offset
-        v = kv * np.asarray(x.speeds, dtype=float)
-        low = np.asarray(x.lower_bound, dtype=bool)
+        keep = t <= 0.0  # the samples the check compares (pre-crash with the item's own offset)
+        t = t[keep]
+        v = kv * np.asarray(x.speeds, dtype=float)[keep]
+        low = np.asarray(x.lower_bound, dtype=bool)[keep]
         ax_v.errorbar(t, v, yerr=kv * x.tolerance, fmt="none", ecolor=_EVIDENCE, elinewidth=0.8, capsize=2.5,
                       alpha=0.6, zorder=6)
         for mask, marker, key in ((~low, "o", "recorded"), (low, "^", "lower")):
@@ -1283,7 +1341,8 @@ def _draw_evidence(S: SceneDrawing, checks: dict) -> None:
         name = x.name or f"recorder in {x.body}"
         detail = ""
         if c is not None and "times" in c.details:
-            detail = (f"{len(x.times)} pre-crash speeds, worst {_residual_text(c, system)}")
+            detail = (f"{c.details.get('n_compared', len(x.times))} pre-crash speeds, worst "
+                      f"{_residual_text(c, system)}")
         S.legend_entry(_wrap(f"recorded speeds \u201c{name}\u201d: {verdict}", 52)
                        + (f"\n  {detail}" if detail else ""),
                        Line2D([], [], ls="none"), color)

@@ -357,7 +357,10 @@ def format_evidence(report, system: str = "SI", labels: dict | None = None) -> s
             extra = c.details["reason"]
         elif c.kind == "recorder":
             k = c.details["worst_sample"]
-            extra = (f"worst of {len(c.details['times'])} samples at {fmt(c.details['times'][k], 'time', s)}: "
+            n, left = c.details.get("n_compared", len(c.details["times"])), ""
+            if n < len(c.details["times"]):
+                left = f" ({len(c.details['times']) - n} after the impact with its time_offset, not compared)"
+            extra = (f"worst of {n} samples at {fmt(c.details['times'][k], 'time', s)}{left}: "
                      f"recorded {fmt(c.details['recorded'][k], 'speed', s)}, computed "
                      f"{fmt(c.details['computed'][k], 'speed', s)}")
         rows.append(["PASS" if c.passed else "FAIL", c.kind, c.name, f"residual {res}", f"tolerance {tol}", extra])

@@ -15,6 +15,7 @@ import copy
 import dataclasses
 import difflib
 import math
+import re
 import tomllib
 from dataclasses import dataclass, field, replace as _replace
 from importlib.resources import files
@@ -525,9 +526,10 @@ EV_CRUSH = Section("crush", [
 ], description="The measured crush of one face of one body (CRASH3): its energy is compared with the impact "
                "model's energy loss")
 EV_RECORDER_SAMPLE = Section("sample", [
-    Field("time", Kind.TIME, maximum=0, example="-2.5 s",
-          description="Time of the sample relative to the impact (negative: before it; pre-crash data end at the "
-                      "impact)"),
+    Field("time", Kind.TIME, maximum=5, example="-2.5 s",
+          description="Time of the sample relative to the impact (negative: before it). Pre-crash data end at the "
+                      "impact: a sample is compared only where time + time_offset <= 0, decided with the offset of "
+                      "each evaluation (a fitted time_offset moves the window)"),
     Field("speed", Kind.SPEED, minimum=0, maximum=MAX_SPEED, example="52 mph", description="Recorded speed"),
     Field("brake", "bool", default=False,
           description="Service brake on at this sample: wheel-speed recorders under-read while braking (locked or "
@@ -667,7 +669,7 @@ from .motion.road import signed_distance
 from .plotting import is_color
 from .scene.run import simulate_approaches
 from .survey.frame import SceneFrame
-from .survey.mapping import expand_survey, is_placed, survey_frame
+from .survey.mapping import as_written, expand_survey, is_placed, survey_frame
 
 SCHEMA = with_inverse_sections(SCHEMA)
 
@@ -804,6 +806,9 @@ class Scenario:
     survey_frame: SceneFrame | None = None
     north: float | None = None
     barrier_extent: tuple[float, float] | None = None
+    #: Doubtful values the loader accepted (an angle of more than a turn: "192 rad" meant as
+    #: degrees?); the run's warnings carry them
+    load_warnings: tuple[str, ...] = ()
 
     @property
     def approaches_simulated(self) -> bool:
@@ -912,6 +917,11 @@ def _build_wheels(vehicle: Vehicle, v: dict, file: str | None, prefix: str | Non
             ws = WheelSettings(default, overrides, schedule, brakes)
             ws.resolve(vehicle)
         except ScenarioError as exc:
+            if (exc.field or "").startswith("units[") and "is 'braked'" in str(exc) and \
+                    (v.get("tyres") or {}).get("state") == "braked":  # the key to change: the tyres' state
+                msg = str(exc).removeprefix(f"{exc.field}: ")
+                raise _err(f'state = "braked" on a body with air brakes: {msg}', f"{prefix}.tyres.state",
+                           file) from None
             raise _rewrap(exc, f"{prefix}.brakes", file) from None
     return ws
 
@@ -983,7 +993,8 @@ def _rollover_check(r: dict, level: str, vehicles, file: str | None) -> bool:
 def _build_runout(r: dict, vehicles, raw_vehicles: dict, file: str | None, raw: dict | None = None) -> RunoutSpec:
     raw = raw or {}
     level = r["level"]
-    if r["load_transfer"] and level not in ("articulated", "load_transfer"):
+    if r["load_transfer"] and (level not in ("articulated", "load_transfer") or
+                               (level == "articulated" and "level" in raw)):  # a level written is never overruled
         raise _err(f"load_transfer = true asks for level \"load_transfer\", but level = {level!r}; give one of them",
                    "runout.load_transfer", file)
     if r["load_transfer"]:
@@ -1366,6 +1377,10 @@ class _Problems:
         raise ScenarioValidationError(problems, file=self.file)
 
 
+class _Skip(Exception):
+    """A part left for the next run (lenient: what it needs could not be built)."""
+
+
 class _Keep:
     def __init__(self, owner: _Problems):
         self.owner = owner
@@ -1399,12 +1414,15 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None, approac
     if isinstance(data, dict) and "survey" in data:
         data = expand_survey(data, file)
     data = _units_any_case(data)
-    merged = apply_presets(data, file)
-    d, schema_problems = validate_collect(merged, SCHEMA)
-    if schema_problems:  # the checks after the schema too, on the parts it found valid: every error in one run
-        raise ScenarioValidationError(schema_problems + _later_problems(d, data, merged, source, file, schema_problems),
-                                      file=file)
-    return _from_validated(d, data, merged, source, file, approaches)
+    try:
+        merged = apply_presets(data, file)
+        d, schema_problems = validate_collect(merged, SCHEMA)
+        if schema_problems:  # the checks after the schema too, on the parts it found valid: every error in one run
+            raise ScenarioValidationError(schema_problems + _later_problems(d, data, merged, source, file,
+                                                                            schema_problems), file=file)
+        return _from_validated(d, data, merged, source, file, approaches)
+    except ScenarioError as exc:  # an item the survey made: named by the key the user wrote
+        raise as_written(exc, data) from None
 
 
 def _related(a: str, b: str) -> bool:
@@ -1430,7 +1448,17 @@ def _later_problems(d, data, merged, source, file, schema_problems) -> list[tupl
     except Exception:  # noqa: BLE001 - a part built on a refused value: nothing more to report
         found = []
     bad = [p for p, _ in schema_problems]
-    return [(p, m) for p, m in found if not any(_related(p, b) for b in bad)]
+    return [(p, m) for p, m in found if not any(_related(p, b) or _about_sibling(p, m, b) for b in bad)]
+
+
+def _about_sibling(path: str, message: str, refused: str) -> bool:
+    """Whether a later error at ``path`` is about a key of the same table that the schema refused
+    (``evidence.crush[0].A``: "... or ees; given: none" when ``evidence.crush[0].ees`` was refused):
+    it names that key, whose value it cannot see."""
+    parent, _, key = refused.rpartition(".")
+    if not parent or path.rpartition(".")[0] != parent:
+        return False
+    return re.search(rf"(?<![\w.]){re.escape(key)}(?!\w)", message) is not None
 
 
 def _from_validated(d: dict, data: dict, merged: dict, source, file: str | None, approaches: bool,
@@ -1475,7 +1503,13 @@ def _from_validated(d: dict, data: dict, merged: dict, source, file: str | None,
     later = _Problems(file, lenient)
     imp = d["impact"]
     problem = None
-    if lenient:  # a file with schema errors: the evidence and the map are checked even if the impact fails
+    # lenient: a vehicle that could not be built (a value of it refused) leaves the checks that need it
+    # (the impact, the evidence) for the next run, and a [runout] not built says nothing of its options
+    vehicle_lost = lenient and len(vehicles) < len(d["vehicles"])
+    runout_failed = d["runout"] is not None and runout is None
+    if vehicle_lost:
+        pass
+    elif lenient:  # a file with schema errors: the evidence and the map are checked even if the impact fails
         with later.each():
             problem = _impact_problem(d, vehicles, states, file)
     else:
@@ -1490,13 +1524,15 @@ def _from_validated(d: dict, data: dict, merged: dict, source, file: str | None,
             runout = _with_contact(runout, d, vehicles, problem, file)
     evidence = map_lines = crush = None
     with later.each():
+        if vehicle_lost:
+            raise _Skip
         evidence = _build_evidence(d["evidence"], states, file, vehicles,
                                    {n: v["approach"] for n, v in d["vehicles"].items()})
-        if evidence.rollover and (runout is None or not runout.options.rollover):
+        if evidence.rollover and not runout_failed and (runout is None or not runout.options.rollover):
             raise _err("a rollover statement is checked against the wheel-lift and rollover check, which is off: add "
                        "runout.rollover = true (level \"load_transfer\")", "evidence.rollover[0].unit", file)
     with later.each():
-        if d["evidence"] is not None and d["evidence"]["crush"]:
+        if d["evidence"] is not None and d["evidence"]["crush"] and not vehicle_lost:
             crush = _build_crush(d["evidence"]["crush"], d, vehicles, file)
     if evidence is not None and crush is not None:
         evidence = dataclasses.replace(evidence, crush=crush)
@@ -1512,11 +1548,38 @@ def _from_validated(d: dict, data: dict, merged: dict, source, file: str | None,
                    evidence, d, map_lines, {}, approach_inputs,
                    descriptions={n: v.get("description") or "" for n, v in d["vehicles"].items()},
                    survey_frame=survey_frame(survey) if placed else None,
-                   north=(d.get("map") or {}).get("north"), barrier_extent=_barrier_extent(d.get("barrier")))
+                   north=(d.get("map") or {}).get("north"), barrier_extent=_barrier_extent(d.get("barrier")),
+                   load_warnings=tuple(_angle_warnings(data)))
     object.__setattr__(out, "_file_data", source)  # the file contents it was built from (Scenario.file_data)
     if not approaches:
         return out
     return simulate_approaches(out)
+
+
+_ANGLE = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(rad|radians?|deg|degrees?)\s*$",
+                    re.IGNORECASE)
+
+
+def _angle_warnings(data, path: str = "") -> list[str]:
+    """A warning for every angle of the file beyond one turn: in rad most likely degrees meant
+    ("192 rad" is 30.6 turns), in deg a doubtful value (a rotation of 1e9 deg)."""
+    out: list[str] = []
+    if isinstance(data, dict):
+        for k, v in data.items():
+            if k != "imported":
+                out += _angle_warnings(v, f"{path}.{k}" if path else str(k))
+    elif isinstance(data, list):
+        for i, v in enumerate(data):
+            out += _angle_warnings(v, f"{path}[{i}]")
+    elif isinstance(data, str):
+        m = _ANGLE.match(data)
+        if m:
+            x, unit = float(m[1]), m[2].lower()
+            turns = abs(x) / (2 * math.pi) if unit.startswith("rad") else abs(x) / 360.0
+            if turns > 1.0:
+                hint = f"; did you mean \"{m[1]} deg\"?" if unit.startswith("rad") else ""
+                out.append(f"{path} = {data!r} is {turns:.4g} turns (more than 2 pi rad){hint}")
+    return out
 
 
 def _barrier_extent(barrier: dict | None) -> tuple[float, float] | None:
@@ -1944,6 +2007,19 @@ def _recorder_item(x: dict, i: int, body, vehicles, d_approach, file: str | None
         raise _err(f"recorder samples are compared with the approach of vehicle {veh.name!r}, which has none: add "
                    f"[vehicles.{veh.name}.approach]", f"{key}.body", file)
     smp = x["samples"]
+    first: dict = {}
+    for j, p in enumerate(smp):
+        if p["time"] in first:
+            raise _err(f"samples[{first[p['time']]}] and samples[{j}] have the same time ({p['time']:g} s); a "
+                       "recorder takes one sample at a time", f"{key}.samples[{j}].time", file)
+        first[p["time"]] = j
+    if len(smp) == 1 and smp[0]["time"] + x["time_offset"] > 0:
+        raise _err(f"time = {smp[0]['time']:g} s is after the impact (time + time_offset = "
+                   f"{smp[0]['time'] + x['time_offset']:g} s); allowed <= {-x['time_offset']:g} s: pre-crash data "
+                   "end at the impact", f"{key}.samples[0].time", file)
+    if not any(p["time"] + x["time_offset"] <= 0 for p in smp):
+        raise _err(f"no sample is before the impact: every time + time_offset ({x['time_offset']:g} s) is > 0; "
+                   "allowed at least one sample at or before it", f"{key}.samples", file)
     return RecorderEvidence(name, tuple(p["time"] for p in smp), tuple(p["speed"] for p in smp),
                             tuple(bool(p["brake"]) for p in smp), x["tolerance"], x["time_offset"], x["name"],
                             sigma=x.get("sigma"))

@@ -354,6 +354,26 @@ _CASELESS = frozenset({"mph", "kph", "fps", "ft/s", "deg", "degree", "rad", "rad
                        "lbf/in", "lb/in", "lbf/in^2", "lb/in^2", "min"})
 
 
+#: Characters that look like a minus sign but are not the ASCII hyphen-minus (pasted from a word
+#: processor or a PDF), with their Unicode names.
+_LOOKALIKE_MINUS = {"\u2212": "minus sign", "\u2013": "en dash", "\u2014": "em dash", "\u2010": "hyphen",
+                    "\u2011": "non-breaking hyphen", "\u2012": "figure dash", "\ufe63": "small hyphen-minus",
+                    "\uff0d": "fullwidth hyphen-minus"}
+
+
+def _case_hint(unit: str, spec: _Spec) -> str:
+    """A unit that differs from one of the expected spellings only in case ("T" for "t"): say what the
+    symbol is (SI symbols keep their case: "T is tesla; a tonne is t")."""
+    same = [sp for sp in spec.spellings if sp.lower() == unit.strip().lower() and sp != unit.strip()]
+    if not same:
+        return ""
+    try:
+        name = str(_pint_unit(unit.strip())).replace("_", " ")
+    except _Invalid:
+        return f"; did you mean '{same[0]}'? (SI symbols keep their case)"
+    return f"; {unit.strip()} is the {name} (SI symbols keep their case): did you mean '{same[0]}'?"
+
+
 def _suggest(unit: str, spec: _Spec) -> str:
     close = difflib.get_close_matches(unit, spec.spellings, n=1, cutoff=0.6)
     return f"; did you mean '{close[0]}'?" if close else ""
@@ -372,6 +392,10 @@ def _to_si(value: object, kind: Kind) -> float:
         if not value.strip():
             raise _Invalid(f"{shown} is empty; {_such_as(spec)}")
         if match is None:
+            odd = next((c for c in value if c in _LOOKALIKE_MINUS), None)
+            if odd is not None:
+                raise _Invalid(f"{shown} contains the character U+{ord(odd):04X} ({_LOOKALIKE_MINUS[odd]}) where a "
+                               f"minus is meant; write the ASCII hyphen-minus '-' ({_such_as(spec)})")
             raise _Invalid(f"{shown} is not a number followed by a unit; {_such_as(spec)}")
         number, unit = float(match["num"]), match["unit"]
     if not math.isfinite(number):
@@ -403,7 +427,7 @@ def _to_si(value: object, kind: Kind) -> float:
         factor = _si_factor(unit, kind)
     except _Invalid as exc:
         raise _Invalid(f"{shown} {exc}; expected {spec.noun} ({spec.expect})"
-                       f"{_suggest(unit, spec)}") from None
+                       f"{_suggest(unit, spec) or _case_hint(unit, spec)}") from None
     result = number * factor
     if not math.isfinite(result):
         raise _Invalid(f"{shown} is too large: not a finite number in SI")

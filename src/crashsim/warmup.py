@@ -67,6 +67,9 @@ def compile_kernels(progress: Callable[[int, str], None] | None = None) -> Path:
         if progress is not None:
             progress(i, COMPILE_STEPS[i])
 
+    # the marker names the sources compiled now, read before the compile: a reinstall under a long
+    # compile removes or replaces them, and this compile is then of the old ones
+    done = marker()
     step(0)
     kernels()  # defining the kernels
 
@@ -78,12 +81,9 @@ def compile_kernels(progress: Callable[[int, str], None] | None = None) -> Path:
     run_scene(replace(scenario, runout=replace(spec, options=replace(spec.options, engine="scipy"))))
     step(3)
     run_scene(replace(scenario, runout=replace(spec, options=replace(spec.options, engine="compiled"))))
-    done = marker()
     try:
         done.parent.mkdir(parents=True, exist_ok=True)
-        for old in done.parent.glob("ready-*"):
-            old.unlink()
-        done.touch()
+        done.touch()  # others stay: installations elsewhere may share this cache (each its own marker)
     except OSError:  # pragma: no cover - read-only cache
         pass
     return done.parent

@@ -120,3 +120,54 @@ def test_a_value_the_file_does_not_give_is_written_in_si():
     out = set_value(raw, t, 1612.5, like=True)
     written = out["vehicles"]["A"]["bodies"][0]["mass"]
     assert written.endswith(" lb") and parse(written, "mass", field="m") == pytest.approx(1612.5, rel=1e-15)
+
+
+# --------------------------------------------------------------------------- the user's own file, edited in place
+def test_best_fit_is_the_users_file_with_its_values_replaced(tmp_path):
+    """Comments, order and layout kept; the survey a reference to its files (not the items it
+    imports); an unknown of a survey-generated recorder item written at its [[survey.recorders]]
+    entry; every path relative to the written file, which loads and runs from its own folder."""
+    import shutil
+    from pathlib import Path
+
+    from crashsim.reconstruct.write_best import edit_best
+    from crashsim.survey.mapping import load_scene_data
+
+    root = Path(__file__).resolve().parents[2] / "scenarios" / "survey"
+    case = tmp_path / "case"
+    shutil.copytree(root / "files", case / "files")
+    src = (root / "truck_brakes_survey.toml").read_text()
+    anchor = 'initial = "0.75"\n'
+    assert anchor in src
+    src = src.replace(anchor, anchor + '\n# the recorder clock\n[[fit.unknowns]]\npath = "evidence.recorder[0].time_offset"\n'
+                      'lower = "-1 s"\nupper = "1 s"\n', 1)
+    scene = case / "scene.toml"
+    scene.write_text(src)
+    paths = ["evidence.recorder[0].time_offset", "vehicles.truck.approach.speed"]
+    best = load_scene_data(scene)
+    best = set_value(best, resolve_path(paths[0]), -0.3, like=True)
+    best = set_value(best, resolve_path(paths[1]), 24.6, like=True)
+    out = tmp_path / "handed_over" / "best.toml"
+    out.parent.mkdir()
+    text = edit_best(scene, out, best, paths, engine="compiled", header="# header\n", trailer="# trailer\n")
+    out.write_text(text)
+    written = load_toml(out)
+    assert "fit" not in written and "imported" not in written["survey"]
+    assert written["survey"]["recorders"][0]["time_offset"] == "-0.3 s"
+    assert written["vehicles"]["truck"]["approach"]["speed"].endswith(" mph")
+    assert written["survey"]["files"][0]["file"] == "../case/files/scene.dxf"
+    assert written["survey"]["underlay"]["image"].startswith("../case/files/")
+    # every line of the input but the changed ones, in order, comments included
+    changed = ("time_offset", "speed = \"55 mph\"", "file = ", "image = ", "world_file = ", "engine = ")
+    head, rest = src.split("\n[fit]\n", 1)
+    tail = "[uncertainty]\n" + rest.split("\n[uncertainty]\n", 1)[1]  # the [fit] table goes
+    kept = [ln for ln in (head + "\n" + tail).splitlines() if not any(c in ln for c in changed)]
+    lines = text.splitlines()
+    it = iter(lines)
+    assert all(any(ln == w for w in it) for ln in kept), "a line of the input lost or moved"
+    assert len(lines) < len(src.splitlines()) + 10  # no inlined survey (it was 2,137 lines)
+    # it runs from its own folder, with the fitted values
+    sc = load_scenario(out)
+    (rec,) = sc.evidence.recorder
+    assert rec.time_offset == pytest.approx(-0.3, abs=1e-12)
+    assert sc.approaches["truck"].speed_at_braking == pytest.approx(24.6, rel=1e-12)

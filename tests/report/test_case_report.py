@@ -23,6 +23,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from crashsim.casereport import made_from
+
 from crashsim.casereport import FILE_COMMENT, input_rows, render_case_report, toml_comments
 from crashsim.cli import main
 from crashsim.reconstruct import run_scene
@@ -150,7 +152,8 @@ def report(tmp_path_factory):
     fit.write_text(json.dumps({"success": True, "message": "converged", "chi2": 1.5, "dof": 3, "p_value": 0.68,
                                "confidence": 0.95, "n_agree": 4, "n_starts": 4, "warnings": [],
                                "unknowns": [{"path": "vehicles.car.speed", "name": "car speed", "kind": "speed",
-                                             "value": 13.41, "stderr": 0.2, "interval": [13.0, 13.8]}]}))
+                                             "value": 13.41, "stderr": 0.2, "interval": [13.0, 13.8]}],
+                               "made_from": made_from("fit", SCENE)}))
     assert main(["report", str(SCENE), "-o", str(out), "--fit", str(fit), "--units", "US"]) == 0
     return out, fit
 
@@ -328,3 +331,45 @@ def test_a_rollover_statement_reads_as_a_verdict_in_the_evidence_table(tmp_path)
     cells = verdicts[0]
     assert "computed: does not roll" in cells and "the statement must hold" in cells
     assert cells[0] == "PASS"
+
+
+def test_results_of_other_inputs_or_commands_are_refused(tmp_path, capsys):
+    """A result embeds only beside the scene whose inputs made it (the SHA-256 of the scenario file
+    and its survey files), and only as the result of its own command; one line, exit 2."""
+    stamp = made_from("fit", SCENE)
+    cases = {
+        "no_stamp": ({"samples": 3}, "has no 'made_from'"),
+        "other_command": ({"made_from": made_from("mc", SCENE)}, "is the result of crashsim mc, not of crashsim fit"),
+        "other_inputs": ({"made_from": {**stamp, "inputs_sha256": "0" * 64}}, "was made from other inputs"),
+    }
+    for name, (obj, words) in cases.items():
+        f = tmp_path / f"{name}.json"
+        f.write_text(json.dumps(obj))
+        out = tmp_path / f"{name}.html"
+        assert main(["report", str(SCENE), "-o", str(out), "--fit", str(f)]) == 2, name
+        err = capsys.readouterr().err
+        assert len(err.strip().splitlines()) == 1 and "--fit" in err and words in err, err
+        assert not out.exists()
+    # the scene file changed by one byte: its results no longer belong to it
+    copy = tmp_path / "scene.toml"
+    copy.write_bytes(SCENE.read_bytes())
+    f = tmp_path / "fit.json"
+    f.write_text(json.dumps({"made_from": made_from("fit", copy)}))
+    copy.write_bytes(SCENE.read_bytes() + b"\n")
+    assert main(["report", str(copy), "-o", str(tmp_path / "c.html"), "--fit", str(f)]) == 2
+    assert "was made from other inputs" in capsys.readouterr().err
+
+
+def test_a_result_of_this_scene_is_embedded(tmp_path, capsys):
+    """crashsim mc --json stamps its result with the scene's inputs; the report takes it."""
+    fit_scene_file = ROOT / "scenarios" / "fit" / "intersection_fit.toml"
+    assert main(["mc", str(fit_scene_file), "--samples", "2", "--workers", "1", "--quiet", "--json"]) == 0
+    out = capsys.readouterr().out
+    doc = json.loads(out)
+    assert doc["made_from"]["command"] == "mc"
+    assert doc["made_from"]["inputs_sha256"] == made_from("mc", fit_scene_file)["inputs_sha256"]
+    f = tmp_path / "mc.json"
+    f.write_text(out)
+    assert main(["report", str(fit_scene_file), "-o", str(tmp_path / "c.html"), "--mc", str(f)]) == 0
+    assert main(["report", str(SCENE), "-o", str(tmp_path / "d.html"), "--mc", str(f)]) == 2
+    assert "was made from other inputs" in capsys.readouterr().err

@@ -227,9 +227,10 @@ def test_units_in_the_scene_file_contradicting_the_drawing(pair):
     data = copy.deepcopy(surv)
     data["survey"]["files"][0]["units"] = "m"
     mapping._CACHE.clear()
-    with pytest.raises(ScenarioError, match=r"survey.files.units: .*units = 'm', but the drawing's header says "
-                                            r"\$INSUNITS = 21 \(us_ft\)"):
+    with pytest.raises(ScenarioError, match=r"survey.files\[0\].units: .*units = 'm', but the drawing's header says "
+                                            r"\$INSUNITS = 21 \(us_ft\)") as info:
         scenario_from_dict(data, file="scene.toml")
+    assert "remove units" not in str(info.value)  # that advice moved the scene without a word
 
 
 def test_unsupported_entities_warned_once_in_the_sources(pair, tmp_path, caplog):
@@ -245,9 +246,17 @@ def test_unsupported_entities_warned_once_in_the_sources(pair, tmp_path, caplog)
     with caplog.at_level("WARNING", logger="crashsim"):
         sc = scenario_from_dict(data)
     notes = [r["note"] for r in sc.data["survey"]["imported"] if r["kind"] == "note"]
-    assert any("3 entities of types the importer does not take were left out: 3 3DFACE" in n for n in notes)
-    assert sum("3DFACE" in r.getMessage() for r in caplog.records) == 1
-    assert "1 entities on layers or codes no map entry matches were not imported: TREES (1)" in notes
+    # TIN faces are read (kind = "surface" would take them); unmapped, they are named with the layers left out
+    assert "4 entities on layers or codes no map entry matches were not imported: TIN (3), TREES (1)" in notes
+    doc.modelspace().add_hatch(dxfattribs={"layer": "HATCHED"}).paths.add_polyline_path([(0, 0), (1, 0), (1, 1)])
+    doc.saveas(tmp_path / "with_hatch.dxf")
+    data["survey"]["files"][0]["file"] = str(tmp_path / "with_hatch.dxf")
+    mapping._CACHE.clear()
+    with caplog.at_level("WARNING", logger="crashsim"):
+        sc = scenario_from_dict(data)
+    notes = [r["note"] for r in sc.data["survey"]["imported"] if r["kind"] == "note"]
+    assert any("1 entities of types the importer does not take were left out: 1 HATCH" in n for n in notes)
+    assert sum("HATCH" in r.getMessage() for r in caplog.records) == 1
 
 
 def test_samples_from_an_unexpanded_file_read_it_once(pair, monkeypatch):

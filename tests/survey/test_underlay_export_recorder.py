@@ -256,10 +256,15 @@ def test_recorder_table(tmp_path):
     p = tmp_path / "r.csv"
     p.write_text("t;Speed (km/h);brk;ABS\n-1000;90;0;0\n-500;72;1;0\n;;;\n-100;60;0;1\n100;10;1;1\n")
     samples, notes = read_recorder(str(p), _spec(speed="Speed (km/h)", time_unit="ms", brake="brk", abs="ABS"))
-    assert [s[0] for s in samples] == pytest.approx([-1.0, -0.5, -0.1], abs=0)
-    assert [s[1] for s in samples] == pytest.approx([25.0, 20.0, 60 / 3.6], rel=1e-15)
-    assert [s[2] for s in samples] == [False, True, True]  # brake or ABS on: a lower bound
-    assert any("1 samples after the impact" in n for n in notes)
+    # the sample 0.1 s after the impact is kept (a fitted time_offset may bring it before the impact)
+    # but not compared at the file's offset, and the notes say so
+    assert [s[0] for s in samples] == pytest.approx([-1.0, -0.5, -0.1, 0.1], abs=0)
+    assert [s[1] for s in samples] == pytest.approx([25.0, 20.0, 60 / 3.6, 10 / 3.6], rel=1e-15)
+    assert [s[2] for s in samples] == [False, True, True, True]  # brake or ABS on: a lower bound
+    assert any("1 samples after the impact with time_offset = 0 s are kept but not compared" in n for n in notes)
+    p.write_text("t;Speed (km/h)\n-1000;90\n5001;10\n")
+    samples, notes = read_recorder(str(p), _spec(speed="Speed (km/h)", time_unit="ms"))
+    assert len(samples) == 1 and any("1 samples more than 5 s after the impact were left out" in n for n in notes)
     with pytest.raises(ScenarioError, match=r"has no column 'Speed \(mph\)'; nearest: 'Speed \(km/h\)'. Columns: 't', 'Speed"):
         read_recorder(str(p), _spec(speed="Speed (mph)"))
     with pytest.raises(ScenarioError, match=r"speed_unit = 'knots'"):

@@ -116,3 +116,116 @@ def test_a_compile_that_finishes_first_stops_the_interpreted_run(monkeypatch, ca
     argv = ["run", str(SCENE)]
     assert cli._first_run(cli.build_parser().parse_args(argv), argv) is None
     assert "the scene runs compiled" in capsys.readouterr().err
+
+
+def _fresh_env(tmp_path, policy: str) -> dict:
+    env = dict(os.environ, CRASHSIM_CACHE_DIR=str(tmp_path / "fresh"), CRASHSIM_FIRST_RUN=policy,
+               PYTHONPATH=os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")]))
+    env.pop("NUMBA_CACHE_DIR", None)
+    env.pop("NUMBA_DISABLE_JIT", None)
+    return env
+
+
+def test_an_interpreted_run_is_not_cut_by_the_wall_time_limit(tmp_path):
+    """max_wall_time is a budget for compiled kernels: interpreted, the same scene must reach the same
+    rest (it used to end NOT AT REST, exit 3, on a loaded machine). A limit far below the interpreted
+    run's time shows it: lifted, and said so on stderr."""
+    text = SCENE.read_text()
+    assert "[runout]\n" in text
+    f = tmp_path / "scene.toml"
+    f.write_text(text.replace("[runout]\n", '[runout]\nmax_wall_time = "0.05 s"\n', 1))
+    out = subprocess.run([sys.executable, "-m", "crashsim", "run", str(f)], env=_fresh_env(tmp_path, "interpret"),
+                         capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr
+    assert "wall-time limit (runout.max_wall_time = 0.05 s) is lifted" in out.stderr
+    assert "NOT AT REST" not in out.stdout
+
+
+def test_a_dead_background_compile_is_noticed_and_started_again(monkeypatch, tmp_path, capsys):
+    """A compile that died (a reinstall under it: its log ends in a traceback) is named in one line
+    by the next command, which starts the compile again."""
+    monkeypatch.setenv("CRASHSIM_CACHE_DIR", str(tmp_path))
+    monkeypatch.setenv(first_run.ENV, "background")
+    (tmp_path / "compile.log").write_text("compiling 1: kernel module\nTraceback (most recent call last):\n"
+                                          "ModuleNotFoundError: No module named 'crashsim.motion.kernels'\n")
+    assert "ModuleNotFoundError" in first_run.dead_compile()
+    calls = []
+    monkeypatch.setattr(first_run, "run_interpreted", lambda argv, race=False: 0)
+    monkeypatch.setattr(first_run, "start_background_compile", lambda: calls.append("compile") or tmp_path / "l")
+    assert main(["run", str(SCENE)]) == 0
+    err = [ln for ln in capsys.readouterr().err.splitlines() if "stopped before it finished" in ln]
+    assert len(err) == 1 and "compiling again" in err[0] and calls == ["compile"]
+    (tmp_path / "compile.log").write_text("compiling 1: kernel module\ncompiled in 80.1 s\n")
+    assert first_run.dead_compile() is None  # a finished one is not dead
+
+
+@pytest.mark.slow
+def test_a_compile_killed_under_way_is_restarted_by_the_next_command(tmp_path):
+    """The README's order on a fresh machine: a first command starts the background compile; it dies
+    (killed here, as a reinstall of the package under it kills it); the next command says so in one
+    line, runs its scene and starts the compile again."""
+    import signal
+    import time
+
+    env = _fresh_env(tmp_path, "background")
+    first = subprocess.run([sys.executable, "-c", "from crashsim import first_run; print(first_run."
+                            "start_background_compile())"], env=env, capture_output=True, text=True, timeout=120)
+    log = Path(first.stdout.strip())
+    lock = tmp_path / "fresh" / "compiling.lock"
+    t0 = time.monotonic()
+    while not lock.exists() and time.monotonic() - t0 < 60:
+        time.sleep(0.2)
+    pid = int(lock.read_text())
+    os.kill(pid, signal.SIGKILL)  # dies without removing its lock or finishing its log
+    time.sleep(0.5)
+    try:
+        out = subprocess.run([sys.executable, "-m", "crashsim", "run", str(SCENE)], env=env, capture_output=True,
+                             text=True, timeout=900)
+        assert out.returncode == 0, out.stderr
+        notes = [ln for ln in out.stderr.splitlines() if "stopped before it finished" in ln]
+        assert len(notes) == 1 and str(log) in notes[0]
+        assert lock.exists() and int(lock.read_text()) != pid  # compiling again
+    finally:
+        try:
+            os.kill(int(lock.read_text()), signal.SIGKILL)
+        except (OSError, ValueError):
+            pass
+
+
+def test_the_ready_marker_follows_the_installed_files(tmp_path, monkeypatch):
+    """numba stamps a cached kernel by its file; the marker does too (where, when written, what), so a
+    reinstall is not taken for a ready cache that every process would recompile silently."""
+    from crashsim import _jit
+
+    src = tmp_path / "a" / "kernel.py"
+    src.parent.mkdir()
+    src.write_text("x = 1\n")
+    monkeypatch.setattr(_jit, "kernel_sources", lambda impact=True: [src])
+    d1 = _jit.digest()
+    os.utime(src, ns=(src.stat().st_atime_ns, src.stat().st_mtime_ns + 10**9))  # the same file written again
+    d2 = _jit.digest()
+    other = tmp_path / "b" / "kernel.py"
+    other.parent.mkdir()
+    other.write_bytes(src.read_bytes())
+    os.utime(other, ns=(src.stat().st_atime_ns, src.stat().st_mtime_ns))
+    monkeypatch.setattr(_jit, "kernel_sources", lambda impact=True: [other])
+    d3 = _jit.digest()  # the same bytes and time elsewhere (an editable install after a copy)
+    assert len({d1, d2, d3}) == 3
+
+
+def test_the_compile_names_its_sources_before_it_compiles(monkeypatch, tmp_path):
+    """A reinstall under a long compile removed its sources before it wrote its marker (it died with
+    FileNotFoundError after compiling); the marker is taken first now."""
+    import crashsim.warmup as warmup
+
+    order = []
+    monkeypatch.setattr(warmup, "marker", lambda: order.append("marker") or tmp_path / "numba" / "ready-x")
+
+    def stop():
+        order.append("compile")
+        raise RuntimeError("stop here")
+
+    monkeypatch.setattr(warmup, "kernels", stop)
+    with pytest.raises(RuntimeError):
+        warmup.compile_kernels()
+    assert order == ["marker", "compile"]

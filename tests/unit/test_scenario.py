@@ -264,9 +264,13 @@ def test_accuracy_target_reports_its_estimate():
     ({"accuracy": "1 cm", "level": "energy"}, "runout.accuracy", "energy"),
     ({"accuracy_heading": "1 deg"}, "runout.accuracy_heading", "needs accuracy"),
     ({"load_transfer": True, "level": "rigid"}, "runout.load_transfer", "rigid"),
+    # a level written is never overruled: articulated as written against load_transfer = true
+    ({"load_transfer": True, "level": "articulated"}, "runout.load_transfer", "level = 'articulated'"),
     ({"level": "articulatd"}, "runout.level", "articulated"),
 ])
 def test_runout_option_conflicts(extra, key, words):
+    """Each conflict is an error naming the key (load_transfer alone, level not written, still
+    asks for the load-transfer level: tests/unit/test_levels.py)."""
     d = _scene_data()
     d["runout"].update(extra)
     msg = error_of(d)

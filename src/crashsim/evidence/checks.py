@@ -250,7 +250,9 @@ class DeltaVEvidence:
 class RecorderEvidence:
     """Pre-crash speed samples of a recorder (EDR, engine ECM) in a body, SI.
 
-    ``times`` are relative to the impact (<= 0) after adding ``time_offset``; ``lower_bound``
+    ``times`` are relative to the impact after adding ``time_offset``: a sample is compared only
+    where time + ``time_offset`` <= 0 (pre-crash data end at the impact), decided with the item's
+    own offset at every evaluation, so that an offset fitted moves the window too; ``lower_bound``
     marks samples taken with the service brake on: wheel-speed-based recorders under-read while
     the wheels lock or the ABS cycles, so such a sample only says the speed was at least that.
     """
@@ -292,12 +294,23 @@ class Evidence:
                     or self.crush or self.rollover)
 
 
+def recorder_window(ev: RecorderEvidence) -> np.ndarray:
+    """Which samples are pre-crash (time + ``time_offset`` <= 0) with this item's own offset: the
+    window moves with the offset (a fit unknown), so it is taken anew at every evaluation."""
+    return np.asarray(ev.times, float) + ev.time_offset <= 0.0
+
+
 def recorder_residuals(ev: RecorderEvidence, approach) -> tuple[np.ndarray, np.ndarray]:
-    """(computed speeds [m/s], residuals computed - recorded) of a recorder's samples; a
-    lower-bound sample has residual 0 when the computed speed is above it."""
+    """(computed speeds [m/s], residuals computed - recorded) of a recorder's samples, from this
+    item's own ``time_offset``; a lower-bound sample has residual 0 when the computed speed is
+    above it. A sample the offset puts after the impact (outside :func:`recorder_window`) is not
+    compared: computed NaN, residual 0 (the vector keeps one entry per sample of the file)."""
     t = np.asarray(ev.times, float) + ev.time_offset
-    computed = np.asarray(approach.speed_at(t, body=ev.body), float)
-    res = computed - np.asarray(ev.speeds, float)
+    inside = t <= 0.0
+    computed = np.full(t.shape, np.nan)
+    if inside.any():
+        computed[inside] = np.asarray(approach.speed_at(t[inside], body=ev.body), float)
+    res = np.where(inside, computed - np.asarray(ev.speeds, float), 0.0)
     res = np.where(np.asarray(ev.lower_bound, bool), np.minimum(res, 0.0), res)
     return computed, res
 
@@ -308,13 +321,21 @@ def _check_recorder(ev: RecorderEvidence, approach, index: int) -> Check:
         return Check("recorder", name, math.inf, ev.tolerance, False, "speed",
                      {"reason": "no approach was computed for this body's vehicle"})
     computed, res = recorder_residuals(ev, approach)
-    k = int(np.argmax(np.abs(res)))
+    inside = recorder_window(ev)
+    details = {"times": [float(x) for x in ev.times], "recorded": [float(x) for x in ev.speeds],
+               "computed": [None if not math.isfinite(c) else float(c) for c in computed],
+               "residuals": res.tolist(), "lower_bound": list(ev.lower_bound), "time_offset": ev.time_offset,
+               "compared": inside.tolist(), "n_compared": int(inside.sum())}
+    if not inside.any():
+        details["reason"] = (f"no sample is before the impact with time_offset = {ev.time_offset:g} s "
+                             "(time + time_offset <= 0)")
+        return Check("recorder", name, math.inf, ev.tolerance, False, "speed", details)
+    k = int(np.argmax(np.where(inside, np.abs(res), -1.0)))
     worst = float(res[k])
-    return Check("recorder", name, worst, ev.tolerance, bool(np.all(np.abs(res) <= ev.tolerance)), "speed",
-                 {"times": [float(x) for x in ev.times], "recorded": [float(x) for x in ev.speeds],
-                  "computed": computed.tolist(), "residuals": res.tolist(), "lower_bound": list(ev.lower_bound),
-                  "time_offset": ev.time_offset, "worst_sample": k,
-                  "rms": float(np.sqrt(np.mean(res * res)))})
+    r_in = res[inside]
+    details.update(worst_sample=k, rms=float(np.sqrt(np.mean(r_in * r_in))))
+    return Check("recorder", name, worst, ev.tolerance, bool(np.all(np.abs(r_in) <= ev.tolerance)), "speed",
+                 details)
 
 
 @dataclass(frozen=True)

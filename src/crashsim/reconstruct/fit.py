@@ -63,7 +63,7 @@ from scipy.optimize import least_squares
 
 from .._version import __version__
 from ..errors import ScenarioError, SolverError, UnreachableImpactError, failure_reason, in_file
-from ..evidence.checks import (approach_of_body, approach_tracks, recorder_residuals,
+from ..evidence.checks import (approach_of_body, approach_tracks, recorder_residuals, recorder_window,
                                signed_distance_to_polyline, wheel_matches)
 from ..evidence.crush import GROUP_TITLES, crush_groups
 from ..geometry import wrap_angle
@@ -77,6 +77,7 @@ from .montecarlo import DEFAULT_SAMPLE_TIME_LIMIT
 from .overrides import (ScenarioOverrides, default_engine, file_contents, forward_data, get_value, parse_value,
                         resolve_path, set_value)
 from .parallel import Executor, Progress
+from .write_best import edit_best
 
 __all__ = ["FitSpec", "Unknown", "FitProblem", "FitResult", "EvidenceResidual", "StartResult", "fit_scene",
            "RANK_TOL", "PENALTY"]
@@ -382,14 +383,18 @@ class EvidenceModel:
                 out.append(np.array([float(wrap_angle(b.rest_heading - it.measured))]))
                 det.append({"computed": float(wrap_angle(b.rest_heading))})
             elif it.kind == "recorder":
+                # this evaluation's own item: its time_offset (a fit unknown) moves the samples and
+                # which of them are before the impact; the file's item is only the shape of the vector
+                x = scene.scenario.evidence.recorder[it.index]
                 a = approach_of_body(approaches, it.body)
                 if a is None:
                     out.append(np.full(it.size, np.nan))
                     det.append({"computed": None})
                 else:
-                    computed, res = recorder_residuals(it.measured, a)
+                    computed, res = recorder_residuals(x, a)
                     out.append(res)
-                    det.append({"computed": computed.tolist()})
+                    det.append({"computed": [None if not math.isfinite(v) else float(v) for v in computed],
+                                "time_offset": float(x.time_offset), "compared": recorder_window(x).tolist()})
             elif it.kind == "mark" and it.mark.phase == "approach":
                 if pre_tracks is None:
                     pre_tracks = approach_tracks(approaches)
@@ -793,7 +798,9 @@ class FitResult:
     def write_best(self, path) -> "Path":
         """Write :meth:`best_scenario_dict` as a runnable TOML scenario file.
 
-        A header comment says what wrote it, from which file, the best values (with their
+        The input file itself with its values replaced in place (:mod:`crashsim.reconstruct.write_best`:
+        comments, order and layout kept, the survey a reference, paths relative to ``path``); a
+        header comment says what wrote it, from which file, the best values (with their
         intervals) and chi^2; the input's ``[fit]`` table follows at the end as comments.
 
         Parameters
@@ -817,12 +824,18 @@ class FitResult:
             raise ScenarioError(f"{str(path)!r} is the input file; the best fit is written to another file",
                                 field="--write-best", file=self.file)
         data = self.best_scenario_dict()
-        text = _best_header(self, data) + tomli_w.dumps(data)
         fit_table = (self.source_data or {}).get("fit")
+        trailer = ""
         if fit_table is not None:
-            text += ("\n# ---- The [fit] table of the input file (the fit that wrote this file) ----\n"
-                     + "".join(f"# {line}\n" if line else "#\n"
-                               for line in tomli_w.dumps({"fit": fit_table}).splitlines()))
+            trailer = ("\n# ---- The [fit] table of the input file (the fit that wrote this file) ----\n"
+                       + "".join(f"# {line}\n" if line else "#\n"
+                                 for line in tomli_w.dumps({"fit": fit_table}).splitlines()))
+        if self.file is not None and Path(self.file).is_file():
+            # the user's own file, its values replaced in place (comments, order, survey references kept)
+            text = edit_best(Path(self.file), path, data, [u.path for u in self.unknowns], engine=self.engine,
+                             header=_best_header(self, data), trailer=trailer)
+        else:  # a scenario given as a dict: no file to edit
+            text = _best_header(self, data) + tomli_w.dumps(data) + trailer
         path.write_text(text, encoding="utf-8")
         return path
 

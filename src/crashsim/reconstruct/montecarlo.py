@@ -600,7 +600,9 @@ class MCResult:
         lines = [f"crashsim Monte Carlo: {title}".rstrip()]
         resumed = f", {self.n_resumed} resumed from the results file" if self.n_resumed else ""
         lines.append(f"{self.n_done} of {self.n} samples ({self.n_failed} failed{resumed}); seed {self.seed}; "
-                     f"engine {self.engine}; {self.backend}, {self.workers} worker(s); {self.elapsed:.1f} s")
+                     f"engine {self.engine}; "
+                     + (f"{self.backend}, {self.workers} worker(s)" if self.backend != "serial" else "serial (this process)")
+                     + f"; {self.elapsed:.1f} s")
         if self.tolerance is not None:
             lines.append(f"run-out tolerance of the samples: {self.tolerance.rule}")
         lines.append("")

@@ -560,6 +560,8 @@ def run_scene(scenario, *, lean: bool = False) -> SceneResult:
     warnings = [f"approach of {name}: {w}" for name, a in scenario.approaches.items() for w in a.warnings]
     warnings += [f"impact: {w}" for w in impact.warnings]
     warnings += rest_misfit_warnings(scenario.evidence)
+    warnings += [r["note"] for r in survey_records(scenario) if r.get("kind") == "warning"]
+    warnings += list(getattr(scenario, "load_warnings", ()))
     if runout is not None:
         if joint is None:
             warnings += barrier_crossings(scenario, runout)

@@ -1,6 +1,7 @@
 """DXF drawings (R12 to current, ASCII or binary) read with ezdxf.
 
-Taken: LINE, LWPOLYLINE, POLYLINE (2-D and 3-D; polyface and mesh are not), ARC, CIRCLE,
+Taken: LINE, LWPOLYLINE, POLYLINE (2-D and 3-D; polyface and mesh are not), 3DFACE (the faces of a
+TIN, with their elevations: the road's grade and cross-slope, kind = "surface"), ARC, CIRCLE,
 ELLIPSE and SPLINE (as polylines whose chords lie within ``chord_tolerance`` of the curve),
 POINT, TEXT and MTEXT (labels), and INSERT (the block's entities placed, scaled and turned by
 ezdxf's virtual entities, on the INSERT's layer where they lie on layer 0). Z is dropped (the
@@ -10,6 +11,7 @@ scene is planar). Any other type is counted and named in one warning, never drop
 from __future__ import annotations
 
 import math
+import re
 from collections import Counter
 
 import numpy as np
@@ -33,16 +35,25 @@ def _open(path: str):
         return ezdxf.readfile(path)
     except IOError as exc:
         raise ScenarioError(f"cannot read the DXF file: {exc}", file=path) from None
-    except ezdxf.DXFStructureError:
-        pass
-    try:
+    except ezdxf.DXFStructureError as exc:
+        first = exc
+    try:  # ezdxf's recover module reads what it can of a damaged file, and says where it is damaged
         doc, auditor = recover.readfile(path)
     except Exception as exc:
-        raise ScenarioError(f"not a readable DXF file ({type(exc).__name__}: {exc})", file=path) from None
+        raise ScenarioError(f"the DXF file is damaged{_at_line(exc)} ({type(exc).__name__}: {exc})",
+                            file=path) from None
     if auditor.has_errors:
-        raise ScenarioError(f"the DXF file is damaged: {len(auditor.errors)} errors, the first: "
-                            f"{auditor.errors[0].message}", file=path)
+        raise ScenarioError(f"the DXF file is damaged{_at_line(first)}: {len(auditor.errors)} errors, the first: "
+                            f"{auditor.errors[0].message} (ezdxf: {first})", file=path)
+    if not len(doc.modelspace()):
+        raise ScenarioError(f"the DXF file is damaged{_at_line(first)}: {first} (recovered with no entities)",
+                            file=path)
     return doc
+
+
+def _at_line(exc) -> str:
+    m = re.search(r"line (\d+)", str(exc))
+    return f" at line {m[1]}" if m else ""
 
 
 def header_unit(doc) -> str | None:
@@ -145,18 +156,29 @@ def _entity_points(e, kind: str, sagitta: float):
     return None
 
 
-def _drawing_unit(path: str, insunits, units: str | None, file: str | None) -> tuple[str, float]:
-    """(unit, metres per unit) of a drawing from its $INSUNITS and the scene file's units."""
+#: The unit of a drawing that states none, read for a listing only (``crashsim survey``).
+UNITLESS = "unitless"
+
+
+def _drawing_unit(path: str, insunits, units: str | None, file: str | None,
+                  need_units: bool = True) -> tuple[str, float]:
+    """(unit, metres per unit) of a drawing from its $INSUNITS and the scene file's units
+    (``need_units`` False: a drawing without any is read as written, :data:`UNITLESS`)."""
     head = INSUNITS.get(int(insunits or 0))
     if units is not None:
         scale = unit_scale(units, field="survey.files.units", file=file)
+        if head == "ft" and units.strip() in ("us_ft", "survey_foot"):
+            return units, scale  # $INSUNITS has no code for the US survey foot before R2018: feet it says
         if head is not None and not np.isclose(UNIT_METRES[head], scale, rtol=1e-12):
             raise ScenarioError(f"{path}: units = {units!r}, but the drawing's header says $INSUNITS = "
-                                f"{insunits} ({head}); remove units or correct it",
+                                f"{insunits} ({head}): one of them is wrong (they place the scene differently); "
+                                f"give the unit its coordinates are in (the header's: units = \"{head}\")",
                                 field="survey.files.units", file=file)
         return units, scale
     if head is not None:
         return head, UNIT_METRES[head]
+    if not need_units:
+        return UNITLESS, 1.0
     raise ScenarioError(f"{path}: the drawing does not state its units ($INSUNITS = "
                         f"{'absent' if insunits is None else insunits}); give units = \"m\" (or \"ft\", \"us_ft\", "
                         "\"mm\", ...) in its [[survey.files]] entry", field="survey.files.units", file=file)
@@ -164,13 +186,18 @@ def _drawing_unit(path: str, insunits, units: str | None, file: str | None) -> t
 
 def _header_note(version, insunits, unit: str) -> str:
     head = INSUNITS.get(int(insunits or 0))
-    return (f"$ACADVER {version}, $INSUNITS {'absent' if insunits is None else insunits} ({head or 'unitless'}), "
+    note = (f"$ACADVER {version}, $INSUNITS {'absent' if insunits is None else insunits} ({head or 'unitless'}), "
             f"read as {unit}")
+    if head == "ft" and unit in ("us_ft", "survey_foot"):
+        note += (" as units says (a DXF before R2018 has no $INSUNITS code for the US survey foot; the two feet "
+                 "differ by 2 ppm, 0.6 m at 1,000,000 ft)")
+    return note
 
 
-def _read_dxf_fast(path: str, units: str | None, chord_tolerance: float, file: str | None) -> SurveyData:
+def _read_dxf_fast(path: str, units: str | None, chord_tolerance: float, file: str | None,
+                   need_units: bool = True) -> SurveyData:
     def scale_of(header):
-        return _drawing_unit(path, header.get("$INSUNITS"), units, file)
+        return _drawing_unit(path, header.get("$INSUNITS"), units, file, need_units)
 
     header, unit, ents = _read_fast(path, chord_tolerance, scale_of)
     data = SurveyData(path, "dxf", unit, ents)
@@ -179,7 +206,7 @@ def _read_dxf_fast(path: str, units: str | None, chord_tolerance: float, file: s
 
 
 def read_dxf(path: str, units: str | None = None, *, chord_tolerance: float = 0.01,
-             file: str | None = None, fast: bool = True) -> SurveyData:
+             file: str | None = None, fast: bool = True, need_units: bool = True) -> SurveyData:
     """The entities of a DXF file, in metres.
 
     Parameters
@@ -193,6 +220,8 @@ def read_dxf(path: str, units: str | None = None, *, chord_tolerance: float = 0.
         Largest distance [m] of a chord from the arc, circle, ellipse or spline it replaces.
     file : str, optional
         The scene file, for error messages.
+    need_units : bool
+        False (a listing): a drawing that states no units is read as written, unit ``"unitless"``.
     fast : bool
         Read an ASCII drawing of only LINE, LWPOLYLINE (without bulges), POINT, TEXT, ARC and
         CIRCLE in world coordinates without building an ezdxf document (the same entities,
@@ -205,13 +234,13 @@ def read_dxf(path: str, units: str | None = None, *, chord_tolerance: float = 0.
     """
     if fast:
         try:
-            return _read_dxf_fast(path, units, chord_tolerance, file)
+            return _read_dxf_fast(path, units, chord_tolerance, file, need_units)
         except ScenarioError:
             raise
         except (_NotFast, ValueError, IndexError, KeyError):  # a type or quirk the fast path leaves to ezdxf
             pass
     doc = _open(path)
-    unit, scale = _drawing_unit(path, doc.header.get("$INSUNITS"), units, file)
+    unit, scale = _drawing_unit(path, doc.header.get("$INSUNITS"), units, file, need_units)
     sagitta = chord_tolerance / scale
     data = SurveyData(path, "dxf", unit)
     data.notes.append(_header_note(doc.dxfversion, doc.header.get("$INSUNITS"), unit))
@@ -230,9 +259,17 @@ def read_dxf(path: str, units: str | None = None, *, chord_tolerance: float = 0.
                 clayer = child.dxf.layer if child.dxf.layer not in ("0", "") else layer
                 take(child, clayer, f"{ref}/{j + 1}")
             return
+        if kind == "3DFACE":  # a TIN face: its vertices with their elevation (kind = "surface")
+            v = np.asarray([(p[0], p[1], p[2]) for p in (e.dxf.vtx0, e.dxf.vtx1, e.dxf.vtx2, e.dxf.vtx3)], dtype=float)
+            if np.allclose(v[3], v[2], rtol=0, atol=0):
+                v = v[:3]  # a triangle (its fourth vertex repeats the third)
+            if np.all(np.isfinite(v)):
+                data.faces.append((layer, ref, v * scale))
+                return
         got = _entity_points(e, kind, sagitta)
         if got is None:
             skipped[kind if kind != "POLYLINE" else "POLYLINE (mesh)"] += 1
+            data.skipped_layers[(layer, kind if kind != "POLYLINE" else "POLYLINE (mesh)")] += 1
             return
         geom, pts, closed, text = got
         if len(pts) == 0 or not math.isfinite(float(pts.sum())):
@@ -314,6 +351,10 @@ def _fast_tags(path: str):
         ents.append(cur)
     if not seen:
         raise _NotFast("no sections")
+    if section is not None or not any(ln.strip() == "EOF" for ln in lines[-4:]):
+        where = f"inside the {section} section (no ENDSEC, no EOF)" if section else "without EOF"
+        raise ScenarioError(f"the DXF file is damaged at line {n}: it ends there {where}; a truncated copy? "
+                            "(crashsim survey FILE lists what it holds)", file=path)
     return header, ents
 
 

@@ -66,18 +66,29 @@ class SurveyData:
     unit: str
     entities: list = field(default_factory=list)
     skipped: Counter = field(default_factory=Counter)
+    #: The entities not taken, by (layer, type): what ``crashsim survey`` lists beside the others
+    skipped_layers: Counter = field(default_factory=Counter)
+    #: Why every entity's layer or code is empty, where the reader can tell (no D column, no feature
+    #: with the layer property): said where a map entry matches nothing
+    empty_layers: str = ""
     notes: list = field(default_factory=list)
+    #: The faces of a TIN (DXF 3DFACE): (layer, handle, vertices (n, 3) [m] in the survey's axes, z up);
+    #: a map entry of kind "surface" makes them the road's grade and cross-slope
+    faces: list = field(default_factory=list)
 
     def layers(self) -> dict[str, Counter]:
-        """Entity counts by geometry (and type) for each layer or code."""
+        """Entity counts by geometry (and type) for each layer or code (TIN faces as 3DFACE)."""
         out: dict[str, Counter] = {}
         for e in self.entities:
             out.setdefault(e.layer, Counter())[e.dxftype or e.geometry] += 1
+        for layer, _, _ in self.faces:
+            out.setdefault(layer, Counter())["3DFACE"] += 1
         return out
 
     def extents(self, layer: str | None = None) -> tuple[np.ndarray, np.ndarray] | None:
         """(min, max) of the coordinates [m] of a layer's entities (all with None); None if empty."""
         pts = [e.points for e in self.entities if layer is None or e.layer == layer]
+        pts += [v[:, :2] for lay, _, v in self.faces if layer is None or lay == layer]
         if not pts:
             return None
         a = np.vstack(pts)

@@ -17,7 +17,9 @@ Layers (one per thing, so a user can switch them in the drawing the survey came 
 
 Coordinates: scene metres taken back through the scene frame (``survey.origin``,
 ``survey.rotation``) and divided by the survey unit (``survey.units``, default the first survey
-file's, else metres); the DXF header's ``$INSUNITS`` names that unit.
+file's, else metres); the DXF header's ``$INSUNITS`` names that unit. GeoJSON with a
+``survey.crs`` is RFC 7946 (WGS 84 longitude/latitude, no ``crs`` member); without one, the
+survey's own axes in its unit.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ from ..errors import ScenarioError
 from ..geometry import rotate
 from ..units import Kind, format_value
 from .frame import INSUNITS, SceneFrame, unit_scale
+from .geojson import projected_crs
 from .mapping import read_survey_file
 
 __all__ = ["ExportItem", "export_items", "export_frame", "write_dxf", "write_geojson"]
@@ -175,12 +178,31 @@ def write_dxf(items, path, frame: SceneFrame, unit: str) -> str:
 
 
 def write_geojson(items, path, frame: SceneFrame, unit: str, crs: str | None = None) -> str:
-    """Write ``items`` to a GeoJSON FeatureCollection in the survey's axes and ``unit`` (with a
-    legacy ``crs`` member naming ``crs`` where given); a text becomes a Point with a ``text`` property."""
+    """Write ``items`` to a GeoJSON FeatureCollection; returns the path.
+
+    With the survey's projected ``crs`` (``survey.crs``) the file is RFC 7946: WGS 84 longitude and
+    latitude (degrees, in that order), no ``crs`` member, so that any GIS puts it on the map; the
+    survey's coordinates are taken from metres to the CRS's own axis unit and transformed with
+    pyproj. Without a CRS there is no map to put it on: the coordinates are the survey's own axes
+    in ``unit`` (a local frame), named by the ``crashsim_units`` member. A text becomes a Point
+    with a ``text`` property.
+    """
     scale = unit_scale(unit, field="survey.units")
+    transform = None
+    if crs:
+        from pyproj import Transformer
+
+        src, factor = projected_crs(crs)
+        to_lonlat = Transformer.from_crs(src, "EPSG:4326", always_xy=True)
+
+        def transform(p):  # survey metres -> the CRS's unit -> lon, lat
+            lon, lat = to_lonlat.transform(p[:, 0] / factor, p[:, 1] / factor)
+            return np.column_stack([lon, lat])
+
     feats = []
     for it in items:
-        p = frame.to_survey(it.points) / scale
+        p = frame.to_survey(it.points)
+        p = transform(p) if transform is not None else p / scale
         if it.geometry == "line":
             coords = p.tolist() + ([p[0].tolist()] if it.closed else [])
             geom = {"type": "Polygon", "coordinates": [coords]} if it.closed else \
@@ -193,8 +215,9 @@ def write_geojson(items, path, frame: SceneFrame, unit: str, crs: str | None = N
         feats.append({"type": "Feature", "properties": props, "geometry": geom})
     doc = {"type": "FeatureCollection", "features": feats}
     if crs:
-        doc["crs"] = {"type": "name", "properties": {"name": crs}}
-    doc["crashsim_units"] = unit
+        doc["crashsim_source_crs"] = crs  # a foreign member (RFC 7946, 6.1): where the coordinates came from
+    else:
+        doc["crashsim_units"] = unit
     try:
         with open(path, "w", encoding="utf-8") as fh:
             json.dump(doc, fh)

@@ -118,9 +118,13 @@ def read_geojson(path: str, target_crs: str | None, *, crs: str | None = None, l
     data = SurveyData(path, "geojson", f"{dst.axis_info[0].unit_name} ({dst.to_string()})")
     data.notes.append(f"coordinates in {src_text}, projected to {dst.to_string()}" if transformer else
                       f"coordinates in {src_text}")
+    names: set = set()
+    with_layer = 0
     for k, f in enumerate(feats):
         ref = f"#{k}" if f.get("id") is None else f"#{k} (id {f['id']})"
         props = f.get("properties") or {}
+        names.update(props)
+        with_layer += layer_property in props
         layer = props.get(layer_property)
         layer = "" if layer is None else str(layer)
         geom = f.get("geometry")
@@ -141,4 +145,8 @@ def read_geojson(path: str, target_crs: str | None, *, crs: str | None = None, l
                                     f"{coords[0]!r} ...)", field="survey.crs", file=file)
             data.entities.append(Entity(layer, ref if len(parts) == 1 else f"{ref}/{j + 1}", g, a * factor, closed,
                                         "", t))
+    if feats and not with_layer:
+        shown = ", ".join(sorted(map(str, names))[:20]) or "none"
+        data.empty_layers = f"no feature has a property {layer_property!r} (layer_property); the properties: {shown}"
+        data.notes.append(data.empty_layers)
     return data

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ScenarioError
-from .dxf import read_dxf
+from .dxf import UNITLESS, read_dxf
 from .frame import UNIT_METRES
 from .geojson import read_geojson
 from .mapping import SURVEY_FORMATS
@@ -24,7 +24,12 @@ def read_any(path: str, *, units: str | None = None, columns: str = "PNEZD", crs
     if not Path(path).is_file():
         raise ScenarioError(f"{path}: no such file", field="file")
     if fmt == "dxf":
-        return read_dxf(path, units)
+        data = read_dxf(path, units, need_units=False)  # a listing needs no units
+        if data.unit == UNITLESS:
+            data.notes.append("the drawing does not state its units ($INSUNITS): coordinates as written; a scene "
+                              "that maps it needs units = \"m\" (or \"ft\", \"us_ft\", ...) in its [[survey.files]] "
+                              "entry")
+        return data
     if fmt == "points":
         return read_points(path, units or "m", columns)
     if fmt == "geojson":
@@ -66,15 +71,25 @@ def _utm_for(path: str):
 def summary(data) -> str:
     """The layers or codes of a survey file with entity counts by type and extents (in its unit)."""
     k = UNIT_METRES.get(data.unit, 1.0)
-    unit = data.unit if data.unit in UNIT_METRES else "m"
+    unit = data.unit if data.unit in UNIT_METRES or data.unit == UNITLESS else "m"
     what = {"dxf": "layer", "points": "code", "geojson": "layer"}[data.format]
     lines = [f"{data.path}: {data.format}, {len(data.entities)} entities, coordinates in {data.unit}"]
     lines += [f"  note: {n}" for n in data.notes]
     rows = []
-    for layer, counts in sorted(data.layers().items()):
-        lo, hi = data.extents(layer)
-        rows.append((layer or "(empty)", ", ".join(f"{n} {t}" for t, n in counts.most_common()),
-                     f"x {lo[0] / k:.3f} .. {hi[0] / k:.3f}, y {lo[1] / k:.3f} .. {hi[1] / k:.3f} {unit}"))
+    taken = data.layers()
+    left: dict = {}
+    for (layer, kind), n in getattr(data, "skipped_layers", {}).items():
+        left.setdefault(layer, []).append(f"{n} {kind} (not imported)")
+    for layer in sorted(set(taken) | set(left)):
+        counts = taken.get(layer)
+        parts = [f"{n} {t}" for t, n in counts.most_common()] if counts else []
+        parts += sorted(left.get(layer, []))
+        if counts:
+            lo, hi = data.extents(layer)
+            ext = f"x {lo[0] / k:.3f} .. {hi[0] / k:.3f}, y {lo[1] / k:.3f} .. {hi[1] / k:.3f} {unit}"
+        else:
+            ext = "-"
+        rows.append((layer or "(empty)", ", ".join(parts), ext))
     if rows:
         w0 = max(len(what), *(len(r[0]) for r in rows))
         w1 = max(len("entities"), *(len(r[1]) for r in rows))

@@ -24,7 +24,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ScenarioError
-from ..schema import Section, load_toml, validate
+from ..schema import ScenarioValidationError, Section, load_toml, validate
+from ..units import Kind, parse
 from .dxf import read_dxf
 from .frame import SceneFrame, unit_scale
 from .geojson import read_geojson
@@ -34,7 +35,7 @@ from .schema import MAP_LINE_STYLES, SURVEY
 from .underlay import georef_from_section
 
 __all__ = ["expand_survey", "load_scene_data", "read_survey_file", "survey_frame", "survey_section",
-           "is_expanded", "is_placed"]
+           "is_expanded", "is_placed", "as_written"]
 
 _log = logging.getLogger("crashsim")
 _ROOT = Section("root", subsections=[SURVEY], description="survey only")
@@ -82,8 +83,8 @@ def read_survey_file(entry: dict, crs: str | None, *, key: str = "survey.files[0
     (memoised by path, modification time, size and reading options: read once per process)."""
     path = _resolve(entry["file"], file)
     if not os.path.isfile(path):
-        raise ScenarioError(f"survey file {entry['file']!r} not found (looked for {path})", field=f"{key}.file",
-                            file=file)
+        raise ScenarioError(f"survey file {entry['file']!r} not found (looked for {os.path.relpath(path)})",
+                            field=f"{key}.file", file=file)
     fmt = _format(entry, path, key, file)
     st = os.stat(path)
     brk = _resolve(entry["breaklines"], file) if entry.get("breaklines") else None
@@ -103,9 +104,13 @@ def read_survey_file(entry: dict, crs: str | None, *, key: str = "survey.files[0
         else:
             data = read_geojson(path, crs, crs=entry["crs"], layer_property=entry["layer_property"], file=file)
     except ScenarioError as exc:
-        if exc.field is None:
-            raise ScenarioError(str(exc).removeprefix(f"{file}: ") if file else str(exc), field=f"{key}.file",
-                                file=file) from None
+        if exc.field is None:  # the reader's own error: the file named as the scene file writes it
+            text = str(exc).removeprefix(f"{file}: ") if file else str(exc)
+            raise ScenarioError(text.replace(path, entry["file"]), field=f"{key}.file", file=file) from None
+        if exc.field.startswith("survey.files."):  # a reader's key: this entry's, with its index
+            text = str(exc).removeprefix(f"{file}: " if file else "").removeprefix(f"{exc.field}: ")
+            raise ScenarioError(text.replace(path, entry["file"]),
+                                field=f"{key}.{exc.field.removeprefix('survey.files.')}", file=file) from None
         raise
     if len(_CACHE) > 32:
         _CACHE.clear()
@@ -141,6 +146,7 @@ class _Out:
     def __init__(self, data: dict):
         self.data = data
         self.records: list[dict] = []
+        self.faces_taken: set = set()  # (id of the SurveyData, face index) of the TIN faces a surface took
 
     def append(self, where: tuple, item: dict) -> str:
         node = self.data
@@ -150,9 +156,10 @@ class _Out:
         lst.append(item)
         return f"{'.'.join(where)}[{len(lst) - 1}]"
 
-    def record(self, path: str, e, kind: str, target: str, note: str = "") -> None:
+    def record(self, path: str, e, kind: str, target: str, note: str = "", key: str = "") -> None:
         self.records.append({"file": path, "layer": "" if e is None else e.layer, "ref": "" if e is None else e.ref,
-                             "type": "" if e is None else e.dxftype, "kind": kind, "target": target, "note": note})
+                             "type": "" if e is None else e.dxftype, "kind": kind, "target": target, "note": note,
+                             "key": key})
 
 
 def _need(m: dict, raw: dict, keys, mkey: str, file: str | None) -> None:
@@ -175,6 +182,7 @@ _ALLOWED = {
     "impact_point": _COMMON | {"tolerance", "sigma"},
     "gouge": _COMMON | {"color", "size"},
     "debris": _COMMON | {"color", "size"},
+    "surface": _COMMON,
     "ignore": _COMMON,
 }
 
@@ -186,6 +194,10 @@ def _map_file(out: _Out, sd, entry: dict, raw_entry: dict, frame: SceneFrame, ke
     for e, t in zip(sd.entities, taken):
         if not t:
             left[e.layer] = left.get(e.layer, 0) + 1
+    faces_taken = out.faces_taken
+    for j, (layer, _, _) in enumerate(sd.faces):
+        if (id(sd), j) not in faces_taken:
+            left[layer] = left.get(layer, 0) + 1
     if left:
         shown = ", ".join(f"{lay or '(empty)'} ({n})" for lay, n in sorted(left.items()))
         out.record(entry["file"], None, "note", "", f"{sum(left.values())} entities on layers or codes no map entry "
@@ -196,10 +208,14 @@ def _map_entries(out: _Out, sd, entry: dict, raw_entry: dict, frame: SceneFrame,
                  have_runout: bool) -> np.ndarray:
     """Apply the file's map entries; returns which entities were taken."""
     src = entry["file"]
-    layers = sorted({e.layer for e in sd.entities})
+    layers = sorted({e.layer for e in sd.entities} | {f[0] for f in sd.faces})
     taken = np.zeros(len(sd.entities), dtype=bool)
     for i, (m, rm) in enumerate(zip(entry["map"], raw_entry["map"])):
         mkey = f"{key}.map[{i}]"
+        if m["kind"] == "surface":
+            _need(m, rm, (), mkey, file)
+            _surface(out, sd, m, frame, mkey, src, file, have_runout)
+            continue
         _need(m, rm, {"line": ("style",), "zone": ("friction",), "mark": ("tolerance",),
                       "rest": ("body", "tolerance"), "impact_point": ("tolerance",)}.get(m["kind"], ()), mkey, file)
         if m["kind"] == "line" and m["style"] not in MAP_LINE_STYLES:
@@ -210,12 +226,19 @@ def _map_entries(out: _Out, sd, entry: dict, raw_entry: dict, frame: SceneFrame,
         idx = [j for j, e in enumerate(sd.entities) if not taken[j] and _match(m["match"], e.layer)]
         if not idx:
             matched = [lay for lay in layers if _match(m["match"], lay)]
+            if matched and not any(e.layer in matched for e in sd.entities):
+                raise ScenarioError(f"{src}: {', '.join(map(repr, matched))} holds TIN faces (3DFACE) only: map it "
+                                    "as kind = \"surface\" (the road's grade and cross-slope)",
+                                    field=f"{mkey}.kind", file=file)
             if matched:  # its layers were taken by an earlier entry
                 raise ScenarioError(f"{src}: match = {m['match']!r}: every entity of {', '.join(map(repr, matched))} "
                                     "is taken by an earlier map entry", field=f"{mkey}.match", file=file)
             near = difflib.get_close_matches(m["match"], layers, n=1, cutoff=0.3)
             hint = f"; nearest: {near[0]!r}" if near else ""
             shown = ", ".join(map(repr, layers[:40])) + (f" and {len(layers) - 40} more" if len(layers) > 40 else "")
+            if sd.empty_layers and layers == [""]:
+                raise ScenarioError(f"{src} has no layer or code matching {m['match']!r}: {sd.empty_layers}",
+                                    field=f"{mkey}.match", file=file)
             raise ScenarioError(f"{src} has no layer or code matching {m['match']!r}{hint}. It has: "
                                 f"{shown or 'none'}", field=f"{mkey}.match", file=file)
         taken[idx] = True
@@ -325,7 +348,7 @@ def _map_entries(out: _Out, sd, entry: dict, raw_entry: dict, frame: SceneFrame,
             if rm.get("sigma") is not None:
                 item["sigma"] = rm["sigma"]
             out.data.setdefault("evidence", {})["impact_point"] = item
-            out.record(src, e, kind, "evidence.impact_point")
+            out.record(src, e, kind, "evidence.impact_point", key=mkey)
         # labels: a text names the nearest item it made on its layer (nearest vertex, a k-d tree per layer)
         if texts:
             _name_by_labels(out, src, texts, made, scene)
@@ -333,10 +356,48 @@ def _map_entries(out: _Out, sd, entry: dict, raw_entry: dict, frame: SceneFrame,
             target = out.append(where, item)
             if isinstance(e, _Group):
                 for x in e.members:
-                    out.record(src, x, kind, target)
+                    out.record(src, x, kind, target, key=mkey)
             else:
-                out.record(src, e, kind, target)
+                out.record(src, e, kind, target, key=mkey)
     return taken
+
+
+def _surface(out: "_Out", sd, m: dict, frame: SceneFrame, mkey: str, src: str, file: str | None,
+             have_runout: bool) -> None:
+    """A TIN's faces (kind = "surface") as the road's plane: runout.grade and runout.cross_slope, rise over
+    run along the scene's +x and +y, from the least-squares plane through every vertex."""
+    idx = [j for j, (layer, _, _) in enumerate(sd.faces) if (id(sd), j) not in out.faces_taken and
+           _match(m["match"], layer)]
+    if not idx:
+        have = sorted({f[0] for f in sd.faces})
+        raise ScenarioError(f"{src} has no TIN faces (3DFACE) on a layer matching {m['match']!r}; layers with "
+                            f"faces: {', '.join(map(repr, have)) or 'none'}", field=f"{mkey}.match", file=file)
+    if not have_runout:
+        raise ScenarioError("a road surface (its grade and cross-slope) needs a [runout] section",
+                            field=f"{mkey}.kind", file=file)
+    given = [k for k in ("grade", "cross_slope") if k in (out.data.get("runout") or {})]
+    if given:
+        raise ScenarioError(f"kind = 'surface' gives runout.grade and runout.cross_slope from the TIN, but the file "
+                            f"gives runout.{given[0]} too; give one of them", field=f"{mkey}.kind", file=file)
+    v = np.vstack([sd.faces[j][2] for j in idx])
+    xy = frame.to_scene(v[:, :2])
+    a = np.column_stack([np.ones(len(xy)), xy - xy.mean(axis=0)])
+    if len(v) < 3 or np.linalg.matrix_rank(a[:, 1:]) < 2:
+        raise ScenarioError(f"{src}: the faces on {m['match']!r} do not span a plane (their vertices lie on a line)",
+                            field=f"{mkey}.match", file=file)
+    coef, *_ = np.linalg.lstsq(a, v[:, 2], rcond=None)
+    rms = float(np.sqrt(np.mean((a @ coef - v[:, 2]) ** 2)))
+    grade, cross = float(coef[1]), float(coef[2])
+    out.data["runout"]["grade"] = grade
+    out.data["runout"]["cross_slope"] = cross
+    out.faces_taken.update((id(sd), j) for j in idx)
+    note = (f"road plane of {len(idx)} faces ({len(v)} vertices): grade {100 * grade:.3g} %, cross-slope "
+            f"{100 * cross:.3g} %, RMS of the vertices about it {rms:.3g} m (one plane for the scene: no vertical "
+            "curve or changing banking)")
+    for target in ("runout.grade", "runout.cross_slope"):
+        out.records.append({"file": src, "layer": sd.faces[idx[0]][0], "ref": f"{len(idx)} faces", "type": "3DFACE",
+                            "kind": "surface", "target": target, "note": note if target == "runout.grade" else "",
+                            "key": mkey})
 
 
 def _name_by_labels(out: "_Out", src: str, texts, made: list, scene) -> None:
@@ -400,8 +461,8 @@ def expand_survey(data: dict, file: str | None = None) -> dict:
         _map_file(out, sd, entry, raw_files[i], frame, key, file, have_runout)
         msgs = ([sd.skipped_warning()] if sd.skipped else []) + list(sd.notes)
         for msg in msgs:
-            if msg:
-                out.record(entry["file"], None, "note", "", msg)
+            if msg:  # the file as the scene file writes it, not the analyst's absolute path
+                out.record(entry["file"], None, "note", "", msg.replace(sd.path, entry["file"]))
         if sd.skipped:
             _log.warning("%s", sd.skipped_warning())
     raw_rec = data["survey"].get("recorders", [])
@@ -409,7 +470,11 @@ def expand_survey(data: dict, file: str | None = None) -> dict:
         key = f"survey.recorders[{i}]"
 
         path = _resolve(r["file"], file)
-        samples, notes = read_recorder(path, r, key=key, file=file)
+        try:
+            samples, notes = read_recorder(path, r, key=key, file=file)
+        except ScenarioError as exc:  # the table named as the scene file writes it
+            text = str(exc).removeprefix(f"{file}: " if file else "").removeprefix(f"{exc.field}: " if exc.field else "")
+            raise ScenarioError(text.replace(path, r["file"]), field=exc.field, file=file) from None
         item = {"name": r["name"] or f"recorder {Path(r['file']).name}", "body": r["body"],
                 "tolerance": raw_rec[i]["tolerance"], "time_offset": raw_rec[i].get("time_offset", "0 s"),
                 "samples": [{"time": f"{t!r} s", "speed": f"{v!r} m/s", "brake": low} for t, v, low in samples]}
@@ -417,7 +482,7 @@ def expand_survey(data: dict, file: str | None = None) -> dict:
             item["sigma"] = raw_rec[i]["sigma"]
         target = out.append(("evidence", "recorder"), item)
         out.records.append({"file": r["file"], "layer": "", "ref": f"{len(samples)} samples", "type": "CSV",
-                            "kind": "recorder", "target": target, "note": "; ".join(notes)})
+                            "kind": "recorder", "target": target, "note": "; ".join(notes), "key": key})
     if s["underlay"]:  # placed now, so that a world file or control points that do not fit fail at load
 
         g = georef_from_section(s["underlay"], frame, file, file)
@@ -432,8 +497,111 @@ def expand_survey(data: dict, file: str | None = None) -> dict:
             note += "; control point residuals " + ", ".join(f"{r:.3g} m" for r in g.residuals)
         out.records.append({"file": s["underlay"]["image"], "layer": "", "ref": "", "type": "image",
                             "kind": "underlay", "target": "", "note": note})
+    _far_items(out, data, file)
     out.data["survey"]["imported"] = out.records
     return out.data
+
+
+#: An imported item farther than this from every vehicle at the impact is warned of [m]: a scene is
+#: tens to hundreds of metres across, a wrong origin or swapped columns put the survey kilometres off.
+FAR = 1000.0
+
+
+def _metres(node, out: list) -> None:
+    """The scene points [m] written in an item (pairs of "x m" strings), collected into ``out``."""
+    if isinstance(node, dict):
+        for v in node.values():
+            _metres(v, out)
+    elif isinstance(node, list):
+        if len(node) == 2 and all(isinstance(v, str) and v.endswith(" m") for v in node):
+            try:
+                out.append((float(node[0][:-2]), float(node[1][:-2])))
+            except ValueError:
+                pass
+        else:
+            for v in node:
+                _metres(v, out)
+
+
+def _far_items(out: _Out, data: dict, file: str | None) -> None:
+    """A warning record (in the report's warnings) for each imported item farther than :data:`FAR` from
+    every vehicle's position at the impact, naming it and its source."""
+    cars = []
+    for name, v in (data.get("vehicles") or {}).items():
+        try:
+            cars.append([parse(x, Kind.LENGTH, field=f"vehicles.{name}.position", file=file) for x in v["position"]])
+        except (ScenarioError, KeyError, TypeError, ValueError):
+            continue
+    if not cars:
+        return
+    cars = np.asarray(cars, dtype=float)
+    seen = set()
+    dists = []
+    for r in list(out.records):
+        t = r.get("target") or ""
+        if not t or t in seen or r["kind"] in ("note", "label", "ignore", "underlay", "warning", "recorder"):
+            continue
+        seen.add(t)
+        node = out.data
+        try:
+            for part in t.split("."):
+                name, _, idx = part.partition("[")
+                node = node[name] if not idx else node[name][int(idx.rstrip("]"))]
+        except (KeyError, IndexError, ValueError, TypeError):
+            continue
+        pts: list = []
+        _metres(node, pts)
+        if not pts:
+            continue
+        d = float(np.min(np.hypot(*(np.asarray(pts)[:, None, :] - cars[None, :, :]).transpose(2, 0, 1))))
+        dists.append(d)
+        if d > FAR:
+            out.records.append({"file": r["file"], "layer": r["layer"], "ref": r["ref"], "type": r["type"],
+                                "kind": "warning", "target": t,
+                                "note": f"survey item {t} ({r['kind']} from {r['file']}, {r['layer'] or '(no layer)'} "
+                                        f"{r['ref']}) lies {d / 1000:.4g} km from every vehicle at the impact: check "
+                                        "survey.origin, survey.rotation and the file's columns and units"})
+    if len(dists) >= 2 and min(dists) > FAR:  # the whole survey is off: its placement, not an item
+        o = (data.get("survey") or {}).get("origin")
+        raise ScenarioError(f"every item imported from the survey ({len(dists)}) lies at least {min(dists) / 1000:.4g} "
+                            f"km from every vehicle at the impact: survey.origin = {o!r} (easting or x first, then "
+                            "northing or y, in the survey's coordinates) or survey.rotation does not place the survey "
+                            "on the scene", field="survey.origin", file=file)
+
+
+def _written(field: str, targets: dict) -> str | None:
+    """The key the user wrote for ``field`` of an item the survey generated (``evidence.rest[1].points[3].at``
+    -> ``survey.files[1].map[0].at (imported as evidence.rest[1].points[3].at)``), or None."""
+    for target, key in targets.items():
+        if field == target or field.startswith((target + ".", target + "[")):
+            rest = field[len(target):].lstrip(".")
+            last = rest.rsplit(".", 1)[-1].split("[", 1)[0] if rest else ""
+            return f"{key}.{last}" if last else key
+    return None
+
+
+def as_written(exc: ScenarioError, data: dict) -> ScenarioError:
+    """``exc`` with the keys of survey-generated items named as the user wrote them (the map entry or
+    recorder table that made the item, the generated key in brackets); ``exc`` itself if none."""
+    s = data.get("survey") if isinstance(data, dict) else None
+    records = (s or {}).get("imported") if isinstance(s, dict) else None
+    if not records or type(exc) not in (ScenarioError, ScenarioValidationError):
+        return exc
+    targets = {r["target"]: r["key"] for r in records if r.get("target") and r.get("key")}
+    if not targets:
+        return exc
+    if isinstance(exc, ScenarioValidationError):
+        problems, changed = [], False
+        for path, text in exc.problems:
+            w = _written(path, targets)
+            changed |= w is not None
+            problems.append((w, f"{text} (imported as {path})") if w else (path, text))
+        return ScenarioValidationError(problems, file=exc.file) if changed else exc
+    w = _written(exc.field or "", targets)
+    if w is None:
+        return exc
+    text = str(exc).removeprefix(f"{exc.file}: " if exc.file else "").removeprefix(f"{exc.field}: ")
+    return ScenarioError(f"{text} (imported as {exc.field})", field=w, file=exc.file)
 
 
 def load_scene_data(path: str | os.PathLike) -> dict:

@@ -97,6 +97,12 @@ def read_points(path: str, units: str, columns: str = "PNEZD", *, join: str = "r
     scale = unit_scale(units, field="survey.files.units", file=file)
     cols = columns.upper().replace(" ", "")
     bad = set(cols) - set("PNEXYZD-")
+    both = bool(set(cols) & set("NE")) and bool(set(cols) & set("XY"))
+    twice = sorted({c for c in cols if c != "-" and cols.count(c) > 1})
+    if both or twice:
+        raise ScenarioError(f"columns = {columns!r}: " + (f"the letter {twice[0]!r} is given twice" if twice else
+                            "gives both N/E and X/Y; use one pair (P, N, E, Z, D: \"PNEZD\")"),
+                            field="survey.files.columns", file=file)
     if bad or not (("N" in cols and "E" in cols) or ("X" in cols and "Y" in cols)):
         raise ScenarioError(f"columns = {columns!r}: use the letters P, N, E (or X, Y), Z, D and - (skip), with N and "
                             "E or X and Y, e.g. \"PNEZD\"", field="survey.files.columns", file=file)
@@ -110,7 +116,11 @@ def read_points(path: str, units: str, columns: str = "PNEZD", *, join: str = "r
     ip = cols.index("P") if "P" in cols else None
     idd = cols.index("D") if "D" in cols else None
     data = SurveyData(path, "points", units)
+    if idd is None:
+        data.empty_layers = f"columns = {columns!r} has no D (description, the code) column"
     pts, numbers, codes, controls = [], [], [], []
+    first_row: dict[str, int] = {}
+    short = 0
     empty = 0
     no_point = []
     for r, row in enumerate(rows):
@@ -131,7 +141,14 @@ def read_points(path: str, units: str, columns: str = "PNEZD", *, join: str = "r
         if "." not in sx + sy and "e" not in (sx + sy).lower() and max(len(sx), len(sy)) > 9:
             no_point.append(f"{sx}, {sy}")
         pts.append((float(sx), float(sy)))
+        short += len(row) < len(cols)
         numbers.append(row[ip].strip() if ip is not None and ip < len(row) else str(len(pts)))
+        if ip is not None:
+            if numbers[-1] in first_row:
+                raise ScenarioError(f"{path}: rows {first_row[numbers[-1]]} and {line} have the same point number "
+                                    f"{numbers[-1]!r}; a point number names one point (renumber one of them)",
+                                    field="survey.files.columns", file=file)
+            first_row[numbers[-1]] = line
         desc = row[idd] if idd is not None and idd < len(row) else ""
         code, ctl = split_code(desc)
         codes.append(code)
@@ -143,6 +160,11 @@ def read_points(path: str, units: str, columns: str = "PNEZD", *, join: str = "r
                           f"({no_point[0]}): check the export's decimal setting before trusting them")
     if not pts:
         raise ScenarioError(f"{path}: no points (columns = {columns!r})", file=file)
+    if short == len(pts):  # every row: a column declared that the file does not have
+        n = max(len(r) for r in rows)
+        raise ScenarioError(f"{path}: the rows have {n} fields where columns = {columns!r} declares {len(cols)}; "
+                            "give the letters of the columns the file has (e.g. \"PNEZ\" without a code)",
+                            field="survey.files.columns", file=file)
     xy = np.asarray(pts, dtype=float) * scale
     if breaklines is not None:
         index = {n: i for i, n in enumerate(numbers)}

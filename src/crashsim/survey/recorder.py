@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import difflib
 import math
+import re
 
 from ..errors import ScenarioError
 
@@ -15,7 +16,15 @@ SPEED_UNITS = {"km/h": 1 / 3.6, "kph": 1 / 3.6, "mph": 0.44704, "m/s": 1.0, "ft/
 _CHANNELS = ("time", "speed", "brake", "abs", "accelerator", "steering", "yaw_rate")
 
 
-def _number(text: str) -> float | None:
+#: Largest |time_offset| the schema allows [s]: a sample up to this far after the file's impact
+#: can be brought before it by a fitted offset, so it is kept (and compared only when it is).
+OFFSET_RANGE = 5.0
+_DECIMAL_COMMA = re.compile(r"^\s*[-+]?\d+,\d+\s*$")
+
+
+def _number(text: str, comma: bool = False) -> float | None:
+    if comma and _DECIMAL_COMMA.match(text or ""):
+        text = text.replace(",", ".")
     try:
         x = float(text)
     except (TypeError, ValueError):
@@ -35,7 +44,8 @@ def read_recorder(path: str, spec: dict, *, key: str = "survey.recorders[0]", fi
     Returns
     -------
     samples : list of (time [s], speed [m/s], lower_bound: bool)
-        Samples at or before the impact (time + 0 <= 0), in file order.
+        Samples up to :data:`OFFSET_RANGE` after the impact, in file order (those after it with
+        the file's ``time_offset`` are compared only when a fitted offset brings them before it).
     notes : list of str
         Rows left out and why, channels found.
     """
@@ -75,17 +85,31 @@ def read_recorder(path: str, spec: dict, *, key: str = "survey.recorders[0]", fi
         col[ch] = header.index(name.strip())
     samples, notes = [], []
     later = blank = 0
-    for r, row in enumerate(reader, 2):
-        if not row or not any(c.strip() for c in row):
-            continue
-        t = _number(row[col["time"]]) if col["time"] < len(row) else None
-        v = _number(row[col["speed"]]) if col["speed"] < len(row) else None
+    rows = [(r, row) for r, row in enumerate(reader, 2) if row and any(c.strip() for c in row)]
+    if not rows:
+        raise ScenarioError(f"{path}: the recorder table has a header row but no data rows", field=f"{key}.file",
+                            file=file)
+    # a decimal comma ("-15,0") where the columns are not separated by commas: read as a decimal point, said so
+    comma = dialect.delimiter != "," and any(_DECIMAL_COMMA.match(row[col[ch]]) for _, row in rows
+                                              for ch in ("time", "speed") if col[ch] < len(row))
+    seen: dict[float, int] = {}
+    for r, row in rows:
+        t = _number(row[col["time"]], comma) if col["time"] < len(row) else None
+        v = _number(row[col["speed"]], comma) if col["speed"] < len(row) else None
         if t is None or v is None:
+            if dialect.delimiter == "," and len(row) > len(header):
+                raise ScenarioError(f"{path}: row {r} has {len(row)} fields where the header has {len(header)}: "
+                                    "a decimal comma in a comma-separated table? (write 15.0, or separate the "
+                                    "columns with ';')", field=f"{key}.file", file=file)
             blank += 1
             continue
         t *= TIME_UNITS[tu]
         v *= SPEED_UNITS[su]
-        if t + spec["time_offset"] > 0:
+        if t in seen:
+            raise ScenarioError(f"{path}: rows {seen[t]} and {r} have the same time {row[col['time']].strip()!r} "
+                                f"{tu}; a recorder takes one sample at a time", field=f"{key}.time", file=file)
+        seen[t] = r
+        if t > OFFSET_RANGE:
             later += 1
             continue
         if v < 0:
@@ -93,14 +117,20 @@ def read_recorder(path: str, spec: dict, *, key: str = "survey.recorders[0]", fi
                                 file=file)
         low = any(row[col[ch]].strip().lower() in on for ch in ("brake", "abs") if ch in col and col[ch] < len(row))
         samples.append((t, v, low))
+    if comma:
+        notes.append("decimal commas (\"-15,0\") read as decimal points")
     if blank:
         notes.append(f"{blank} rows without a number in the time or speed column were left out")
     if later:
-        notes.append(f"{later} samples after the impact were left out (pre-crash data end at it)")
+        notes.append(f"{later} samples more than {OFFSET_RANGE:g} s after the impact were left out")
+    after = sum(t + spec["time_offset"] > 0 for t, _, _ in samples)
+    if after:
+        notes.append(f"{after} samples after the impact with time_offset = {spec['time_offset']:g} s are kept but "
+                     "not compared (a fitted time_offset can bring them before it)")
     extra = [ch for ch in ("accelerator", "steering", "yaw_rate") if ch in col]
     if extra:
         notes.append(f"channels read but not compared (no model output to check them against): {', '.join(extra)}")
-    if not samples:
+    if not any(t + spec["time_offset"] <= 0 for t, _, _ in samples):
         raise ScenarioError(f"{path}: no pre-crash samples (time <= 0 after time_offset) with a time and a speed",
                             field=f"{key}.file", file=file)
     return samples, notes

@@ -15,7 +15,7 @@ def survey_records(scenario) -> list[dict]:
 def format_survey(records: list[dict]) -> str:
     """One line per imported item (its target, kind, file, layer or code, handle or point numbers),
     then the notes and warnings of the import."""
-    items = [r for r in records if r["kind"] not in ("note", "label", "ignore", "underlay")]
+    items = [r for r in records if r["kind"] not in ("note", "label", "ignore", "underlay", "warning")]
     notes = [r for r in records if r["kind"] == "note"]
     labels = [r for r in records if r["kind"] == "label"]
     ignored = [r for r in records if r["kind"] == "ignore"]
@@ -33,6 +33,9 @@ def format_survey(records: list[dict]) -> str:
         lines.append(f"  ignored on purpose (kind = \"ignore\"): {len(ignored)} entities")
     for r in notes:
         lines.append(f"  note, {r['file']}: {r['note']}")
+    for r in records:
+        if r["kind"] == "warning":
+            lines.append(f"  warning: {r['note']}")
     for r in records:
         if r["kind"] == "underlay":
             lines.append(f"  underlay, {r['file']}: {r['note']}")

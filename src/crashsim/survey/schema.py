@@ -16,7 +16,7 @@ MAP_LINE_STYLES = ("edge", "lane", "centre", "kerb", "stop", "other")
 #: [[evidence.marks]] tyre mark; rest: an [[evidence.rest]] item (measured points of a body);
 #: impact_point: [evidence.impact_point]; gouge, debris: drawn only (map lines of style other);
 #: ignore: mapped on purpose and left out.
-KINDS = ("line", "obstacle", "zone", "mark", "rest", "impact_point", "gouge", "debris", "ignore")
+KINDS = ("line", "obstacle", "zone", "mark", "rest", "impact_point", "gouge", "debris", "surface", "ignore")
 FORMATS = ("dxf", "points", "geojson")
 
 MAPPING = Section("map", [
@@ -24,8 +24,9 @@ MAPPING = Section("map", [
           description="Which entities: a DXF layer name, a point code or a GeoJSON property value; * and ? are "
                       "wildcards; case is ignored. An entity is taken by the first entry that matches it"),
     Field("kind", choices=KINDS, example="obstacle",
-          description="What they are: line, obstacle, zone, mark, rest, impact_point, gouge, debris (drawn only) "
-                      "or ignore"),
+          description="What they are: line, obstacle, zone, mark, rest, impact_point, gouge, debris (drawn only), "
+                      "surface (a TIN of DXF 3DFACEs: the plane fitted to its vertices, in the scene frame, gives "
+                      "runout.grade and runout.cross_slope, which the file then does not give) or ignore"),
     Field("name", "str", default="", description="Name of the items made (default: the layer or code and the "
                                                   "entity handle or point numbers)"),
     Field("style", "str", required=False, example="kerb",
@@ -93,7 +94,7 @@ RECORDER = Section("recorder", [
     Field("time_offset", Kind.TIME, default="0 s", minimum=-5, maximum=5,
           description="As evidence.recorder.time_offset (a fit unknown by its path evidence.recorder[i].time_offset)"),
     Field("time", "str", example="Time (s)", description="Column of the sample time (impact at 0, before it "
-                                                         "negative; later samples are left out)"),
+                                                         "negative; samples more than 5 s after it are left out)"),
     Field("speed", "str", example="Speed, vehicle indicated (km/h)", description="Column of the speed"),
     Field("time_unit", "str", default="s", description="Unit of the time column (s, ms)"),
     Field("speed_unit", "str", default="km/h", description="Unit of the speed column (km/h, mph, m/s)"),
@@ -138,6 +139,8 @@ IMPORTED = Section("imported", [
     Field("kind", "str", description="What it became"),
     Field("target", "str", default="", description="The scene item it became (map.lines[3], evidence.rest[0])"),
     Field("note", "str", default="", description="A warning or note of the import"),
+    Field("key", "str", default="", description="The key that made it (survey.files[1].map[0], survey.recorders[0]): "
+                                                "errors of the item name it"),
 ], description="Written by crashsim when the survey is read (fit --write-best keeps it): an imported item and its "
                "source; with these present the files are not read again")
 

@@ -17,6 +17,8 @@ in the scene's metres; the figure's scale bar stays true because the image follo
 
 from __future__ import annotations
 
+import os
+
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -158,7 +160,7 @@ def georef_from_section(u: dict, frame: SceneFrame, base: str | None, file: str 
     """The :class:`Georef` of a validated ``[survey.underlay]`` section (no pixels read but a GeoTIFF's header)."""
     image = _path(u["image"], base)
     if not image.is_file():
-        raise ScenarioError(f"underlay image {u['image']!r} not found (looked for {image})",
+        raise ScenarioError(f"underlay image {u['image']!r} not found (looked for {os.path.relpath(image)})",
                             field="survey.underlay.image", file=file)
     scale = unit_scale(u["units"], field="survey.underlay.units", file=file)
     if u["control"]:
@@ -212,7 +214,7 @@ def load_image(u: dict, base: str | None, file: str | None = None) -> np.ndarray
     """The pixels of the underlay image, shape (rows, columns, channels)."""
     image = _path(u["image"], base)
     if not image.is_file():
-        raise ScenarioError(f"underlay image {u['image']!r} not found (looked for {image})",
+        raise ScenarioError(f"underlay image {u['image']!r} not found (looked for {os.path.relpath(image)})",
                             field="survey.underlay.image", file=file)
     if image.suffix.lower() in (".tif", ".tiff"):
         try:
@@ -228,7 +230,8 @@ def load_image(u: dict, base: str | None, file: str | None = None) -> np.ndarray
     try:
         return mpimg.imread(image)
     except Exception as exc:
-        raise ScenarioError(f"cannot read the underlay image {u['image']!r}: {exc}", field="survey.underlay.image",
+        shown = os.path.relpath(image) if Path(u["image"]).is_absolute() else u["image"]
+        raise ScenarioError(f"cannot read the underlay image {shown!r}: {exc}", field="survey.underlay.image",
                             file=file) from None
 
 

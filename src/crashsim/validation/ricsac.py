@@ -44,7 +44,8 @@ from ..units import Kind
 from .core import CaseResult, Quantity, angle_difference, quantity, vector
 from .crushgeom import Damage, Outline, impulse_centre, place
 
-__all__ = ["load_test", "placement", "scene_text", "pooled_bands", "day_frame", "run_case"]
+__all__ = ["load_test", "placement", "scene_text", "pooled_bands", "loss_from_velocities", "path_lengths", "day_frame",
+           "measured_rotation", "parse_mixed", "run_case"]
 
 FT = 0.3048
 
@@ -158,11 +159,11 @@ def _axles(v: dict, rules: dict) -> tuple[float, float, float]:
 
 
 def _m(x: float) -> str:
-    return f'"{x:.4f} m"'
+    return f'"{x + 0.0:.4f} m"'.replace('"-0.0000 m"', '"0.0000 m"')
 
 
 def _deg(x: float) -> str:
-    return f'"{math.degrees(x):.4f} deg"'
+    return f'"{math.degrees(x):.4f} deg"'.replace('"-0.0000 deg"', '"0.0000 deg"')
 
 
 def scene_text(t: dict, rules: dict) -> str:
@@ -234,7 +235,7 @@ def _reference_direction(t: dict, k: int) -> tuple[float, float | None]:
     return from_velocity + angle_difference(diagrams, from_velocity) / 2, diagrams
 
 
-def _loss_from_velocities(t: dict) -> tuple[float, float]:
+def loss_from_velocities(t: dict) -> tuple[float, float]:
     """Initial kinetic energy and its loss from the published velocities and masses [J]."""
     e0 = e1 = 0.0
     for k, v in enumerate(t["vehicles"]):
@@ -260,7 +261,7 @@ def pooled_bands(tests: list[dict]) -> dict:
     direction = worst((abs(angle_difference(t["direction_diagrams"][k],
                                             _direction_from_velocity(t["separation"][k][0]))) / 2, t["number"], k)
                       for t in tests if t["direction_checked"] for k in (0, 1))
-    energy = worst((abs(t["energy"][1] / t["energy"][0] - _loss_from_velocities(t)[1] / _loss_from_velocities(t)[0]) / 2,
+    energy = worst((abs(t["energy"][1] / t["energy"][0] - loss_from_velocities(t)[1] / loss_from_velocities(t)[0]) / 2,
                     t["number"], None) for t in tests)
     return {"delta_v": dv, "separation": sep, "yaw_rate": yaw, "direction": direction, "energy": energy}
 
@@ -418,7 +419,7 @@ def run_case(data: dict, rules: dict, tests: list[dict]) -> CaseResult:
                           f"scatter: largest half-difference of the two published measurements (RICSAC {dirb[1]}, "
                           f"vehicle {dirb[2] + 1})", src, an))
     e0, loss = t["energy"]
-    e0v, lossv = _loss_from_velocities(t)
+    e0v, lossv = loss_from_velocities(t)
     ref = (loss / e0 + lossv / e0v) / 2
     computed = scene.impact.energy_loss["system"]  # a fraction of the kinetic energy before the impact
     q.append(Quantity(cid, "energy loss", "energy loss", "dimensionless", ref, computed, "difference", computed - ref,

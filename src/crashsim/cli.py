@@ -34,7 +34,7 @@ from .survey.export import export_frame, export_items, write_dxf, write_geojson
 from .survey.inspect import preview, read_any, summary
 from .survey.mapping import load_scene_data
 from .units import Kind, format_value, parse, resolve_system
-from .validation import load_suite, plot_case, results_dict, run_suite, table_text, write_csv
+from .validation import class_errors, load_suite, plot_case, results_dict, run_suite, table_text, write_csv
 from .vehicle_plan import geometry_lines, plot_body_plan
 from .warmup import COMPILE_STEPS, compile_kernels
 
@@ -323,7 +323,8 @@ def _cmd_report(args) -> int:
                        + [f"--{k} {getattr(args, k)}" for k in ("fit", "mc", "posterior") if getattr(args, k)]
                        + ([f"--units {args.units}"] if args.units else []))
     written = write_case_report(scene, args.output, input_files=inputs, system=args.units, presets=presets(),
-                                command=command, output_kinds=OUTPUT_KINDS, **extra)
+                                command=command, output_kinds=OUTPUT_KINDS,
+                                validation=class_errors(scene, system=args.units), **extra)
     sys.stdout.write(f"wrote {written}\n")
     return 0
 

@@ -2,7 +2,8 @@
 
 A scene's class follows from its first impact, by rule:
 
-* the impact's other body is a barrier (a fixed body): **vehicle-to-barrier**;
+* the impact's other body is a barrier (a fixed body): **vehicle-to-barrier** (its cases: a small car and
+  a loaded tractor-van semitrailer);
 * otherwise **car-to-car**, with the configuration of the faces that meet: each body's face is the side
   of its outline nearest the impact point (front, rear or side), giving front-to-side, front-to-rear,
   front-to-front, side-to-side, rear-to-side or rear-to-rear.
@@ -11,7 +12,7 @@ The suite's errors come from the table ``benchmarks/validation_suite.py`` writes
 (``crashsim/data/validation_errors.json``, the numbers of ``docs/validation/errors.md``): for the class,
 every quantity group's mean and largest error over the class's cases, and, where the suite has cases of
 the same configuration, the same over those alone. A scene whose vehicles lie outside the validated
-cases (an articulated vehicle, a heavy vehicle in a car-to-car class) is told so: the class's errors are
+cases of a car-to-car class (an articulated vehicle, one heavier than their cars) is told so: the class's errors are
 then the nearest evidence the suite has, not a measured error rate of that configuration.
 """
 
@@ -24,6 +25,7 @@ from importlib.resources import files
 import numpy as np
 
 from ..geometry import rotation
+from .output import summary_value_text
 
 __all__ = ["face_of", "scene_class", "load_error_table", "class_errors", "TABLE"]
 
@@ -52,18 +54,17 @@ def scene_class(scene) -> dict:
     bodies = {b.name: (v, b) for v in sc.vehicles for b in v.bodies}
     b1, b2 = imp.body1, imp.body2
     fixed = [n for n in (b1, b2) if bodies[n][1].is_fixed]
+    if fixed:  # the class's cases: a small car (MASH 3-10) and a 36 t tractor-van semitrailer (NCHRP 350 5-12)
+        return {"class": "vehicle-to-barrier", "configuration": None, "outside": [],
+                "rule": "the impact's other body is a barrier"}
     outside = []
     for n in (b1, b2):
         v, b = bodies[n]
-        if b.is_fixed:
-            continue
         if len(v.bodies) > 1:
-            outside.append(f"{v.name} is articulated ({len(v.bodies)} bodies)")
-        if b.mass > CAR_MASS_LIMIT and not fixed:
-            outside.append(f"{n} weighs {b.mass:.0f} kg (the staged collisions' cars weigh at most {CAR_MASS_LIMIT:.0f} kg)")
-    if fixed:
-        return {"class": "vehicle-to-barrier", "configuration": None, "outside": outside,
-                "rule": "the impact's other body is a barrier"}
+            outside.append(f"{v.name} is articulated ({len(v.bodies)} bodies; the staged collisions are of cars)")
+        if b.mass > CAR_MASS_LIMIT:
+            outside.append(f"{n} weighs {b.mass:.0f} kg (the staged collisions' cars weigh at most "
+                           f"{CAR_MASS_LIMIT:.0f} kg)")
     faces = []
     for n in (b1, b2):
         faces.append(face_of(bodies[n][1], sc.states[n], imp.point))
@@ -94,12 +95,18 @@ def _summarise(rows: list[dict]) -> list[dict]:
     return out
 
 
-def class_errors(scene, table: dict | None = None) -> dict:
+def _texts(rows: list[dict], system: str | None) -> list[dict]:
+    return [{**r, "mean_text": summary_value_text(r, r["mean_abs_error"], system),
+             "max_text": summary_value_text(r, r["max_abs_error"], system)} for r in rows]
+
+
+def class_errors(scene, table: dict | None = None, system: str | None = None) -> dict:
     """What the case report quotes: the scene's class (:func:`scene_class`) and the suite's errors for it.
 
     Returns a dict with ``class``, ``configuration``, ``rule``, ``outside`` (list of reasons), ``version``
     and ``date`` of the table, ``class_rows`` (per group, over the class's cases) and ``configuration_rows``
-    (over the cases of the same configuration, empty if the suite has none); ``available`` is False when the
+    (over the cases of the same configuration, empty if the suite has none), each row with its errors as
+    text in ``system`` (default: the unit system of each result's sources); ``available`` is False when the
     installation has no table.
     """
     c = scene_class(scene)
@@ -109,5 +116,6 @@ def class_errors(scene, table: dict | None = None) -> dict:
     rows = [r for r in table["quantities"] if r["class"] == c["class"]]
     conf = [r for r in rows if c["configuration"] and r.get("configuration") == c["configuration"]]
     return {**c, "available": True, "version": table.get("version"), "date": table.get("date"),
-            "command": table.get("command"), "class_rows": _summarise(rows), "configuration_rows": _summarise(conf),
+            "command": table.get("command"), "class_rows": _texts(_summarise(rows), system),
+            "configuration_rows": _texts(_summarise(conf), system),
             "cases": sorted({r["case"] for r in rows})}

@@ -16,8 +16,8 @@ from pathlib import Path
 from ..units import format_value, to_unit
 from .core import STATUS, CaseResult, Quantity
 
-__all__ = ["value_text", "error_text", "band_text", "table_text", "summaries", "summary_text", "write_csv",
-           "results_dict", "plot_case"]
+__all__ = ["value_text", "error_text", "band_text", "table_text", "summaries", "summary_text", "summary_value_text",
+           "write_csv", "results_dict", "plot_case"]
 
 
 def _system(q: Quantity, system: str | None) -> str:
@@ -130,7 +130,10 @@ def summaries(results: list[CaseResult]) -> list[dict]:
     return out
 
 
-def _summary_value(s: dict, x: float, system: str | None) -> str:
+def summary_value_text(s: dict, x: float, system: str | None = None) -> str:
+    """A summary row's error (mean or largest |error|) as text, by its metric: % or the unit shown."""
+    if x is None or not math.isfinite(x):
+        return "n/a"
     if s["metric"] in ("relative", "range"):
         return f"{100 * x:.1f} %"
     if s["metric"] == "criterion":
@@ -142,8 +145,8 @@ def _summary_value(s: dict, x: float, system: str | None) -> str:
 def summary_text(results: list[CaseResult], system: str | None = None) -> str:
     """The errors per case class and group, as text."""
     lines = ["Errors per case class (mean and largest |error| over the quantities; within: inside their bands)"]
-    rows = [[s["class"], s["group"], str(s["n"]), _summary_value(s, s["mean_abs_error"], system),
-             _summary_value(s, s["max_abs_error"], system), f"{s['within']}/{s['n']}", ", ".join(s["cases"])]
+    rows = [[s["class"], s["group"], str(s["n"]), summary_value_text(s, s["mean_abs_error"], system),
+             summary_value_text(s, s["max_abs_error"], system), f"{s['within']}/{s['n']}", ", ".join(s["cases"])]
             for s in summaries(results)]
     header = ["class", "result", "n", "mean |error|", "largest", "within", "cases"]
     widths = [max(len(x) for x in col) for col in zip(header, *rows)]

@@ -90,7 +90,7 @@ def run_case(data: dict, rules: dict, suite_folder: Path) -> CaseResult:
     for body in ("tractor", "trailer"):
         ex = s["exit"][body]
         value = ex[2] if ex is not None else math.nan
-        q.append(Quantity(cid, f"exit angle, {body}", "exit angle", "angle", s["limit"], value, "limit",
+        q.append(Quantity(cid, f"exit angle, {body}", "exit angle (criterion M)", "angle", s["limit"], value, "limit",
                           value - s["limit"], 0.0, "stated: NCHRP 350 evaluation criterion M (below 60 % of the impact "
                           "angle)", data["test"]["criterion_source"], {}, "US",
                           f"direction of the CG velocity at the loss of contact ({ex[0]:.3f} s)" if ex else "never left"))

@@ -141,8 +141,8 @@ def run_case(data: dict, rules: dict, suite_folder: Path) -> CaseResult:
     band = shift / expected
     q = [Quantity(data["case"]["id"], f"steady off-tracking, steer-axle radius {c['steer_axle_radius']}", "off-tracking",
                   "length", expected, computed, "relative", (computed - expected) / expected, band,
-                  f"stated: the closed form's kinematic idealisation: the tyres' slip at {speed_end / 0.44704:.1f} mph "
-                  "reduce the closed form's off-tracking by {100 * shift:.1f} cm (its slip-angle form)", c["source"], {}, "US",
+                  f"stated: the closed form's speed correction: its slip-angle form at the last lap's speed (down to "
+                  f"{speed_end / 0.44704:.1f} mph) off-tracks {100 * shift:.1f} cm less", c["source"], {}, "US",
                   f"closed form at the steer axle's fitted radius {r_front:.3f} m; steer {math.degrees(steer):.2f} deg "
                   f"(left {math.degrees(angles['left']):.2f}, right {math.degrees(angles['right']):.2f})")]
     figure = {"front": (fx, fy), "trailer": (tx, ty), "r_front": r_front, "r_trailer": r_trailer, "expected": expected,

@@ -219,8 +219,8 @@ def _forest(ax, result: CaseResult, system: str | None):
     ax.set_yticklabels([q.name for q in reversed(qs)], fontsize=7)
     ax.set_xlim(-_CLIP - 0.5, _CLIP + 0.5)
     ax.set_ylim(-0.7, n - 0.3)
-    ax.set_xlabel("error / band half-width\n(shaded: the band; grey diamonds: published methods' errors;\n"
-                  "limits: error / 25 % of the limit)", fontsize=7)
+    ax.set_xlabel("error / band half-width (limits: error / 25 % of the limit)\nshaded: the band; dots: green within, "
+                  "amber documented miss,\nred new miss; grey diamonds: published methods' errors", fontsize=7)
     ax.tick_params(axis="x", labelsize=7)
 
 

@@ -118,13 +118,14 @@ def markdown(results, cost: dict) -> str:
         if r.assumptions:
             lines.append("")
         lines.append(_md_row(["quantity", "measured", "crashsim", "error", "band", "status", "band basis",
-                              "anchors (same metric)"]))
-        lines.append(_md_row(["---"] * 8))
+                              "anchors (same metric)", "note"]))
+        lines.append(_md_row(["---"] * 9))
         for q in r.quantities:
             m, c = value_text(q, q.measured), value_text(q, q.computed)
             if q.metric == "range":
                 m, c = f"path {m}", f"{c} off"
-            lines.append(_md_row([q.name, m, c, error_text(q), band_text(q), q.status, q.basis, _anchors(q)]))
+            lines.append(_md_row([q.name, m, c, error_text(q), band_text(q), q.status, q.basis, _anchors(q),
+                                  q.note or "-"]))
         lines.append("")
         if "sensitivity" in r.figure:
             lines += ["Sensitivity (one coefficient at a time, the others at the rules' values): exit angles at the "

@@ -162,11 +162,11 @@ def write_csv(results: list[CaseResult], path: Path, system: str | None = None) 
     w = csv.writer(buf)
     w.writerow(["case", "class", "quantity", "group", "metric", "measured", "computed", "error", "band", "status",
                 "measured_si", "computed_si", "error_si_or_fraction", "band_si_or_fraction", "basis", "source",
-                "anchors"])
+                "anchors", "note"])
     for r, q, row in _rows(results, system):
         w.writerow([r.id, r.case_class, q.name, q.group, q.metric, row[2], row[3], row[4], row[5], q.status,
                     f"{q.measured:.6g}", f"{q.computed:.6g}", f"{q.error:.6g}", f"{q.band:.6g}", q.basis, q.source,
-                    _anchor_text(q, system)])
+                    _anchor_text(q, system), q.note])
     path.write_text(buf.getvalue(), encoding="utf-8")
     return path
 

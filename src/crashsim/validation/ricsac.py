@@ -42,7 +42,7 @@ from ..scene import run_scene
 from ..scenario import load_scenario
 from ..units import Kind
 from .core import CaseResult, Quantity, angle_difference, quantity, vector
-from .crushgeom import Damage, Outline, impulse_centre, place
+from .crushgeom import Damage, Outline, place
 
 __all__ = ["load_test", "placement", "scene_text", "pooled_bands", "loss_from_velocities", "path_lengths", "day_frame",
            "measured_rotation", "parse_mixed", "run_case"]
@@ -388,10 +388,12 @@ def run_case(data: dict, rules: dict, tests: list[dict]) -> CaseResult:
               "CRASH3 damage only": _rel(anchors["crash3_delta_v"][k], ref)}
         for a in anchors["day2004"]:
             an[a["method"]] = _rel(a["delta_v"][k], ref)
+        each = ", ".join(f"{label} {100 * _rel(dv, x):+.1f} %" for label, x in
+                         zip(("untransformed", "Brach & Smith 2002", "McHenry 1997"), refs))
         q.append(Quantity(cid, f"delta-v, {name}", "delta-v", "speed", ref, dv, "relative", _rel(dv, ref), dvb[0],
                           f"scatter: largest half-spread of the three published reductions (RICSAC {dvb[1]}, vehicle "
                           f"{dvb[2] + 1})", f"{t['delta_v_source']}: mean of {', '.join(f'{x:.2f}' for x in refs)} m/s",
-                          an))
+                          an, note=f"against each reduction: {each}"))
         (vm, wm) = t["separation"][k]
         err = anchors["fitted_separation_error"]
         for j, axis in enumerate("xy"):

@@ -527,7 +527,7 @@ def _posterior(d: dict, system: str) -> dict:
 def render_case_report(scene, *, input_files, system: str | None = None, fit: dict | None = None,
                        mc: dict | None = None, posterior: dict | None = None, presets: dict | None = None,
                        command: str | None = None, now: _dt.datetime | None = None, figures: bool = True,
-                       output_kinds: dict | None = None) -> str:
+                       output_kinds: dict | None = None, validation: dict | None = None) -> str:
     """The case report of ``scene`` as one HTML document (text).
 
     Parameters
@@ -553,6 +553,9 @@ def render_case_report(scene, *, input_files, system: str | None = None, fit: di
     output_kinds : dict, optional
         Quantity kind of each Monte Carlo output by its first word (``{"speed": "speed", ...}``,
         :data:`crashsim.reconstruct.montecarlo.OUTPUT_KINDS`): its percentiles then in ``system`` units.
+    validation : dict, optional
+        The validation suite's errors for the scene's case class (:func:`crashsim.validation.class_errors`),
+        quoted in the "Known error of the method" section.
     """
     system = figure_system(scene, system)
     files_ = [Path(p) for p in input_files]
@@ -573,6 +576,7 @@ def render_case_report(scene, *, input_files, system: str | None = None, fit: di
         "posterior": _posterior(posterior, system) if posterior else None,
         "warnings": list(scene.warnings), "notes": notes, "figures": _figures(scene, system) if figures else [],
         "command": command or f"crashsim report {files_[0].name} -o case.html",
+        "validation": validation,
     }
     env = jinja2.Environment(loader=jinja2.FileSystemLoader(str(files("crashsim").joinpath("templates"))),
                              autoescape=jinja2.select_autoescape(["html", "j2"]), undefined=jinja2.StrictUndefined,

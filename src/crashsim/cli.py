@@ -37,6 +37,7 @@ from .survey.inspect import preview, read_any, summary
 from .survey.mapping import load_scene_data
 from .survey.underlay import scene_underlay
 from .units import Kind, format_value, parse, resolve_system
+from .validation import class_errors, load_suite, plot_case, results_dict, run_suite, table_text, write_csv
 from .vehicle_plan import geometry_lines, plot_body_plan
 from .warmup import COMPILE_STEPS, compile_kernels
 
@@ -346,7 +347,8 @@ def _cmd_report(args) -> int:
                        + [f"--{k} {getattr(args, k)}" for k in ("fit", "mc", "posterior") if getattr(args, k)]
                        + ([f"--units {args.units}"] if args.units else []))
     written = write_case_report(scene, args.output, input_files=inputs, system=args.units, presets=presets(),
-                                command=command, output_kinds=OUTPUT_KINDS, **extra)
+                                command=command, output_kinds=OUTPUT_KINDS,
+                                validation=class_errors(scene, system=args.units), **extra)
     sys.stdout.write(f"wrote {written}\n")
     return 0
 
@@ -380,6 +382,35 @@ def _cmd_presets(args) -> int:
         sys.stdout.write(f"    source: {p['source']}\n")
         for face, c in p.get("crush", {}).items():
             sys.stdout.write(f"    crush stiffness, {face}: A {c['A']}, B {c['B']}\n      source: {c['source']}\n")
+    return 0
+
+
+def _cmd_validate(args) -> int:
+    suite = load_suite(args.suite)
+    chosen = suite.select(args.cases, "fast" if args.quick else None)  # unknown names: exit 2 before any work
+    if not chosen:
+        raise ScenarioError("no case to run (--quick keeps the fast tier only)", field="CASE")
+    results = run_suite(suite, chosen, progress=None if args.json else
+                        (lambda cid: sys.stderr.write(f"crashsim: validating {cid}\n")))
+    if args.csv:
+        write_csv(results, Path(args.csv), args.units)
+    if args.plots:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        Path(args.plots).mkdir(parents=True, exist_ok=True)
+        for r in results:
+            plot_case(r, Path(args.plots) / f"{r.id}.png", args.units)
+    if args.json:
+        json.dump(_clean(results_dict(results)), sys.stdout, indent=2)
+        sys.stdout.write("\n")
+    else:
+        sys.stdout.write(table_text(results, args.units))
+    changed = [f"{q.case}: {q.name} ({q.status})" for r in results for q in r.new_misses]
+    if changed:
+        sys.stderr.write(f"crashsim: {len(changed)} quantit{'y differs' if len(changed) == 1 else 'ies differ'} from the "
+                         f"suite's record of documented misses: {'; '.join(changed)}\n")
+        return 1
     return 0
 
 
@@ -469,6 +500,20 @@ def build_parser() -> argparse.ArgumentParser:
     rp.add_argument("--units", type=_units, default=None, help="SI or US: units of the report (default: the scenario's)")
     rp.set_defaults(func=_cmd_report)
 
+    va = sub.add_parser("validate", help="run the validation suite (staged collisions, full-scale tests): every "
+                                         "quantity's error against its band")
+    va.add_argument("cases", nargs="*", metavar="CASE", help="case ids (folders of the suite; default: all)")
+    va.add_argument("--suite", metavar="DIR", help="the suite's folder (default: ./validation, else the source "
+                                                   "checkout's validation/)")
+    va.add_argument("--quick", action="store_true", help="only the fast tier's cases")
+    va.add_argument("--json", action="store_true", help="print every case and quantity as one JSON object (SI)")
+    va.add_argument("--csv", metavar="FILE", help="write one row per quantity to FILE")
+    va.add_argument("--plots", metavar="DIR", help="write one figure per case into DIR (measured against computed, "
+                                                   "error and its band)")
+    va.add_argument("--units", type=_units, default=None,
+                    help="SI or US (any case) for every value (default: each source's own units)")
+    va.set_defaults(func=_cmd_validate)
+
     s = sub.add_parser("schema", help="print the documented scenario-file schema")
     s.add_argument("--format", choices=("text", "markdown"), default="text")
     s.set_defaults(func=_cmd_schema)
@@ -482,7 +527,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 #: Commands that run the run-out kernels (and so may compile them on a first run).
-_COMPUTING = ("run", "fit", "mc", "posterior", "plot", "animate", "export", "report")
+_COMPUTING = ("run", "fit", "mc", "posterior", "plot", "animate", "export", "report", "validate")
 
 
 def _first_compile(bar: bool = True) -> None:
@@ -555,6 +600,11 @@ def _check_outputs(args) -> None:
             raise ScenarioError("--plot NAME and -o FILE go together: the preset to draw and the figure to write",
                                 field="--plot" if args.output else "-o")
         check_output_file(args.output, field="-o", suffixes=_figure_suffixes(), what="a figure")
+    if c == "validate":
+        if args.csv:
+            check_output_file(args.csv, field="--csv", suffixes=(".csv",), what="the table")
+        if args.plots:
+            check_output_dir(args.plots, field="--plots", what="the figures")
     if c == "animate":
         check_output_file(check_animation_path(args.output, field="-o"), field="-o", what="the animation")
         if not parse(args.dt, Kind.TIME, field="--dt") > 0:

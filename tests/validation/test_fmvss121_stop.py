@@ -2,7 +2,8 @@
 Table II, as amended by the final rule of 27 July 2009, 74 FR 37122).
 
 Set-up as the standard's procedure sets it, with what this test assumes (docs/heavy-vehicles.md,
-"Validation: the FMVSS 121 stop"):
+"Validation: the FMVSS 121 stop"; the builder is crashsim.validation.stopping's, shared with the
+validation suite's fmvss121-stop case):
 
 * a typical three-axle (6x4) truck-tractor at its GVWR of 52,000 lb (steer axle 12,000 lb, drive
   tandem 40,000 lb, their usual ratings), loaded through its fifth wheel by an *unbraked* flatbed
@@ -31,13 +32,9 @@ from pathlib import Path
 
 import pytest
 
-from crashsim.motion import Road, RunoutOptions, simulate_runout
-from crashsim.motion.brakes import AirBrakes, BrakeUnit
 from crashsim.motion.loads import static_loads
-from crashsim.motion.wheels import WheelSetting, WheelSettings
-from crashsim.vehicles import Axle, Body, Hitch, Vehicle, chain_states
+from crashsim.validation.stopping import LB, fmvss_tractor_with_control_trailer, stopping_distance
 
-LB = 0.45359237  # kg per lb (mass)
 G0 = 9.80665
 MPH = 0.44704
 FT = 0.3048
@@ -45,36 +42,13 @@ LIMIT_FT = 250.0
 DOCS = Path(__file__).resolve().parents[2] / "docs" / "heavy-vehicles.md"
 
 
-def fmvss_tractor_with_control_trailer() -> Vehicle:
-    """The tractor at GVWR on an unbraked single-axle control semitrailer (module docstring)."""
-    w_tractor_axles = 52000.0 * LB  # steer + drive, kingpin load included [kg]
-    w_trailer_axle = 4500.0 * LB
-    m2 = 2 * w_trailer_axle  # CG midway between kingpin and axle: half on each
-    m1 = w_tractor_axles - w_trailer_axle
-    wheelbase = 5.5  # steer axle to the drive tandem's centre [m]
-    x_r = -12000.0 * LB / m1 * wheelbase  # the tractor's own weight puts 12,000 lb on the steer axle
-    x_f = x_r + wheelbase
-    tractor = Body("tractor", m1, 60000.0, length=7.0, width=2.5, outline_center=(x_f - 4.6 + 3.5, 0.0),
-                   axles=(Axle(x_f, 2.05, name="steer"), Axle(x_r + 0.65, 1.85, True, "drive 1"),
-                          Axle(x_r - 0.65, 1.85, True, "drive 2")), cg_height=1.1)
-    half = 0.5 * 258.0 * 0.0254  # S6.1.10.3: the axle 258 in behind the kingpin, the CG midway [m]
-    trailer = Body("control", m2, 80000.0, length=8.5, width=2.5, axles=(Axle(-half, 1.85, True, "axle"),),
-                   cg_height=1.2)
-    return Vehicle("truck", (tractor, trailer), (Hitch((x_r, 0.0), (half, 0.0)),))
-
-
 def run_fmvss_stop(engine: str = "compiled") -> float:
-    """Stopping distance [ft] of the tractor's CG from 60 mph (module docstring)."""
-    veh = fmvss_tractor_with_control_trailer()
-    brakes = AirBrakes({"tractor": BrakeUnit((60e3, 100e3, 100e3), "tractor", abs=True)}, apply=0.0,
-                       abs_efficiency=0.85)
-    tyre = WheelSetting("rolling", cornering_coefficient=6.0, rolling_resistance=0.007)
-    init = chain_states(veh, (0.0, 0.0), 0.0, (60.0 * MPH, 0.0))
-    res = simulate_runout(veh, init, WheelSettings(default=tyre, brakes=brakes), Road(0.9),
-                          RunoutOptions(engine=engine))
+    """Stopping distance [ft] of the tractor's CG from 60 mph (the set-up of crashsim.validation.stopping,
+    the validation suite's fmvss121-stop case)."""
+    d, res = stopping_distance(60.0 * MPH, engine)
     assert res.status == "rest", res.message
     assert not any(w.sliding.any() for w in res.wheels.values())  # ABS: no wheel locked
-    return res.bodies["tractor"].rest_position[0] / FT
+    return d / FT
 
 
 def test_setup_is_the_standards_loading():

@@ -334,3 +334,16 @@ def test_cad_out_command_runs(tmp_path, capsys):
     assert main(args) == 0
     assert out.stat().st_size > 10_000
     assert "CRASHSIM-T0.5-car" in out.read_text()
+
+
+def test_the_known_error_paragraph_is_the_validation_table_s():
+    """Every number with a decimal point in the README's "Known error rates" paragraph appears in the table
+    benchmarks/validation_suite.py writes (docs/validation/errors.md), where the anchors' published rates are
+    quoted too; and the paragraph links that table."""
+    para = README.split("**Known error rates against staged collisions and full-scale tests.**")[1].split("\n\n")[0]
+    assert "docs/validation/errors.md" in para
+    table = (ROOT / "docs" / "validation" / "errors.md").read_text()
+    numbers = re.findall(r"(?<![\w.])\d+\.\d+", para)
+    assert len(numbers) >= 8
+    missing = [n for n in numbers if not re.search(rf"(?<![\d.]){re.escape(n)}(?!\d)", table)]
+    assert not missing, f"README numbers not in docs/validation/errors.md (run python benchmarks/validation_suite.py): {missing}"

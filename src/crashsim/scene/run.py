@@ -508,7 +508,7 @@ def simulate_approaches(scenario):
     return out
 
 
-def run_scene(scenario, *, lean: bool = False) -> SceneResult:
+def run_scene(scenario, *, lean: bool = False, separation: dict | None = None) -> SceneResult:
     """Solve a loaded scenario: the impact, then the run-out of the whole scene if asked for.
 
     At the ``articulated`` and ``load_transfer`` levels every vehicle runs out together, with
@@ -522,6 +522,11 @@ def run_scene(scenario, *, lean: bool = False) -> SceneResult:
     the wheels a run-out tyre mark of the evidence can match, no hitch histories, no pair
     summaries, no event places (:func:`crashsim.motion.postprocess.assemble_scene`).  Reports,
     figures and ``to_dict`` need the full result (the default).
+
+    ``separation``: ``{body: (velocity (2,) [m/s], yaw rate [rad/s])}`` to start the run-out of those
+    bodies from instead of the impact's separation velocities (at the impact's positions): a run-out
+    from measured separation velocities, as the validation suite runs it. The impact is solved and
+    reported as usual; an articulated vehicle's bodies are made hitch-consistent as always.
 
     Raises
     ------
@@ -540,6 +545,12 @@ def run_scene(scenario, *, lean: bool = False) -> SceneResult:
     spec = scenario.runout
     if spec is not None and spec.level != "impact":
         states = separation_states(scenario, impact)
+        for name, (velocity, yaw_rate) in (separation or {}).items():
+            if name not in states:
+                raise ScenarioError(f"separation state for {name!r}, which is not a movable body of the scene; "
+                                    f"allowed {', '.join(states)}", field="separation", file=scenario.path)
+            s0 = states[name]
+            states[name] = BodyState(s0.position, s0.heading, tuple(velocity), float(yaw_rate))
         movable = [v for v in scenario.vehicles if not v.is_barrier]
         initial = {}
         for veh in movable:

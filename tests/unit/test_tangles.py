@@ -128,3 +128,29 @@ def test_a_box_between_two_walls_rammed_by_a_third_body_comes_to_rest():
     a, b = (runs[e].impact_events() for e in ENGINES)
     assert [ev.pairs for ev in a] == [ev.pairs for ev in b]
     assert [ev.t for ev in a] == pytest.approx([ev.t for ev in b], abs=1e-3)
+
+
+@pytest.mark.parametrize("table, key, value, words", [
+    ("contacts", "restitution", "-0.2", ("-0.2", "[0, 1]")),
+    ("contacts", "friction", "-1.0", ("-1", "0")),
+    ("contacts", "velocity_threshold", '"0 m/s"', ("0 m/s", "(0, 50] m/s")),
+    ("contacts.pairs", "restitution", "1.5", ("1.5", "[0, 1]")),
+])
+def test_contact_settings_the_simultaneous_solve_cannot_use_are_refused(tmp_path, table, key, value, words):
+    """A negative e or f, or a threshold of zero, refused in one message naming the file, the key as
+    written, the value in the file's units and the range."""
+    from crashsim.errors import ScenarioError
+
+    text = TANGLES[0].read_text()
+    if table == "contacts":
+        text += f"\n[contacts]\n{key} = {value}\n"
+    else:
+        text += f'\n[[contacts.pairs]]\nfirst = "A"\nsecond = "B"\n{key} = {value}\n'
+    path = tmp_path / "bad_contact.toml"
+    path.write_text(text)
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(path)
+    msg = str(info.value)
+    assert "bad_contact.toml" in msg and key in msg and len(msg.strip().splitlines()) == 1, msg
+    for w in words:
+        assert w in msg, (w, msg)

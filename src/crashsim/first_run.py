@@ -85,7 +85,17 @@ def compile_in_progress() -> bool:
         return False
     except OSError:  # pragma: no cover - a live process of another user
         return True
-    return True
+    return not _zombie(pid)
+
+
+def _zombie(pid: int) -> bool:
+    """True if ``pid`` has exited but is not reaped yet (Linux ``/proc``: state Z): a compile killed
+    under a parent that does not reap it (a container's init) still answers ``kill(pid, 0)``."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return False
+    return stat[stat.rfind(")") + 2:].startswith("Z")
 
 
 def dead_compile() -> str | None:

@@ -229,3 +229,25 @@ def test_the_compile_names_its_sources_before_it_compiles(monkeypatch, tmp_path)
     with pytest.raises(RuntimeError):
         warmup.compile_kernels()
     assert order == ["marker", "compile"]
+
+
+def test_a_killed_compile_not_yet_reaped_is_not_under_way(tmp_path, monkeypatch):
+    """A compile killed under a parent that does not reap it (a container's init) is a zombie: it still
+    answers kill(pid, 0), but it compiles nothing, so the lock it left does not count as a compile under way."""
+    import signal
+    import time
+
+    monkeypatch.setattr(first_run, "cache_dir", lambda: tmp_path)
+    child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        (tmp_path / "compiling.lock").write_text(str(child.pid))
+        assert first_run.compile_in_progress()
+        os.kill(child.pid, signal.SIGKILL)
+        t0 = time.monotonic()
+        while not first_run._zombie(child.pid) and time.monotonic() - t0 < 10:
+            time.sleep(0.05)
+        assert first_run._zombie(child.pid)  # exited, not reaped: kill(pid, 0) still succeeds
+        assert not first_run.compile_in_progress()
+    finally:
+        child.kill()
+        child.wait()

@@ -310,7 +310,8 @@ def describe_event(e, system: str = "SI") -> str:
         how = (f"{a} strikes {b} at {fmt(d['speed_m_s'], 'speed', s)}" if d["speed_m_s"] >= 0 else
                f"{a} is pushed against {b} (parting at {fmt(-d['speed_m_s'], 'speed', s)} before)")
         many = d.get("pairs_at_once", 1)
-        lost = (f"{fmt(e.energy, 'energy', s)} lost" if many == 1 else
+        # numbered as the figures and the impact table number it (an event may span instants)
+        lost = (f"impact {d['event']}: {fmt(e.energy, 'energy', s)} lost" if many == 1 else
                 f"impact {d['event']}: {many} pairs at once, {fmt(d['instant_energy_J'], 'energy', s)} lost in all")
         return f"{how}: normal impulse {fmt(d['normal_impulse_N_s'], 'impulse', s)}, delta-v {dv}, {lost}"
     return message_in(e.detail, s)

@@ -234,7 +234,7 @@ def impact_instant(model: SceneModel, t: float, y: np.ndarray, trigger: np.ndarr
         how = (f"{pair.a} strikes {pair.b} at {closing:.3g} m/s" if closing >= 0.0 else
                f"{pair.a} is pushed against {pair.b} (parting at {-closing:.3g} m/s before)")
         # with several pairs at once a pair's share of the loss can be of either sign: the instant's is given
-        lost = (f"{loss:.4g} J lost" if len(shares) == 1 else
+        lost = (f"impact {event}: {loss:.4g} J lost" if len(shares) == 1 else
                 f"impact {event}: {len(shares)} pairs at once, {loss_total:.4g} J lost in all")
         log.append(RunoutEvent(
             t, "impact", f"{how}: normal impulse {rec.normal_impulse:.4g} N s, delta-v {dv}, {lost}"

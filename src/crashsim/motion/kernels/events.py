@@ -545,14 +545,3 @@ def settle_at(y, M, D):
     rec = np.zeros((M.wheel.shape[0] * max(M.zone_mu.shape[0], 1) + D.parked.shape[0] + 8, 5))
     n = settle(y, M, D, np.zeros((M.wheel.shape[0], M.zone_mu.shape[0]), np.bool_), W, rec, 0)
     return rec[:n]
-
-
-@njit(**JIT)
-def pending_strike(y, M, D):
-    """After an impulse: :func:`find_strike` as ``geo`` = (pair, x, y, nx, ny, u_n); pair -1 if none."""
-    W = make_work(M)
-    body_trig(y, M.body.shape[0], W.trig)
-    geo = np.zeros(6)
-    if not find_strike(y, M, D, W.trig, W.contact_pts, geo):
-        geo[0] = -1.0
-    return geo

@@ -598,6 +598,11 @@ class PairImpulse:
         return self.energy_loss_normal + self.energy_loss_tangential + self.energy_loss_moment
 
 
+def _delta_v_json(delta_v: dict) -> dict:
+    """``{body: (dvx, dvy)}`` as the JSON gives a delta-v: ``{body: {"vector": [dvx, dvy], "magnitude": |dv|}}``."""
+    return {k: {"vector": list(v), "magnitude": float(np.hypot(*v))} for k, v in delta_v.items()}
+
+
 @dataclass(frozen=True, eq=False)
 class SecondaryImpact:
     """One pair's part of an impact during the run-out (SI, world frame).
@@ -664,7 +669,7 @@ class SecondaryImpact:
             "body1": self.body1, "body2": self.body2, "point": self.point, "normal": self.normal,
             "closing_speed": self.closing_speed, "normal_impulse": self.normal_impulse,
             "tangential_impulse": self.tangential_impulse, "energy_loss": self.energy_loss,
-            "delta_v": {k: {"vector": list(v), "magnitude": float(np.hypot(*v))} for k, v in self.delta_v.items()},
+            "delta_v": _delta_v_json(self.delta_v),
             "law": self.law, "restitution": self.restitution, "friction": self.friction, "warning": self.warning,
             **_work_split(self.result),
         })
@@ -725,8 +730,7 @@ class ImpactEvent:
         return jsonable({"event": self.number, "time": self.t, "instants": self.instants, "pairs": list(self.pairs),
                          "energy_loss": self.energy_loss,
                          "normal_impulse": float(sum(r.normal_impulse for r in self.records)),
-                         "delta_v": {k: {"vector": list(v), "magnitude": float(np.hypot(*v))}
-                                     for k, v in self.delta_v().items()}})
+                         "delta_v": _delta_v_json(self.delta_v())})
 
 
 def impact_events(impacts) -> list[ImpactEvent]:

@@ -523,11 +523,41 @@ def build_parser() -> argparse.ArgumentParser:
     pr.add_argument("--plot", metavar="NAME", help="draw preset NAME to scale in plan view (with -o FILE)")
     pr.add_argument("-o", "--output", metavar="FILE", help="figure of --plot: .png, .svg or .pdf")
     pr.set_defaults(func=_cmd_presets)
+
+    lv = sub.add_parser("live", help="open the scene in a live view in the browser: drag vehicles, set speeds and "
+                                     "frictions, see the scene, its evidence and its uncertainty recomputed at once")
+    lv.add_argument("file", help="scenario file (TOML)")
+    lv.add_argument("--port", type=int, default=0, help="port on 127.0.0.1 (default: a free one)")
+    lv.add_argument("--no-browser", action="store_true", help="print the address only, do not open a browser")
+    lv.add_argument("--band-samples", type=int, default=32,
+                    help="samples of the Monte Carlo band (with [uncertainty]; 0: none; default 32)")
+    lv.add_argument("--workers", type=int, default=2, help="worker processes of the band (default 2)")
+    lv.set_defaults(func=_cmd_live)
     return p
 
 
+def _cmd_live(args) -> int:
+    try:
+        from .live.server import LiveServer
+    except ImportError as exc:  # aiohttp or tomlkit missing: the optional extra
+        raise ScenarioError(f"the live view needs the 'live' extra ({exc.name} is not installed): "
+                            "pip install \"crashsim[live]\"", field="live") from None
+    server = LiveServer(args.file, port=args.port, band_samples=args.band_samples, workers=args.workers)
+
+    def ready(url):
+        sys.stderr.write(f"crashsim live: {args.file} at\n  {url}\n(Ctrl+C stops it; the address carries the "
+                         "token the server asks of every request)\n")
+        if not args.no_browser:
+            import webbrowser
+
+            webbrowser.open(url)
+
+    server.run(on_ready=ready)
+    return 0
+
+
 #: Commands that run the run-out kernels (and so may compile them on a first run).
-_COMPUTING = ("run", "fit", "mc", "posterior", "plot", "animate", "export", "report", "validate")
+_COMPUTING = ("run", "fit", "mc", "posterior", "plot", "animate", "export", "report", "validate", "live")
 
 
 def _first_compile(bar: bool = True) -> None:
@@ -646,6 +676,13 @@ def _check_options(args) -> None:
                     raise ScenarioError(f"--times: {t.strip()!r}; allowed times > 0 after separation, e.g. "
                                         "\"0.5 s, 1 s\"", field="--times")
                 args.times_s.append(v)
+    if c == "live":
+        if not 0 <= args.port <= 65535:
+            raise ScenarioError(f"--port = {args.port}; allowed 0 (a free port) to 65535", field="--port")
+        if args.band_samples < 0:
+            raise ScenarioError(f"--band-samples = {args.band_samples}; allowed 0 (no band) or more", field="--band-samples")
+        if args.workers < 1:
+            raise ScenarioError(f"--workers = {args.workers}; allowed 1 or more", field="--workers")
     if c == "mc" and args.samples is not None and args.samples < 1:
         raise ScenarioError(f"--samples = {args.samples}; allowed a number of samples >= 1", field="--samples")
     if c == "posterior" and args.steps is not None and args.steps < 1:

@@ -1,0 +1,58 @@
+"""The Monte Carlo band of the live view, run in worker processes.
+
+A worker builds one :class:`BandRunner` per scene (keyed by the file's hash and the inputs) and
+runs the samples it is sent: each sample's scene to rest (the lean result a Monte Carlo sample
+reads), returning its CG paths, rest poses and whether it meets all the evidence.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import CrashsimError
+from ..reconstruct import run_scene
+from ..reconstruct.overrides import ScenarioOverrides
+
+__all__ = ["BandRunner", "run_band_chunk", "PATH_POINTS"]
+
+#: Points per CG path of a band sample.
+PATH_POINTS = 60
+
+_RUNNERS: dict = {}
+
+
+class BandRunner:
+    """The samples of one scene: its inputs by path, built once (:class:`ScenarioOverrides`)."""
+
+    def __init__(self, payload: dict):
+        self.overrides = ScenarioOverrides(payload["data"], payload["paths"], engine=payload["engine"],
+                                           file=payload["file"], cache=1, field_prefix="uncertainty.inputs")
+
+    def run(self, x) -> dict:
+        try:
+            scene = run_scene(self.overrides.scenario(x), lean=True)
+        except CrashsimError as exc:
+            return {"error": f"{type(exc).__name__}: {exc}"}
+        paths, rest = {}, {}
+        for r in (scene.runout or {}).values():
+            for name, b in r.bodies.items():
+                rest[name] = [round(float(b.rest_position[0]), 4), round(float(b.rest_position[1]), 4),
+                              round(float(b.rest_heading), 5)]
+        t_end = float(scene.t_end or 0.0)
+        if t_end > 0:
+            h = scene.history(max(t_end / (PATH_POINTS - 1), 1e-3))
+            for name in rest:
+                if f"{name}.x" in h:
+                    paths[name] = np.round(np.column_stack([h[f"{name}.x"], h[f"{name}.y"]]), 3).tolist()
+        ev = scene.evidence
+        return {"paths": paths, "rest": rest, "at_rest": bool(scene.at_rest),
+                "all_passed": bool(ev.all_passed) if ev is not None else False}
+
+
+def run_band_chunk(payload: dict, rows: list) -> list[dict]:
+    """Run the band samples ``rows`` (SI values of ``payload['paths']``) in this process."""
+    r = _RUNNERS.get(payload["key"])
+    if r is None:
+        _RUNNERS.clear()
+        r = _RUNNERS[payload["key"]] = BandRunner(payload)
+    return [r.run(x) for x in rows]

@@ -1,0 +1,106 @@
+"""The live server's safety: the token, the Host and Origin checks, hostile messages, coalescing."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+
+import pytest
+
+
+
+def _run(coro):
+    return asyncio.new_event_loop().run_until_complete(coro)
+
+
+async def _get(srv, path, headers=None, token=True):
+    import aiohttp
+
+    q = f"?token={srv.token}" if token else ""
+    async with aiohttp.ClientSession() as s:
+        async with s.get(f"http://127.0.0.1:{srv.port}{path}{q}", headers=headers or {}) as r:
+            return r.status, await r.read()
+
+
+def test_the_page_needs_the_token(live_server):
+    assert _run(_get(live_server, "/"))[0] == 200
+    assert _run(_get(live_server, "/static/live.js"))[0] == 200
+    status, body = _run(_get(live_server, "/", token=False))
+    assert status == 403 and b"token" in body
+    assert _run(_get(live_server, "/static/live.js", token=False))[0] == 403
+    wrong = _run(_get(live_server, f"/?token={live_server.token[:-1]}x", token=False))
+    assert wrong[0] == 403
+
+
+def test_a_foreign_host_or_origin_is_refused(live_server):
+    assert _run(_get(live_server, "/", headers={"Host": f"evil.example:{live_server.port}"}))[0] == 403  # DNS rebinding
+    assert _run(_get(live_server, "/", headers={"Host": f"localhost:{live_server.port}"}))[0] == 200
+    assert _run(_get(live_server, "/", headers={"Origin": "http://evil.example"}))[0] == 403
+
+
+def test_no_file_but_the_pages_own_is_served(live_server):
+    for path in ("/static/../session.py", "/static/live_server.py", "/static/%2e%2e%2fsession.py", "/scene.toml"):
+        assert _run(_get(live_server, path))[0] in (403, 404)
+
+
+async def _ws_session(srv, origin, messages, wait_for=None):
+    import aiohttp
+
+    got = []
+    async with aiohttp.ClientSession() as s:
+        async with s.ws_connect(f"ws://127.0.0.1:{srv.port}/ws?token={srv.token}",
+                                headers={} if origin is None else {"Origin": origin}) as ws:
+            for m in messages:
+                await (ws.send_str(m) if isinstance(m, str) else ws.send_bytes(m))
+            while True:
+                msg = await asyncio.wait_for(ws.receive(), 60)
+                if msg.type != aiohttp.WSMsgType.TEXT:
+                    break
+                got.append(json.loads(msg.data))
+                if wait_for(got):
+                    break
+    return got
+
+
+def test_the_websocket_needs_this_servers_origin(live_server):
+    import aiohttp
+
+    for origin in (None, "http://evil.example", f"http://127.0.0.1:{live_server.port + 1}"):
+        with pytest.raises(aiohttp.WSServerHandshakeError) as e:
+            _run(_ws_session(live_server, origin, [], lambda got: True))
+        assert e.value.status == 403
+
+
+def test_malformed_messages_are_answered_and_the_server_goes_on(live_server):
+    origin = f"http://127.0.0.1:{live_server.port}"
+    bad = ["not json", "[]", "3", "null", '{"type": 5}', '{"type": "exec", "code": "import os"}',
+           '{"type": "set"}', '{"type": "set", "seq": "1", "values": {}}', '{"type": "set", "seq": 1, "values": []}',
+           '{"type": "set", "seq": 1, "values": {"x": [1]}}', '{"type": "save_as", "name": 3}',
+           '{"type": "set", "seq": true, "values": {}}', "{" * 5000, b"\x00\x01"]
+    msgs = [bad[i % len(bad)] for i in range(200)]
+    n_before = live_server.stats["errors"]
+    got = _run(_ws_session(live_server, origin, msgs, lambda got: sum(m["type"] == "error" for m in got) >= 200))
+    errors = [m for m in got if m["type"] == "error"]
+    assert len(errors) == 200 and live_server.stats["errors"] - n_before == 200
+    assert all(isinstance(m["error"], str) and m["error"] for m in errors)
+    # still serving: a valid change, and an unknown input, answered
+    got = _run(_ws_session(live_server, origin, ['{"type": "set", "seq": 7, "values": {"vehicles.B.speed": "31 mph"}}',
+                                            '{"type": "set", "seq": 8, "values": {"vehicles.Z.speed": "31 mph"}}'],
+                           lambda got: any(m.get("seq") == 8 for m in got)))
+    kinds = {m.get("seq"): m["type"] for m in got if m.get("seq") in (7, 8)}
+    assert kinds.get(8) == "invalid" and "not an input of this view" in next(m for m in got if m.get("seq") == 8)["error"]
+    assert _run(_get(live_server, "/"))[0] == 200
+
+
+def test_changes_sent_at_once_are_coalesced(live_server):
+    origin = f"http://127.0.0.1:{live_server.port}"
+    msgs = [json.dumps({"type": "set", "seq": 100 + i, "values": {"vehicles.B.speed": f"{30 + i * 0.01:.2f} mph"}})
+            for i in range(100)]
+    computed = live_server.stats["computed"]
+    got = _run(_ws_session(live_server, origin, msgs, lambda got: any(m.get("seq") == 199 for m in got)))
+    answered = [m["seq"] for m in got if m["type"] in ("result", "invalid") and m.get("seq", 0) >= 100]
+    assert answered[-1] == 199  # the last change is the last answered
+    assert answered == sorted(answered)
+    assert live_server.stats["computed"] - computed < 100  # not one recompute per change: never a backlog
+    last = next(m for m in got if m.get("seq") == 199)
+    assert last["values"]["vehicles.B.speed"] == "13.8538 m/s"  # 30.99 mph in the file's unit

@@ -38,7 +38,7 @@ def served(scene_copy):
 
 def _settled(page, timeout=60000):
     """Every change sent answered, and a result drawn after it (or the change refused)."""
-    page.wait_for_function("window.__live.results > 0 && window.__live.lastAnswered >= window.__live.lastSent "
+    page.wait_for_function("window.__live.results > 0 && !window.__live.busy "
                            "&& (window.__live.lastDrawn >= window.__live.lastSent || window.__live.invalid > 0)",
                            timeout=timeout)
 

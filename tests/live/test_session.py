@@ -105,8 +105,12 @@ def test_the_band_draws_about_the_views_values(scene_copy):
     payload, rows = s.band_task(4)
     i = payload["paths"].index("vehicles.B.speed")
     s.apply({"vehicles.B.speed": "40 mph"})
-    _, moved = s.band_task(4)
+    moved_payload, moved = s.band_task(4)
     shift = 17.8816 - 13.41
-    assert [r[i] for r in moved] == pytest.approx([r[i] + shift for r in rows])
-    j = payload["paths"].index("vehicles.A.position[0]")  # not uncertain: the view's value in every sample
-    assert {r[j] for r in moved} == {0.0}
+    k = moved_payload["paths"].index("vehicles.B.speed")
+    assert [r[k] for r in moved] == pytest.approx([r[i] + shift for r in rows])
+    assert "vehicles.A.position[0]" not in payload["paths"]  # the file's value: not written
+    s.apply({"vehicles.A.position[0]": "0.5 m"})
+    p2, moved = s.band_task(4)
+    j = p2["paths"].index("vehicles.A.position[0]")  # not uncertain: the view's value in every sample
+    assert {r[j] for r in moved} == {0.5}

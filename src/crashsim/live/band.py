@@ -7,6 +7,8 @@ reads), returning its CG paths, rest poses and whether it meets all the evidence
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
 from ..errors import CrashsimError
@@ -29,10 +31,12 @@ class BandRunner:
                                            file=payload["file"], cache=1, field_prefix="uncertainty.inputs")
 
     def run(self, x) -> dict:
+        t0 = time.process_time()
         try:
             scene = run_scene(self.overrides.scenario(x), lean=True)
         except CrashsimError as exc:
-            return {"error": f"{type(exc).__name__}: {exc}"}
+            return {"error": f"{type(exc).__name__}: {exc}", "cpu": time.process_time() - t0}
+        cpu = time.process_time() - t0  # the sample's scene build and physics, CPU seconds
         paths, rest = {}, {}
         for r in (scene.runout or {}).values():
             for name, b in r.bodies.items():
@@ -45,7 +49,7 @@ class BandRunner:
                 if f"{name}.x" in h:
                     paths[name] = np.round(np.column_stack([h[f"{name}.x"], h[f"{name}.y"]]), 3).tolist()
         ev = scene.evidence
-        return {"paths": paths, "rest": rest, "at_rest": bool(scene.at_rest),
+        return {"paths": paths, "rest": rest, "at_rest": bool(scene.at_rest), "cpu": cpu,
                 "all_passed": bool(ev.all_passed) if ev is not None else False}
 
 

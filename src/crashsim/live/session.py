@@ -19,6 +19,7 @@ import copy
 import hashlib
 import math
 import re
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
@@ -104,10 +105,13 @@ class Control:
     target: Any = field(repr=False, default=None)
 
     def to_dict(self) -> dict:
-        num = (lambda x: x * self.per_si)
+        step = _step(self.kind, self.per_si)
+        # the slider's ends on whole steps, so that its values are round numbers in the unit
+        lo = round(math.floor(self.lower * self.per_si / step) * step, 6)
+        hi = round(math.ceil(self.upper * self.per_si / step) * step, 6)
         return {"path": self.path, "label": self.label, "group": self.group, "kind": self.kind.value,
-                "unit": self.unit, "per_si": self.per_si, "lower": num(self.lower), "upper": num(self.upper),
-                "written": self.written, "value": num(self.value), "step": _step(self.kind, self.per_si)}
+                "unit": self.unit, "per_si": self.per_si, "lower": lo, "upper": hi,
+                "written": self.written, "value": self.value * self.per_si, "step": step}
 
 
 def _step(kind: Kind, per_si: float) -> float:
@@ -151,11 +155,17 @@ class LiveSession:
         self.data = load_scene_data(self.file)
         self.system = self.scenario.units
         self.controls = self._make_controls()
-        self.overrides = ScenarioOverrides(self.data, list(self.controls), engine=self.engine, file=self.file,
-                                           cache=4, field_prefix="live")
+        self._rebase()
         self.result = None
         self.payload = None
         self.error = None
+
+    def _rebase(self) -> None:
+        """The file's own values of the inputs (SI; None where the file does not give one)."""
+        self.overrides = ScenarioOverrides(self.data, list(self.controls), engine=self.engine, file=self.file,
+                                           cache=1, field_prefix="live")
+        self._base = [self.overrides.base_value(i) for i in range(len(self.controls))]
+        self._by_paths = {}
 
     def changed_on_disk(self) -> bool:
         """The file on disk is not the file opened (its bytes changed since)."""
@@ -320,11 +330,27 @@ class LiveSession:
         new = {}
         for p, w in (values or {}).items():
             new[p] = self.read(p, w)
-        si = [new[p][1] if p in new else c.value for p, c in self.controls.items()]
-        sc = self.overrides.scenario(si)
+        si = {p: new[p][1] if p in new else c.value for p, c in self.controls.items()}
+        # only the inputs that differ from the file's are written (the others are the file's):
+        # a change of the speeds, coefficients, point or friction alone then takes the fast path
+        # that rebuilds only the objects it reaches (crashsim.reconstruct.variants)
+        differ = tuple(p for i, p in enumerate(self.controls)
+                       if self._base[i] is None or si[p] != self._base[i])
+        sc = self._overrides_for(differ).scenario([si[p] for p in differ])
         for p, (text, x) in new.items():
             self.controls[p].written, self.controls[p].value = text, x
         return sc
+
+    def _overrides_for(self, paths: tuple):
+        """The :class:`ScenarioOverrides` of the file and these inputs (a few kept)."""
+        o = self._by_paths.get(paths)
+        if o is None:
+            o = ScenarioOverrides(self.data, list(paths), engine=self.engine, file=self.file, cache=2,
+                                  field_prefix="live")
+            if len(self._by_paths) >= 8:
+                self._by_paths.pop(next(iter(self._by_paths)))
+            self._by_paths[paths] = o
+        return o
 
     def apply(self, values: Mapping[str, Any] | None = None) -> dict:
         """Read ``values`` (``{path: written}``) over the current inputs, run the scene, and return
@@ -332,9 +358,12 @@ class LiveSession:
         impact that cannot be solved) returns ``{"ok": False, "error": one line}`` and keeps the
         inputs and the result of the last good change."""
         keep = {p: (c.written, c.value) for p, c in self.controls.items()}
+        t0 = time.perf_counter()
         try:
             sc = self.scenario_for(values)
+            t1 = time.perf_counter()
             result = run_scene(sc)
+            t2 = time.perf_counter()
         except CrashsimError as exc:
             for p, (w, x) in keep.items():
                 self.controls[p].written, self.controls[p].value = w, x
@@ -342,7 +371,10 @@ class LiveSession:
             return {"ok": False, "error": self.error, "values": self.values()}
         self.result, self.error = result, None
         self.payload = view.result_payload(result, self)
-        return {"ok": True, **self.payload, "values": self.values()}
+        # seconds: reading the values and building the scene, the scene's physics (impact, run-out to
+        # rest, evidence checks), the payload (benchmarks/live_view.py states each as a ratio)
+        timing = {"build": t1 - t0, "physics": t2 - t1, "payload": time.perf_counter() - t2}
+        return {"ok": True, **self.payload, "values": self.values(), "timing": timing}
 
     def static(self) -> dict:
         """What the page draws once per file: the map, zones, obstacles, evidence, outlines, inputs."""
@@ -368,8 +400,7 @@ class LiveSession:
             self.file_hash = hashlib.sha256(out.read_bytes()).hexdigest()
             self.raw = load_toml(self.file)
             self.data = load_scene_data(self.file)
-            self.overrides = ScenarioOverrides(self.data, list(self.controls), engine=self.engine, file=self.file,
-                                               cache=4, field_prefix="live")
+            self._rebase()
         return str(out)
 
     def sibling(self, name: str) -> Path:
@@ -427,23 +458,38 @@ class LiveSession:
         from ..reconstruct.montecarlo import sample_inputs
 
         spec = self._band_spec()
-        paths = list(self.controls)
-        extra = [d.path for d in spec.inputs if d.path not in self.controls]
-        paths += extra
-        current = [c.value for c in self.controls.values()]
-        index = {p: i for i, p in enumerate(paths)}
+        # the inputs written into each sample: those the view changed from the file (at their value)
+        # and the uncertain ones (drawn); the rest stay the file's, so that a sample takes the fast
+        # path when the changed inputs allow it (crashsim.reconstruct.variants)
         shift = {}
         for i, (p, c) in enumerate(self.controls.items()):
-            base = self.overrides.base_value(i)
+            base = self._base[i]
             shift[p] = 0.0 if base is None else c.value - base
+        changed = [p for p, c in self.controls.items() if shift[p] != 0.0 or self._base[list(self.controls).index(p)] is None]
+        paths = changed + [d.path for d in spec.inputs if d.path not in changed]
+        index = {p: i for i, p in enumerate(paths)}
+        current = [self.controls[p].value for p in changed] + [0.0] * (len(paths) - len(changed))
         rows = []
         for i in range(n):
-            x = list(current) + [0.0] * len(extra)
+            x = list(current)
             for d, v in zip(spec.inputs, sample_inputs(spec, spec.seed, i)):
                 x[index[d.path]] = float(v) + shift.get(d.path, 0.0)
             rows.append(x)
-        payload = {"data": self.data, "paths": paths, "engine": self.engine, "file": self.file,
-                   "key": hashlib.sha256(repr((self.file_hash, paths, self.engine)).encode()).hexdigest()}
+        data, rtol = self.data, None
+        ro = self.result.scenario.runout if self.result is not None else None
+        raw_runout = data.get("runout")
+        if (spec.tolerance == "evidence" and ro is not None and isinstance(raw_runout, dict)
+                and "accuracy" not in raw_runout):
+            # as crashsim mc runs the samples of this file: at the loosest run-out tolerance whose
+            # error stays negligible beside the evidence (crashsim.reconstruct.tolerance)
+            from ..reconstruct.tolerance import evidence_tolerance, tolerance_items, with_tolerance
+
+            tol = evidence_tolerance(tolerance_items(self.result.scenario.evidence), self.result, ro.options.rtol,
+                                     ro.options.atol, what="tolerance")
+            if tol.changed:
+                data, rtol = with_tolerance(data, tol), tol.rtol
+        payload = {"data": data, "paths": paths, "engine": self.engine, "file": self.file, "rtol": rtol,
+                   "key": hashlib.sha256(repr((self.file_hash, paths, self.engine, rtol)).encode()).hexdigest()}
         return payload, rows
 
 
@@ -480,5 +526,5 @@ class LiveSession:
 
 def _file_value_differs(session: LiveSession, c: Control) -> bool:
     """The current value is not the file's own (SI, by value: the file may write it in other digits)."""
-    base = session.overrides.base_value(list(session.controls).index(c.path))
+    base = session._base[list(session.controls).index(c.path)]
     return base is None or abs(base - c.value) > 1e-12 * max(1.0, abs(base))

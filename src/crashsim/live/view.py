@@ -175,7 +175,7 @@ def band_payload(rows: list[dict], n: int, system: str) -> dict:
     the evidence."""
     ok = [r for r in rows if "error" not in r]
     meets = sum(1 for r in ok if r.get("all_passed"))
-    return {"n": n, "n_done": len(ok), "n_failed": len(rows) - len(ok), "n_meets_all": meets,
+    return {"n": n, "n_done": len(ok), "cpu": sum(r.get("cpu", 0.0) for r in rows), "n_failed": len(rows) - len(ok), "n_meets_all": meets,
             "share_text": f"{meets} of {n} samples ({100.0 * meets / n:.0f} %) meet all the evidence" if n else "",
             "samples": [{"paths": r["paths"], "rest": r["rest"], "all_passed": r.get("all_passed", False)} for r in ok]}
 

@@ -21,7 +21,7 @@
   let tIndex = 0, playing = false;
   const undo = [], redo = [];
   // measurement hooks (benchmarks/live_view.py): input time and drawn time of each change
-  const probe = window.__live = {inputT: {}, drawnT: {}, lastDrawn: -1, lastSent: 0, lastAnswered: -1, results: 0, invalid: 0, errors: 0,
+  const probe = window.__live = {inputT: {}, drawnT: {}, lastDrawn: -1, lastSent: 0, lastAnswered: -1, lastInput: 0, busy: false, results: 0, invalid: 0, errors: 0,
                                  bands: 0, lastBand: null, messages: []};
 
   // -- the socket ---------------------------------------------------------------------------------
@@ -36,13 +36,33 @@
   function send(msg) { if (ws && ws.readyState === 1) ws.send(JSON.stringify(msg)); }
   function status(text, cls) { const s = $("status"); s.textContent = text; s.className = "status " + (cls || ""); }
 
+  // One change in flight at a time: a change made meanwhile waits, and only the latest waiting one
+  // is sent when the answer comes (never a backlog). Inputs are counted: the probe times each input
+  // from its event to the result that includes it drawn.
+  let inputs = 0, inFlight = null, dirty = false;
+  const upTo = {};
   function sendValues(inputTime) {
+    inputs += 1;
+    probe.lastInput = inputs;
+    probe.inputT[inputs] = inputTime === undefined ? performance.now() : inputTime;
+    dirty = true;
+    probe.busy = true;
+    if (inFlight === null) flush();
+  }
+  function flush() {
     seq += 1;
     lastSent = seq;
     probe.lastSent = seq;
-    probe.inputT[seq] = inputTime === undefined ? performance.now() : inputTime;
+    upTo[seq] = inputs;
+    inFlight = seq;
+    dirty = false;
     send({type: "set", seq: seq, values: Object.assign({}, values)});
     status("computing…", "busy");
+  }
+  function answered(s) {
+    if (s !== inFlight) return;
+    inFlight = null;
+    if (dirty) flush(); else probe.busy = false;
   }
 
   function onMessage(m) {
@@ -180,10 +200,11 @@
     probe.results += 1;
     probe.lastAnswered = Math.max(probe.lastAnswered, m.seq);
     probe.messages.push(["result", m.seq]);
+    answered(m.seq);
     if (m.seq < lastShown) return;  // an older answer after a newer one: never shown
     R = m;
     lastShown = m.seq;
-    if (m.seq === lastSent || m.seq <= 0) {
+    if ((m.seq === lastSent && !dirty) || m.seq <= 0) {
       values = Object.assign({}, m.values);
       status(m.seq === lastSent || m.seq <= 0 ? "up to date" : "computing…", "");
     }
@@ -194,13 +215,15 @@
     markChanged(m.changed);
     if (band) layers.band.setAttribute("opacity", "0.35");  // the band of an older state until its own comes
     const s = m.seq;
-    requestAnimationFrame(() => { probe.drawnT[s] = performance.now(); probe.lastDrawn = s; });
+    const n = upTo[s];
+    requestAnimationFrame(() => { if (n !== undefined) probe.drawnT[n] = performance.now(); probe.lastDrawn = s; });
   }
 
   function onInvalid(m) {
     probe.invalid += 1;
     if (m.seq !== undefined) probe.lastAnswered = Math.max(probe.lastAnswered, m.seq);
-    if (m.seq !== undefined && m.seq < lastSent) return;  // a newer change is on its way
+    answered(m.seq);
+    if ((m.seq !== undefined && m.seq < lastSent) || dirty) return;  // a newer change is on its way
     values = Object.assign({}, m.values || values);  // the last good values
     showError(m.error);
     status("invalid input: last good result shown", "bad");

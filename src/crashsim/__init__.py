@@ -28,12 +28,9 @@ Everything inside is SI; units are converted at the edges (:mod:`crashsim.units`
 
 import logging as _logging
 
+from ._lazy import lazy_exports as _lazy_exports
 from ._version import __version__
-from .api import fit, load, monte_carlo, posterior, run
 from .errors import CrashsimError, IllConditionedError, ScenarioError, SolverError
-from .impact import (CrushSurface, ExternalImpulse, ImpactBatch, ImpactProblem, ImpactResult, TangentialLaw,
-                     VelocityConstraint, solve_impact, tyre_friction_impulse)
-from .vehicles import Axle, Body, BodyState, Hitch, Vehicle, chain_states
 
 # Library code never prints: warnings go to the "crashsim" logger, silent unless the
 # application configures logging (the standard library's advice for libraries).
@@ -46,3 +43,12 @@ __all__ = [
     "CrushSurface", "ExternalImpulse", "ImpactBatch", "ImpactProblem", "ImpactResult", "TangentialLaw",
     "VelocityConstraint", "solve_impact", "tyre_friction_impulse",
 ]
+
+# The light face: everything but the version and the errors is imported on first use (PEP 562), so
+# ``import crashsim`` loads neither numpy nor the kernels (numba), SciPy or matplotlib.
+__getattr__, __dir__ = _lazy_exports(__name__, {
+    **dict.fromkeys(("fit", "load", "monte_carlo", "posterior", "run"), ".api"),
+    **dict.fromkeys(("CrushSurface", "ExternalImpulse", "ImpactBatch", "ImpactProblem", "ImpactResult",
+                     "TangentialLaw", "VelocityConstraint", "solve_impact", "tyre_friction_impulse"), ".impact"),
+    **dict.fromkeys(("Axle", "Body", "BodyState", "Hitch", "Vehicle", "chain_states"), ".vehicles"),
+})

@@ -19,11 +19,12 @@ happens. The warm-up itself runs the whole pipeline and so lives at the top, in 
 from __future__ import annotations
 
 import hashlib
+import importlib.metadata
 import os
 import sys
 from pathlib import Path
 
-__all__ = ["cache_dir", "numba_dir", "configure", "kernel_sources", "digest", "marker", "ready"]
+__all__ = ["cache_dir", "numba_version", "numba_dir", "configure", "kernel_sources", "digest", "marker", "ready"]
 
 
 def cache_dir() -> Path:
@@ -41,11 +42,16 @@ def cache_dir() -> Path:
     return base / "crashsim"
 
 
+def numba_version() -> str:
+    """The installed numba's version, read from its package metadata: whether the kernels are compiled
+    (:func:`ready`) is answered without importing numba (about 0.7 s of CPU), so a command that
+    refuses its input, or finds the kernels ready, does not pay for it."""
+    return importlib.metadata.version("numba")
+
+
 def numba_dir() -> Path:
     """The numba cache below :func:`cache_dir`, one per numba version."""
-    import numba
-
-    return cache_dir() / f"numba-{numba.__version__}"
+    return cache_dir() / f"numba-{numba_version()}"
 
 
 def configure() -> Path:
@@ -85,9 +91,7 @@ def digest() -> str:
     where they are and when they were written, as numba's own cache index stamps a kernel by its
     file (a reinstall, editable or not, puts new files there: their kernels compile anew, and the
     marker says so instead of a ready cache that every process would silently recompile)."""
-    import numba
-
-    h = hashlib.sha256(numba.__version__.encode())
+    h = hashlib.sha256(numba_version().encode())
     for path in kernel_sources():
         st = path.stat()
         h.update(f"{path.resolve()}\0{st.st_mtime_ns}\0{st.st_size}\0".encode())

@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ScenarioError
+from .figure_options import ANIMATION_LEGENDS, VIEWS
 from .geometry import to_world
 from .motion.result import time_grid
 from .plotting import (Z_REST, Z_TEXT, figure_system, layout_scene_figure, place_labels, plot_scene,
@@ -47,13 +48,6 @@ HOLD = 1.0
 
 #: GIF frame delays are whole centiseconds and most viewers slow down delays under 20 ms.
 _GIF_MIN_DELAY_MS = 20
-
-#: Views of an animation: a camera framed on the vehicles at each frame, or the whole scene still.
-VIEWS = ("follow", "scene")
-
-#: Legends of an animation: compact, outside the view (:func:`crashsim.plotting.plot_scene`'s
-#: ``legend="compact"``), or none.
-ANIMATION_LEGENDS = ("compact", "none")
 
 #: Half-width of the follow camera's smoothing window [s of scene time] (:func:`camera_limits`).
 CAMERA_WINDOW = 0.5

@@ -14,32 +14,17 @@ import math
 import sys
 from pathlib import Path
 
-from tqdm import tqdm
-
-from . import first_run
 from ._jit import cache_dir, ready
 from ._version import __version__
-from .animation import ANIMATION_LEGENDS, VIEWS, animate_scene, check_animation_path, frame_times
-from .casereport import check_result_json, made_from, survey_files, write_case_report
 from .errors import CrashsimError, ScenarioError, SolverError
-from .motion.result import jsonable as _clean  # JSON-safe copy: numpy to Python, NaN/inf to None
+from .figure_options import ANIMATION_LEGENDS, LABEL_KINDS, LEGEND_MODES, PAPER_SIZES, VIEWS, check_hide, parse_scale
 from .outputs import check_output_dir, check_output_file, check_workers
-from .plotting import LABEL_KINDS, LEGEND_MODES, PAPER_SIZES, check_hide, check_sheet, parse_scale, save_scene_figures
-from .reconstruct import run_scene
-from .reconstruct.fit import fit_scene, same_file
-from .reconstruct.mc_plots import save_mc_figures
-from .reconstruct.montecarlo import OUTPUT_KINDS, monte_carlo
-from .reconstruct.posterior import run_posterior
-from .reconstruct.posterior_plots import save_posterior_figures
-from .scenario import load_scenario, preset_geometry, presets, schema_document
-from .survey.export import export_frame, export_items, write_dxf, write_geojson
-from .survey.inspect import preview, read_any, summary
-from .survey.mapping import load_scene_data
-from .survey.underlay import scene_underlay
 from .units import Kind, format_value, parse, resolve_system
-from .validation import class_errors, load_suite, plot_case, results_dict, run_suite, table_text, write_csv
-from .vehicle_plan import geometry_lines, plot_body_plan
-from .warmup import COMPILE_STEPS, compile_kernels
+
+# The light face: the parser, --help, --version and the checks of options and output paths need
+# none of the physics, so a command imports what it runs (the scenario loader, the kernels, SciPy,
+# matplotlib) inside the function that runs it: ``crashsim --version`` starts in tenths of a second
+# (benchmarks/startup.py, tests/unit/test_light_import.py).
 
 __all__ = ["main"]
 
@@ -81,6 +66,9 @@ def _load(path: str):
     """The scenario of ``path``; in an interpreted first run without the run-out's wall-time limit
     (a budget for compiled kernels: a result must not depend on whether they were compiled yet), said
     on stderr."""
+    from . import first_run
+    from .scenario import load_scenario
+
     scenario = load_scenario(path)
     ro = scenario.runout
     if first_run.interpreted() and ro is not None and ro.options.max_wall_time < first_run.INTERPRETED_WALL_TIME:
@@ -97,17 +85,22 @@ def _load(path: str):
 def _figure_inputs(scenario) -> None:
     """What a figure reads besides the scene, read before the run: the underlay image (a damaged one is
     refused now, not after the run-out)."""
+    from .survey.underlay import scene_underlay
+
     scene_underlay(scenario)
 
 
 def _cmd_run(args) -> int:
+    from .motion.result import jsonable
+    from .reconstruct import run_scene
+
     scenario = _load(args.file)
     dt = _dt(args.dt)  # checked before any work (_check_options)
     result = run_scene(scenario)
     if args.csv:
         result.write_csv(Path(args.csv), system=args.units, dt=dt)
     if args.json:
-        json.dump(_clean(result.to_dict()), sys.stdout, indent=2)
+        json.dump(jsonable(result.to_dict()), sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:
         sys.stdout.write(result.report(args.units) + "\n")
@@ -122,6 +115,10 @@ def _cmd_run(args) -> int:
 
 
 def _cmd_fit(args) -> int:
+    from .reconstruct.fit import fit_scene, same_file
+    from .scenario import load_scenario
+    from .survey.mapping import load_scene_data
+
     if args.write_best is not None:  # before the fit, not after it
 
         if same_file(Path(args.write_best), Path(args.file)):
@@ -144,13 +141,21 @@ def _cmd_fit(args) -> int:
 def _dump_result(result, command: str, file: str) -> None:
     """The result as one JSON object (SI), with what it was made from (:func:`made_from`: the SHA-256
     of the scene's inputs), so that a case report embeds it only beside the scene it belongs to."""
-    d = _clean(result.to_dict())
+    from .casereport import made_from
+    from .motion.result import jsonable
+
+    d = jsonable(result.to_dict())
     d["made_from"] = made_from(command, file)
     json.dump(d, sys.stdout, indent=2)
     sys.stdout.write("\n")
 
 
 def _cmd_mc(args) -> int:
+    from .reconstruct.mc_plots import save_mc_figures
+    from .reconstruct.montecarlo import monte_carlo
+    from .scenario import load_scenario
+    from .survey.mapping import load_scene_data
+
     scenario = load_scenario(args.file)
     system = _units(args.units or scenario.units)
     if args.accept and scenario.evidence.empty:
@@ -196,6 +201,11 @@ def _stopped(what: str, kept_in) -> int:
 
 
 def _cmd_posterior(args) -> int:
+    from .reconstruct.posterior import run_posterior
+    from .reconstruct.posterior_plots import save_posterior_figures
+    from .scenario import load_scenario
+    from .survey.mapping import load_scene_data
+
     scenario = load_scenario(args.file)  # the whole file validated first ([fit], [posterior], evidence sigmas)
     system = _units(args.units or scenario.units)
     try:
@@ -267,6 +277,9 @@ def _add_inverse_commands(sub):
 
 
 def _cmd_plot(args) -> int:
+    from .plotting import check_sheet
+    from .reconstruct import run_scene
+
     interval = None if args.interval is None else parse(args.interval, Kind.TIME, field="--interval")
     scenario = _load(args.file)
     if args.paper is not None or args.scale is not None:  # the sheet against what is known before the run
@@ -285,6 +298,8 @@ def _cmd_plot(args) -> int:
 
 
 def _save_figures(args, scene, interval) -> list:
+    from .plotting import save_scene_figures
+
     return save_scene_figures(scene, Path(args.output), histories_path=args.histories and Path(args.histories),
                               dpi=args.dpi, interval=interval, system=args.units,
                               time_distance_path=args.time_distance and Path(args.time_distance),
@@ -293,6 +308,11 @@ def _save_figures(args, scene, interval) -> list:
 
 
 def _cmd_animate(args) -> int:
+    from tqdm import tqdm
+
+    from .animation import animate_scene, check_animation_path, frame_times
+    from .reconstruct import run_scene
+
     out = check_animation_path(args.output, field="-o")  # before anything long
     dt = parse(args.dt, Kind.TIME, field="--dt")
     frame_times(0.0, dt, field="--dt")  # dt > 0; the frame count is checked once the run-out's end is known
@@ -314,6 +334,8 @@ def _cmd_animate(args) -> int:
 
 
 def _cmd_survey(args) -> int:
+    from .survey.inspect import preview, read_any, summary
+
     data = read_any(args.file, units=args.units, columns=args.columns, crs=args.crs,
                     layer_property=args.layer_property)
     sys.stdout.write(summary(data) + "\n")
@@ -323,6 +345,9 @@ def _cmd_survey(args) -> int:
 
 
 def _cmd_export(args) -> int:
+    from .reconstruct import run_scene
+    from .survey.export import export_frame, export_items, write_dxf, write_geojson
+
     times = args.times_s  # checked before any work (_check_options), as the output paths
     scenario = _load(args.file)
     frame, unit = export_frame(scenario)
@@ -337,6 +362,12 @@ def _cmd_export(args) -> int:
 
 
 def _cmd_report(args) -> int:
+    from .casereport import survey_files, write_case_report
+    from .reconstruct import run_scene
+    from .reconstruct.montecarlo import OUTPUT_KINDS
+    from .scenario import presets
+    from .validation import class_errors
+
     extra = args.results  # read and checked before any work (_check_outputs)
     scenario = _load(args.file)
     _figure_inputs(scenario)
@@ -354,11 +385,16 @@ def _cmd_report(args) -> int:
 
 
 def _cmd_schema(args) -> int:
+    from .scenario import schema_document
+
     sys.stdout.write(schema_document(args.format) + "\n")
     return 0
 
 
 def _cmd_presets(args) -> int:
+    from .scenario import preset_geometry, presets
+    from .vehicle_plan import geometry_lines, plot_body_plan
+
     system = args.units or "SI"
     if args.plot:
         import matplotlib
@@ -386,6 +422,9 @@ def _cmd_presets(args) -> int:
 
 
 def _cmd_validate(args) -> int:
+    from .motion.result import jsonable
+    from .validation import load_suite, plot_case, results_dict, run_suite, table_text, write_csv
+
     suite = load_suite(args.suite)
     chosen = suite.select(args.cases, "fast" if args.quick else None)  # unknown names: exit 2 before any work
     if not chosen:
@@ -402,7 +441,7 @@ def _cmd_validate(args) -> int:
         for r in results:
             plot_case(r, Path(args.plots) / f"{r.id}.png", args.units)
     if args.json:
-        json.dump(_clean(results_dict(results)), sys.stdout, indent=2)
+        json.dump(jsonable(results_dict(results)), sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:
         sys.stdout.write(table_text(results, args.units))
@@ -563,6 +602,10 @@ _COMPUTING = ("run", "fit", "mc", "posterior", "plot", "animate", "export", "rep
 def _first_compile(bar: bool = True) -> None:
     """Compile the run-out kernels once, saying so on stderr with a progress bar (a line per step
     without ``bar``); the first run after installing or upgrading, later runs load them from the cache."""
+    from tqdm import tqdm
+
+    from .warmup import COMPILE_STEPS, compile_kernels
+
     if ready():
         return
     sys.stderr.write("crashsim: compiling the run-out kernels (once after installing or upgrading; about 1-2 "
@@ -615,6 +658,8 @@ def _check_outputs(args) -> None:
             if path:
                 check_output_file(path, field=field, suffixes=figs, what="a figure")
     if c == "report":
+        from .casereport import check_result_json
+
         check_output_file(args.output, field="-o", suffixes=(".html", ".htm"), make_parents=False,
                           what="the case report")
         args.results = {}
@@ -636,6 +681,8 @@ def _check_outputs(args) -> None:
         if args.plots:
             check_output_dir(args.plots, field="--plots", what="the figures")
     if c == "animate":
+        from .animation import check_animation_path
+
         check_output_file(check_animation_path(args.output, field="-o"), field="-o", what="the animation")
         if not parse(args.dt, Kind.TIME, field="--dt") > 0:
             raise ScenarioError(f"{args.dt!r} is not a positive time; allowed a time between frames > 0 s, "
@@ -692,13 +739,29 @@ def _check_options(args) -> None:
                             field="--sample-time-limit")
 
 
+def _check_scene_file(path: str) -> None:
+    """Read and validate the scenario file ``path`` without simulating its approaches (they run the
+    kernels): a :class:`ScenarioError` for a file that cannot be read or has an error."""
+    from .scenario import scenario_from_dict
+    from .schema import load_toml
+
+    scenario_from_dict(load_toml(path), file=path, approaches=False)
+
+
 def _first_run(args, argv: list[str]) -> int | None:
     """On a machine whose kernels are not compiled: run a single-scene command interpreted while they
     compile in the background, or compile first (:mod:`crashsim.first_run`). An exit code if the command
-    ran in a child process, else None (run it here)."""
-    if args.command not in _COMPUTING or ready() or first_run.interpreted():
+    ran in a child process, else None (run it here). The scenario file is read and validated first, so
+    that a file refused is refused at once, before any compile or child process starts."""
+    if args.command not in _COMPUTING or ready():
+        return None
+    from . import first_run
+
+    if first_run.interpreted():
         return None
     how = first_run.policy()
+    if getattr(args, "file", None) is not None:
+        _check_scene_file(args.file)
     dead = first_run.dead_compile()
     if dead is not None:  # say so once, and compile again (below: in the background or here)
         sys.stderr.write(f"crashsim: {dead}; compiling again\n")

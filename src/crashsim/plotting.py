@@ -19,6 +19,7 @@ import numpy as np
 
 from .errors import ScenarioError
 from .evidence.crush import profile_outline
+from .figure_options import LABEL_KINDS, LEGEND_MODES, PAPER_SIZES, check_hide, parse_scale
 from .geometry import rotate, to_body, to_world
 from .motion.approach import path_length
 from .motion.road import points_in_polygon, signed_distance
@@ -508,15 +509,8 @@ def _draw_crush(S, sc) -> None:
         S.legend_entry(_CRUSH_KEY, Patch(facecolor="none", edgecolor="0.2", hatch="xxxx", lw=1.0))
 
 
-#: Where the legend of a scene figure goes: compact (one line per entry, the evidence as one entry)
-#: under or beside the diagram, in full under or beside it, small inside it, or none.
-LEGEND_MODES = ("compact", "outside", "inside", "none")
-
 #: Legend modes that put the legend outside the axes (the figure sized to hold it).
 _OUTSIDE = ("compact", "outside")
-
-#: Paper sizes of a print sheet, portrait (width, height) [mm]: ISO 216 A4 and A3, US letter and tabloid.
-PAPER_SIZES = {"A4": (210.0, 297.0), "A3": (297.0, 420.0), "letter": (215.9, 279.4), "tabloid": (279.4, 431.8)}
 
 #: Scales a print sheet picks from when none is given (1:N), the largest drawing that fits.
 _SCALES = (10, 20, 25, 50, 100, 200, 250, 500, 1000, 2000, 2500, 5000, 10000)
@@ -533,44 +527,6 @@ def legend_mode(legend) -> str:
     if legend is False or legend is None:
         return "none"
     return str(legend)
-
-
-def check_hide(hide) -> frozenset:
-    """The label kinds to hide (``"names,pdof"`` or a sequence), each one of :data:`LABEL_KINDS`
-    or ``"labels"`` (all of them).
-
-    Raises
-    ------
-    ScenarioError
-        For an unknown kind (field ``hide``), naming the kinds allowed.
-    """
-    items = hide.split(",") if isinstance(hide, str) else list(hide or ())
-    kinds = frozenset(str(k).strip() for k in items if str(k).strip())
-    unknown = sorted(kinds - set(LABEL_KINDS) - {"labels"})
-    if unknown:
-        raise ScenarioError(f"unknown label kind(s) {', '.join(map(repr, unknown))}; allowed: labels (all), "
-                            f"{', '.join(LABEL_KINDS)}", field="hide")
-    return kinds
-
-
-def parse_scale(text, *, field: str = "scale") -> float:
-    """The denominator N of a drawing scale ``"1:200"`` (or ``"200"``, or a number).
-
-    Raises
-    ------
-    ScenarioError
-        Unless N is a finite number >= 1.
-    """
-    raw = str(text).strip()
-    body = raw.split(":", 1)[1] if raw.startswith("1:") else raw
-    try:
-        n = float(body)
-    except ValueError:
-        n = float("nan")
-    if not (math.isfinite(n) and n >= 1.0):
-        raise ScenarioError(f"scale {raw!r} is not a drawing scale; allowed 1:N with N >= 1, e.g. \"1:200\"",
-                            field=field)
-    return n
 
 
 class PrintSheet(NamedTuple):
@@ -1897,11 +1853,6 @@ def _downhill_arrow(S: SceneDrawing, x: float) -> list:
                       path_effects=_halo(), gid="downhill-arrow")
     return [t]
 
-
-#: Kinds of text label on a scene figure (``hide=`` of :func:`plot_scene`, ``--hide`` of
-#: ``crashsim plot``), in the order :func:`place_labels` places them (earlier kinds keep their
-#: place, later ones move): ``"labels"`` hides all of them.
-LABEL_KINDS = ("impacts", "names", "pdof", "delta-v", "approach", "obstacles", "zones", "map", "times")
 
 #: Distances from its anchor [points] at which :func:`place_labels` tries a label that overlaps
 #: another, 12 directions each; a label moved this far or more gets a leader line to its anchor.

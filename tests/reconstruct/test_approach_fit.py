@@ -48,6 +48,7 @@ def _with_approach_evidence(data, truth):
     return out, scene
 
 
+@pytest.mark.slow  # 4-10 s (tests/reconstruct --durations, 2-core machine)
 def test_fit_recovers_the_speed_at_braking():
     truth = 16.0
     data, scene = _with_approach_evidence(approach_scene(), truth)

@@ -127,6 +127,7 @@ def test_a_distribution_beyond_the_allowed_range_is_refused_not_dropped(data):
         UncertaintySpec.from_dict(wide)
 
 
+@pytest.mark.slow  # 4-10 s (tests/reconstruct --durations, 2-core machine)
 def test_a_normal_distribution_with_a_small_tail_outside_is_truncated_and_said_so(data):
     """0.62 % of N(0.1, 0.04) lies below e = 0: truncated to [0, 1], the report says so, and
     every sample is valid (none fails)."""

@@ -74,6 +74,7 @@ def test_the_model_is_the_closed_form_here():
         assert abs(-rest[0] - _d(v)) < 1e-3 * SIGMA
 
 
+@pytest.mark.slow  # 4-10 s (tests/reconstruct --durations, 2-core machine)
 def test_posterior_matches_the_closed_form():
     """Quantiles and mean of the chain against the quadrature of p(v); each tolerance is 4 Monte
     Carlo standard errors from the chain's effective sample size (quantile q: sqrt(q (1-q) / ESS)
@@ -148,6 +149,7 @@ def test_resumed_chain_equals_an_uninterrupted_one(tmp_path):
         run_posterior(rebound(seed=9), workers=1, progress=False, chain_path=path, engine=ENGINE)
 
 
+@pytest.mark.slow  # 4-10 s (tests/reconstruct --durations, 2-core machine)
 def test_dask_cluster_equals_local():
     distributed = pytest.importorskip("distributed", reason="dask.distributed is not installed")
     local = run_posterior(rebound(), workers=1, progress=False, engine=ENGINE)
@@ -333,6 +335,7 @@ def test_a_burn_in_shorter_than_the_climb_warns(caplog):
     assert not [w for w in later.warnings if "settles only" in w]
 
 
+@pytest.mark.slow  # 4-10 s (tests/reconstruct --durations, 2-core machine)
 def test_a_target_effective_sample_size_stops_the_chain_where_it_is_met():
     """With ``ess`` the chain stops at the first check that meets it (every unknown >= ess
     effective samples, 50 tau kept, a burn-in of two tau); the chain up to there is the same as a

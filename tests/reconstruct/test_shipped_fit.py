@@ -69,6 +69,7 @@ def test_the_second_basin_is_a_worse_local_minimum():
     assert chi2[0.05] < 5.0 < 10.0 < chi2[0.15], chi2
 
 
+@pytest.mark.slow  # 4-10 s (tests/reconstruct --durations, 2-core machine)
 def test_shipped_scene_monte_carlo(tmp_path):
     matplotlib.use("Agg")
     from crashsim.reconstruct.mc_plots import save_mc_figures

@@ -12,6 +12,8 @@ from pathlib import Path
 
 import pytest
 
+import crashsim.reconstruct as reconstruct
+import crashsim.scenario as scenario
 from crashsim import cli
 from crashsim.cli import main
 
@@ -25,8 +27,10 @@ def _fail(*a, **k):
 
 @pytest.fixture
 def no_work(monkeypatch):
-    for name in ("_first_compile", "load_scenario", "run_scene"):
-        monkeypatch.setattr(cli, name, _fail)
+    # where the command line takes them from when a command runs (it imports them inside the command)
+    monkeypatch.setattr(cli, "_first_compile", _fail)
+    monkeypatch.setattr(scenario, "load_scenario", _fail)
+    monkeypatch.setattr(reconstruct, "run_scene", _fail)
 
 
 def _cases(tmp: Path) -> dict:
@@ -58,7 +62,7 @@ def test_refused_before_loading(no_work, tmp_path, capsys, name):
 
 
 def test_paper_and_scale_refused_before_the_run(monkeypatch, tmp_path, capsys):
-    monkeypatch.setattr(cli, "run_scene", _fail)
+    monkeypatch.setattr(reconstruct, "run_scene", _fail)
     assert main(["plot", SCENE, "-o", str(tmp_path / "p.png"), "--paper", "A4", "--scale", "1:10"]) == 2
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and "--scale" in err and "1:10 is too large" in err, err

@@ -47,6 +47,7 @@ def test_the_class_errors_are_the_packaged_table_s():
     assert set(e["cases"]) == {r["case"] for r in table["quantities"] if r["class"] == "car-to-car"}
 
 
+@pytest.mark.slow  # 5-21 s (tests/validation --durations, 2-core machine)
 def test_the_case_report_quotes_the_class_error(tmp_path, capsys):
     out = tmp_path / "case.html"
     assert main(["report", str(ROOT / "scenarios/scenes/truck_brakes_into_car.toml"), "-o", str(out)]) == 0

@@ -269,6 +269,7 @@ def test_posterior_section_comes_from_the_posterior_report():
     assert flo - plo > 2 * abs(fhi - phi)  # the longer lower tail
 
 
+@pytest.mark.slow  # 5-21 s (tests/validation --durations, 2-core machine)
 def test_reliability_section_numbers_are_the_code_s():
     """Every number of the reliability section is a constant or default of the code, or a claim
     checked here (the circular percentiles of a cloud from 191 to 231 deg)."""

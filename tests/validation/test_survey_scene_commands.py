@@ -36,6 +36,7 @@ def test_run_matches_the_typed_scene(capsys):
 
 
 @pytest.mark.slow
+@pytest.mark.slow  # 5-21 s (tests/validation --durations, 2-core machine)
 def test_plot_animate_fit_mc_export(tmp_path, capsys):
     assert main(["plot", SCENE, "-o", str(tmp_path / "s.png"), "--no-approach"]) == 0
     assert main(["animate", SCENE, "-o", str(tmp_path / "a.gif"), "--no-approach", "--dt", "0.5 s", "--dpi", "40"]) == 0

@@ -28,22 +28,16 @@ tyre_forces, lateral_force
 static_loads, StaticLoads
     Static wheel, axle and hitch loads.
 
-The numeric core never imports pymunk, matplotlib or file formats; numba is imported only
-when the compiled engine is first used.
+The numeric core never imports pymunk, matplotlib or file formats. Every name above is
+imported from its module on first use (PEP 562), so ``import crashsim.motion`` loads nothing
+heavy. numba is imported when the kernels are first needed: the first run-out on either engine
+(the SciPy engine calls the same kernels, interpreted by numba's dispatchers or compiled), the
+first scene packed for them (:mod:`.scene_model`), or the first hitch projection
+(:func:`make_hitch_consistent`). The inputs (``RunoutOptions``, ``Road``, ``ContactModel``,
+``WheelSettings``, ...) and the result types load numpy only.
 """
 
-from .contact import ContactModel, Obstacle
-from .hitches import make_hitch_consistent
-from .layout import StateLayout
-from .loads import StaticLoads, static_loads
-from .options import ENGINES, METHODS, SCHEMES, RunoutOptions
-from .result import (BodyHistory, BodyRunout, HitchHistory, PairSummary, RunoutEvent, RunoutResult, SceneRunout,
-                     SecondaryImpact, TrackSegment, WheelTrack)
-from .road import FrictionZone, Road
-from .runout import Runout, run_runout
-from .simulate import simulate_runout, simulate_scene
-from .tyres import LATERAL_MODELS, lateral_force, tyre_forces
-from .wheels import WHEEL_STATES, ScheduledChange, WheelSetting, WheelSettings
+from .._lazy import lazy_exports
 
 __all__ = [
     "run_runout",
@@ -80,3 +74,18 @@ __all__ = [
     "static_loads",
     "StaticLoads",
 ]
+
+__getattr__, __dir__ = lazy_exports(__name__, {
+    **dict.fromkeys(("ContactModel", "Obstacle"), ".contact"),
+    "make_hitch_consistent": ".hitches",
+    "StateLayout": ".layout",
+    **dict.fromkeys(("StaticLoads", "static_loads"), ".loads"),
+    **dict.fromkeys(("ENGINES", "METHODS", "SCHEMES", "RunoutOptions"), ".options"),
+    **dict.fromkeys(("BodyHistory", "BodyRunout", "HitchHistory", "PairSummary", "RunoutEvent", "RunoutResult",
+                     "SceneRunout", "SecondaryImpact", "TrackSegment", "WheelTrack"), ".result"),
+    **dict.fromkeys(("FrictionZone", "Road"), ".road"),
+    **dict.fromkeys(("Runout", "run_runout"), ".runout"),
+    **dict.fromkeys(("simulate_runout", "simulate_scene"), ".simulate"),
+    **dict.fromkeys(("LATERAL_MODELS", "lateral_force", "tyre_forces"), ".tyres"),
+    **dict.fromkeys(("WHEEL_STATES", "ScheduledChange", "WheelSetting", "WheelSettings"), ".wheels"),
+})

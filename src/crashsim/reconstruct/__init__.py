@@ -4,13 +4,17 @@ The reconstruction layer: fit (:mod:`.fit`), Monte Carlo (:mod:`.montecarlo`) an
 (:mod:`.posterior`) of a scenario, with the path overrides they sample through
 (:mod:`.overrides`, :mod:`.patch`), the inverse sections' schema and their plots. One run of a
 scene is the layer below (:mod:`crashsim.scene`); ``SceneResult`` and ``run_scene`` are
-re-exported here from it.
+re-exported here from it. The names are imported on first use (PEP 562).
 """
 
-from ..scene import SceneResult, run_scene
-from .fit import FitResult, fit_scene
-from .montecarlo import MCResult, monte_carlo
-from .posterior import PosteriorResult, run_posterior
+from .._lazy import lazy_exports
 
 __all__ = ["SceneResult", "run_scene", "fit_scene", "FitResult", "monte_carlo", "MCResult", "run_posterior",
            "PosteriorResult"]
+
+__getattr__, __dir__ = lazy_exports(__name__, {
+    **dict.fromkeys(("SceneResult", "run_scene"), "..scene"),
+    **dict.fromkeys(("FitResult", "fit_scene"), ".fit"),
+    **dict.fromkeys(("MCResult", "monte_carlo"), ".montecarlo"),
+    **dict.fromkeys(("PosteriorResult", "run_posterior"), ".posterior"),
+})

@@ -1,0 +1,83 @@
+"""The option vocabularies of the figures and animations, and their checks, without the drawing.
+
+What ``crashsim plot`` and ``crashsim animate`` offer (legend modes, paper sizes, label kinds,
+views) and the checks of ``--hide`` and ``--scale``, apart from :mod:`crashsim.plotting` and
+:mod:`crashsim.animation` (which import them from here), so that the command line builds its
+parser, prints ``--help`` or ``--version``, or refuses an option, without loading numpy, the run-out or
+matplotlib.
+"""
+
+from __future__ import annotations
+
+import math
+
+from .errors import ScenarioError
+
+__all__ = ["LEGEND_MODES", "PAPER_SIZES", "LABEL_KINDS", "VIEWS", "ANIMATION_LEGENDS", "check_hide", "parse_scale"]
+
+#: Where the legend of a scene figure goes: compact (one line per entry, the evidence as one entry)
+#: under or beside the diagram, in full under or beside it, small inside it, or none.
+LEGEND_MODES = ("compact", "outside", "inside", "none")
+
+#: Paper sizes of a print sheet, portrait (width, height) [mm]: ISO 216 A4 and A3, US letter and tabloid.
+PAPER_SIZES = {"A4": (210.0, 297.0), "A3": (297.0, 420.0), "letter": (215.9, 279.4), "tabloid": (279.4, 431.8)}
+
+#: Kinds of text label on a scene figure (``hide=`` of :func:`crashsim.plotting.plot_scene`, ``--hide`` of
+#: ``crashsim plot``), in the order :func:`crashsim.plotting.place_labels` places them (earlier kinds keep
+#: their place, later ones move): ``"labels"`` hides all of them.
+LABEL_KINDS = ("impacts", "names", "pdof", "delta-v", "approach", "obstacles", "zones", "map", "times")
+
+#: Views of an animation: a camera framed on the vehicles at each frame, or the whole scene still.
+VIEWS = ("follow", "scene")
+
+#: Legends of an animation: compact, outside the view (:func:`crashsim.plotting.plot_scene`'s
+#: ``legend="compact"``), or none.
+ANIMATION_LEGENDS = ("compact", "none")
+
+
+def check_hide(hide) -> frozenset:
+    """The label kinds to hide (``"names,pdof"`` or a sequence), each one of :data:`LABEL_KINDS`
+    or ``"labels"`` (all of them).
+
+    Raises
+    ------
+    ScenarioError
+        For an unknown kind (field ``hide``), naming the kinds allowed.
+
+    Examples
+    --------
+    >>> sorted(check_hide("names, pdof"))
+    ['names', 'pdof']
+    """
+    items = hide.split(",") if isinstance(hide, str) else list(hide or ())
+    kinds = frozenset(str(k).strip() for k in items if str(k).strip())
+    unknown = sorted(kinds - set(LABEL_KINDS) - {"labels"})
+    if unknown:
+        raise ScenarioError(f"unknown label kind(s) {', '.join(map(repr, unknown))}; allowed: labels (all), "
+                            f"{', '.join(LABEL_KINDS)}", field="hide")
+    return kinds
+
+
+def parse_scale(text, *, field: str = "scale") -> float:
+    """The denominator N of a drawing scale ``"1:200"`` (or ``"200"``, or a number).
+
+    Raises
+    ------
+    ScenarioError
+        Unless N is a finite number >= 1.
+
+    Examples
+    --------
+    >>> parse_scale("1:200")
+    200.0
+    """
+    raw = str(text).strip()
+    body = raw.split(":", 1)[1] if raw.startswith("1:") else raw
+    try:
+        n = float(body)
+    except ValueError:
+        n = float("nan")
+    if not (math.isfinite(n) and n >= 1.0):
+        raise ScenarioError(f"scale {raw!r} is not a drawing scale; allowed 1:N with N >= 1, e.g. \"1:200\"",
+                            field=field)
+    return n

@@ -20,6 +20,9 @@ monte_carlo(scenario_or_path, samples, **options)
     Propagate the ``[uncertainty]`` inputs -> MCResult.
 posterior(scenario_or_path, **options)
     MCMC posterior of the ``[fit]`` unknowns given the evidence -> PosteriorResult.
+open_live(path)
+    The live view of a scene, served on 127.0.0.1 in the background -> LiveServer (a notebook
+    shows it inline; ``.url``, ``.stop()``; the ``live`` extra).
 
 Lower levels: :func:`solve_impact` with :class:`ImpactProblem` (the impulse-momentum solver),
 :mod:`crashsim.motion` (run-outs), :mod:`crashsim.plotting`, :mod:`crashsim.units`.
@@ -37,7 +40,7 @@ from .errors import CrashsimError, IllConditionedError, ScenarioError, SolverErr
 _logging.getLogger("crashsim").addHandler(_logging.NullHandler())
 
 __all__ = [
-    "load", "run", "fit", "monte_carlo", "posterior",
+    "load", "run", "fit", "monte_carlo", "posterior", "open_live",
     "CrashsimError", "IllConditionedError", "ScenarioError", "SolverError",
     "Axle", "Body", "BodyState", "Hitch", "Vehicle", "chain_states",
     "CrushSurface", "ExternalImpulse", "ImpactBatch", "ImpactProblem", "ImpactResult", "TangentialLaw",
@@ -48,6 +51,7 @@ __all__ = [
 # ``import crashsim`` loads neither numpy nor the kernels (numba), SciPy or matplotlib.
 __getattr__, __dir__ = _lazy_exports(__name__, {
     **dict.fromkeys(("fit", "load", "monte_carlo", "posterior", "run"), ".api"),
+    "open_live": ".live.server",
     **dict.fromkeys(("CrushSurface", "ExternalImpulse", "ImpactBatch", "ImpactProblem", "ImpactResult",
                      "TangentialLaw", "VelocityConstraint", "solve_impact", "tyre_friction_impulse"), ".impact"),
     **dict.fromkeys(("Axle", "Body", "BodyState", "Hitch", "Vehicle", "chain_states"), ".vehicles"),

@@ -12,6 +12,7 @@ import dataclasses
 import json
 import math
 import sys
+import webbrowser
 from pathlib import Path
 
 from ._jit import cache_dir, ready
@@ -587,8 +588,6 @@ def _cmd_live(args) -> int:
         sys.stderr.write(f"crashsim live: {args.file} at\n  {url}\n(Ctrl+C stops it; the address carries the "
                          "token the server asks of every request)\n")
         if not args.no_browser:
-            import webbrowser
-
             webbrowser.open(url)
 
     server.run(on_ready=ready)

@@ -44,6 +44,7 @@ OPTIONAL_HEAVY = {
     "tomli_w",  # writing a scenario file
     "scipy.stats",  # about 0.4 s to import, needed by fit and Monte Carlo statistics only
     "scipy.spatial",  # nearest-neighbour search of plot labels and survey text only
+    "aiohttp", "tomlkit",  # the live view (the live extra): its server, and the file written back
 }
 
 

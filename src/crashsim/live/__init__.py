@@ -14,16 +14,10 @@ samples, in worker processes), :mod:`~crashsim.live.savefile` (the file written 
 
 from __future__ import annotations
 
+from .._lazy import lazy_exports as _lazy_exports
+
 __all__ = ["LiveSession", "LiveServer", "open_live"]
 
-
-def __getattr__(name):
-    if name == "LiveSession":
-        from .session import LiveSession
-
-        return LiveSession
-    if name in ("LiveServer", "open_live"):
-        from . import server
-
-        return getattr(server, name)
-    raise AttributeError(f"module 'crashsim.live' has no attribute {name!r}")
+# aiohttp and tomlkit (the ``live`` extra) load with the server, not with this package
+__getattr__, __dir__ = _lazy_exports(__name__, {"LiveSession": ".session", "LiveServer": ".server",
+                                                "open_live": ".server"})

@@ -11,6 +11,7 @@ from __future__ import annotations
 from typing import Any, Mapping
 
 from ..errors import ScenarioError
+from ..units import parse
 
 __all__ = ["save_values"]
 
@@ -40,8 +41,6 @@ def save_values(text: str, values: Mapping[str, Any], controls: Mapping[str, Any
     without a change is the same file byte for byte.
     """
     import tomlkit
-
-    from ..units import parse
 
     doc = tomlkit.parse(text)
     for path, written in values.items():

@@ -34,7 +34,12 @@ import time
 from importlib import resources
 from pathlib import Path
 
+from ..casereport import survey_files, write_case_report
 from ..errors import CrashsimError, ScenarioError
+from ..plotting import save_scene_figures
+from ..reconstruct.fit import fit_scene
+from ..scenario import presets
+from ..units import format_value
 from .band import run_band_chunk
 from .session import LiveSession
 from .view import band_payload
@@ -196,14 +201,9 @@ class LiveServer:
                 if s.changed() or s.changed_on_disk():
                     raise ScenarioError("a case report names the file it was made from: save the view's changes "
                                         "first", field="export", file=s.file)
-                from ..casereport import survey_files, write_case_report
-                from ..scenario import presets
-
                 write_case_report(s.result, out, input_files=[s.file] + survey_files(s.file), presets=presets(),
                                   command=f"crashsim live {s.path.name} (exported)")
             else:
-                from ..plotting import save_scene_figures
-
                 save_scene_figures(s.result, out)
             return out.read_bytes()
 
@@ -464,9 +464,6 @@ class LiveServer:
 
 def _fit(data: dict, file: str, workers: int) -> dict:
     """Run the fit of ``data`` (the view's values as the starts' first); its result as the page shows it."""
-    from ..reconstruct.fit import fit_scene
-    from ..units import format_value
-
     try:
         r = fit_scene(data, None, file=file, workers=workers, progress=False)
     except CrashsimError as exc:

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import copy
 import hashlib
+import io
 import math
 import re
 import time
@@ -26,12 +27,16 @@ from typing import Any, Mapping
 
 from ..errors import CrashsimError, ScenarioError
 from ..reconstruct import run_scene
-from ..reconstruct.overrides import ScenarioOverrides, get_value, resolve_path
+from ..reconstruct.montecarlo import UncertaintySpec, sample_inputs
+from ..reconstruct.overrides import ScenarioOverrides, get_value, resolve_path, set_written
+from ..reconstruct.tolerance import evidence_tolerance, tolerance_items, with_tolerance
 from ..scenario import SCHEMA, load_scenario
 from ..schema import in_range, load_toml
 from ..survey.mapping import load_scene_data
+from ..survey.underlay import scene_underlay
 from ..units import Kind, parse, si_unit, to_unit, write_like
 from . import view
+from .savefile import save_values
 
 __all__ = ["Control", "LiveSession", "canonical", "SIGNIFICANT"]
 
@@ -164,7 +169,9 @@ class LiveSession:
         """The file's own values of the inputs (SI; None where the file does not give one)."""
         self.overrides = ScenarioOverrides(self.data, list(self.controls), engine=self.engine, file=self.file,
                                            cache=1, field_prefix="live")
+        # where the file gives no value, the schema's default the view started from
         self._base = [self.overrides.base_value(i) for i in range(len(self.controls))]
+        self._base = [c.value if b is None else b for b, c in zip(self._base, self.controls.values())]
         self._by_paths = {}
 
     def changed_on_disk(self) -> bool:
@@ -199,8 +206,8 @@ class LiveSession:
                 continue
             raw = d["vehicles"][v.name]
             name = f"{v.name} ({sc.descriptions.get(v.name)})" if sc.descriptions.get(v.name) else v.name
-            wanted += [(f"vehicles.{v.name}.position[0]", "x at impact", name),
-                       (f"vehicles.{v.name}.position[1]", "y at impact", name),
+            wanted += [(f"vehicles.{v.name}.position[0]", "CG x at impact", name),
+                       (f"vehicles.{v.name}.position[1]", "CG y at impact", name),
                        (f"vehicles.{v.name}.heading", "heading at impact", name)]
             a = raw.get("approach")
             if raw.get("speed") is not None:
@@ -385,8 +392,6 @@ class LiveSession:
         """Write the current inputs into the file (or into ``target``, a new file beside it), keeping
         its comments, order and layout; the path written. Refuses (ScenarioError) to overwrite a
         file changed on disk since it was opened, unless ``force``."""
-        from .savefile import save_values
-
         if target is None:
             if self.changed_on_disk() and not force:
                 raise ScenarioError("the file changed on disk since it was opened: reload it, or save as a new file",
@@ -419,8 +424,6 @@ class LiveSession:
     def fit_inputs(self) -> dict:
         """The file's contents with the current inputs written in, the ``[fit]`` unknowns that are
         inputs of the view starting from their current values (within their bounds)."""
-        from ..reconstruct.overrides import set_written
-
         data = copy.deepcopy(self.raw)
         for p, c in self.controls.items():
             data = set_written(data, c.target, c.written)
@@ -437,8 +440,6 @@ class LiveSession:
         """The ``[uncertainty]`` spec of the file, or None."""
         if not self.raw.get("uncertainty"):
             return None
-        from ..reconstruct.montecarlo import UncertaintySpec
-
         return UncertaintySpec.from_dict(self.raw["uncertainty"], file=self.file)
 
 
@@ -455,8 +456,6 @@ class LiveSession:
         the SI values of each sample). Sample ``i`` draws the ``[uncertainty]`` inputs as ``crashsim mc``
         does (seed, i); an uncertain input the view changed is drawn about the view's value (shifted by
         the change from the file's value); every other input of the view is at its current value."""
-        from ..reconstruct.montecarlo import sample_inputs
-
         spec = self._band_spec()
         # the inputs written into each sample: those the view changed from the file (at their value)
         # and the uncertain ones (drawn); the rest stay the file's, so that a sample takes the fast
@@ -482,8 +481,6 @@ class LiveSession:
                 and "accuracy" not in raw_runout):
             # as crashsim mc runs the samples of this file: at the loosest run-out tolerance whose
             # error stays negligible beside the evidence (crashsim.reconstruct.tolerance)
-            from ..reconstruct.tolerance import evidence_tolerance, tolerance_items, with_tolerance
-
             tol = evidence_tolerance(tolerance_items(self.result.scenario.evidence), self.result, ro.options.rtol,
                                      ro.options.atol, what="tolerance")
             if tol.changed:
@@ -495,8 +492,6 @@ class LiveSession:
 
     def _underlay(self):
         if not hasattr(self, "_underlay_cache"):
-            from ..survey.underlay import scene_underlay
-
             self._underlay_cache = scene_underlay(self.scenario)
         return self._underlay_cache
 
@@ -515,8 +510,6 @@ class LiveSession:
         u = self._underlay()
         if u is None:
             return None
-        import io
-
         from matplotlib.image import imsave
 
         buf = io.BytesIO()

@@ -146,8 +146,6 @@
     S.zones.forEach((z, i) => {
       poly(z.polygon, {fill: ["#e9f3d9", "#f6ecd5", "#e2ecf6", "#f3e0e6"][i % 4], stroke: "#8a9a6a",
                        "stroke-width": 0.8, class: "zone"}, layers.zones);
-      const c = z.polygon.reduce((a, p) => [a[0] + p[0] / z.polygon.length, a[1] + p[1] / z.polygon.length], [0, 0]);
-      text(c, `${z.name}, f = ${z.friction}`, 10, {"text-anchor": "middle", fill: "#556"}, layers.zones);
     });
     for (const m of S.map_lines) {
       line(m.points, {stroke: m.colour || "#777", "stroke-width": m.style === "edge" ? 1.6 : 1.0,
@@ -182,7 +180,11 @@
   function extent() {
     let lo = [Infinity, Infinity], hi = [-Infinity, -Infinity];
     const add = (p) => { lo = [Math.min(lo[0], p[0]), Math.min(lo[1], p[1])]; hi = [Math.max(hi[0], p[0]), Math.max(hi[1], p[1])]; };
-    for (const b in R.poses) for (const p of R.poses[b]) add(p);
+    for (const b in R.poses) {
+      const ps = R.poses[b], body = S.bodies[b];
+      for (const p of ps) add(p);
+      if (body && body.outline) for (const q of [ps[0], ps[ps.length - 1]]) world(body.outline, q).forEach(add);
+    }
     for (const r of S.evidence.rest) add(r.position);
     for (const m of S.evidence.marks) m.points.forEach(add);
     for (const b in R.approach) R.approach[b].forEach(add);
@@ -523,6 +525,18 @@
       const d = document.createElement("div");
       d.innerHTML = `<span style="color:${COLOURS[v.colour % COLOURS.length][0]}">■</span> `;
       d.append(`${v.name}${v.description ? ": " + v.description : ""}`);
+      leg.appendChild(d);
+    }
+    S.zones.forEach((z, i) => {
+      const d = document.createElement("div");
+      const f = values[`runout.zones[${i}].friction`];
+      d.innerHTML = `<span style="color:#8a9a6a">▦</span> `;
+      d.append(`zone ${z.name}: f = ${f === undefined ? z.friction : f}`);
+      leg.appendChild(d);
+    });
+    if (S.zones.length && values["runout.road_friction"] !== undefined) {
+      const d = document.createElement("div");
+      d.append(`road outside the zones: f = ${values["runout.road_friction"]}`);
       leg.appendChild(d);
     }
     const d = document.createElement("div");

@@ -31,7 +31,7 @@ _log = logging.getLogger("crashsim")
 __all__ = ["is_color", "LABEL_KINDS", "LINE_SHY", "line_ink", "LEGEND_MODES", "PAPER_SIZES", "PrintSheet", "place_labels", "check_hide",
            "legend_mode", "parse_scale", "replace_scale_bar", "north_direction", "print_sheet", "scene_drawing", "text_box", "BarrierAxes",
            "plot_barrier_sweep", "plot_barrier_figures", "plot_scene", "plot_histories",
-           "history_panels", "save_scene_figures", "SCENE_FIGURE_SUFFIXES", "check_sheet"]
+           "history_panels", "save_scene_figures", "SCENE_FIGURE_SUFFIXES", "check_sheet", "zone_colors"]
 
 
 def _plt():
@@ -1605,21 +1605,44 @@ def _zone_label(zone) -> str:
     return ", ".join([f"{zone.name}, f = {zone.mu:g}", *slope])
 
 
+def zone_colors(zones) -> list[tuple[str, str]]:
+    """(fill, edge) of each friction zone: one pair per distinct zone name, in the order the names
+    first appear (:data:`_ZONE_COLORS`, repeating after four names), so that two zones of one
+    name ("grass verge" either side of the road) look alike and share one legend entry."""
+    order: dict[str, int] = {}
+    for z in zones:
+        order.setdefault(z.name, len(order))
+    return [_ZONE_COLORS[order[z.name] % len(_ZONE_COLORS)] for z in zones]
+
+
+def _zone_legend_texts(zones) -> dict[str, str]:
+    """Zone name -> its legend text: ``"friction zone: grass verge, f = 0.4"``; zones of one name
+    whose friction or slope differ list each distinct value set (``"gravel, f = 0.5 | f = 0.6"``)."""
+    parts: dict[str, list[str]] = {}
+    for z in zones:
+        rest = _zone_label(z).removeprefix(f"{z.name}, ")
+        got = parts.setdefault(z.name, [])
+        if rest not in got:
+            got.append(rest)
+    return {name: f"friction zone: {name}, {' | '.join(rest)}" for name, rest in parts.items()}
+
+
 def _draw_zones(S: SceneDrawing, roi: _Roi) -> None:
-    """Every friction zone of the road as a pale hatched polygon under everything else, with a
-    legend entry; only its part inside the region of interest counts toward the axis limits."""
+    """Every friction zone of the road as a pale hatched polygon under everything else, one colour
+    and one legend entry per zone name (:func:`zone_colors`); only its part inside the region of
+    interest counts toward the axis limits."""
     from matplotlib.patches import Patch, Polygon
 
     zones = _zones(S)
-    for i, z in enumerate(zones):
-        fill, edge = _ZONE_COLORS[i % len(_ZONE_COLORS)]
+    legend = _zone_legend_texts(zones)
+    for i, (z, (fill, edge)) in enumerate(zip(zones, zone_colors(zones))):
         xy = S.d(z.vertices)
         S.ax.add_patch(Polygon(xy, closed=True, facecolor=fill, edgecolor=edge, lw=0.8, hatch=".",
                                zorder=_Z_ZONE, gid=f"zone:{i}"))
         inside = _clip_polygon(xy, roi.lo, roi.hi)
         if len(inside):
             S.add(inside)
-        S.legend_entry(f"friction zone: {_zone_label(z)}", Patch(facecolor=fill, edgecolor=edge, hatch=".", lw=0.8))
+        S.legend_entry(legend[z.name], Patch(facecolor=fill, edgecolor=edge, hatch=".", lw=0.8))
     if zones:
         S.legend_entry(f"road surface outside the zones: f = {S.sc.runout.road.mu:g}",
                        Patch(facecolor="white", edgecolor="0.6", lw=0.8))
@@ -1745,6 +1768,7 @@ def _label_road_layout(S: SceneDrawing, roi: _Roi, lo, hi) -> None:
     inset = 0.03 * (np.asarray(hi) - np.asarray(lo))
     vlo, vhi = lo + inset, hi - inset  # anchors inside the axes
     polys = [S.d(z.vertices) for z in zones]
+    colors = zone_colors(zones)
     for i, z in enumerate(zones):
         part = _clip_polygon(polys[i], vlo, vhi)
         if len(part) < 3:
@@ -1764,7 +1788,7 @@ def _label_road_layout(S: SceneDrawing, roi: _Roi, lo, hi) -> None:
             continue
         text = _zone_label(z)
         k = place.best(cand, text, 7.5, allowed=effective, room=signed_distance(cand, polys[i]))
-        edge = _ZONE_COLORS[i % len(_ZONE_COLORS)][1]
+        edge = colors[i][1]
         S.text(cand[k], text, kind="zones", gid=f"zone-label:{i}", fontsize=7.5, ha="center", va="center",
                    style="italic", color=_darker(edge),
                    path_effects=_halo(2.2), zorder=Z_TEXT - 0.5)

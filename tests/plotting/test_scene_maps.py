@@ -227,3 +227,54 @@ def test_every_style_is_drawn_its_own_way():
     for s in MAP_LINE_STYLES:
         assert _MAP_STYLES[s][0] in texts
     assert "road edge (painted)" in texts
+
+
+def test_one_colour_and_one_legend_entry_per_zone_name():
+    """Two zones named "grass verge" (either side of the road) are one colour and one legend entry;
+    a zone of another name has another colour and its own entry. The label of each zone is in its
+    zone's colour (darkened)."""
+    from matplotlib.colors import to_rgb
+
+    from crashsim.plotting import _darker
+
+    scene = _scene(INTERSECTION)
+    lo, hi = _vehicle_box(scene)
+    x0, x1 = lo[0] - 2.0, hi[0] + 2.0
+    north = FrictionZone(((x0, hi[1] + 1.0), (x1, hi[1] + 1.0), (x1, hi[1] + 6.0), (x0, hi[1] + 6.0)), 0.4,
+                         "grass verge")
+    gravel = FrictionZone(((x0, lo[1] - 1.0), (0.5 * (x0 + x1), lo[1] - 1.0), (0.5 * (x0 + x1), lo[1] - 6.0),
+                           (x0, lo[1] - 6.0)), 0.55, "gravel")
+    south = FrictionZone(((0.5 * (x0 + x1), lo[1] - 1.0), (x1, lo[1] - 1.0), (x1, lo[1] - 6.0),
+                          (0.5 * (x0 + x1), lo[1] - 6.0)), 0.4, "grass verge")
+    ax = plot_scene(_with_layout(scene, [north, gravel, south]), ax=plt.subplots(figsize=(10, 7))[1],
+                    legend="best")
+    fills = [to_rgb(_by_gid(ax, f"zone:{i}").get_facecolor()) for i in range(3)]
+    edges = [to_rgb(_by_gid(ax, f"zone:{i}").get_edgecolor()) for i in range(3)]
+    assert fills[0] == fills[2] and edges[0] == edges[2]  # one name, one colour
+    assert fills[1] != fills[0] and edges[1] != edges[0]
+    leg = ax.get_legend()
+    texts = [t.get_text() for t in leg.get_texts()]
+    zone_entries = [t for t in texts if t.startswith("friction zone:")]
+    assert zone_entries == ["friction zone: grass verge, f = 0.4", "friction zone: gravel, f = 0.55"]
+    # the legend swatch of each entry is its zones' colour
+    for text, handle in zip(texts, leg.legend_handles):
+        if text == "friction zone: grass verge, f = 0.4":
+            assert to_rgb(handle.get_facecolor()) == fills[0]
+        elif text == "friction zone: gravel, f = 0.55":
+            assert to_rgb(handle.get_facecolor()) == fills[1]
+    for i in (0, 2):  # each grass label (where drawn) in the grass colour
+        label = _by_gid(ax, f"zone-label:{i}")
+        if label is not None:
+            assert np.allclose(to_rgb(label.get_color()), _darker(edges[0]))
+    plt.close("all")
+
+
+def test_zones_of_one_name_with_different_friction_list_each_in_their_entry():
+    scene = _scene(INTERSECTION)
+    a = FrictionZone(((0.0, 20.0), (5.0, 20.0), (5.0, 25.0)), 0.5, "gravel")
+    b = FrictionZone(((10.0, 20.0), (15.0, 20.0), (15.0, 25.0)), 0.6, "gravel")
+    ax = plot_scene(_with_layout(scene, [a, b]), ax=plt.subplots()[1], legend="best")
+    texts = [t.get_text() for t in ax.get_legend().get_texts() if t.get_text().startswith("friction zone:")]
+    assert texts == ["friction zone: gravel, f = 0.5 | f = 0.6"]
+    plt.close("all")
+

@@ -31,7 +31,8 @@ _log = logging.getLogger("crashsim")
 __all__ = ["is_color", "LABEL_KINDS", "LINE_SHY", "line_ink", "LEGEND_MODES", "PAPER_SIZES", "PrintSheet", "place_labels", "check_hide",
            "legend_mode", "parse_scale", "replace_scale_bar", "north_direction", "print_sheet", "scene_drawing", "text_box", "BarrierAxes",
            "plot_barrier_sweep", "plot_barrier_figures", "plot_scene", "plot_histories",
-           "history_panels", "save_scene_figures", "SCENE_FIGURE_SUFFIXES", "check_sheet", "zone_colors"]
+           "history_panels", "save_scene_figures", "SCENE_FIGURE_SUFFIXES", "check_sheet", "zone_colors",
+           "map_line_legend_texts"]
 
 
 def _plt():
@@ -1648,12 +1649,45 @@ def _draw_zones(S: SceneDrawing, roi: _Roi) -> None:
                        Patch(facecolor="white", edgecolor="0.6", lw=0.8))
 
 
+def _map_line_look(line) -> tuple[str, str]:
+    """(what it is, colour) of a map line: its style's legend text, or for a gouge or debris drawn
+    from a survey "gouge"/"debris"; its own colour or the style's."""
+    text, color = _MAP_STYLES[line.style][:2]
+    if line.imported_as in ("gouge", "debris"):
+        text = line.imported_as
+    return text, line.color or color
+
+
+def map_line_legend_texts(lines) -> list[str]:
+    """The legend text of each map line, one text for the lines that look alike (one style, one
+    colour), naming where they come from: the survey file's layers or codes (``"road edge (EDGE,
+    EP)"``, ``"gouge (GOUGE)"``), else the name or colour given to a line of its own colour
+    (``"road edge (painted)"``); a plain line of a style written in the scenario file is its
+    style's text alone (``"road edge"``), in an entry apart from the surveyed ones."""
+    groups: dict[tuple, list[str]] = {}
+    keys = []
+    for line in lines:
+        text, color = _map_line_look(line)
+        key = (line.style, text, color, bool(line.layer))  # a written line is not said to come from a layer
+        keys.append(key)
+        names = groups.setdefault(key, [])
+        if line.layer:
+            name = line.layer
+        elif line.color is not None:
+            name = line.name or line.color
+        else:
+            name = ""
+        if name and name not in names:
+            names.append(name)
+    return [f"{key[1]} ({', '.join(groups[key])})" if groups[key] else key[1] for key in keys]
+
+
 def _map_line_artist_kw(line) -> tuple[str, dict]:
     """(legend text, Line2D keywords) of a map line in its style (and its own colour, if given)."""
     from matplotlib import patheffects
 
-    text, color, lw, dashes, double = _MAP_STYLES[line.style]
-    color = line.color or color
+    _, _, lw, dashes, double = _MAP_STYLES[line.style]
+    _, color = _map_line_look(line)
     if double:  # two strokes with a white gap: a wide stroke under a narrow white line
         kw = dict(color="white", lw=lw, solid_capstyle="butt",
                   path_effects=[patheffects.Stroke(linewidth=3.6 * lw, foreground=color), patheffects.Normal()])
@@ -1661,9 +1695,7 @@ def _map_line_artist_kw(line) -> tuple[str, dict]:
         kw = dict(color=color, lw=lw, solid_capstyle="butt")
         if dashes is not None:
             kw.update(ls="--", dashes=dashes)
-    if line.color is not None:
-        text = f"{text} ({line.name or line.color})"
-    return text, kw
+    return map_line_legend_texts([line])[0], kw
 
 
 def _draw_map_lines(S: SceneDrawing, roi: _Roi) -> None:
@@ -1671,8 +1703,9 @@ def _draw_map_lines(S: SceneDrawing, roi: _Roi) -> None:
     inside the region of interest count toward the axis limits."""
     from matplotlib.lines import Line2D
 
-    for i, line in enumerate(getattr(S.sc, "map_lines", ())):
-        text, kw = _map_line_artist_kw(line)
+    lines = getattr(S.sc, "map_lines", ())
+    for i, (line, text) in enumerate(zip(lines, map_line_legend_texts(lines))):
+        _, kw = _map_line_artist_kw(line)
         xy = S.d(line.points)
         S.ax.plot(xy[:, 0], xy[:, 1], zorder=_Z_MAP, gid=f"map:{i}", **kw)
         for piece in _clip_polyline(xy, roi.lo, roi.hi):

@@ -697,12 +697,20 @@ class MapLine:
         The polyline in the world frame [m], n >= 2 (read-only).
     color : str or None
         A matplotlib colour replacing the style's own; None for the style's.
+    layer : str
+        The survey file's layer or point code the line was imported from (``survey.imported``);
+        "" for a line written in the scenario file. The figure's legend names it.
+    imported_as : str
+        What the survey mapping made of that layer: ``"line"``, ``"gouge"`` or ``"debris"``
+        (``survey.files.map.kind``); "" for a line written in the scenario file.
     """
 
     name: str
     style: str
     points: np.ndarray
     color: str | None = None
+    layer: str = ""
+    imported_as: str = ""
 
     def __post_init__(self) -> None:
         pts = np.array(self.points, dtype=float)
@@ -714,7 +722,8 @@ class MapLine:
         object.__setattr__(self, "points", pts)
 
     def _key(self) -> tuple:
-        return self.name, self.style, self.color, self.points.shape, self.points.tobytes()
+        return (self.name, self.style, self.color, self.layer, self.imported_as, self.points.shape,
+                self.points.tobytes())
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, MapLine):
@@ -725,8 +734,15 @@ class MapLine:
         return hash(self._key())
 
 
-def _build_map_lines(m: dict, file: str | None) -> tuple[MapLine, ...]:
-    """The ``[[map.lines]]`` of a validated file (points already in m); colours checked here."""
+def _build_map_lines(m: dict, file: str | None, survey: dict | None = None) -> tuple[MapLine, ...]:
+    """The ``[[map.lines]]`` of a validated file (points already in m); colours checked here. A line
+    imported from a survey file carries the layer or code it came from (its ``survey.imported``
+    record, whose target is ``map.lines[i]``)."""
+    source = {}
+    for rec in ((survey or {}).get("imported") or ()):
+        target = rec.get("target") or ""
+        if target.startswith("map.lines[") and rec.get("layer") is not None:
+            source.setdefault(target, (rec["layer"], rec.get("kind") or ""))
     lines = []
     for i, ln in enumerate(m["lines"]):
         color = ln["color"]
@@ -734,7 +750,8 @@ def _build_map_lines(m: dict, file: str | None) -> tuple[MapLine, ...]:
             if not is_color(color):
                 raise _err(f"{color!r} is not a colour; use a matplotlib colour name (\"white\", \"tab:orange\") "
                            "or a hex code (\"#7f7f7f\")", f"map.lines[{i}].color", file)
-        lines.append(MapLine(ln["name"], ln["style"], np.asarray(ln["points"], dtype=float), color))
+        layer, kind = source.get(f"map.lines[{i}]", ("", ""))
+        lines.append(MapLine(ln["name"], ln["style"], np.asarray(ln["points"], dtype=float), color, layer, kind))
     return tuple(lines)
 
 
@@ -1537,7 +1554,7 @@ def _from_validated(d: dict, data: dict, merged: dict, source, file: str | None,
     if evidence is not None and crush is not None:
         evidence = dataclasses.replace(evidence, crush=crush)
     with later.each():
-        map_lines = _build_map_lines(d["map"], file)
+        map_lines = _build_map_lines(d["map"], file, d.get("survey"))
     with later.each():
         _check_north(d, file)
     later.raise_any()

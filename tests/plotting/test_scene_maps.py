@@ -278,3 +278,49 @@ def test_zones_of_one_name_with_different_friction_list_each_in_their_entry():
     assert texts == ["friction zone: gravel, f = 0.5 | f = 0.6"]
     plt.close("all")
 
+
+SURVEY = ROOT / "scenarios" / "survey" / "truck_brakes_survey.toml"
+
+
+def test_lines_from_a_survey_carry_their_layer_or_code():
+    sc = load_scenario(SURVEY)
+    by_layer = {}
+    for ln in sc.map_lines:
+        by_layer.setdefault(ln.layer, set()).add((ln.style, ln.imported_as))
+    # the DXF layers and the point file's code, as mapped in the file
+    assert by_layer["EDGE"] == {("edge", "line")} and by_layer["EP"] == {("edge", "line")}
+    assert by_layer["GOUGE"] == {("other", "gouge")} and by_layer["DEBRIS"] == {("other", "debris")}
+    assert "" not in by_layer  # every line of this file comes from the survey
+
+
+def test_legend_names_the_survey_layers_not_a_colour_code():
+    """A gouge drawn from layer GOUGE is "gouge (GOUGE)" in the legend, not "other line (#8c564b)";
+    the road edges of the DXF layer EDGE and of the point code EP look alike and share one entry."""
+    scene = _scene(SURVEY)
+    ax = plot_scene(scene)
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "gouge (GOUGE)" in texts and "debris (DEBRIS)" in texts
+    assert "road edge (EDGE, EP)" in texts
+    assert "centre line (CENTRE)" in texts and "kerb / verge edge (KERB)" in texts
+    assert not any("other line" in t or "#" in t for t in texts), texts
+    # each entry's swatch is drawn as its lines are
+    leg = ax.get_legend()
+    for i, ln in enumerate(scene.scenario.map_lines):
+        if ln.imported_as == "gouge":
+            handle = leg.legend_handles[texts.index("gouge (GOUGE)")]
+            assert matplotlib.colors.same_color(handle.get_color(), _by_gid(ax, f"map:{i}").get_color())
+    plt.close("all")
+
+
+def test_written_lines_keep_their_names_or_colours_in_the_legend():
+    scene = _scene(INTERSECTION)
+    lines = [MapLine("", "other", np.array([[-10.0, -3.0], [10.0, -3.0]]), "#8c564b"),
+             MapLine("", "edge", np.array([[-10.0, 3.0], [10.0, 3.0]])),
+             MapLine("old paint", "lane", np.array([[-10.0, 5.0], [10.0, 5.0]]), "tab:orange"),
+             MapLine("", "edge", np.array([[-10.0, 7.0], [10.0, 7.0]]), None, "EOP", "line")]
+    ax = plot_scene(_with_layout(scene, (), lines), ax=plt.subplots()[1], legend="best")
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    # a written line of its own colour without a name can only say its colour; a layer is named
+    assert "other line (#8c564b)" in texts and "lane line (old paint)" in texts
+    assert "road edge" in texts and "road edge (EOP)" in texts
+    plt.close("all")

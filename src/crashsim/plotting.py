@@ -314,7 +314,8 @@ class SceneDrawing:
         self.fixed: list = []  # artists the labels keep clear of (axes indicator, scale bar, ...)
         self.unplaced = 0  # labels place_labels found no free place for
         self.timed: list = []  # (Line2D, times [s] (n,), points (n, 2) display units): paths and tracks
-        self.appear: list = []  # (artist, time [s]): outlines etc. at rest, from their rest; later impacts
+        self.appear: list = []  # (artist, time [s]): outlines etc. at rest, from their rest; the impact's results
+        # (delta-v and PDOF arrows, the contact point, numbered impacts) from the impact they belong to
         self.body_of = {b.name: b for v in self.sc.vehicles for b in v.bodies}
         self.vehicle_of = {b.name: v for v in self.sc.vehicles for b in v.bodies}
         movable = [v for v in self.sc.vehicles if not v.is_barrier]
@@ -1357,6 +1358,8 @@ def _draw_arrows(S: SceneDrawing) -> None:
     moving = [b for b in imp.bodies.values() if not b.fixed]
     if not moving:
         return
+    # results of the impact: in the animation they appear at the impact (t = 0), not before it
+    first = (len(ax.patches), len(ax.lines), len(S.texts))
     # one arrow scale for all bodies: display length per display speed, a 1-2-2.5-5 number,
     # such that the largest delta-v is drawn about 6 m (20 ft) long
     ref_len = to_unit(6.0, Kind.LENGTH, system)[0]
@@ -1418,6 +1421,7 @@ def _draw_arrows(S: SceneDrawing) -> None:
         S.labels.append(lab)
     S.legend_entry("PDOF: crush force on each body in contact",
                    Line2D([], [], ls="none", marker=r"$\Rightarrow$", ms=12, color="0.15"))
+    S.appear += [(a, 0.0) for a in (*ax.patches[first[0]:], *ax.lines[first[1]:], *S.texts[first[2]:])]
 
 
 def _draw_obstacles(S: SceneDrawing) -> None:
@@ -1467,8 +1471,8 @@ def _draw_impacts(S: SceneDrawing) -> None:
         S.text(xy, str(n), kind="impacts", fontsize=7, fontweight="bold", ha="center", va="center",
                zorder=_Z_ARROW + 2, bbox=dict(boxstyle="circle,pad=0.25", facecolor="#ffd54f", edgecolor="0.1", lw=1.0))
         S.add(xy)
-        if n > 1:  # a later impact appears (in the animation) when it happens
-            S.appear += [(a, t_mark) for a in (*S.ax.lines[first[0]:], *S.texts[first[1]:])]
+        # each impact appears (in the animation) when it happens: the first at t = 0
+        S.appear += [(a, t_mark) for a in (*S.ax.lines[first[0]:], *S.texts[first[1]:])]
     S.legend_entry("impacts in time order (1: the first; the report lists them)",
                    Line2D([], [], ls="none", marker="o", ms=9, mfc="#ffd54f", mec="0.1"))
 

@@ -21,6 +21,7 @@ from importlib.resources import files
 from pathlib import Path
 
 import jinja2
+import markupsafe
 
 from ._version import __version__
 from .errors import ScenarioError
@@ -550,11 +551,9 @@ def _mc(d: dict, system: str, kinds: dict | None) -> dict:
 _KEY_BREAKS = re.compile(r"(?<=[._/-])|(?=\[)")
 
 
-def breakable_key(key) -> "markupsafe.Markup":
+def breakable_key(key) -> markupsafe.Markup:
     """A key as HTML that wraps only at a separator (after ``.``, ``_``, ``/``, ``-``, before ``[``): the key
     escaped, a ``<wbr>`` at each (the table's CSS keeps the words between them whole)."""
-    import markupsafe
-
     return markupsafe.Markup("<wbr>").join(markupsafe.escape(part) for part in _KEY_BREAKS.split(str(key)))
 
 

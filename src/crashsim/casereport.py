@@ -28,7 +28,7 @@ from .errors import ScenarioError
 from .plotting import figure_system, plot_histories, plot_scene, plot_time_distance
 from .motion.wheels import wheel_labels
 from .report import closing_error_text, describe_event, format_approach, rollover_cells, validity_text
-from .units import format_value, toml_repr
+from .units import format_value, system_label, toml_repr
 
 __all__ = ["toml_comments", "input_rows", "sha256_file", "survey_files", "load_json", "inputs_sha256", "made_from",
            "check_result_json", "MADE_FROM", "render_case_report", "write_case_report",
@@ -615,7 +615,8 @@ def render_case_report(scene, *, input_files, system: str | None = None, fit: di
     notes = list(VALIDITY_NOTES)
     approach = format_approach(sc.approaches, system) if sc.approaches else ""
     context = {
-        "title": sc.title, "source": sc.source, "file": files_[0].name, "system": system, "version": __version__,
+        "title": sc.title, "source": sc.source, "file": files_[0].name, "system": system_label(system),
+        "version": __version__,
         "date": now.strftime("%Y-%m-%d %H:%M UTC"),
         "files": [{"name": str(p), "sha256": sha256_file(p), "bytes": p.stat().st_size} for p in files_],
         "inputs": input_rows(raw, toml_comments(text), sc.data, presets),

@@ -128,7 +128,7 @@ def _cmd_fit(args) -> int:
             raise ScenarioError(f"{args.write_best!r} is the input file; write the best fit to another file",
                                 field="--write-best", file=args.file)
     scenario = load_scenario(args.file)  # the whole file validated first ([fit] and evidence sigmas included)
-    system = _units(args.units or scenario.units)
+    system = resolve_system(args.units, scenario.units)  # the file's speed_unit kept
     result = fit_scene(load_scene_data(args.file), None, engine=args.engine, workers=args.workers,
                        progress=args.progress, file=args.file, sample_time_limit=args.sample_time_limit)
     if args.json:
@@ -152,7 +152,7 @@ def _dump_result(result, command: str, file: str) -> None:
 
 def _cmd_mc(args) -> int:
     scenario = load_scenario(args.file)
-    system = _units(args.units or scenario.units)
+    system = resolve_system(args.units, scenario.units)  # the file's speed_unit kept
     if args.accept and scenario.evidence.empty:
         raise ScenarioError("--accept keeps the samples that meet all the evidence, but the scenario has no "
                             "[evidence] items", field="--accept", file=args.file)
@@ -197,7 +197,7 @@ def _stopped(what: str, kept_in) -> int:
 
 def _cmd_posterior(args) -> int:
     scenario = load_scenario(args.file)  # the whole file validated first ([fit], [posterior], evidence sigmas)
-    system = _units(args.units or scenario.units)
+    system = resolve_system(args.units, scenario.units)  # the file's speed_unit kept
     try:
         result = run_posterior(load_scene_data(args.file), None, steps=args.steps, seed=args.seed,
                                start="fit" if args.from_fit else None, engine=args.engine, workers=args.workers,

@@ -40,7 +40,7 @@ from .motion.wheels import select_wheels, enumerate_wheels
 from .schema import (ArrayOf, Field, ScenarioValidationError, Section, Table, document, load_toml, validate,
                      validate_collect)
 from .survey.schema import MAP_LINE_STYLES, SURVEY
-from .units import Kind, format_value, parse, toml_repr
+from .units import SPEED_UNITS, DisplaySystem, Kind, format_value, parse, toml_repr
 from .vehicles import MAX_ROLLOVER_THRESHOLD, Axle, Body, BodyState, Hitch, Vehicle, chain_states
 
 __all__ = ["SCHEMA", "MAP_LINE_STYLES", "MapLine", "Scenario", "RunoutSpec", "load_scenario", "presets", "preset_geometry",
@@ -645,6 +645,9 @@ META = Section("scenario", [
     Field("units", choices=("SI", "US"), default="SI",
           description="Units of every output (any case): the reports of run, fit and mc, the CSV files, the figures "
                       "and animations (US: ft, mph, lb, lbf, lbf s, ft lbf, deg); --units overrides it"),
+    Field("speed_unit", choices=SPEED_UNITS, required=False, example="km/h",
+          description="Unit of the speeds in SI outputs (reports, tables, figures, animations, the case report): "
+                      "m/s, km/h or mph; absent: m/s. US outputs show mph; with --units SI it still applies"),
 ], description="What the scene is")
 
 SCHEMA = Section("scenario file", subsections=[
@@ -772,6 +775,8 @@ class Scenario:
     ----------
     path : str or None
     title, source, units : str
+        ``units`` is "SI" or "US"; with ``[scenario] speed_unit`` a :class:`crashsim.units.DisplaySystem`
+        (equal to that string) carrying it, which every output of the scene reads.
     vehicles : tuple of Vehicle
         Including a barrier vehicle if the file has ``[barrier]``.
     states : dict of BodyState
@@ -1561,7 +1566,8 @@ def _from_validated(d: dict, data: dict, merged: dict, source, file: str | None,
     meta = d["scenario"]
     survey = d.get("survey")
     placed = is_placed(survey)
-    out = Scenario(file, meta["title"], meta["source"], meta["units"], tuple(vehicles), states, problem, runout,
+    units = DisplaySystem(meta["units"], meta["speed_unit"]) if meta.get("speed_unit") else meta["units"]
+    out = Scenario(file, meta["title"], meta["source"], units, tuple(vehicles), states, problem, runout,
                    evidence, d, map_lines, {}, approach_inputs,
                    descriptions={n: v.get("description") or "" for n, v in d["vehicles"].items()},
                    survey_frame=survey_frame(survey) if placed else None,

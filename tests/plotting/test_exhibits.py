@@ -282,9 +282,10 @@ def test_animation_tracks_grow_and_rest_outlines_appear_at_rest():
             np.testing.assert_allclose(np.column_stack([x, y])[:n], xy[:n], atol=1e-12)
     for artist, t_on in S.appear:
         assert artist.get_visible() == (t >= t_on)
-    # later impacts' numbers appear at their times (the first, at 0, is there from the start)
+    # every impact's number appears at its time: the first at the impact (t = 0), the later ones later
     numbers = {a.get_text(): on for a, on in S.appear if (a.get_gid() or "") == "label:impacts"}
-    assert numbers == {str(n): pytest.approx(float(i.t)) for n, i in enumerate(scene.joint.impacts, start=2)}
+    assert numbers == {"1": 0.0, **{str(n): pytest.approx(float(i.t))
+                                    for n, i in enumerate(scene.joint.impacts, start=2)}}
     assert any(t < e for e in ends.values())  # some vehicle still moving at that frame
     anim.frame(len(anim) - 1)
     assert all(a.get_visible() for a, _ in S.appear)

@@ -61,7 +61,7 @@ def _hide(text: str) -> frozenset:
 
 
 def _scale(text: str) -> float:
-    """argparse type of ``--scale``: 1:N."""
+    """argparse type of ``--scale``: 1:N, or an engineer's scale 1" = F'."""
     try:
         return parse_scale(text, field="--scale")
     except ScenarioError as exc:
@@ -452,7 +452,8 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("--paper", choices=tuple(PAPER_SIZES), default=None,
                     help="print sheet: the figure is the page, the drawing to scale (PDF/SVG print at 100 %%)")
     pl.add_argument("--scale", type=_scale, default=None, metavar="1:N",
-                    help='drawing scale on the sheet, e.g. "1:200" (default: the largest that fits; A4 without '
+                    help='drawing scale on the sheet, e.g. "1:200" or an engineer\'s scale "1\" = 40\'" (default: '
+                         'the largest standard scale that fits, in US units an engineer\'s scale; A4 without '
                          '--paper)')
     pl.set_defaults(func=_cmd_plot)
 

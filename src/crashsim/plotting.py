@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import logging
 import math
+import re
 import textwrap
 import weakref
 from pathlib import Path
@@ -32,7 +33,7 @@ __all__ = ["is_color", "LABEL_KINDS", "LINE_SHY", "line_ink", "LEGEND_MODES", "P
            "legend_mode", "parse_scale", "replace_scale_bar", "north_direction", "print_sheet", "scene_drawing", "text_box", "BarrierAxes",
            "plot_barrier_sweep", "plot_barrier_figures", "plot_scene", "plot_histories",
            "history_panels", "save_scene_figures", "SCENE_FIGURE_SUFFIXES", "check_sheet", "zone_colors",
-           "map_line_legend_texts"]
+           "map_line_legend_texts", "engineer_scale_text", "ENGINEER_SCALES_FT"]
 
 
 def _plt():
@@ -523,6 +524,10 @@ PAPER_SIZES = {"A4": (210.0, 297.0), "A3": (297.0, 420.0), "letter": (215.9, 279
 #: Scales a print sheet picks from when none is given (1:N), the largest drawing that fits.
 _SCALES = (10, 20, 25, 50, 100, 200, 250, 500, 1000, 2000, 2500, 5000, 10000)
 
+#: Engineer's scales of US drawings, as feet per inch (1" = 10', 20', 30', 40', 50', 60', 100', ...):
+#: the divisions of an engineer's scale rule (10 to 60 parts to the inch) times a power of ten.
+ENGINEER_SCALES_FT = tuple(float(d * 10 ** k) for k in range(0, 4) for d in (1, 2, 3, 4, 5, 6))
+
 #: Margins of a print sheet [in]: paper edge, and room for the tick labels and axis labels.
 _SHEET_EDGE, _SHEET_LEFT, _SHEET_BOTTOM = 12.0 / 25.4, 0.55, 0.45
 
@@ -555,8 +560,12 @@ def check_hide(hide) -> frozenset:
     return kinds
 
 
+_ENGINEER = re.compile(r"""^1\s*(?:"|in|inch)\s*=\s*([0-9.eE+]+)\s*(?:'|ft|feet|foot)$""")
+
+
 def parse_scale(text, *, field: str = "scale") -> float:
-    """The denominator N of a drawing scale ``"1:200"`` (or ``"200"``, or a number).
+    """The denominator N of a drawing scale ``"1:200"`` (or ``"200"``, or a number), or of an engineer's
+    scale ``1" = 40'`` (also ``1 in = 40 ft``): N = 12 x the feet per inch (480).
 
     Raises
     ------
@@ -564,15 +573,26 @@ def parse_scale(text, *, field: str = "scale") -> float:
         Unless N is a finite number >= 1.
     """
     raw = str(text).strip()
+    eng = _ENGINEER.match(raw.lower())
     body = raw.split(":", 1)[1] if raw.startswith("1:") else raw
     try:
-        n = float(body)
+        n = 12.0 * float(eng[1]) if eng else float(body)
     except ValueError:
         n = float("nan")
     if not (math.isfinite(n) and n >= 1.0):
-        raise ScenarioError(f"scale {raw!r} is not a drawing scale; allowed 1:N with N >= 1, e.g. \"1:200\"",
-                            field=field)
+        raise ScenarioError(f"scale {raw!r} is not a drawing scale; allowed 1:N with N >= 1, e.g. \"1:200\", "
+                            "or an engineer's scale 1\" = F' with F > 0 feet, e.g. 1\" = 40'", field=field)
     return n
+
+
+def engineer_scale_text(n: float) -> str:
+    """A drawing scale 1:N as a US sheet states it: ``1" = 40'`` (N = 480, an engineer's scale of
+    :data:`ENGINEER_SCALES_FT`); a scale that is none of them as its exact feet per inch to 3 significant
+    digits beside 1:N (``1" = 41.7' (1:500)``): the text always says how the sheet is drawn."""
+    ft = float(n) / 12.0
+    if any(math.isclose(ft, e, rel_tol=1e-9) for e in ENGINEER_SCALES_FT):
+        return f"1\" = {ft:g}'"
+    return f"1\" = {ft:.3g}' (1:{float(n):g})"
 
 
 class PrintSheet(NamedTuple):
@@ -587,7 +607,8 @@ class PrintSheet(NamedTuple):
     hi: np.ndarray        # upper right
 
 
-def print_sheet(paper: str, lo, hi, per_metre: float, scale=None, *, legend_height: float = 1.4) -> PrintSheet:
+def print_sheet(paper: str, lo, hi, per_metre: float, scale=None, *, legend_height: float = 1.4,
+                system: str = "SI") -> PrintSheet:
     """The sheet, scale and view of a scene figure printed on ``paper``: the view centred on the
     framed extent ``[lo, hi]`` and as large as the drawing box at scale 1:N.
 
@@ -600,9 +621,12 @@ def print_sheet(paper: str, lo, hi, per_metre: float, scale=None, *, legend_heig
     per_metre : float
         Display units per metre (1 for m, 1/0.3048 for ft).
     scale : float, optional
-        N of 1:N; default the largest drawing of :data:`_SCALES` that holds the extent.
+        N of 1:N; default the largest drawing of :data:`_SCALES` (US: of the engineer's scales
+        :data:`ENGINEER_SCALES_FT`, N = 12 x feet per inch) that holds the extent.
     legend_height : float
         Room kept under the drawing for the legend [in].
+    system : {"SI", "US"}
+        Which standard scales a scale not given is picked from.
 
     Raises
     ------
@@ -623,12 +647,13 @@ def print_sheet(paper: str, lo, hi, per_metre: float, scale=None, *, legend_heig
     box_h = size[1] - 2 * _SHEET_EDGE - _SHEET_BOTTOM - title - legend_height
     room = np.array([box_w, box_h]) * 0.0254  # metres of paper
     need = float(max(ext_m / room))  # the smallest N that holds the extent
+    us = str(system) == "US"
+    standard = tuple(12.0 * f for f in ENGINEER_SCALES_FT) if us else _SCALES
+    fits = [n for n in standard if n >= need * (1.0 - 1e-9)]
     if scale is None:
-        fits = [n for n in _SCALES if n >= need]
         scale = float(fits[0]) if fits else float(math.ceil(need))
     elif scale < need * (1.0 - 1e-9):
-        fits = [n for n in _SCALES if n >= need]
-        hint = f"1:{fits[0]:g}" if fits else f"1:{math.ceil(need)}"
+        hint = (engineer_scale_text(fits[0]) if us else f"1:{fits[0]:g}") if fits else f"1:{math.ceil(need)}"
         raise ScenarioError(f"scale 1:{scale:g} is too large for the scene on {key}: its framed extent "
                             f"{ext_m[0]:.1f} m x {ext_m[1]:.1f} m fits at 1:N with N >= {need:.0f} (e.g. {hint}), "
                             "or on "
@@ -755,7 +780,9 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
         Needs ``ax=None``.
     scale : float, optional
         N of the scale 1:N (default: the largest of 1:10 ... 1:10000 at which the framed view fits
-        the sheet); A4 if no ``paper`` is given.
+        the sheet; in US units the largest engineer's scale, 1" = 10', 20', ... 6000'); A4 if no
+        ``paper`` is given. The scale bar states it: "1:200", on a US sheet ``1" = 40'``
+        (:func:`engineer_scale_text`).
 
     Returns
     -------
@@ -971,14 +998,14 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
             raise ScenarioError("a print sheet (paper, scale) needs a new figure: leave ax=None", field="ax")
         # the page first (its size from the paper alone), then the legend under the drawing, measured,
         # then the drawing box and the view at scale
-        probe = print_sheet(paper or "A4", lo, hi, S.k, 1e9)
+        probe = print_sheet(paper or "A4", lo, hi, S.k, 1e9, system=S.system)
         ax.figure.set_size_inches(*probe.size)
         leg = _scene_legend(S, mode, True, compact=True) if mode != "none" else None
         room = 0.0
         if mode in _OUTSIDE:
             fig = ax.figure
             room = leg.get_window_extent(fig.canvas.get_renderer()).height / fig.dpi + 0.15
-        sheet = print_sheet(paper or "A4", lo, hi, S.k, scale, legend_height=room)
+        sheet = print_sheet(paper or "A4", lo, hi, S.k, scale, legend_height=room, system=S.system)
         lo, hi = sheet.lo, sheet.hi
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
@@ -1863,14 +1890,16 @@ def _darker(color, factor: float = 0.6):
 
 def _scale_bar(S: SceneDrawing, width: float, sheet=None):
     """Scale bar at the lower left (a 1-2-2.5-5 length near a fifth of the view); on a print sheet
-    its label also states the scale and the paper ("1:200 on A4")."""
+    its label also states the scale and the paper ("1:200 on A4"; a US sheet its engineer's scale,
+    ``1" = 40' on letter``: :func:`engineer_scale_text`)."""
     from matplotlib.font_manager import FontProperties
     from mpl_toolkits.axes_grid1.anchored_artists import AnchoredSizeBar
 
     length = _nice_at_most(width / 5.0)
     label = f"{length:g} {S.lunit}"
     if sheet is not None:
-        label += f"   scale 1:{sheet.scale:g} on {sheet.paper} {sheet.orientation}"
+        shown = engineer_scale_text(sheet.scale) if S.system == "US" else f"1:{sheet.scale:g}"
+        label += f"   scale {shown} on {sheet.paper} {sheet.orientation}"
     bar = AnchoredSizeBar(S.ax.transData, length, label, "lower left", pad=0.5, sep=3,
                           borderpad=0.6, frameon=True, size_vertical=0.0, color="black",
                           fontproperties=FontProperties(size=8))

@@ -4,8 +4,9 @@ An edge module like :mod:`crashsim.plotting` (matplotlib imported lazily, on fir
 fixed layer of every frame is :func:`crashsim.plotting.plot_scene` without ghost outlines
 (outlines at impact, obstacles, evidence, arrows, a compact legend outside the view, scale bar);
 per frame the moving outlines, the hitch pins and a clock change, the tyre tracks and CG paths
-grow to the clock, the outlines at rest appear when their vehicle comes to rest and later
-impacts' numbers when they happen.
+grow to the clock, the outlines at rest appear when their vehicle comes to rest, and the results
+of an impact (the delta-v and PDOF arrows with their labels, the contact point, the impact's
+number) when it happens: a frame before the impact (the approach) shows none of them.
 
 Two views (:data:`VIEWS`): ``"follow"`` (the default) is a camera framed on the vehicles at
 each frame, its centre and size smoothed over :data:`CAMERA_WINDOW` seconds of scene time
@@ -572,7 +573,8 @@ def animate_scene(scene, path, *, dt: float = 0.05, speed: float = 1.0, system: 
     Identical consecutive GIF frames (the hold) are stored once with their delays summed.
 
     Tracks and CG paths grow with the clock, the outlines at rest (with their axles, pins and
-    names) appear when their vehicle comes to rest, later impacts' numbers when they happen. A
+    names) appear when their vehicle comes to rest; the delta-v and PDOF arrows, the contact point
+    and each impact's number when their impact happens (none on a frame of the approach). A
     GIF of the scene view is rendered by drawing the fixed layer once and, per frame, only what
     changes over it (blitting); the follow view and an MP4 draw each frame whole.
     """

@@ -21,17 +21,18 @@ from importlib.resources import files
 from pathlib import Path
 
 import jinja2
+import markupsafe
 
 from ._version import __version__
 from .errors import ScenarioError
 from .plotting import figure_system, plot_histories, plot_scene, plot_time_distance
 from .motion.wheels import wheel_labels
 from .report import closing_error_text, describe_event, format_approach, rollover_cells, validity_text
-from .units import format_value, toml_repr
+from .units import format_value, system_label, toml_repr
 
 __all__ = ["toml_comments", "input_rows", "sha256_file", "survey_files", "load_json", "inputs_sha256", "made_from",
            "check_result_json", "MADE_FROM", "render_case_report", "write_case_report",
-           "VALIDITY_NOTES", "FILE_COMMENT"]
+           "VALIDITY_NOTES", "FILE_COMMENT", "breakable_key", "percent"]
 
 #: The model's assumptions and limits that every case report carries (README "Limits you should know").
 VALIDITY_NOTES = (
@@ -492,20 +493,68 @@ def _fit(d: dict, system: str) -> dict:
                                           for k, v in summary], "warnings": d.get("warnings", [])}
 
 
+def percent(v, decimals: int = 1) -> str:
+    """A fraction as the text reports print it: ``0.083 -> "8.3 %"``; None or NaN: "n/a"."""
+    if v is None or not isinstance(v, (int, float)) or not math.isfinite(v):
+        return "n/a"
+    return f"{100.0 * float(v):.{decimals}f} %"
+
+
+def _headline_share(v) -> str:
+    """A share as ``MCResult.evidence_headline`` prints it (3 significant digits: "0.59 %")."""
+    return "n/a" if v is None or not math.isfinite(float(v)) else f"{100.0 * float(v):.3g} %"
+
+
+def _mc_value(v, kind: str | None, system: str) -> str:
+    """A Monte Carlo output value as ``MCResult.report`` prints it: a fraction (dimensionless) in %, a
+    count to 3 digits, a ratio to 4, a physical quantity in the report's units; a kind not known: plain."""
+    if kind == "dimensionless":
+        return percent(v)
+    if kind == "count":
+        return "n/a" if v is None else f"{float(v):.3g}"
+    if kind == "ratio":
+        return "n/a" if v is None else f"{float(v):.4g}"
+    return _num(v, kind, system)
+
+
 def _mc(d: dict, system: str, kinds: dict | None) -> dict:
     pct = d.get("percentiles", {})
     qs = list(dict.fromkeys(q for p in pct.values() for q in p))  # the JSON's order: p5 ... p95, mean, std
     kinds = kinds or {}
+    acc = d.get("accepted") if isinstance(d.get("accepted"), dict) else None
+    acc_pct = (acc or {}).get("percentiles") or {}
 
     def kind(key):
-        k = kinds.get(key.split(".", 1)[0])
-        return None if k in (None, "dimensionless") else k
+        return kinds.get(key.split(".", 1)[0])
 
-    rows = [{"key": k, "values": [_num(p.get(q), kind(k), system) for q in qs]} for k, p in pct.items()]
+    rows = []
+    for k, p in pct.items():
+        rows.append({"key": k, "group": "all" if acc_pct else "",
+                     "values": [_mc_value(p.get(q), kind(k), system) for q in qs]})
+        if k in acc_pct:
+            rows.append({"key": "", "group": "accepted",
+                         "values": [_mc_value(acc_pct[k].get(q), kind(k), system) for q in qs]})
     summary = [("samples", d.get("n")), ("done", d.get("n_done")), ("failed", d.get("n_failed")), ("seed", d.get("seed"))]
-    if d.get("pass_share") is not None:
-        summary.append(("share meeting every evidence item", _num(d["pass_share"], None, "SI")))
-    return {"quantiles": qs, "rows": rows, "summary": summary}
+    if acc is not None:
+        summary.append(("samples meeting all the evidence (accepted)",
+                        f"{acc.get('count')} of {acc.get('of')} ({_headline_share(acc.get('share'))})"))
+    share = d.get("pass_share")
+    evidence = []
+    if isinstance(share, dict):  # share of the samples within each evidence item's tolerance
+        evidence = [{"key": k, "share": percent(v)} for k, v in share.items()]
+    elif isinstance(share, (int, float)):
+        summary.append(("share meeting every evidence item", percent(share)))
+    return {"quantiles": qs, "rows": rows, "summary": summary, "evidence": evidence, "accepted": bool(acc_pct)}
+
+
+#: Where a key (``vehicles.car.bodies[0].mass``, ``delta_v.car``) may wrap: after each of its separators.
+_KEY_BREAKS = re.compile(r"(?<=[._/-])|(?=\[)")
+
+
+def breakable_key(key) -> markupsafe.Markup:
+    """A key as HTML that wraps only at a separator (after ``.``, ``_``, ``/``, ``-``, before ``[``): the key
+    escaped, a ``<wbr>`` at each (the table's CSS keeps the words between them whole)."""
+    return markupsafe.Markup("<wbr>").join(markupsafe.escape(part) for part in _KEY_BREAKS.split(str(key)))
 
 
 def _posterior(d: dict, system: str) -> dict:
@@ -566,7 +615,8 @@ def render_case_report(scene, *, input_files, system: str | None = None, fit: di
     notes = list(VALIDITY_NOTES)
     approach = format_approach(sc.approaches, system) if sc.approaches else ""
     context = {
-        "title": sc.title, "source": sc.source, "file": files_[0].name, "system": system, "version": __version__,
+        "title": sc.title, "source": sc.source, "file": files_[0].name, "system": system_label(system),
+        "version": __version__,
         "date": now.strftime("%Y-%m-%d %H:%M UTC"),
         "files": [{"name": str(p), "sha256": sha256_file(p), "bytes": p.stat().st_size} for p in files_],
         "inputs": input_rows(raw, toml_comments(text), sc.data, presets),
@@ -581,6 +631,7 @@ def render_case_report(scene, *, input_files, system: str | None = None, fit: di
     env = jinja2.Environment(loader=jinja2.FileSystemLoader(str(files("crashsim").joinpath("templates"))),
                              autoescape=jinja2.select_autoescape(["html", "j2"]), undefined=jinja2.StrictUndefined,
                              trim_blocks=True, lstrip_blocks=True)
+    env.filters["key"] = breakable_key
     return env.get_template("case_report.html.j2").render(**context)
 
 

@@ -47,7 +47,7 @@ def _hide(text: str) -> frozenset:
 
 
 def _scale(text: str) -> float:
-    """argparse type of ``--scale``: 1:N."""
+    """argparse type of ``--scale``: 1:N, or an engineer's scale 1" = F'."""
     try:
         return parse_scale(text, field="--scale")
     except ScenarioError as exc:
@@ -126,7 +126,7 @@ def _cmd_fit(args) -> int:
             raise ScenarioError(f"{args.write_best!r} is the input file; write the best fit to another file",
                                 field="--write-best", file=args.file)
     scenario = load_scenario(args.file)  # the whole file validated first ([fit] and evidence sigmas included)
-    system = _units(args.units or scenario.units)
+    system = resolve_system(args.units, scenario.units)  # the file's speed_unit kept
     result = fit_scene(load_scene_data(args.file), None, engine=args.engine, workers=args.workers,
                        progress=args.progress, file=args.file, sample_time_limit=args.sample_time_limit)
     if args.json:
@@ -158,7 +158,7 @@ def _cmd_mc(args) -> int:
     from .survey.mapping import load_scene_data
 
     scenario = load_scenario(args.file)
-    system = _units(args.units or scenario.units)
+    system = resolve_system(args.units, scenario.units)  # the file's speed_unit kept
     if args.accept and scenario.evidence.empty:
         raise ScenarioError("--accept keeps the samples that meet all the evidence, but the scenario has no "
                             "[evidence] items", field="--accept", file=args.file)
@@ -208,7 +208,7 @@ def _cmd_posterior(args) -> int:
     from .survey.mapping import load_scene_data
 
     scenario = load_scenario(args.file)  # the whole file validated first ([fit], [posterior], evidence sigmas)
-    system = _units(args.units or scenario.units)
+    system = resolve_system(args.units, scenario.units)  # the file's speed_unit kept
     try:
         result = run_posterior(load_scene_data(args.file), None, steps=args.steps, seed=args.seed,
                                start="fit" if args.from_fit else None, engine=args.engine, workers=args.workers,
@@ -492,7 +492,8 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("--paper", choices=tuple(PAPER_SIZES), default=None,
                     help="print sheet: the figure is the page, the drawing to scale (PDF/SVG print at 100 %%)")
     pl.add_argument("--scale", type=_scale, default=None, metavar="1:N",
-                    help='drawing scale on the sheet, e.g. "1:200" (default: the largest that fits; A4 without '
+                    help='drawing scale on the sheet, e.g. "1:200" or an engineer\'s scale "1\" = 40\'" (default: '
+                         'the largest standard scale that fits, in US units an engineer\'s scale; A4 without '
                          '--paper)')
     pl.set_defaults(func=_cmd_plot)
 

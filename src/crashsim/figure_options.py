@@ -10,6 +10,7 @@ matplotlib.
 from __future__ import annotations
 
 import math
+import re
 
 from .errors import ScenarioError
 
@@ -58,8 +59,12 @@ def check_hide(hide) -> frozenset:
     return kinds
 
 
+_ENGINEER = re.compile(r"""^1\s*(?:"|in|inch)\s*=\s*([0-9.eE+]+)\s*(?:'|ft|feet|foot)$""")
+
+
 def parse_scale(text, *, field: str = "scale") -> float:
-    """The denominator N of a drawing scale ``"1:200"`` (or ``"200"``, or a number).
+    """The denominator N of a drawing scale ``"1:200"`` (or ``"200"``, or a number), or of an engineer's
+    scale ``1" = 40'`` (also ``1 in = 40 ft``): N = 12 x the feet per inch (480).
 
     Raises
     ------
@@ -70,14 +75,17 @@ def parse_scale(text, *, field: str = "scale") -> float:
     --------
     >>> parse_scale("1:200")
     200.0
+    >>> parse_scale('1" = 40\'')
+    480.0
     """
     raw = str(text).strip()
+    eng = _ENGINEER.match(raw.lower())
     body = raw.split(":", 1)[1] if raw.startswith("1:") else raw
     try:
-        n = float(body)
+        n = 12.0 * float(eng[1]) if eng else float(body)
     except ValueError:
         n = float("nan")
     if not (math.isfinite(n) and n >= 1.0):
-        raise ScenarioError(f"scale {raw!r} is not a drawing scale; allowed 1:N with N >= 1, e.g. \"1:200\"",
-                            field=field)
+        raise ScenarioError(f"scale {raw!r} is not a drawing scale; allowed 1:N with N >= 1, e.g. \"1:200\", "
+                            "or an engineer's scale 1\" = F' with F > 0 feet, e.g. 1\" = 40'", field=field)
     return n

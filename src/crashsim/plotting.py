@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import logging
 import math
+import re
 import textwrap
 import weakref
 from pathlib import Path
@@ -32,7 +33,8 @@ _log = logging.getLogger("crashsim")
 __all__ = ["is_color", "LABEL_KINDS", "LINE_SHY", "line_ink", "LEGEND_MODES", "PAPER_SIZES", "PrintSheet", "place_labels", "check_hide",
            "legend_mode", "parse_scale", "replace_scale_bar", "north_direction", "print_sheet", "scene_drawing", "text_box", "BarrierAxes",
            "plot_barrier_sweep", "plot_barrier_figures", "plot_scene", "plot_histories",
-           "history_panels", "save_scene_figures", "SCENE_FIGURE_SUFFIXES", "check_sheet"]
+           "history_panels", "save_scene_figures", "SCENE_FIGURE_SUFFIXES", "check_sheet", "zone_colors",
+           "map_line_legend_texts", "engineer_scale_text", "ENGINEER_SCALES_FT"]
 
 
 def _plt():
@@ -314,7 +316,8 @@ class SceneDrawing:
         self.fixed: list = []  # artists the labels keep clear of (axes indicator, scale bar, ...)
         self.unplaced = 0  # labels place_labels found no free place for
         self.timed: list = []  # (Line2D, times [s] (n,), points (n, 2) display units): paths and tracks
-        self.appear: list = []  # (artist, time [s]): outlines etc. at rest, from their rest; later impacts
+        self.appear: list = []  # (artist, time [s]): outlines etc. at rest, from their rest; the impact's results
+        # (delta-v and PDOF arrows, the contact point, numbered impacts) from the impact they belong to
         self.body_of = {b.name: b for v in self.sc.vehicles for b in v.bodies}
         self.vehicle_of = {b.name: v for v in self.sc.vehicles for b in v.bodies}
         movable = [v for v in self.sc.vehicles if not v.is_barrier]
@@ -515,6 +518,10 @@ _OUTSIDE = ("compact", "outside")
 #: Scales a print sheet picks from when none is given (1:N), the largest drawing that fits.
 _SCALES = (10, 20, 25, 50, 100, 200, 250, 500, 1000, 2000, 2500, 5000, 10000)
 
+#: Engineer's scales of US drawings, as feet per inch (1" = 10', 20', 30', 40', 50', 60', 100', ...):
+#: the divisions of an engineer's scale rule (10 to 60 parts to the inch) times a power of ten.
+ENGINEER_SCALES_FT = tuple(float(d * 10 ** k) for k in range(0, 4) for d in (1, 2, 3, 4, 5, 6))
+
 #: Margins of a print sheet [in]: paper edge, and room for the tick labels and axis labels.
 _SHEET_EDGE, _SHEET_LEFT, _SHEET_BOTTOM = 12.0 / 25.4, 0.55, 0.45
 
@@ -529,6 +536,16 @@ def legend_mode(legend) -> str:
     return str(legend)
 
 
+def engineer_scale_text(n: float) -> str:
+    """A drawing scale 1:N as a US sheet states it: ``1" = 40'`` (N = 480, an engineer's scale of
+    :data:`ENGINEER_SCALES_FT`); a scale that is none of them as its exact feet per inch to 3 significant
+    digits beside 1:N (``1" = 41.7' (1:500)``): the text always says how the sheet is drawn."""
+    ft = float(n) / 12.0
+    if any(math.isclose(ft, e, rel_tol=1e-9) for e in ENGINEER_SCALES_FT):
+        return f"1\" = {ft:g}'"
+    return f"1\" = {ft:.3g}' (1:{float(n):g})"
+
+
 class PrintSheet(NamedTuple):
     """A scene figure laid out on paper at a stated scale (see :func:`print_sheet`)."""
 
@@ -541,7 +558,8 @@ class PrintSheet(NamedTuple):
     hi: np.ndarray        # upper right
 
 
-def print_sheet(paper: str, lo, hi, per_metre: float, scale=None, *, legend_height: float = 1.4) -> PrintSheet:
+def print_sheet(paper: str, lo, hi, per_metre: float, scale=None, *, legend_height: float = 1.4,
+                system: str = "SI") -> PrintSheet:
     """The sheet, scale and view of a scene figure printed on ``paper``: the view centred on the
     framed extent ``[lo, hi]`` and as large as the drawing box at scale 1:N.
 
@@ -554,9 +572,12 @@ def print_sheet(paper: str, lo, hi, per_metre: float, scale=None, *, legend_heig
     per_metre : float
         Display units per metre (1 for m, 1/0.3048 for ft).
     scale : float, optional
-        N of 1:N; default the largest drawing of :data:`_SCALES` that holds the extent.
+        N of 1:N; default the largest drawing of :data:`_SCALES` (US: of the engineer's scales
+        :data:`ENGINEER_SCALES_FT`, N = 12 x feet per inch) that holds the extent.
     legend_height : float
         Room kept under the drawing for the legend [in].
+    system : {"SI", "US"}
+        Which standard scales a scale not given is picked from.
 
     Raises
     ------
@@ -577,12 +598,13 @@ def print_sheet(paper: str, lo, hi, per_metre: float, scale=None, *, legend_heig
     box_h = size[1] - 2 * _SHEET_EDGE - _SHEET_BOTTOM - title - legend_height
     room = np.array([box_w, box_h]) * 0.0254  # metres of paper
     need = float(max(ext_m / room))  # the smallest N that holds the extent
+    us = str(system) == "US"
+    standard = tuple(12.0 * f for f in ENGINEER_SCALES_FT) if us else _SCALES
+    fits = [n for n in standard if n >= need * (1.0 - 1e-9)]
     if scale is None:
-        fits = [n for n in _SCALES if n >= need]
         scale = float(fits[0]) if fits else float(math.ceil(need))
     elif scale < need * (1.0 - 1e-9):
-        fits = [n for n in _SCALES if n >= need]
-        hint = f"1:{fits[0]:g}" if fits else f"1:{math.ceil(need)}"
+        hint = (engineer_scale_text(fits[0]) if us else f"1:{fits[0]:g}") if fits else f"1:{math.ceil(need)}"
         raise ScenarioError(f"scale 1:{scale:g} is too large for the scene on {key}: its framed extent "
                             f"{ext_m[0]:.1f} m x {ext_m[1]:.1f} m fits at 1:N with N >= {need:.0f} (e.g. {hint}), "
                             "or on "
@@ -709,7 +731,9 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
         Needs ``ax=None``.
     scale : float, optional
         N of the scale 1:N (default: the largest of 1:10 ... 1:10000 at which the framed view fits
-        the sheet); A4 if no ``paper`` is given.
+        the sheet; in US units the largest engineer's scale, 1" = 10', 20', ... 6000'); A4 if no
+        ``paper`` is given. The scale bar states it: "1:200", on a US sheet ``1" = 40'``
+        (:func:`engineer_scale_text`).
 
     Returns
     -------
@@ -925,14 +949,14 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
             raise ScenarioError("a print sheet (paper, scale) needs a new figure: leave ax=None", field="ax")
         # the page first (its size from the paper alone), then the legend under the drawing, measured,
         # then the drawing box and the view at scale
-        probe = print_sheet(paper or "A4", lo, hi, S.k, 1e9)
+        probe = print_sheet(paper or "A4", lo, hi, S.k, 1e9, system=S.system)
         ax.figure.set_size_inches(*probe.size)
         leg = _scene_legend(S, mode, True, compact=True) if mode != "none" else None
         room = 0.0
         if mode in _OUTSIDE:
             fig = ax.figure
             room = leg.get_window_extent(fig.canvas.get_renderer()).height / fig.dpi + 0.15
-        sheet = print_sheet(paper or "A4", lo, hi, S.k, scale, legend_height=room)
+        sheet = print_sheet(paper or "A4", lo, hi, S.k, scale, legend_height=room, system=S.system)
         lo, hi = sheet.lo, sheet.hi
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
@@ -1312,6 +1336,8 @@ def _draw_arrows(S: SceneDrawing) -> None:
     moving = [b for b in imp.bodies.values() if not b.fixed]
     if not moving:
         return
+    # results of the impact: in the animation they appear at the impact (t = 0), not before it
+    first = (len(ax.patches), len(ax.lines), len(S.texts))
     # one arrow scale for all bodies: display length per display speed, a 1-2-2.5-5 number,
     # such that the largest delta-v is drawn about 6 m (20 ft) long
     ref_len = to_unit(6.0, Kind.LENGTH, system)[0]
@@ -1373,6 +1399,7 @@ def _draw_arrows(S: SceneDrawing) -> None:
         S.labels.append(lab)
     S.legend_entry("PDOF: crush force on each body in contact",
                    Line2D([], [], ls="none", marker=r"$\Rightarrow$", ms=12, color="0.15"))
+    S.appear += [(a, 0.0) for a in (*ax.patches[first[0]:], *ax.lines[first[1]:], *S.texts[first[2]:])]
 
 
 def _draw_obstacles(S: SceneDrawing) -> None:
@@ -1422,8 +1449,8 @@ def _draw_impacts(S: SceneDrawing) -> None:
         S.text(xy, str(n), kind="impacts", fontsize=7, fontweight="bold", ha="center", va="center",
                zorder=_Z_ARROW + 2, bbox=dict(boxstyle="circle,pad=0.25", facecolor="#ffd54f", edgecolor="0.1", lw=1.0))
         S.add(xy)
-        if n > 1:  # a later impact appears (in the animation) when it happens
-            S.appear += [(a, t_mark) for a in (*S.ax.lines[first[0]:], *S.texts[first[1]:])]
+        # each impact appears (in the animation) when it happens: the first at t = 0
+        S.appear += [(a, t_mark) for a in (*S.ax.lines[first[0]:], *S.texts[first[1]:])]
     S.legend_entry("impacts in time order (1: the first; the report lists them)",
                    Line2D([], [], ls="none", marker="o", ms=9, mfc="#ffd54f", mec="0.1"))
 
@@ -1561,32 +1588,88 @@ def _zone_label(zone) -> str:
     return ", ".join([f"{zone.name}, f = {zone.mu:g}", *slope])
 
 
+def zone_colors(zones) -> list[tuple[str, str]]:
+    """(fill, edge) of each friction zone: one pair per distinct zone name, in the order the names
+    first appear (:data:`_ZONE_COLORS`, repeating after four names), so that two zones of one
+    name ("grass verge" either side of the road) look alike and share one legend entry."""
+    order: dict[str, int] = {}
+    for z in zones:
+        order.setdefault(z.name, len(order))
+    return [_ZONE_COLORS[order[z.name] % len(_ZONE_COLORS)] for z in zones]
+
+
+def _zone_legend_texts(zones) -> dict[str, str]:
+    """Zone name -> its legend text: ``"friction zone: grass verge, f = 0.4"``; zones of one name
+    whose friction or slope differ list each distinct value set (``"gravel, f = 0.5 | f = 0.6"``)."""
+    parts: dict[str, list[str]] = {}
+    for z in zones:
+        rest = _zone_label(z).removeprefix(f"{z.name}, ")
+        got = parts.setdefault(z.name, [])
+        if rest not in got:
+            got.append(rest)
+    return {name: f"friction zone: {name}, {' | '.join(rest)}" for name, rest in parts.items()}
+
+
 def _draw_zones(S: SceneDrawing, roi: _Roi) -> None:
-    """Every friction zone of the road as a pale hatched polygon under everything else, with a
-    legend entry; only its part inside the region of interest counts toward the axis limits."""
+    """Every friction zone of the road as a pale hatched polygon under everything else, one colour
+    and one legend entry per zone name (:func:`zone_colors`); only its part inside the region of
+    interest counts toward the axis limits."""
     from matplotlib.patches import Patch, Polygon
 
     zones = _zones(S)
-    for i, z in enumerate(zones):
-        fill, edge = _ZONE_COLORS[i % len(_ZONE_COLORS)]
+    legend = _zone_legend_texts(zones)
+    for i, (z, (fill, edge)) in enumerate(zip(zones, zone_colors(zones))):
         xy = S.d(z.vertices)
         S.ax.add_patch(Polygon(xy, closed=True, facecolor=fill, edgecolor=edge, lw=0.8, hatch=".",
                                zorder=_Z_ZONE, gid=f"zone:{i}"))
         inside = _clip_polygon(xy, roi.lo, roi.hi)
         if len(inside):
             S.add(inside)
-        S.legend_entry(f"friction zone: {_zone_label(z)}", Patch(facecolor=fill, edgecolor=edge, hatch=".", lw=0.8))
+        S.legend_entry(legend[z.name], Patch(facecolor=fill, edgecolor=edge, hatch=".", lw=0.8))
     if zones:
         S.legend_entry(f"road surface outside the zones: f = {S.sc.runout.road.mu:g}",
                        Patch(facecolor="white", edgecolor="0.6", lw=0.8))
+
+
+def _map_line_look(line) -> tuple[str, str]:
+    """(what it is, colour) of a map line: its style's legend text, or for a gouge or debris drawn
+    from a survey "gouge"/"debris"; its own colour or the style's."""
+    text, color = _MAP_STYLES[line.style][:2]
+    if line.imported_as in ("gouge", "debris"):
+        text = line.imported_as
+    return text, line.color or color
+
+
+def map_line_legend_texts(lines) -> list[str]:
+    """The legend text of each map line, one text for the lines that look alike (one style, one
+    colour), naming where they come from: the survey file's layers or codes (``"road edge (EDGE,
+    EP)"``, ``"gouge (GOUGE)"``), else the name or colour given to a line of its own colour
+    (``"road edge (painted)"``); a plain line of a style written in the scenario file is its
+    style's text alone (``"road edge"``), in an entry apart from the surveyed ones."""
+    groups: dict[tuple, list[str]] = {}
+    keys = []
+    for line in lines:
+        text, color = _map_line_look(line)
+        key = (line.style, text, color, bool(line.layer))  # a written line is not said to come from a layer
+        keys.append(key)
+        names = groups.setdefault(key, [])
+        if line.layer:
+            name = line.layer
+        elif line.color is not None:
+            name = line.name or line.color
+        else:
+            name = ""
+        if name and name not in names:
+            names.append(name)
+    return [f"{key[1]} ({', '.join(groups[key])})" if groups[key] else key[1] for key in keys]
 
 
 def _map_line_artist_kw(line) -> tuple[str, dict]:
     """(legend text, Line2D keywords) of a map line in its style (and its own colour, if given)."""
     from matplotlib import patheffects
 
-    text, color, lw, dashes, double = _MAP_STYLES[line.style]
-    color = line.color or color
+    _, _, lw, dashes, double = _MAP_STYLES[line.style]
+    _, color = _map_line_look(line)
     if double:  # two strokes with a white gap: a wide stroke under a narrow white line
         kw = dict(color="white", lw=lw, solid_capstyle="butt",
                   path_effects=[patheffects.Stroke(linewidth=3.6 * lw, foreground=color), patheffects.Normal()])
@@ -1594,9 +1677,7 @@ def _map_line_artist_kw(line) -> tuple[str, dict]:
         kw = dict(color=color, lw=lw, solid_capstyle="butt")
         if dashes is not None:
             kw.update(ls="--", dashes=dashes)
-    if line.color is not None:
-        text = f"{text} ({line.name or line.color})"
-    return text, kw
+    return map_line_legend_texts([line])[0], kw
 
 
 def _draw_map_lines(S: SceneDrawing, roi: _Roi) -> None:
@@ -1604,8 +1685,9 @@ def _draw_map_lines(S: SceneDrawing, roi: _Roi) -> None:
     inside the region of interest count toward the axis limits."""
     from matplotlib.lines import Line2D
 
-    for i, line in enumerate(getattr(S.sc, "map_lines", ())):
-        text, kw = _map_line_artist_kw(line)
+    lines = getattr(S.sc, "map_lines", ())
+    for i, (line, text) in enumerate(zip(lines, map_line_legend_texts(lines))):
+        _, kw = _map_line_artist_kw(line)
         xy = S.d(line.points)
         S.ax.plot(xy[:, 0], xy[:, 1], zorder=_Z_MAP, gid=f"map:{i}", **kw)
         for piece in _clip_polyline(xy, roi.lo, roi.hi):
@@ -1701,6 +1783,7 @@ def _label_road_layout(S: SceneDrawing, roi: _Roi, lo, hi) -> None:
     inset = 0.03 * (np.asarray(hi) - np.asarray(lo))
     vlo, vhi = lo + inset, hi - inset  # anchors inside the axes
     polys = [S.d(z.vertices) for z in zones]
+    colors = zone_colors(zones)
     for i, z in enumerate(zones):
         part = _clip_polygon(polys[i], vlo, vhi)
         if len(part) < 3:
@@ -1720,7 +1803,7 @@ def _label_road_layout(S: SceneDrawing, roi: _Roi, lo, hi) -> None:
             continue
         text = _zone_label(z)
         k = place.best(cand, text, 7.5, allowed=effective, room=signed_distance(cand, polys[i]))
-        edge = _ZONE_COLORS[i % len(_ZONE_COLORS)][1]
+        edge = colors[i][1]
         S.text(cand[k], text, kind="zones", gid=f"zone-label:{i}", fontsize=7.5, ha="center", va="center",
                    style="italic", color=_darker(edge),
                    path_effects=_halo(2.2), zorder=Z_TEXT - 0.5)
@@ -1758,14 +1841,16 @@ def _darker(color, factor: float = 0.6):
 
 def _scale_bar(S: SceneDrawing, width: float, sheet=None):
     """Scale bar at the lower left (a 1-2-2.5-5 length near a fifth of the view); on a print sheet
-    its label also states the scale and the paper ("1:200 on A4")."""
+    its label also states the scale and the paper ("1:200 on A4"; a US sheet its engineer's scale,
+    ``1" = 40' on letter``: :func:`engineer_scale_text`)."""
     from matplotlib.font_manager import FontProperties
     from mpl_toolkits.axes_grid1.anchored_artists import AnchoredSizeBar
 
     length = _nice_at_most(width / 5.0)
     label = f"{length:g} {S.lunit}"
     if sheet is not None:
-        label += f"   scale 1:{sheet.scale:g} on {sheet.paper} {sheet.orientation}"
+        shown = engineer_scale_text(sheet.scale) if S.system == "US" else f"1:{sheet.scale:g}"
+        label += f"   scale {shown} on {sheet.paper} {sheet.orientation}"
     bar = AnchoredSizeBar(S.ax.transData, length, label, "lower left", pad=0.5, sep=3,
                           borderpad=0.6, frameon=True, size_vertical=0.0, color="black",
                           fontproperties=FontProperties(size=8))

@@ -7,7 +7,7 @@ import re
 
 import numpy as np
 
-from .units import Kind, format_value, to_unit
+from .units import Kind, format_value, speed_unit_of, to_unit
 
 __all__ = ["format_approach", "format_impact", "format_runout", "format_joint", "format_events", "format_evidence",
            "format_crush", "describe_event", "fmt", "table", "validity_text",
@@ -131,10 +131,12 @@ _SI_QUANTITY = re.compile(r"(?<![\w.])(-?\d+(?:\.\d+)?(?:e[+-]?\d+)?) (m/s|m|J|N
 def message_in(text: str, system: str = "SI") -> str:
     """A message written in SI (the run-out's stop reasons: ``"... 2.489 m/s > v_stop = 0.03 m/s"``)
     with its speeds, lengths, energies, impulses and forces in the display units of ``system``."""
-    if system == "SI":
-        return text
     kinds = {"m/s": "speed", "m": "length", "J": "energy", "N s": "impulse", "N": "force"}
-    return _SI_QUANTITY.sub(lambda m: fmt(float(m[1]), kinds[m[2]], system), text)
+    if system == "SI":  # SI as written, but speeds in the speed unit of SI outputs ([scenario] speed_unit)
+        if speed_unit_of(system) == "m/s":
+            return text
+        kinds = {"m/s": "speed"}
+    return _SI_QUANTITY.sub(lambda m: fmt(float(m[1]), kinds[m[2]], system) if m[2] in kinds else m[0], text)
 
 
 def format_runout(runout: dict, system: str = "SI", *, joint: bool = False) -> str:

@@ -40,7 +40,7 @@ from .motion.wheels import select_wheels, enumerate_wheels
 from .schema import (ArrayOf, Field, ScenarioValidationError, Section, Table, document, load_toml, validate,
                      validate_collect)
 from .survey.schema import MAP_LINE_STYLES, SURVEY
-from .units import Kind, format_value, parse, toml_repr
+from .units import SPEED_UNITS, DisplaySystem, Kind, format_value, parse, toml_repr
 from .vehicles import MAX_ROLLOVER_THRESHOLD, Axle, Body, BodyState, Hitch, Vehicle, chain_states
 
 __all__ = ["SCHEMA", "MAP_LINE_STYLES", "MapLine", "Scenario", "RunoutSpec", "load_scenario", "presets", "preset_geometry",
@@ -645,6 +645,9 @@ META = Section("scenario", [
     Field("units", choices=("SI", "US"), default="SI",
           description="Units of every output (any case): the reports of run, fit and mc, the CSV files, the figures "
                       "and animations (US: ft, mph, lb, lbf, lbf s, ft lbf, deg); --units overrides it"),
+    Field("speed_unit", choices=SPEED_UNITS, required=False, example="km/h",
+          description="Unit of the speeds in SI outputs (reports, tables, figures, animations, the case report): "
+                      "m/s, km/h or mph; absent: m/s. US outputs show mph; with --units SI it still applies"),
 ], description="What the scene is")
 
 SCHEMA = Section("scenario file", subsections=[
@@ -697,12 +700,20 @@ class MapLine:
         The polyline in the world frame [m], n >= 2 (read-only).
     color : str or None
         A matplotlib colour replacing the style's own; None for the style's.
+    layer : str
+        The survey file's layer or point code the line was imported from (``survey.imported``);
+        "" for a line written in the scenario file. The figure's legend names it.
+    imported_as : str
+        What the survey mapping made of that layer: ``"line"``, ``"gouge"`` or ``"debris"``
+        (``survey.files.map.kind``); "" for a line written in the scenario file.
     """
 
     name: str
     style: str
     points: np.ndarray
     color: str | None = None
+    layer: str = ""
+    imported_as: str = ""
 
     def __post_init__(self) -> None:
         pts = np.array(self.points, dtype=float)
@@ -714,7 +725,8 @@ class MapLine:
         object.__setattr__(self, "points", pts)
 
     def _key(self) -> tuple:
-        return self.name, self.style, self.color, self.points.shape, self.points.tobytes()
+        return (self.name, self.style, self.color, self.layer, self.imported_as, self.points.shape,
+                self.points.tobytes())
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, MapLine):
@@ -725,8 +737,15 @@ class MapLine:
         return hash(self._key())
 
 
-def _build_map_lines(m: dict, file: str | None) -> tuple[MapLine, ...]:
-    """The ``[[map.lines]]`` of a validated file (points already in m); colours checked here."""
+def _build_map_lines(m: dict, file: str | None, survey: dict | None = None) -> tuple[MapLine, ...]:
+    """The ``[[map.lines]]`` of a validated file (points already in m); colours checked here. A line
+    imported from a survey file carries the layer or code it came from (its ``survey.imported``
+    record, whose target is ``map.lines[i]``)."""
+    source = {}
+    for rec in ((survey or {}).get("imported") or ()):
+        target = rec.get("target") or ""
+        if target.startswith("map.lines[") and rec.get("layer") is not None:
+            source.setdefault(target, (rec["layer"], rec.get("kind") or ""))
     lines = []
     for i, ln in enumerate(m["lines"]):
         color = ln["color"]
@@ -734,7 +753,8 @@ def _build_map_lines(m: dict, file: str | None) -> tuple[MapLine, ...]:
             if not is_color(color):
                 raise _err(f"{color!r} is not a colour; use a matplotlib colour name (\"white\", \"tab:orange\") "
                            "or a hex code (\"#7f7f7f\")", f"map.lines[{i}].color", file)
-        lines.append(MapLine(ln["name"], ln["style"], np.asarray(ln["points"], dtype=float), color))
+        layer, kind = source.get(f"map.lines[{i}]", ("", ""))
+        lines.append(MapLine(ln["name"], ln["style"], np.asarray(ln["points"], dtype=float), color, layer, kind))
     return tuple(lines)
 
 
@@ -755,6 +775,8 @@ class Scenario:
     ----------
     path : str or None
     title, source, units : str
+        ``units`` is "SI" or "US"; with ``[scenario] speed_unit`` a :class:`crashsim.units.DisplaySystem`
+        (equal to that string) carrying it, which every output of the scene reads.
     vehicles : tuple of Vehicle
         Including a barrier vehicle if the file has ``[barrier]``.
     states : dict of BodyState
@@ -1537,14 +1559,15 @@ def _from_validated(d: dict, data: dict, merged: dict, source, file: str | None,
     if evidence is not None and crush is not None:
         evidence = dataclasses.replace(evidence, crush=crush)
     with later.each():
-        map_lines = _build_map_lines(d["map"], file)
+        map_lines = _build_map_lines(d["map"], file, d.get("survey"))
     with later.each():
         _check_north(d, file)
     later.raise_any()
     meta = d["scenario"]
     survey = d.get("survey")
     placed = is_placed(survey)
-    out = Scenario(file, meta["title"], meta["source"], meta["units"], tuple(vehicles), states, problem, runout,
+    units = DisplaySystem(meta["units"], meta["speed_unit"]) if meta.get("speed_unit") else meta["units"]
+    out = Scenario(file, meta["title"], meta["source"], units, tuple(vehicles), states, problem, runout,
                    evidence, d, map_lines, {}, approach_inputs,
                    descriptions={n: v.get("description") or "" for n, v in d["vehicles"].items()},
                    survey_frame=survey_frame(survey) if placed else None,

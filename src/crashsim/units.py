@@ -65,6 +65,10 @@ __all__ = [
     "G0",
     "Kind",
     "System",
+    "DisplaySystem",
+    "SPEED_UNITS",
+    "speed_unit_of",
+    "system_label",
     "DISPLAY_UNITS",
     "registry",
     "parse",
@@ -83,6 +87,56 @@ G0: float = 9.80665
 """Standard acceleration of gravity [m/s^2], exact by definition (3rd CGPM, 1901)."""
 
 System = Literal["SI", "US"]
+
+#: Units a speed of an SI output may be shown in (``[scenario] speed_unit``); US outputs show mph.
+SPEED_UNITS = ("m/s", "km/h", "mph")
+
+
+class DisplaySystem(str):
+    """A unit system (``"SI"`` or ``"US"``; equal to, and usable as, that string) whose SI outputs
+    show speeds in ``speed_unit`` (one of :data:`SPEED_UNITS`) instead of m/s.
+
+    :func:`to_unit` (and so every report, table and figure) reads ``speed_unit`` off the system it is
+    given; :func:`resolve_system` keeps it when a system is chosen by name over a scenario's
+    (``--units SI`` on a file with ``speed_unit = "km/h"``: km/h). A US system shows mph whatever
+    ``speed_unit`` says.
+
+    Examples
+    --------
+    >>> si = DisplaySystem("SI", "km/h")
+    >>> si == "SI", format_value(13.4112, Kind.SPEED, si), format_value(5.0, Kind.LENGTH, si)
+    (True, '48.28 km/h', '5 m')
+    """
+
+    speed_unit: str | None
+
+    def __new__(cls, system: str, speed_unit: str | None = None):
+        if system not in ("SI", "US"):
+            raise ValueError(f"unknown unit system {system!r}; use 'SI' or 'US'")
+        if speed_unit is not None and speed_unit not in SPEED_UNITS:
+            raise ValueError(f"unknown speed unit {speed_unit!r}; allowed {', '.join(SPEED_UNITS)}")
+        self = super().__new__(cls, system)
+        self.speed_unit = speed_unit
+        return self
+
+    def __getnewargs__(self):  # pickled whole (worker processes)
+        return str(self), self.speed_unit
+
+    def __repr__(self) -> str:
+        return f"DisplaySystem({str(self)!r}, {self.speed_unit!r})"
+
+
+def system_label(system) -> str:
+    """How a report names its unit system: ``"SI"``, ``"US"``, ``"SI, speeds in km/h"``."""
+    speed = speed_unit_of(system)
+    return str(system) if speed == DISPLAY_UNITS[Kind.SPEED][str(system)] else f"{system}, speeds in {speed}"
+
+
+def speed_unit_of(system) -> str:
+    """The speed unit of a system's outputs: ``speed_unit`` of an SI :class:`DisplaySystem`, else the
+    system's own (m/s, mph)."""
+    own = getattr(system, "speed_unit", None)
+    return own if own is not None and system == "SI" else DISPLAY_UNITS[Kind.SPEED][str(system)]
 
 
 class Kind(str, enum.Enum):
@@ -519,15 +573,22 @@ def parse_vector(value: Sequence[str | int | float], kind: Kind | str, n: int | 
 def resolve_system(value: object, default: str = "SI", *, field: str = "units") -> System:
     """A unit system written by a user (``"SI"``, ``"us"``, any case; None: ``default``).
 
+    A ``default`` that is a :class:`DisplaySystem` (a scenario's ``units`` with its ``speed_unit``)
+    lends its speed unit to the system chosen (shown in SI outputs only).
+
     Raises
     ------
     ScenarioError
         Naming ``field`` and the value, for anything but SI or US.
     """
     value = default if value is None else value
+    if isinstance(value, DisplaySystem):
+        return value  # type: ignore[return-value]
     if not isinstance(value, str) or value.strip().upper() not in ("SI", "US"):
         raise ScenarioError(f"unknown unit system {value!r}; allowed \"SI\" or \"US\" (any case)", field=field)
-    return value.strip().upper()  # type: ignore[return-value]
+    name = value.strip().upper()
+    speed = getattr(default, "speed_unit", None)  # the scenario's speed unit of SI outputs, kept
+    return DisplaySystem(name, speed) if speed is not None else name  # type: ignore[return-value]
 
 
 def si_unit(kind: Kind | str) -> str:
@@ -546,7 +607,7 @@ def to_unit(si_value: float, kind: Kind | str, system: System = "SI") -> tuple[f
         Its physical kind.
     system
         ``"SI"`` or ``"US"`` (US customary: ft, mph, lb, lbf, lbf s, ft lbf, lbf ft s^2,
-        deg, deg/s, ft/s^2).
+        deg, deg/s, ft/s^2); an SI :class:`DisplaySystem` shows speeds in its ``speed_unit``.
 
     Returns
     -------
@@ -561,7 +622,7 @@ def to_unit(si_value: float, kind: Kind | str, system: System = "SI") -> tuple[f
     kind = _kind(kind)
     if system not in ("SI", "US"):
         raise ValueError(f"unknown unit system {system!r}; use 'SI' or 'US'")
-    label = DISPLAY_UNITS[kind][system]
+    label = speed_unit_of(system) if kind is Kind.SPEED else DISPLAY_UNITS[kind][str(system)]
     if kind in _PLAIN:
         return float(si_value), label
     return float(si_value) / _si_factor(label, kind), label

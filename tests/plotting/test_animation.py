@@ -483,3 +483,61 @@ def test_cli_scene_without_runout_exits_2(tmp_path, capsys):
     assert code == 2
     assert "runout: " in capsys.readouterr().err
 
+
+
+# -- results appear at their time ---------------------------------------------------------------
+
+def _result_artists(ax):
+    """The impact's results on the figure: delta-v and PDOF arrows, their labels, the contact point."""
+    arrows = [p for p in ax.patches if (p.get_gid() or "").startswith(("arrow:delta-v:", "arrow:pdof:"))]
+    labels = [t for t in ax.texts if (t.get_gid() or "").startswith(("label:delta-v", "label:pdof"))]
+    return arrows, labels
+
+
+def _drawn(anim, artist) -> bool:
+    """Whether the artist is drawn on the frame (visible, and among the artists of the figure)."""
+    return artist.get_visible() and artist.get_figure(root=True) is anim.fig
+
+
+def test_impact_results_are_absent_before_the_impact_and_shown_from_it():
+    """The truck that brakes into a car: the approach frames (t < 0) show no delta-v or PDOF arrow
+    nor their labels; the frame at the impact (t = 0) and after it show them all."""
+    scene = _scene(TRUCK)
+    anim = scene_animation(scene, dt=DT, view="scene")
+    try:
+        arrows, labels = _result_artists(anim.ax)
+        assert {p.get_gid() for p in arrows} >= {"arrow:delta-v:car", "arrow:pdof:car"}
+        assert len(labels) == len(arrows)  # one label per arrow
+        times = anim.times
+        assert times[0] < 0.0 and 0.0 in times
+        k0 = int(np.flatnonzero(times == 0.0)[0])
+        anim.frame(0)  # the start of braking
+        assert not any(_drawn(anim, a) for a in [*arrows, *labels])
+        anim.frame(k0 - 1)  # the last frame before the impact
+        assert times[k0 - 1] < 0.0
+        assert not any(_drawn(anim, a) for a in [*arrows, *labels])
+        # from the impact on, every arrow and label (and after it, to the last frame)
+        for k, expected in ((k0 - 1, False), (k0, True), (len(times) - 1, True)):
+            anim.frame(k)
+            assert all(_drawn(anim, a) for a in [*arrows, *labels]) == expected, times[k]
+        # every artist the animation shows from a time is among those it redraws per frame
+        changing = set(map(id, anim.changing))
+        assert all(id(a) in changing for a in [*arrows, *labels])
+    finally:
+        import matplotlib.pyplot as plt
+
+        plt.close(anim.fig)
+
+
+def test_results_on_the_first_frame_of_a_scene_without_approach_are_shown():
+    """Without an approach the first frame is the impact itself (t = 0): the arrows are there."""
+    anim = scene_animation(_scene(INTERSECTION), dt=DT, view="scene")
+    try:
+        arrows, labels = _result_artists(anim.ax)
+        assert arrows and anim.times[0] == 0.0
+        anim.frame(0)
+        assert all(a.get_visible() for a in [*arrows, *labels])
+    finally:
+        import matplotlib.pyplot as plt
+
+        plt.close(anim.fig)

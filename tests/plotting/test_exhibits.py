@@ -282,9 +282,10 @@ def test_animation_tracks_grow_and_rest_outlines_appear_at_rest():
             np.testing.assert_allclose(np.column_stack([x, y])[:n], xy[:n], atol=1e-12)
     for artist, t_on in S.appear:
         assert artist.get_visible() == (t >= t_on)
-    # later impacts' numbers appear at their times (the first, at 0, is there from the start)
+    # every impact's number appears at its time: the first at the impact (t = 0), the later ones later
     numbers = {a.get_text(): on for a, on in S.appear if (a.get_gid() or "") == "label:impacts"}
-    assert numbers == {str(n): pytest.approx(float(i.t)) for n, i in enumerate(scene.joint.impacts, start=2)}
+    assert numbers == {"1": 0.0, **{str(n): pytest.approx(float(i.t))
+                                    for n, i in enumerate(scene.joint.impacts, start=2)}}
     assert any(t < e for e in ends.values())  # some vehicle still moving at that frame
     anim.frame(len(anim) - 1)
     assert all(a.get_visible() for a, _ in S.appear)
@@ -376,3 +377,63 @@ def test_shipped_scene_labels_cover_fewer_lines(monkeypatch):
     ORIGINAL = plotting.place_labels
     before, after = shy_ink(False), shy_ink(True)
     assert after < 0.6 * before, (before, after)
+
+
+# -- US sheets: an engineer's scale -----------------------------------------------------------------
+
+def _drawn_ft_per_inch(ax) -> tuple[float, float]:
+    """Feet of the view per inch of paper, across and up (the view is in ft), as the sheet is drawn."""
+    w, h = ax.figure.get_size_inches()
+    box = ax.get_position()
+    return float(np.ptp(ax.get_xlim()) / (box.width * w)), float(np.ptp(ax.get_ylim()) / (box.height * h))
+
+
+def test_a_us_sheet_states_the_engineer_s_scale_it_is_drawn_at():
+    """A US sheet whose scale is picked is drawn at an engineer's scale (1" = 10', 20', 30', 40', 50', 60',
+    100', ...) and its scale bar says so ("1\\" = 40'"), not 1:500; measured on the figure: the feet of
+    view per inch of paper are the stated feet."""
+    from crashsim.plotting import ENGINEER_SCALES_FT
+
+    scene = _scene(TRUCK)  # a US scene
+    assert scene.scenario.units == "US"
+    for paper in ("letter", "tabloid"):
+        ax = plot_scene(scene, paper=paper)
+        bar = next(a for a in ax.artists if a.get_gid() == "scalebar")
+        m = re.search(r"""scale 1" = (\d+(?:\.\d+)?)' on """ + paper, bar.txt_label.get_text())
+        assert m, bar.txt_label.get_text()
+        ft = float(m[1])
+        assert ft in ENGINEER_SCALES_FT and "1:" not in bar.txt_label.get_text()
+        across, up = _drawn_ft_per_inch(ax)
+        assert across == pytest.approx(ft, rel=1e-9) and up == pytest.approx(ft, rel=1e-9)
+        plt.close("all")
+    # a scale given as 1:N is drawn at 1:N and stated as it is (feet per inch beside 1:N)
+    ax = plot_scene(scene, paper="tabloid", scale=1000)
+    text = next(a for a in ax.artists if a.get_gid() == "scalebar").txt_label.get_text()
+    assert """scale 1" = 83.3' (1:1000) on tabloid""" in text
+    assert _drawn_ft_per_inch(ax)[0] == pytest.approx(1000 / 12, rel=1e-9)
+    plt.close("all")
+    # given as an engineer's scale, drawn at it
+    ax = plot_scene(scene, paper="tabloid", scale=parse_scale("1\" = 100'"))
+    text = next(a for a in ax.artists if a.get_gid() == "scalebar").txt_label.get_text()
+    assert """scale 1" = 100' on tabloid""" in text
+    assert _drawn_ft_per_inch(ax)[0] == pytest.approx(100.0, rel=1e-9)
+    plt.close("all")
+
+
+def test_an_si_sheet_keeps_its_1_to_n_scale():
+    ax = plot_scene(_scene(TRUCK), paper="A3", system="SI")
+    text = next(a for a in ax.artists if a.get_gid() == "scalebar").txt_label.get_text()
+    n = float(re.search(r"scale 1:(\d+) on A3", text)[1])
+    w = ax.figure.get_size_inches()[0] * ax.get_position().width
+    assert np.ptp(ax.get_xlim()) == pytest.approx(w * 0.0254 * n, rel=1e-9)  # metres of view
+    plt.close("all")
+
+
+def test_engineer_scales_parse_and_print():
+    from crashsim.plotting import ENGINEER_SCALES_FT, engineer_scale_text
+
+    assert {10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 100.0, 200.0} <= set(ENGINEER_SCALES_FT)
+    assert parse_scale("1\" = 40'") == parse_scale("1 in = 40 ft") == 480.0
+    assert engineer_scale_text(480) == "1\" = 40'" and engineer_scale_text(500) == "1\" = 41.7' (1:500)"
+    with pytest.raises(ScenarioError, match="engineer's scale"):
+        parse_scale("1\" = 0'")

@@ -96,13 +96,16 @@ def test_accepted_samples_are_drawn_dark_the_others_pale(mc_accept):
             continue
         bars = a.containers
         assert len(bars) == 2  # all samples (pale), then the accepted ones (dark) on the same bins
-        # each group as its share per bin: the accepted bars are the accepted samples' histogram, in % of 3
+        # both groups as their share of ALL the samples: the accepted bars are the accepted samples'
+        # histogram in % of the N samples (3 of 10: at most 30 %), the pale ones sum to 100 %
         key = next(k for k in mc_accept.outputs if a.get_xlabel().startswith(output_label(k)))
         v = mc_accept.outputs[key]
         edges = [p.get_x() for p in bars[0]] + [bars[0][-1].get_x() + bars[0][-1].get_width()]
         shown = display_values(v, mc_accept.kind_of(key), "SI")[0]  # in the figure's units
         counts, _ = np.histogram(shown[[1, 4, 7]], bins=edges)
-        assert np.allclose([p.get_height() for p in bars[1]], 100.0 * counts / 3)
+        assert np.allclose([p.get_height() for p in bars[1]], 100.0 * counts / N)
+        assert sum(p.get_height() for p in bars[1]) == pytest.approx(100.0 * 3 / N)
+        assert a.get_ylabel() == f"share of all {N} samples [%]"
         assert sum(p.get_height() for p in bars[0]) == pytest.approx(100.0)
         assert _luminance(bars[1][0].get_facecolor()[:3]) < _luminance(bars[0][0].get_facecolor()[:3]) - 0.3
         assert "accepted: median" in a.get_title()
@@ -117,4 +120,35 @@ def test_no_accepted_sample_draws_and_says_so(mc, tmp_path):
     axes = plot_histograms(none)
     assert "accepted: none" in axes.ravel()[0].get_title()
     assert "NO sample meets all the evidence" in none.report()
+    plt.close("all")
+
+
+def test_one_accepted_sample_is_one_sample_high_not_a_full_bar(mc):
+    """One accepted sample of N is a bar of 100/N % of all samples (it was drawn as a 100 % bar)."""
+    one = np.zeros(mc.n_done, dtype=bool)
+    one[6] = True
+    axes = plot_histograms(dataclasses.replace(mc, accept=True, meets_all=one), keys=["delta_v.car", "speed.A"])
+    for a in axes.ravel():
+        pale, dark = a.containers
+        heights = np.array([p.get_height() for p in dark])
+        assert heights.max() == pytest.approx(100.0 / N) and np.count_nonzero(heights) == 1
+        assert sum(p.get_height() for p in pale) == pytest.approx(100.0)
+        assert a.get_ylim()[1] < 100.0  # the axis is scaled to all samples' bars, not to a lone 100 % bar
+        assert "all" in a.get_ylabel() and str(N) in a.get_ylabel()
+    plt.close("all")
+
+
+def test_histograms_without_acceptance_are_shares_of_all_samples(mc):
+    """Without acceptance the bars are shares of all samples too; a sample without a value (NaN) still
+    counts in the whole, so the bars then sum to less than 100 % and the title says how many lack one."""
+    out = dict(mc.outputs)
+    v = out["delta_v.car"].copy()
+    v[[0, 2]] = np.nan
+    out["delta_v.car"] = v
+    axes = plot_histograms(dataclasses.replace(mc, outputs=out), keys=["delta_v.car", "speed.A"])
+    gap, full = axes.ravel()
+    assert sum(p.get_height() for p in gap.containers[0]) == pytest.approx(100.0 * (N - 2) / N)
+    assert "2 samples without a value" in gap.get_title()
+    assert sum(p.get_height() for p in full.containers[0]) == pytest.approx(100.0)
+    assert full.get_ylabel() == gap.get_ylabel() == f"share of all {N} samples [%]"
     plt.close("all")

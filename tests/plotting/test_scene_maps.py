@@ -227,3 +227,100 @@ def test_every_style_is_drawn_its_own_way():
     for s in MAP_LINE_STYLES:
         assert _MAP_STYLES[s][0] in texts
     assert "road edge (painted)" in texts
+
+
+def test_one_colour_and_one_legend_entry_per_zone_name():
+    """Two zones named "grass verge" (either side of the road) are one colour and one legend entry;
+    a zone of another name has another colour and its own entry. The label of each zone is in its
+    zone's colour (darkened)."""
+    from matplotlib.colors import to_rgb
+
+    from crashsim.plotting import _darker
+
+    scene = _scene(INTERSECTION)
+    lo, hi = _vehicle_box(scene)
+    x0, x1 = lo[0] - 2.0, hi[0] + 2.0
+    north = FrictionZone(((x0, hi[1] + 1.0), (x1, hi[1] + 1.0), (x1, hi[1] + 6.0), (x0, hi[1] + 6.0)), 0.4,
+                         "grass verge")
+    gravel = FrictionZone(((x0, lo[1] - 1.0), (0.5 * (x0 + x1), lo[1] - 1.0), (0.5 * (x0 + x1), lo[1] - 6.0),
+                           (x0, lo[1] - 6.0)), 0.55, "gravel")
+    south = FrictionZone(((0.5 * (x0 + x1), lo[1] - 1.0), (x1, lo[1] - 1.0), (x1, lo[1] - 6.0),
+                          (0.5 * (x0 + x1), lo[1] - 6.0)), 0.4, "grass verge")
+    ax = plot_scene(_with_layout(scene, [north, gravel, south]), ax=plt.subplots(figsize=(10, 7))[1],
+                    legend="best")
+    fills = [to_rgb(_by_gid(ax, f"zone:{i}").get_facecolor()) for i in range(3)]
+    edges = [to_rgb(_by_gid(ax, f"zone:{i}").get_edgecolor()) for i in range(3)]
+    assert fills[0] == fills[2] and edges[0] == edges[2]  # one name, one colour
+    assert fills[1] != fills[0] and edges[1] != edges[0]
+    leg = ax.get_legend()
+    texts = [t.get_text() for t in leg.get_texts()]
+    zone_entries = [t for t in texts if t.startswith("friction zone:")]
+    assert zone_entries == ["friction zone: grass verge, f = 0.4", "friction zone: gravel, f = 0.55"]
+    # the legend swatch of each entry is its zones' colour
+    for text, handle in zip(texts, leg.legend_handles):
+        if text == "friction zone: grass verge, f = 0.4":
+            assert to_rgb(handle.get_facecolor()) == fills[0]
+        elif text == "friction zone: gravel, f = 0.55":
+            assert to_rgb(handle.get_facecolor()) == fills[1]
+    for i in (0, 2):  # each grass label (where drawn) in the grass colour
+        label = _by_gid(ax, f"zone-label:{i}")
+        if label is not None:
+            assert np.allclose(to_rgb(label.get_color()), _darker(edges[0]))
+    plt.close("all")
+
+
+def test_zones_of_one_name_with_different_friction_list_each_in_their_entry():
+    scene = _scene(INTERSECTION)
+    a = FrictionZone(((0.0, 20.0), (5.0, 20.0), (5.0, 25.0)), 0.5, "gravel")
+    b = FrictionZone(((10.0, 20.0), (15.0, 20.0), (15.0, 25.0)), 0.6, "gravel")
+    ax = plot_scene(_with_layout(scene, [a, b]), ax=plt.subplots()[1], legend="best")
+    texts = [t.get_text() for t in ax.get_legend().get_texts() if t.get_text().startswith("friction zone:")]
+    assert texts == ["friction zone: gravel, f = 0.5 | f = 0.6"]
+    plt.close("all")
+
+
+SURVEY = ROOT / "scenarios" / "survey" / "truck_brakes_survey.toml"
+
+
+def test_lines_from_a_survey_carry_their_layer_or_code():
+    sc = load_scenario(SURVEY)
+    by_layer = {}
+    for ln in sc.map_lines:
+        by_layer.setdefault(ln.layer, set()).add((ln.style, ln.imported_as))
+    # the DXF layers and the point file's code, as mapped in the file
+    assert by_layer["EDGE"] == {("edge", "line")} and by_layer["EP"] == {("edge", "line")}
+    assert by_layer["GOUGE"] == {("other", "gouge")} and by_layer["DEBRIS"] == {("other", "debris")}
+    assert "" not in by_layer  # every line of this file comes from the survey
+
+
+def test_legend_names_the_survey_layers_not_a_colour_code():
+    """A gouge drawn from layer GOUGE is "gouge (GOUGE)" in the legend, not "other line (#8c564b)";
+    the road edges of the DXF layer EDGE and of the point code EP look alike and share one entry."""
+    scene = _scene(SURVEY)
+    ax = plot_scene(scene)
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "gouge (GOUGE)" in texts and "debris (DEBRIS)" in texts
+    assert "road edge (EDGE, EP)" in texts
+    assert "centre line (CENTRE)" in texts and "kerb / verge edge (KERB)" in texts
+    assert not any("other line" in t or "#" in t for t in texts), texts
+    # each entry's swatch is drawn as its lines are
+    leg = ax.get_legend()
+    for i, ln in enumerate(scene.scenario.map_lines):
+        if ln.imported_as == "gouge":
+            handle = leg.legend_handles[texts.index("gouge (GOUGE)")]
+            assert matplotlib.colors.same_color(handle.get_color(), _by_gid(ax, f"map:{i}").get_color())
+    plt.close("all")
+
+
+def test_written_lines_keep_their_names_or_colours_in_the_legend():
+    scene = _scene(INTERSECTION)
+    lines = [MapLine("", "other", np.array([[-10.0, -3.0], [10.0, -3.0]]), "#8c564b"),
+             MapLine("", "edge", np.array([[-10.0, 3.0], [10.0, 3.0]])),
+             MapLine("old paint", "lane", np.array([[-10.0, 5.0], [10.0, 5.0]]), "tab:orange"),
+             MapLine("", "edge", np.array([[-10.0, 7.0], [10.0, 7.0]]), None, "EOP", "line")]
+    ax = plot_scene(_with_layout(scene, (), lines), ax=plt.subplots()[1], legend="best")
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    # a written line of its own colour without a name can only say its colour; a layer is named
+    assert "other line (#8c564b)" in texts and "lane line (old paint)" in texts
+    assert "road edge" in texts and "road edge (EOP)" in texts
+    plt.close("all")

@@ -308,7 +308,8 @@ def test_monte_carlo_and_posterior_sections_in_the_users_units(tmp_path):
     mc_part = body[body.index("Monte Carlo"):body.index("Posterior")]
     head = mc_part[mc_part.index("Output"):]
     assert head.index("p5") < head.index("p50") < head.index("p95") < head.index("mean") < head.index("std")
-    assert "30 mph" in mc_part and "0.75" in mc_part  # speed in mph, a share plain
+    assert "30 mph" in mc_part and "75.0 %" in mc_part  # speed in mph, a fraction in % (as the text report)
+    assert "0.75" not in mc_part
     post_part = body[body.index("Posterior"):]
     assert "road friction" in post_part and "0.7" in post_part and "30 mph" in post_part
     assert "chain short" in post_part
@@ -373,3 +374,122 @@ def test_a_result_of_this_scene_is_embedded(tmp_path, capsys):
     assert main(["report", str(fit_scene_file), "-o", str(tmp_path / "c.html"), "--mc", str(f)]) == 0
     assert main(["report", str(SCENE), "-o", str(tmp_path / "d.html"), "--mc", str(f)]) == 2
     assert "was made from other inputs" in capsys.readouterr().err
+
+
+# -- the Monte Carlo section as an exhibit -----------------------------------------------------------
+
+MC_FILE = ROOT / "scenarios" / "fit" / "intersection_fit.toml"
+
+
+@pytest.fixture(scope="module")
+def mc_result():
+    """A small Monte Carlo of the shipped fit scene with acceptance, as ``crashsim mc --accept --json`` writes it."""
+    from crashsim.cli import _clean
+    from crashsim.reconstruct.montecarlo import monte_carlo
+    from crashsim.reconstruct.overrides import default_engine
+    from crashsim.schema import load_toml
+
+    mc = monte_carlo(load_toml(MC_FILE), n=12, engine=default_engine(), workers=1, progress=False, file=str(MC_FILE),
+                     accept=True)
+    return mc, json.loads(json.dumps(_clean(mc.to_dict())))
+
+
+def _mc_section(text: str) -> str:
+    return text[text.index('<section id="monte-carlo">'):text.index("</section>", text.index('id="monte-carlo"'))]
+
+
+def test_monte_carlo_section_prints_no_data_structure_and_shares_in_percent(mc_result):
+    from crashsim.reconstruct.montecarlo import OUTPUT_KINDS
+
+    mc, d = mc_result
+    assert isinstance(d["pass_share"], dict) and len(d["pass_share"]) > 2  # what was printed as a raw dict
+    scene = run_scene(load_scenario(MC_FILE))
+    text = render_case_report(scene, input_files=[MC_FILE], mc=d, figures=False, output_kinds=OUTPUT_KINDS)
+    _check(text)
+    section = _mc_section(text)
+    shown = html.unescape(re.sub(r"<[^>]+>", " ", section))
+    # no Python / JSON structure in the text: no braces, brackets of lists, quoted keys, None
+    assert not re.search(r"[{}]|\[\s*'|'\s*:|\bNone\b|\bTrue\b|\bFalse\b", shown), shown[:800]
+    # one row per evidence item, its share in % as the text report prints it ("  12.5 %  rest: ...")
+    report = mc.report()
+    for key, share in d["pass_share"].items():
+        cell = f"{100 * share:.1f} %"
+        assert re.search(rf"{re.escape(cell)}\s+{re.escape(key)}", report)  # the text report's line
+        row = re.search(rf"<tr><td class=\"key\">{re.escape(str(_key_html(key)))}</td><td class=\"num\">([^<]*)</td>",
+                        section)
+        assert row and row[1] == cell, (key, row and row[1], cell)
+    # the accepted samples: count, of how many, share in %
+    acc = d["accepted"]
+    assert f"{acc['count']} of {acc['of']} ({100 * acc['share']:.3g} %)" in shown
+    assert mc.evidence_headline().startswith(f"{100 * acc['share']:.3g} % of {acc['of']} samples")
+    # a fraction (energy loss) in % with the text report's digits, all and accepted
+    qs = [q for q in d["percentiles"]["energy_loss.system"] if q.startswith("p")]
+    lines = report.splitlines()
+    i = next(j for j, ln in enumerate(lines) if ln.strip().startswith("energy_loss.system"))
+    text_all = re.findall(r"-?\d+\.\d %", lines[i])
+    assert text_all == [f"{100 * d['percentiles']['energy_loss.system'][q]:.1f} %" for q in qs]
+    row = section[section.index(str(_key_html("energy_loss.system"))):]
+    cells = re.findall(r'<td class="num">([^<]*)</td>', row)[:len(d["percentiles"]["energy_loss.system"])]
+    assert cells[:len(qs)] == text_all
+    assert all(c.endswith(" %") for c in cells)  # mean and std too
+
+
+def _key_html(key):
+    from crashsim.casereport import breakable_key
+
+    return breakable_key(key)
+
+
+def test_keys_wrap_only_at_their_separators():
+    from crashsim.casereport import breakable_key
+
+    assert str(breakable_key("vehicles.car.bodies[0].mass")) == "vehicles.<wbr>car.<wbr>bodies<wbr>[0].<wbr>mass"
+    assert str(breakable_key("speed_at_braking.A")) == "speed_<wbr>at_<wbr>braking.<wbr>A"
+    assert str(breakable_key("a<b")) == "a&lt;b"  # escaped
+    css = (ROOT / "src" / "crashsim" / "templates" / "case_report.html.j2").read_text()
+    rule = re.search(r"td\.key, table\.inputs td\.key \{([^}]*)\}", css)
+    assert rule and "break-word" in rule[1] and "anywhere" not in rule[1] and "break-all" not in rule[1]
+
+
+_BREAKS = """<script>window.addEventListener("load", () => {
+  // where the browser broke each key cell's text into lines: the characters either side of each break
+  const out = [];
+  for (const td of document.querySelectorAll("td.key")) {
+    const text = td.textContent; const walker = document.createTreeWalker(td, NodeFilter.SHOW_TEXT);
+    const chars = []; let n;
+    while ((n = walker.nextNode())) for (let i = 0; i < n.length; i++) {
+      const r = document.createRange(); r.setStart(n, i); r.setEnd(n, i + 1);
+      const b = r.getClientRects(); if (b.length) chars.push([n.data[i], b[0].top]);
+    }
+    for (let i = 1; i < chars.length; i++)
+      if (chars[i][1] > chars[i - 1][1] + 2) out.push([text, chars[i - 1][0], chars[i][0]]);
+  }
+  document.body.setAttribute("data-breaks", JSON.stringify(out));
+});</script>"""
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="no Chromium on this machine (Debian: apt-get install chromium); "
+                                             ".ci/run installs it")
+def test_chromium_breaks_keys_at_separators_not_mid_word(mc_result, tmp_path):
+    """Laid out narrow (500 px, where long keys must wrap), every line break inside a key cell falls after a
+    separator (., _, /, -, a space) or before a "[": never between two letters of a word."""
+    from crashsim.reconstruct.montecarlo import OUTPUT_KINDS
+
+    _, d = mc_result
+    scene = run_scene(load_scenario(MC_FILE))
+    page = tmp_path / "case.html"
+    page.write_text(render_case_report(scene, input_files=[MC_FILE], mc=d, figures=False,
+                                       output_kinds=OUTPUT_KINDS).replace("</body>", _BREAKS + "</body>"),
+                    encoding="utf-8")
+    base = [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+            "--disable-component-update", "--disable-sync", "--no-first-run", f"--user-data-dir={tmp_path / 'profile'}",
+            "--host-resolver-rules=MAP * ~NOTFOUND"]
+    dom = subprocess.run(base + ["--window-size=500,1400", "--virtual-time-budget=5000", "--dump-dom",
+                                 page.resolve().as_uri()], check=True, capture_output=True, text=True,
+                         timeout=180).stdout
+    found = re.search(r'data-breaks="([^"]*)"', dom)
+    assert found, "the probe did not run"
+    breaks = json.loads(html.unescape(found[1]))
+    assert len(breaks) >= 5, "the narrow page wraps some keys (else this test measures nothing)"
+    bad = [(text, a, b) for text, a, b in breaks if not (a in "._/- " or b == "[")]
+    assert not bad, bad[:10]

@@ -72,7 +72,7 @@ from ..outputs import check_workers
 from ..report import fmt, table
 from ..scene.run import run_scene
 from ..schema import in_range, interval_text
-from ..units import resolve_system
+from ..units import resolve_system, system_label
 from .montecarlo import DEFAULT_SAMPLE_TIME_LIMIT
 from .overrides import (ScenarioOverrides, default_engine, file_contents, forward_data, get_value, parse_value,
                         resolve_path, set_value)
@@ -848,7 +848,8 @@ class FitResult:
         if sc is not None and sc.path:
             lines.append(f"file: {sc.path}")
         pct = f"{100 * self.confidence:g} %"
-        lines.append(f"units: {system}; run-out engine: {self.engine}; {self.evaluations} scene evaluations "
+        lines.append(f"units: {system_label(system)}; run-out engine: {self.engine}; "
+                     f"{self.evaluations} scene evaluations "
                      f"in {self.elapsed:.1f} s")
         lines.append("")
         lines.append(f"Unknowns (best fit, {pct} intervals, {'measurement sigmas' if self.covariance_mode == 'absolute' else 'scaled by chi^2/dof'})")

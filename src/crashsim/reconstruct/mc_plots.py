@@ -110,9 +110,11 @@ def default_histogram_keys(mc) -> list[str]:
 def plot_histograms(mc, keys=None, axes=None, *, system: str | None = None, bins: int = 40):
     """Histogram of each output, with its 5th, 50th and 95th percentiles marked.
 
-    With ``mc.accept`` the samples that meet all the evidence are drawn dark over the pale
-    histogram of all samples (same bins; each group as its share of samples per bin, so that
-    a few accepted samples are as visible as all of them), with their own percentiles (dashed).
+    The height of a bar is its share of *all* the samples (``mc.n_done``, a sample without a
+    value for the output included), in %: the y-axis label says so and names the number. With
+    ``mc.accept`` the samples that meet all the evidence are drawn dark over the pale histogram
+    of all samples on the same bins and the same scale (59 accepted samples of 10 000 are bars of
+    at most 0.59 %, never a 100 % bar), with their own percentiles (dashed).
 
     Parameters
     ----------
@@ -141,33 +143,36 @@ def plot_histograms(mc, keys=None, axes=None, *, system: str | None = None, bins
         fig.suptitle(_headline(mc) + ("\nsamples meeting all the evidence dark, the others pale" if mc.accept else ""))
     flat = np.asarray(axes).ravel()
     meets = np.asarray(mc.meets_all, dtype=bool) if mc.accept and len(mc.meets_all) == mc.n_done else None
+    n_all = mc.n_done
     for ax, key in zip(flat, keys):
         v = mc.values(key)  # an angle on its arc around the circular mean (as its percentiles)
         ok = np.isfinite(v)
         d, unit = display_values(v[ok], mc.kind_of(key), sysname)
         ax.set_xlabel(f"{output_label(key)} [{unit}]" if unit else output_label(key))
-        ax.set_ylabel("samples")
+        # every bar is its share of all the samples (a sample without a value counts in the whole)
+        ax.set_ylabel(f"share of all {n_all} samples [%]")
         if not d.size:
             continue
+        share = np.full(d.size, 100.0 / max(n_all, d.size))
+        novalue = "" if d.size == n_all else f"; {n_all - d.size} samples without a value"
         edges = np.histogram_bin_edges(d, bins=bins)
         if meets is None:
-            ax.hist(d, bins=edges, color=_BLUE, alpha=0.85)
+            ax.hist(d, bins=edges, weights=share, color=_BLUE, alpha=0.85)
             for q, ls in ((5, ":"), (50, "-"), (95, ":")):
                 ax.axvline(np.percentile(d, q), color="k", ls=ls, lw=1.0)
-            ax.set_title(_summary(d), fontsize=8)
+            ax.set_title(_summary(d) + novalue, fontsize=8)
             continue
-        acc = d[meets[ok]]
-        # each group as its share per bin (each sums to 100 %): the few accepted samples' shape stays visible
-        ax.hist(d, bins=edges, weights=np.full(d.size, 100.0 / d.size), color=_PALE, label=f"all ({d.size})")
+        inside = meets[ok]
+        acc = d[inside]
+        ax.hist(d, bins=edges, weights=share, color=_PALE, label=f"all ({d.size})")
         if acc.size:
-            ax.hist(acc, bins=edges, weights=np.full(acc.size, 100.0 / acc.size), color=_DARK, alpha=0.75,
-                    label=f"meet all evidence ({acc.size})")
-        ax.set_ylabel("share of the group's samples [%]")
+            ax.hist(acc, bins=edges, weights=share[inside], color=_DARK, alpha=0.75,
+                    label=f"meet all evidence ({acc.size}, {100.0 * acc.size / n_all:.3g} %)")
         for q, ls in ((5, ":"), (50, "-"), (95, ":")):
             ax.axvline(np.percentile(d, q), color="0.55", ls=ls, lw=1.0)
             if acc.size:
                 ax.axvline(np.percentile(acc, q), color=_DARK, ls="--" if q == 50 else ":", lw=1.2)
-        ax.set_title(f"all: {_summary(d)}\naccepted: " + (_summary(acc) if acc.size else "none"), fontsize=7.5)
+        ax.set_title(f"all: {_summary(d)}{novalue}\naccepted: " + (_summary(acc) if acc.size else "none"), fontsize=7.5)
         ax.legend(fontsize=6.5, loc="best", framealpha=0.8)
     return np.asarray(axes)
 

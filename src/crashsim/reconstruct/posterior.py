@@ -79,7 +79,7 @@ _log = logging.getLogger("crashsim")
 PERCENTILES = (2.5, 16.0, 50.0, 84.0, 97.5)
 from ..inverse_schema import MIN_KEPT_STEPS, validate_posterior  # noqa: E402 - fewest steps kept after burn-in and thinning
 from ..report import fmt, table
-from ..units import resolve_system
+from ..units import resolve_system, system_label
 from .fit import FitProblem, FitSpec, NotAtRest, fit_scene
 from .montecarlo import DEFAULT_SAMPLE_TIME_LIMIT, MCResult, UncertaintySpec, scene_outputs
 from .overrides import INVERSE_SECTIONS, default_engine, file_contents
@@ -476,7 +476,8 @@ class PosteriorResult:
         if self.file:
             lines.append(f"file: {self.file}")
         resumed = f" ({self.n_resumed} resumed from {self.chain_path})" if self.n_resumed else ""
-        lines.append(f"units: {system}; run-out engine: {self.engine}; {self.backend}, {self.workers} worker(s); "
+        lines.append(f"units: {system_label(system)}; run-out engine: {self.engine}; "
+                     f"{self.backend}, {self.workers} worker(s); "
                      f"{self.evaluations} scene evaluations in {self.elapsed:.1f} s")
         lines.append(f"emcee {sp.move} move: {sp.walkers} walkers x {self.steps} steps{resumed}; burn-in "
                      f"{sp.burn_steps}, thin {sp.thin}: {self.samples.shape[0]} samples kept ({kept} per walker); "

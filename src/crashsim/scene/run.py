@@ -23,7 +23,7 @@ from ..plotting import plot_scene
 from ..report import (format_approach, format_crush, format_events, format_evidence, format_impact,
                       format_joint, format_runout, message_in)
 from ..survey.report import format_survey, survey_records
-from ..units import Kind, format_value, resolve_system, to_unit
+from ..units import Kind, format_value, resolve_system, speed_unit_of, system_label, to_unit
 from ..vehicles import BodyState, chain_states
 from .models import scene_model
 
@@ -215,7 +215,7 @@ class SceneResult:
             head.append(f"source: {sc.source}")
         if sc.path:
             head.append(f"file: {sc.path}")
-        head.append(f"units: {system}")
+        head.append(f"units: {system_label(system)}")
         text = "\n".join(head) + "\n\n"
         if sc.approaches:
             text += format_approach(sc.approaches, system) + "\n\n"
@@ -435,7 +435,9 @@ def _unit(kind: str, system: str) -> str:
 
 
 def _convert(value: float, kind: str, system: str) -> float:
-    return to_unit(value, kind, system)[0] if system != "SI" else float(value)
+    if system == "SI" and (kind != "speed" or speed_unit_of(system) == "m/s"):
+        return float(value)  # SI as computed (a speed in km/h or mph with [scenario] speed_unit)
+    return to_unit(value, kind, system)[0]
 
 
 def _system(scene, system: str | None) -> str:

@@ -114,3 +114,33 @@ def test_the_band_draws_about_the_views_values(scene_copy):
     p2, moved = s.band_task(4)
     j = p2["paths"].index("vehicles.A.position[0]")  # not uncertain: the view's value in every sample
     assert {r[j] for r in moved} == {0.5}
+
+
+def test_the_command_refuses_bad_input_before_serving(tmp_path, capsys):
+    from crashsim.cli import main
+
+    assert main(["live", str(tmp_path / "missing.toml"), "--no-browser"]) == 2
+    assert "missing.toml" in capsys.readouterr().err
+    for args, key in ((["--port", "70000"], "--port"), (["--band-samples", "-1"], "--band-samples"),
+                      (["--workers", "0"], "--workers")):
+        assert main(["live", str(tmp_path / "missing.toml"), "--no-browser", *args]) == 2
+        assert key in capsys.readouterr().err
+    bad = tmp_path / "bad.toml"
+    bad.write_text((ROOT_SCENE := __import__("pathlib").Path(__file__).resolve().parents[2] / "scenarios" / "fit"
+                    / "intersection_fit.toml").read_text().replace('speed = "13.41 m/s"', 'speed = "13.41 m"', 1))
+    assert ROOT_SCENE.is_file()
+    assert main(["live", str(bad), "--no-browser"]) == 2
+    err = capsys.readouterr().err
+    assert "bad.toml" in err and "vehicles.A.speed" in err and "13.41 m" in err
+
+
+def test_a_notebook_shows_the_view_inline(scene_copy):
+    from crashsim import open_live
+
+    view = open_live(scene_copy, band_samples=0)
+    try:
+        html = view._repr_html_()
+        assert "<iframe" in html and view.url in html and f"token={view.token}" in view.url
+        assert view.url.startswith("http://127.0.0.1:")
+    finally:
+        view.stop()

@@ -384,7 +384,7 @@ MC_FILE = ROOT / "scenarios" / "fit" / "intersection_fit.toml"
 @pytest.fixture(scope="module")
 def mc_result():
     """A small Monte Carlo of the shipped fit scene with acceptance, as ``crashsim mc --accept --json`` writes it."""
-    from crashsim.cli import _clean
+    from crashsim.motion.result import jsonable as _clean
     from crashsim.reconstruct.montecarlo import monte_carlo
     from crashsim.reconstruct.overrides import default_engine
     from crashsim.schema import load_toml

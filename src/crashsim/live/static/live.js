@@ -195,6 +195,12 @@
   }
   function applyView() {
     svg.setAttribute("viewBox", `${view.x} ${-(view.y + view.h)} ${view.w} ${view.h}`);
+    // a scale bar of a round length in the file's unit, about 120 px long
+    const pxPerUnit = svg.clientWidth / view.w / S.per_m;
+    const raw = 120 / pxPerUnit, p = Math.pow(10, Math.floor(Math.log10(raw)));
+    const len = [1, 2, 5, 10].map((k) => k * p).filter((x) => x <= raw * 1.5).pop() || p;
+    $("scalebar-bar").style.width = `${len * pxPerUnit}px`;
+    $("scalebar-text").textContent = `${Number(len.toPrecision(3))} ${S.length_unit}`;
   }
 
   // -- a result -----------------------------------------------------------------------------------

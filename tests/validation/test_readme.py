@@ -348,3 +348,16 @@ def test_the_known_error_paragraph_is_the_validation_table_s():
     assert len(numbers) >= 8
     missing = [n for n in numbers if not re.search(rf"(?<![\d.]){re.escape(n)}(?!\d)", table)]
     assert not missing, f"README numbers not in docs/validation/errors.md (run python benchmarks/validation_suite.py): {missing}"
+
+
+def test_live_view_numbers_come_from_the_browser_benchmark():
+    section = README[README.index("## The live view"):]
+    section = section[:section.index("\n## ", 1)]
+    bench = (ROOT / "plots" / "live_view.md").read_text().splitlines()
+    rows = [ln for ln in section.splitlines() if ln.startswith("| ") and NUMBER.search(ln) and "---" not in ln]
+    assert len(rows) >= 6
+    for ln in rows:
+        if ln.startswith("| flood of"):
+            continue
+        assert ln in bench, ln
+    assert "pip install -e \".[live]\"" in section and "crashsim live scenarios/fit/intersection_fit.toml" in section

@@ -346,6 +346,10 @@ class LiveServer:
         except ScenarioError as exc:
             return await self._send(ws, {"type": "save_refused", "error": str(exc),
                                          "changed_on_disk": self.session.changed_on_disk()})
+        except OSError as exc:  # the folder or the file not writable: nothing written, the view goes on
+            where = f" {exc.filename!r}" if exc.filename else ""
+            return await self._send(ws, {"type": "save_refused", "error": f"could not write{where}: "
+                                         f"{exc.strerror or exc}", "changed_on_disk": False})
         await self._broadcast({"type": "saved", "path": written, "changed": self.session.changed()})
 
     async def _on_reload(self, ws, msg):

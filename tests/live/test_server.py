@@ -104,3 +104,42 @@ def test_changes_sent_at_once_are_coalesced(live_server):
     assert live_server.stats["computed"] - computed < 100  # not one recompute per change: never a backlog
     last = next(m for m in got if m.get("seq") == 199)
     assert last["values"]["vehicles.B.speed"] == "13.8538 m/s"  # 30.99 mph in the file's unit
+
+
+def test_export_gives_the_figure_and_the_report_only_of_a_saved_state(live_server):
+    import aiohttp
+
+    async def get(fmt):
+        async with aiohttp.ClientSession() as s:
+            async with s.get(f"http://127.0.0.1:{live_server.port}/export?format={fmt}&token={live_server.token}") as r:
+                return r.status, r.headers.get("Content-Disposition", ""), await r.read()
+
+    origin = f"http://127.0.0.1:{live_server.port}"
+    _run(_ws_session(live_server, origin, ['{"type": "set", "seq": 300, "values": {"vehicles.B.speed": "13.41 m/s"}}'],
+                     lambda got: any(m.get("seq") == 300 for m in got)))
+    status, disposition, svg = _run(get("svg"))
+    assert status == 200 and svg.lstrip().startswith(b"<?xml") and b"<svg" in svg and "attachment" in disposition
+    status, _, png = _run(get("png"))
+    assert status == 200 and png.startswith(b"\x89PNG")
+    assert _run(get("exe"))[0] == 400
+    status, _, html = _run(get("html"))  # the file's own values: the report names the file
+    assert status == 200 and b"<html" in html.lower() and live_server.session.path.name.encode() in html
+    _run(_ws_session(live_server, origin, ['{"type": "set", "seq": 301, "values": {"vehicles.B.speed": "31 mph"}}'],
+                     lambda got: any(m.get("seq") == 301 for m in got)))
+    status, _, text = _run(get("html"))
+    assert status == 409 and b"save the view's changes first" in text
+    _run(_ws_session(live_server, origin, ['{"type": "set", "seq": 302, "values": {"vehicles.B.speed": "13.41 m/s"}}'],
+                     lambda got: any(m.get("seq") == 302 for m in got)))
+
+
+@pytest.mark.slow
+def test_fit_from_here_answers_with_the_fit(live_server):
+    origin = f"http://127.0.0.1:{live_server.port}"
+    got = _run(_ws_session(live_server, origin, ['{"type": "fit"}'], lambda got: any(m["type"] == "fit" for m in got)))
+    fit = next(m for m in got if m["type"] == "fit")
+    assert fit["ok"], fit
+    paths = [u["path"] for u in fit["unknowns"]]
+    assert paths == ["vehicles.A.speed", "vehicles.B.speed", "impact.restitution", "runout.road_friction"]
+    speed_b = next(u for u in fit["unknowns"] if u["path"] == "vehicles.B.speed")
+    lo, hi = (float(x.split()[0]) for x in speed_b["interval"])
+    assert lo <= float(speed_b["value"].split()[0]) <= hi and 0 < fit["n_agree"] <= fit["starts"]

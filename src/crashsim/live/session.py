@@ -432,7 +432,8 @@ class LiveSession:
             if c is not None:
                 lo, hi = self._fit_bounds().get(c.path, (c.lower, c.upper))
                 x = min(max(c.value, lo), hi)
-                u["initial"] = canonical(x, c.kind, c.like)
+                v = canonical(x, c.kind, c.like)
+                u["initial"] = v if isinstance(v, str) else repr(v)  # [fit] writes every value as text
         return data
 
     # -- the Monte Carlo band and the survey underlay -------------------------------------------

@@ -75,7 +75,7 @@ def parse_scale(text, *, field: str = "scale") -> float:
     --------
     >>> parse_scale("1:200")
     200.0
-    >>> parse_scale('1" = 40\'')
+    >>> parse_scale("1 in = 40 ft")
     480.0
     """
     raw = str(text).strip()

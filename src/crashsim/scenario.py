@@ -793,7 +793,7 @@ class Scenario:
     approaches : dict of ApproachResult
         By vehicle name: the simulated approach of each vehicle with ``[vehicles.<name>.approach]``
         (its velocity and yaw rates at impact are in ``states``); empty until the approaches are
-        simulated (:func:`crashsim.reconstruct.scene.simulate_approaches`: by :func:`scenario_from_dict` unless asked not to,
+        simulated (:func:`crashsim.scene.run.simulate_approaches`: by :func:`scenario_from_dict` unless asked not to,
         else by the scene run).
     approach_inputs : dict of ApproachInput
         By vehicle name: what each vehicle's approach needs (its spec, road and options, the
@@ -1425,7 +1425,7 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None, approac
     A ``[survey]`` section not yet read is read here (:func:`crashsim.survey.expand_survey`): its
     items join the file's own tables before validation.
 
-    ``approaches``: simulate the vehicles' approaches (:func:`crashsim.reconstruct.scene.simulate_approaches`,
+    ``approaches``: simulate the vehicles' approaches (:func:`crashsim.scene.run.simulate_approaches`,
     the default);
     False leaves them to the scene run (:func:`crashsim.reconstruct.run_scene` simulates them
     before the impact): the scenario then carries their inputs (``approach_inputs``), and the

@@ -162,7 +162,7 @@ def test_no_private_name_imported_across_modules():
     assert not bad, "\n".join(bad)
 
 
-# ------------------------------------------------------------------ old paths of moved modules
+# ------------------------------------------------------------------ old paths of moved modules: gone
 SHIMS = [
     ("crashsim.reconstruct.scene", "crashsim.scene.run", "run_scene"),
     ("crashsim.reconstruct.models", "crashsim.scene.models", "scene_model"),
@@ -178,11 +178,12 @@ SHIMS = [
 
 
 @pytest.mark.parametrize("old, new, name", SHIMS, ids=[s[0] for s in SHIMS])
-def test_old_path_warns_and_gives_the_same_object(old, new, name):
+def test_the_old_paths_of_moved_modules_are_gone(old, new, name):
+    """The modules moved before 0.1.0 was released (no user imports the old paths): one path each."""
     sys.modules.pop(old, None)
-    with pytest.warns(DeprecationWarning, match=new.replace(".", r"\.")):
-        shim = importlib.import_module(old)
-    assert getattr(shim, name) is getattr(importlib.import_module(new), name)
+    with pytest.raises(ModuleNotFoundError):
+        importlib.import_module(old)
+    assert hasattr(importlib.import_module(new), name)
 
 
 def test_the_new_paths_do_not_warn():

@@ -26,7 +26,7 @@ from crashsim.motion import (
     simulate_runout,
     static_loads,
 )
-from crashsim.motion.levels import LEVEL_DESCRIPTIONS, LEVELS, simulate_level, simulate_scene_level
+from crashsim.motion.levels import LEVEL_DESCRIPTIONS, LEVELS, simulate_level
 from crashsim.motion.loads import STANDARD_GRAVITY as G
 from crashsim.vehicles import Axle, Body, BodyState, Hitch, Vehicle, chain_states
 
@@ -58,15 +58,13 @@ def test_unknown_level_suggests_the_nearest():
     start = {"car": BodyState((0, 0), 0.0, (10.0, 0.0))}
     with pytest.raises(ScenarioError, match=r"runout\.level.*best matches are \['articulated'\]"):
         simulate_level("articulted", symmetric_car(), start, None, Road(0.7))
-    with pytest.raises(ScenarioError, match="must be one of"), pytest.warns(DeprecationWarning, match="run_runout"):
-        simulate_scene_level("full", [symmetric_car()], start, None, Road(0.7))
+    with pytest.raises(ScenarioError, match="must be one of"):
+        simulate_level("full", symmetric_car(), start, None, Road(0.7))
 
 
 def test_impact_level_has_no_runout():
     start = {"car": BodyState((0, 0), 0.0, (10.0, 0.0))}
     assert simulate_level("impact", symmetric_car(), start, None, Road(0.7)) is None
-    with pytest.warns(DeprecationWarning, match="run_runout"):
-        assert simulate_scene_level("impact", [symmetric_car()], start, None, Road(0.7)) is None
 
 
 # ---------------------------------------------------------------- energy: closed forms
@@ -245,9 +243,9 @@ def test_every_level_on_the_shipped_intersection_scene():
         initial.update(make_hitch_consistent(v, {b.name: states[b.name] for b in v.bodies}))
     results = {}
     for level in LEVELS[1:]:
-        with pytest.warns(DeprecationWarning, match="run_runout"):
-            out = simulate_scene_level(level, sc.vehicles, initial, sc.runout.wheels, sc.runout.road,
-                                       sc.runout.options)
+        # each vehicle alone (the levels compared without the contact of a scene run)
+        out = {v.name: simulate_level(level, v, initial, sc.runout.wheels.get(v.name), sc.runout.road,
+                                      sc.runout.options) for v in sc.vehicles if not v.is_barrier}
         assert set(out) == {"A", "B"}
         for r in out.values():
             assert r.status == "rest"

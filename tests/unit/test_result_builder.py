@@ -33,18 +33,16 @@ def _model():
     return RunoutModel(car, WheelSettings.all_locked().resolve(car), Road(0.7), RunoutOptions())
 
 
-def test_named_inputs_and_the_deprecated_keywords_build_the_same_result():
+def test_named_inputs_build_the_result_and_the_old_keywords_are_gone():
     model = _model()
     inputs = _inputs(model)
     new = build_result(model, inputs)
-    with pytest.warns(DeprecationWarning, match="ResultInputs"):
-        old = build_result(model, **inputs._asdict())
-    assert new.bodies["car"].distance == old.bodies["car"].distance == 3.0
-    assert new.energy_dissipated == old.energy_dissipated == 40.0
+    assert new.bodies["car"].distance == 3.0
+    assert new.energy_dissipated == 40.0
     assert new.bodies["car"].time_to_rest == 1.5 and new.success
     assert [w.static_load for w in new.wheels.values()] == list(model.static_load)
     with pytest.raises(TypeError):
-        build_result(model, inputs, t=inputs.t)
+        build_result(model, **inputs._asdict())
 
 
 def test_static_loads_and_options_can_be_given():

@@ -118,11 +118,3 @@ def _same_report(a, b):
                                                                          b.estimate_heading, b.message)
 
 
-def test_simulate_scene_level_is_deprecated_for_the_one_entry():
-    from crashsim.motion.levels import simulate_scene_level
-
-    start = {"a": BodyState((0, 0), 0.0, (10.0, 0.0))}
-    with pytest.warns(DeprecationWarning, match="run_runout"):
-        old = simulate_scene_level("energy", [_car("a")], start, None, Road(0.7))
-    _same(old["a"], run_runout([_car("a")], start, None, Road(0.7), level="energy").vehicles["a"])
-    assert dataclasses.is_dataclass(old["a"])

@@ -116,7 +116,6 @@ import dataclasses
 import difflib
 import logging
 import math
-import warnings
 from typing import Mapping
 
 import numpy as np
@@ -137,7 +136,7 @@ from .simulate import simulate_runout
 from .tyres import tyre_forces
 from .wheels import WheelSettings
 
-__all__ = ["LEVELS", "LEVEL_DESCRIPTIONS", "check_level", "simulate_level", "simulate_scene_level", "energy_runout",
+__all__ = ["LEVELS", "LEVEL_DESCRIPTIONS", "check_level", "simulate_level", "energy_runout",
            "rigid_runout"]
 
 _log = logging.getLogger("crashsim")
@@ -246,43 +245,6 @@ def simulate_level(
     opts = dataclasses.replace(options, load_transfer=(level == "load_transfer"))
     res = simulate_runout(vehicle, initial, settings, road, opts)
     return dataclasses.replace(res, options={**res.options, "level": level})
-
-
-def simulate_scene_level(
-    level: str,
-    vehicles,
-    initial: Mapping[str, BodyState],
-    wheels_by_vehicle: Mapping[str, WheelSettings | None] | None,
-    road: Road,
-    options: RunoutOptions = RunoutOptions(),
-) -> dict[str, RunoutResult] | None:
-    """:func:`simulate_level` for every movable vehicle of a scene, each alone (None for ``"impact"``).
-
-    .. deprecated::
-        Use :func:`crashsim.motion.run_runout` (``level=...``; its ``.vehicles``), the one run-out
-        entry.  It runs the ``articulated`` and ``load_transfer`` levels with every vehicle
-        together and with contact, as a scene does; this function runs each vehicle alone.
-
-    Mirrors :func:`~crashsim.motion.simulate_scene`: results by vehicle name, barriers absent,
-    a vehicle not in ``wheels_by_vehicle`` has all wheels locked.
-    """
-    warnings.warn("crashsim.motion.levels.simulate_scene_level is deprecated; use crashsim.motion.run_runout "
-                  "(level=...), which runs the articulated levels with every vehicle together and with contact",
-                  DeprecationWarning, stacklevel=2)
-    check_level(level)
-    vehicles = list(vehicles)
-    wheels_by_vehicle = dict(wheels_by_vehicle or {})
-    names = [v.name for v in vehicles]
-    for key in wheels_by_vehicle:
-        if key not in names:
-            raise ScenarioError(f"no vehicle named {key!r}; vehicles are {names}", field="wheels_by_vehicle")
-    if level == "impact":
-        return None
-    return {
-        v.name: simulate_level(level, v, initial, wheels_by_vehicle.get(v.name), road, options)
-        for v in vehicles
-        if not v.is_barrier
-    }
 
 
 # ---------------------------------------------------------------------------------------------- energy

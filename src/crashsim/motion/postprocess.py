@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import logging
 import math
-import warnings
 from dataclasses import dataclass, replace
 from typing import Callable, NamedTuple, Sequence
 
@@ -31,7 +30,7 @@ from .scene_model import kernels
 from .result import (BodyHistory, BodyRunout, HitchHistory, PairSummary, RunoutEvent, RunoutResult,
                      SceneRunout, TrackSegment, WheelTrack)
 
-__all__ = ["ResultInputs", "build_result", "chunk_inputs", "assemble_result", "gauss_legendre_chunks", "split_track"]
+__all__ = ["ResultInputs", "build_result", "chunk_inputs", "gauss_legendre_chunks", "split_track"]
 
 GL_NODES, GL_WEIGHTS = np.polynomial.legendre.leggauss(5)
 _log = logging.getLogger("crashsim")
@@ -207,13 +206,6 @@ def chunk_inputs(
     )
 
 
-def assemble_result(model: RunoutModel, **chunks) -> RunoutResult:
-    """Deprecated: ``build_result(model, chunk_inputs(model, ...))``."""
-    warnings.warn("crashsim.motion.postprocess.assemble_result is deprecated; use "
-                  "build_result(model, chunk_inputs(model, ...))", DeprecationWarning, stacklevel=2)
-    return build_result(model, chunk_inputs(model, **chunks))
-
-
 class ResultInputs(NamedTuple):
     """What :func:`build_result` makes a :class:`~crashsim.motion.result.RunoutResult` of: the
     computed arrays of one vehicle's run and what the run says of itself (all SI).
@@ -290,7 +282,7 @@ class ResultInputs(NamedTuple):
     rollover: dict | None = None
 
 
-def build_result(model, inputs: ResultInputs | None = None, **fields) -> RunoutResult:
+def build_result(model, inputs: ResultInputs) -> RunoutResult:
     """The result objects of one vehicle's run: the one builder of a
     :class:`~crashsim.motion.result.RunoutResult` (both engines, the energy level and the pymunk
     cross-check).
@@ -302,15 +294,7 @@ def build_result(model, inputs: ResultInputs | None = None, **fields) -> RunoutR
         ``mass``, ``inertia`` and ``options`` (or ``options_dict``).
     inputs : ResultInputs
         The computed arrays and what the run says of itself.
-    **fields
-        Deprecated: the fields of :class:`ResultInputs` as keywords.
     """
-    if inputs is None:
-        warnings.warn("build_result(model, t=..., ...) is deprecated; give its inputs as one ResultInputs",
-                      DeprecationWarning, stacklevel=2)
-        inputs = ResultInputs(**fields)
-    elif fields:
-        raise TypeError("build_result takes a ResultInputs or keywords, not both")
     (t, Y, points, sliding, load, hitch_force, stop_moment, distance, path_length, sliding_length, energy, max_gap,
      status, message, t_end, y_initial, y_final, sol, events, method, nfev, njev, nlu, n_segments, missed,
      kinetic_energies, energy_dissipated, gravity_work, static_load, options, rollover) = inputs

@@ -24,7 +24,7 @@ path                                  objects rebuilt
 ====================================  ===============================================================
 
 A vehicle with an approach (``[vehicles.<name>.approach]``) is simulated in the scene run
-(:func:`crashsim.reconstruct.scene.simulate_approaches`), from the inputs the scenario carries:
+(:func:`crashsim.scene.run.simulate_approaches`), from the inputs the scenario carries:
 its speed at impact (``vehicles.<name>.speed``), at the start of braking
 (``vehicles.<name>.approach.speed``) or its reaction time changes only those inputs, and the road friction also the
 road of every approach that runs on the run-out's road; the run re-runs the approach.  The

@@ -360,4 +360,6 @@ def test_live_view_numbers_come_from_the_browser_benchmark():
         if ln.startswith("| flood of"):
             continue
         assert ln in bench, ln
+    ratio = next(ln for ln in section.splitlines() if ln.startswith("The whole round trip is"))
+    assert ratio.split(" The band")[0] in bench
     assert "pip install -e \".[live]\"" in section and "crashsim live scenarios/fit/intersection_fit.toml" in section

@@ -591,6 +591,14 @@ def resolve_system(value: object, default: str = "SI", *, field: str = "units") 
     return DisplaySystem(name, speed) if speed is not None else name  # type: ignore[return-value]
 
 
+def number_and_unit(text: object) -> tuple[float, str] | None:
+    """A value as a file writes it split into its number and its unit text (``"30 mph"`` ->
+    ``(30.0, "mph")``, ``"0.05"`` -> ``(0.05, "")``); None for anything that is not a number with an
+    optional unit (a plain number in a file is a float, not text: None)."""
+    m = _NUMBER.fullmatch(text) if isinstance(text, str) else None
+    return (float(m["num"]), m["unit"]) if m is not None else None
+
+
 def si_unit(kind: Kind | str) -> str:
     """SI unit label of ``kind`` (``"m/s"`` for a speed, ``""`` for dimensionless)."""
     return DISPLAY_UNITS[_kind(kind)]["SI"]

@@ -367,7 +367,7 @@ class LiveServer:
         await self._broadcast(msg)
 
     async def _on_fit(self, ws, msg):
-        if not self.session.static()["fit"]:
+        if not self.session.has_fit:
             return await self._send(ws, {"type": "fit", "ok": False, "error": "this file has no [fit] unknowns"})
         loop = asyncio.get_running_loop()
         data = await loop.run_in_executor(self._compute, self.session.fit_inputs)

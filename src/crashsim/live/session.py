@@ -34,7 +34,7 @@ from ..scenario import SCHEMA, load_scenario
 from ..schema import in_range, load_toml
 from ..survey.mapping import load_scene_data
 from ..survey.underlay import scene_underlay
-from ..units import Kind, parse, si_unit, to_unit, write_like
+from ..units import Kind, number_and_unit, parse, si_unit, to_unit, write_like
 from . import view
 from .savefile import save_values
 
@@ -43,9 +43,6 @@ __all__ = ["Control", "LiveSession", "canonical", "SIGNIFICANT"]
 #: Significant digits of a value the view writes (in the file's unit): a dragged vehicle moves by
 #: a tenth of a millimetre, a typed "65 km/h" in a file that writes mph becomes "40.3891 mph".
 SIGNIFICANT = 6
-
-_NUMBER = re.compile(r"^\s*(?P<num>[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?)\s*(?P<unit>.*?)\s*$")
-
 
 def _round(x: float, digits: int = SIGNIFICANT) -> float:
     if x == 0 or not math.isfinite(x):
@@ -58,14 +55,14 @@ def canonical(si_value: float, kind: Kind, like: Any) -> Any:
     digits: ``"40.3891 mph"``, or a number for a plain number (a percentage if ``like`` is one)."""
     w = write_like(si_value, kind, like)
     if isinstance(w, str):
-        m = _NUMBER.match(w)
-        return f"{_round(float(m['num']))!r} {m['unit']}".replace(".0 ", " ") if m else w
+        x, unit = number_and_unit(w)
+        return f"{_round(x)!r} {unit}".replace(".0 ", " ")
     return _round(float(w))
 
 
 def _unit_of(written: Any) -> str:
-    m = _NUMBER.match(written) if isinstance(written, str) else None
-    return m["unit"] if m else ""
+    split = number_and_unit(written)
+    return split[1] if split else ""
 
 
 @dataclass
@@ -166,7 +163,7 @@ class LiveSession:
         self.error = None
 
     def _rebase(self) -> None:
-        """The file's own values of the inputs (SI; None where the file does not give one)."""
+        """The file's own values of the inputs (SI), against which a value counts as changed."""
         self.overrides = ScenarioOverrides(self.data, list(self.controls), engine=self.engine, file=self.file,
                                            cache=1, field_prefix="live")
         # where the file gives no value, the schema's default the view started from
@@ -250,24 +247,17 @@ class LiveSession:
                 like = t.field.default if t.component is None else t.field.default[t.component]
             if like is None:  # neither in the file nor a default: not an input of this scene
                 continue
-            if isinstance(like, str) and not _unit_of(like) and kind not in (Kind.DIMENSIONLESS,):
-                like = None
-            if like is None or (kind is not Kind.DIMENSIONLESS and not _unit_of(like)):
-                # written in the file's display unit for the kind
-                _, unit = to_unit(1.0, kind, self.system)
-                like = f"0 {unit or si_unit(kind)}"
-                value = parse(get_value(d, t) if get_value(d, t) is not None else t.field.default, kind, field=path)
-            else:
-                value = parse(like, kind, field=path)
-            unit = _unit_of(like) if isinstance(like, str) else ""
-            per_si = 1.0
+            value = parse(like, kind, field=path)
+            if kind is not Kind.DIMENSIONLESS and not _unit_of(like):
+                like = f"0 {to_unit(1.0, kind, self.system)[1] or si_unit(kind)}"  # the file's display unit
+            unit = _unit_of(like)
             w1 = write_like(1.0, kind, like)
-            if isinstance(w1, str):
-                per_si = float(_NUMBER.match(w1)["num"])
+            per_si = number_and_unit(w1)[0] if isinstance(w1, str) else 1.0
             lo, hi = bounds.get(t.path) or self._range(t, kind, value)
+            written = canonical(value, kind, like)
             out[t.path] = Control(path=t.path, label=label, group=group, kind=kind, like=like, unit=unit,
-                                  per_si=per_si, lower=lo, upper=hi, written=canonical(value, kind, like),
-                                  value=parse(canonical(value, kind, like), kind, field=path), target=t)
+                                  per_si=per_si, lower=lo, upper=hi, written=written,
+                                  value=parse(written, kind, field=path), target=t)
         return out
 
     @staticmethod
@@ -341,8 +331,7 @@ class LiveSession:
         # only the inputs that differ from the file's are written (the others are the file's):
         # a change of the speeds, coefficients, point or friction alone then takes the fast path
         # that rebuilds only the objects it reaches (crashsim.reconstruct.variants)
-        differ = tuple(p for i, p in enumerate(self.controls)
-                       if self._base[i] is None or si[p] != self._base[i])
+        differ = tuple(p for p, base in zip(self.controls, self._base) if si[p] != base)
         sc = self._overrides_for(differ).scenario([si[p] for p in differ])
         for p, (text, x) in new.items():
             self.controls[p].written, self.controls[p].value = text, x
@@ -421,16 +410,22 @@ class LiveSession:
                                 field="save as", file=self.file)
         return out
 
+    @property
+    def has_fit(self) -> bool:
+        """The file has ``[fit]`` unknowns (Fit from here can run)."""
+        return bool((self.raw.get("fit") or {}).get("unknowns"))
+
     def fit_inputs(self) -> dict:
         """The file's contents with the current inputs written in, the ``[fit]`` unknowns that are
         inputs of the view starting from their current values (within their bounds)."""
         data = copy.deepcopy(self.raw)
+        bounds = self._fit_bounds()
         for p, c in self.controls.items():
             data = set_written(data, c.target, c.written)
         for u in ((data.get("fit") or {}).get("unknowns") or ()):
             c = self.controls.get(u.get("path"))
             if c is not None:
-                lo, hi = self._fit_bounds().get(c.path, (c.lower, c.upper))
+                lo, hi = bounds.get(c.path, (c.lower, c.upper))
                 x = min(max(c.value, lo), hi)
                 v = canonical(x, c.kind, c.like)
                 u["initial"] = v if isinstance(v, str) else repr(v)  # [fit] writes every value as text
@@ -521,4 +516,4 @@ class LiveSession:
 def _file_value_differs(session: LiveSession, c: Control) -> bool:
     """The current value is not the file's own (SI, by value: the file may write it in other digits)."""
     base = session._base[list(session.controls).index(c.path)]
-    return base is None or abs(base - c.value) > 1e-12 * max(1.0, abs(base))
+    return abs(base - c.value) > 1e-12 * max(1.0, abs(base))

@@ -11,7 +11,6 @@ import math
 
 import numpy as np
 
-from ..geometry import to_world
 from ..impact.result import clock_direction
 from ..units import Kind, format_value, to_unit
 
@@ -74,7 +73,7 @@ def static_payload(session) -> dict:
             "road_friction": ro.road.mu if ro is not None else None, "evidence": evidence,
             "point_frame": imp.get("point_frame", "world"), "normal_frame": imp.get("normal_frame", "world"),
             "controls": [c.to_dict() for c in session.controls.values()],
-            "fit": bool((session.raw.get("fit") or {}).get("unknowns")),
+            "fit": session.has_fit,
             "uncertainty": session.band_inputs(), "underlay": session.underlay_info()}
 
 
@@ -178,9 +177,3 @@ def band_payload(rows: list[dict], n: int, system: str) -> dict:
     return {"n": n, "n_done": len(ok), "cpu": sum(r.get("cpu", 0.0) for r in rows), "n_failed": len(rows) - len(ok), "n_meets_all": meets,
             "share_text": f"{meets} of {n} samples ({100.0 * meets / n:.0f} %) meet all the evidence" if n else "",
             "samples": [{"paths": r["paths"], "rest": r["rest"], "all_passed": r.get("all_passed", False)} for r in ok]}
-
-
-def world_outline(body, pose) -> list:
-    """A body's outline at a pose (x, y, heading), world frame."""
-    o = body.outline()
-    return [] if o is None else _r(to_world(o, pose[:2], pose[2]))

@@ -214,7 +214,7 @@
     lastShown = m.seq;
     if ((m.seq === lastSent && !dirty) || m.seq <= 0) {
       values = Object.assign({}, m.values);
-      status(m.seq === lastSent || m.seq <= 0 ? "up to date" : "computing…", "");
+      status("up to date", "");
     }
     hideError();
     if (!view) { view = extent(); applyView(); drawStatic(); }

@@ -443,7 +443,7 @@ def format_approach(approaches: dict, system: str = "SI") -> str:
     lines = ["Approach before the impact (simulated from the start of braking; constant speed before it)"]
     for name, a in approaches.items():
         how = {"distance": "braking distance given", "time": "braking time given",
-               "start": "start position given"}[a.mode]
+               "start": "start position given", "path": "driven along a path from a distance given"}[a.mode]
         speed_note = "solved from the speed at impact" if a.speed_solved else "given"
         lines.append(f"  vehicle {name} ({how}; speed at braking {speed_note})")
         rows = [
@@ -458,10 +458,18 @@ def format_approach(approaches: dict, system: str = "SI") -> str:
             ["start of braking, first body's CG", _vec(a.braking_start[next(iter(a.braking_start))], "length", s)],
             ["perception point, first body's CG", _vec(a.perception_point, "length", s)],
         ]
+        if any(a.start_articulation):
+            rows.append(["articulation at the start", ", ".join(f"{math.degrees(x):.1f} deg" for x in a.start_articulation)])
         if a.articulation_at_impact:
             rows.append(["articulation at impact (approach)",
                          ", ".join(f"{math.degrees(x):.1f} deg" for x in a.articulation_at_impact)])
-        if a.mode == "start":
+        if a.steering is not None:
+            st = a.steering
+            before = st["t"] <= 1e-12
+            peak = float(np.max(np.abs(st["delta"][before]))) if np.any(before) else 0.0
+            rows.append(["driver (pure pursuit), path error", fmt(a.max_lateral_error, "length", s),
+                         f"largest offset of the rear axles' centre from the path; largest steer {math.degrees(peak):.1f} deg"])
+        if a.mode in ("start", "path"):
             rows.append(["miss of the impact position", fmt(a.miss, "length", s),
                          f"heading off by {math.degrees(a.heading_miss):+.1f} deg"])
         lines += table(rows, indent="    ")

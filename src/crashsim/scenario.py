@@ -238,6 +238,28 @@ def _brakes_section(when: str) -> Section:
 MAX_APPROACH_DISTANCE = 2000.0
 MAX_APPROACH_TIME = 120.0
 
+APPROACH_PATH = Section("path", [
+    Field("points", Kind.LENGTH, n=2, points=True, min_points=2, required=False,
+          example='[["-80 m", "0 m"], ["-20 m", "0 m"], ["0 m", "5 m"]]',
+          description="The path as a polyline in the direction of travel, world frame (or give line)"),
+    Field("line", "str", required=False, example="eastbound lane centre",
+          description="The name of a [[map.lines]] line (typed, or imported from a survey layer) to follow instead of "
+                      "points"),
+    Field("reverse", "bool", default=False, description="With line: its points run against the direction of travel"),
+    Field("preview_time", Kind.TIME, minimum=0.3, maximum=5.0, default="1.0 s", example="1.0 s",
+          description="The driver's preview: the goal point lies this time ahead at the current speed (pure pursuit)"),
+    Field("min_preview", Kind.LENGTH, minimum=0.5, maximum=200, default="4 m", example="4 m",
+          description="Shortest preview distance (at low speed)"),
+    Field("max_steer", Kind.ANGLE, minimum=0.0175, maximum=1.05, default="40 deg", example="40 deg",
+          description="Largest steer angle of the first axle's centre"),
+    Field("max_steer_rate", Kind.ANGULAR_VELOCITY, minimum=0.0175, maximum=12.6, default="30 deg/s",
+          example="30 deg/s", description="Largest rate of that steer angle"),
+    Field("update", Kind.TIME, minimum=0.01, maximum=1.0, default="0.1 s", example="0.1 s",
+          description="The driver's update interval (the steer angle is held between updates)"),
+], required=False, description="A path the driver follows (docs/approach.md): the first unit's first axle is steered "
+                               "so that the centre of its rear axles follows it; needs distance (the start lies that "
+                               "far before the impact position along the path)")
+
 APPROACH = Section("approach", [
     Field("speed", Kind.SPEED, required=False, minimum=0, exclusive_minimum=True, maximum=MAX_SPEED, example="55 mph",
           description="CG speed of the first body at the start of braking; absent: solved from the speed at impact "
@@ -259,7 +281,17 @@ APPROACH = Section("approach", [
                       "distance; no standard value exists: state the expectancy assumed)"),
     Field("road_friction", "float", required=False, minimum=0, maximum=2, exclusive_minimum=True, example="0.7",
           description="Road friction coefficient of the approach (default: runout.road_friction, with its zones)"),
+    Field("articulation", Kind.ANGLE, counts=(1, 2, 3, 4), required=False, minimum=-math.pi, maximum=math.pi,
+          example='["6 deg"]', description="Articulation angle at each hitch at the start (front minus rear heading, "
+                                           "front to rear; default straight): a caravan already swaying"),
+    Field("yaw_rates", Kind.ANGULAR_VELOCITY, counts=(1, 2, 3, 4, 5), required=False, minimum=-MAX_YAW_RATE,
+          maximum=MAX_YAW_RATE, example='["0 deg/s", "-12 deg/s"]',
+          description="Yaw rate of each body at the start, front to rear (default none)"),
+    Field("solve_articulation", "bool", default=False,
+          description="Solve the articulation at the start (articulation: the first guess) so that the approach ends "
+                      "at the impact configuration's articulation"),
 ], subsections=[
+    APPROACH_PATH,
     Section("tyres", _wheel_fields(False), description="Wheel state and tyre data of every wheel from the start of "
                                                        "braking (e.g. state = \"locked\")"),
     ArrayOf("wheels", WHEEL, required=False, description="Per-wheel overrides of the approach's tyres section"),
@@ -666,7 +698,8 @@ SCHEMA = Section("scenario file", subsections=[
 # [fit], [uncertainty] and the evidence sigmas (crashsim fit / crashsim mc)
 from .inverse_schema import with_inverse_sections  # noqa: E402
 from .evidence.crush import CrushEvidence, crush_groups
-from .motion.approach import ApproachSpec, simulate_approach
+from .motion.approach import ApproachSpec, check_path, path_start, simulate_approach
+from .motion.driver import DriverSpec, Path as DrivePath
 from .motion.loads import STANDARD_GRAVITY
 from .motion.road import signed_distance
 from .plotting import is_color
@@ -1246,7 +1279,8 @@ class ApproachInput:
     speed_at_impact: float | None
 
 
-def _approach_input(veh: Vehicle, v: dict, runout: "RunoutSpec | None", file: str | None) -> ApproachInput:
+def _approach_input(veh: Vehicle, v: dict, runout: "RunoutSpec | None", file: str | None,
+                    lines=()) -> ApproachInput:
     """What the approach of ``veh`` (``v["approach"]``) needs, checked (its simulation comes later)."""
     a = v["approach"]
     key = f"vehicles.{veh.name}.approach"
@@ -1267,13 +1301,61 @@ def _approach_input(veh: Vehicle, v: dict, runout: "RunoutSpec | None", file: st
         raise _err("the approach needs the road friction: give road_friction here or a [runout] section",
                    f"{key}.road_friction", file)
     options = runout.options if runout is not None else RunoutOptions()
+    n = len(veh.bodies)
+    for name, want in (("articulation", n - 1), ("yaw_rates", n)):
+        if a[name] is not None and len(a[name]) != want:
+            raise _err(f"vehicle {veh.name!r} has {n} bodies: give {want} value(s), one per "
+                       f"{'hitch' if name == 'articulation' else 'body'}, front to rear; got {len(a[name])}",
+                       f"{key}.{name}", file)
+    if a["articulation"] is not None:
+        for i, (hitch, ang) in enumerate(zip(veh.hitches, a["articulation"])):
+            if hitch.articulation_limit is not None and abs(ang) > hitch.articulation_limit:
+                raise _err(f"{math.degrees(ang):.2f} deg at hitch {i + 1} lies beyond its articulation stop of "
+                           f"{math.degrees(hitch.articulation_limit):.2f} deg", f"{key}.articulation", file)
+    if a["solve_articulation"] and n < 2:
+        raise _err(f"vehicle {veh.name!r} has no hitch: there is no articulation to solve", f"{key}.solve_articulation",
+                   file)
+    # the section's defaults are filled in when it is absent: a path is given by its points or its line
+    given = a["path"] is not None and (a["path"]["points"] is not None or a["path"]["line"] is not None)
+    driver = _approach_driver(veh, v, a, key, lines, file) if given else None
     try:
         spec = ApproachSpec(wheels, a["speed"], a["distance"], a["time"],
                             None if a["start_position"] is None else tuple(a["start_position"]), a["start_heading"],
-                            a["reaction_time"], a["tolerance"], key)
+                            a["reaction_time"], a["tolerance"], key,
+                            None if a["articulation"] is None else tuple(a["articulation"]),
+                            None if a["yaw_rates"] is None else tuple(a["yaw_rates"]), a["solve_articulation"], driver)
     except ScenarioError as exc:
         raise with_file(exc, file) from None
     return ApproachInput(spec, road, options, v["speed"])
+
+
+def _approach_driver(veh: Vehicle, v: dict, a: dict, key: str, lines, file: str | None) -> DriverSpec:
+    """The driver of ``[vehicles.<name>.approach.path]``, its path checked against the vehicle and the
+    impact position (a path the vehicle cannot follow, or that does not reach the impact, is refused)."""
+    p = a["path"]
+    pkey = f"{key}.path"
+    if (p["points"] is None) == (p["line"] is None):
+        raise _err("give the path's points or the name of a [[map.lines]] line (one of the two)", f"{pkey}.points", file)
+    if p["line"] is not None:
+        names = [ln["name"] for ln in lines]
+        if p["line"] not in names:
+            near = difflib.get_close_matches(p["line"], names, n=1)
+            hint = f"; did you mean {near[0]!r}?" if near else ""
+            raise _err(f"no [[map.lines]] line is named {p['line']!r}{hint} Named lines: "
+                       f"{', '.join(repr(x) for x in names if x) or 'none'}", f"{pkey}.line", file)
+        pts = np.asarray(lines[names.index(p["line"])]["points"], dtype=float)
+        pts = pts[::-1] if p["reverse"] else pts
+    else:
+        pts = np.asarray(p["points"], dtype=float)
+    try:
+        driver = DriverSpec(DrivePath(pts, key=pkey), p["preview_time"], p["min_preview"], p["max_steer"],
+                            p["max_steer_rate"], p["update"], pkey)
+        check_path(veh, driver)
+        if a["distance"] is not None:
+            path_start(veh, driver, np.asarray(v["position"], dtype=float), a["distance"], a["tolerance"])
+    except ScenarioError as exc:
+        raise with_file(exc, file) from None
+    return driver
 
 
 def frame_xform(frame: str, states: dict, key: str, file: str | None):
@@ -1521,7 +1603,8 @@ def _from_validated(d: dict, data: dict, merged: dict, source, file: str | None,
     for veh in vehicles:
         v = d["vehicles"][veh.name]
         if v["approach"] is not None and not runout_lost:
-            approach_inputs[veh.name] = _approach_input(veh, v, runout, file)
+            approach_inputs[veh.name] = _approach_input(veh, v, runout, file,
+                                                        (d.get("map") or {}).get("lines") or ())
     later = _Problems(file, lenient)
     imp = d["impact"]
     problem = None

@@ -18,7 +18,16 @@ The approach of a vehicle is simulated with the same tyre model and engines as t
   ``time``
       this time has passed since the start of braking;
   ``start`` (a start position and heading, world frame)
-      the first body's CG passes closest to its position at impact.
+      the first body's CG passes closest to its position at impact;
+  ``path`` (a path to follow and a ``distance``)
+      a driver (:mod:`crashsim.motion.driver`) steers the first unit along the path from the point
+      ``distance`` before the impact position; the approach ends where the CG passes closest to
+      its position at impact, as from a start position.
+
+The approach may start in motion as it was: articulated at its hitches (``articulation``) and
+yawing (``yaw_rates``), hitch-consistent (:func:`~crashsim.vehicles.chain_states`), e.g. a caravan
+already swaying; ``solve_articulation`` finds the articulation at the start whose approach ends at
+the impact configuration's articulation (Newton's method with a finite-difference Jacobian).
 
 With ``distance`` or ``time`` the path is placed in the scene by the rigid motion that puts
 the first body's CG and heading at the end of the approach on the impact configuration.  On a
@@ -38,6 +47,8 @@ distance ``d`` at friction ``mu`` gives ``v_b^2 = v_i^2 + 2 mu g d``.
 
 from __future__ import annotations
 
+import contextlib
+import logging
 import math
 from dataclasses import dataclass, field, replace
 from typing import Mapping
@@ -49,12 +60,13 @@ from ..errors import ScenarioError, UnreachableImpactError
 from ..geometry import rotate
 from ..vehicles import BodyState, Vehicle, chain_states
 from .loads import STANDARD_GRAVITY
+from .driver import SLIP_TIME, DriverSpec, ackermann, pursuit_steer, reference_slip, steer_geometry
 from .options import RunoutOptions
 from .postprocess import split_track
 from .result import RunoutResult, TrackSegment, WheelTrack
 from .road import Road
 from .runout import run_runout
-from .wheels import WheelSettings
+from .wheels import ScheduledChange, WheelSettings
 
 __all__ = ["ApproachSpec", "ApproachResult", "simulate_approach", "approach_speed_at_braking"]
 
@@ -86,6 +98,17 @@ class ApproachSpec:
         With a start position: the largest miss of the impact position [m].
     key : str
         Where it came from in the file (``vehicles.<name>.approach``), for messages.
+    articulation : tuple of float, optional
+        Articulation angle at each hitch at the start [rad] (front heading minus rear heading,
+        front to rear); None: straight.
+    yaw_rates : tuple of float, optional
+        Yaw rate of each body at the start [rad/s]; None: none.
+    solve_articulation : bool
+        Solve the articulation at the start (``articulation`` is the first guess) so that the
+        approach ends at the impact configuration's articulation.
+    driver : DriverSpec, optional
+        A driver that steers along a path (with ``distance``: the start lies that far before the
+        impact position along the path).
     """
 
     wheels: WheelSettings
@@ -97,8 +120,16 @@ class ApproachSpec:
     reaction_time: float = 0.0
     tolerance: float = 0.5
     key: str = "approach"
+    articulation: tuple | None = None
+    yaw_rates: tuple | None = None
+    solve_articulation: bool = False
+    driver: DriverSpec | None = None
 
     def __post_init__(self):
+        if self.driver is not None and (self.distance is None or self.time is not None
+                                        or self.start_position is not None):
+            raise ScenarioError("with a path give distance (how far before the impact position the approach starts, "
+                                "along the path), and neither time nor start_position", field=f"{self.key}.distance")
         given = [k for k in ("distance", "time", "start_position") if getattr(self, k) is not None]
         if len(given) != 1:
             raise ScenarioError("give exactly one of distance (from the start of braking to the impact), time, or "
@@ -108,6 +139,8 @@ class ApproachSpec:
 
     @property
     def mode(self) -> str:
+        if self.driver is not None:
+            return "path"
         return "distance" if self.distance is not None else "time" if self.time is not None else "start"
 
 
@@ -145,6 +178,13 @@ class ApproachResult:
         file may differ: ``warnings`` says so).
     runout : RunoutResult
         The simulation (local frame, times from the start of braking, beyond the impact).
+    steering : dict of str to ndarray, or None
+        With a driver: at each of its updates ``t`` [s] (relative to the impact), the steer angle
+        of the first axle's centre ``delta`` and of its wheels ``left``, ``right`` [rad], the
+        reference point's arc length on the path ``s`` [m] and its offset from the path
+        ``offset`` [m] (left positive); None without one.
+    start_articulation : tuple of float
+        Articulation angles at the start [rad] (given, or solved with ``solve_articulation``).
     """
 
     vehicle: str
@@ -167,6 +207,8 @@ class ApproachResult:
     speed_solved: bool = False
     warnings: tuple = ()
     placement: tuple = (0.0, 0.0, 0.0)  # (rotation [rad], x, y [m]): the run's frame -> the scene's
+    steering: dict | None = field(default=None, repr=False)
+    start_articulation: tuple = ()
 
     def pose(self, body: str, t: float) -> tuple[tuple[float, float], float]:
         """``((x, y), heading)`` of ``body`` at time ``t`` relative to the impact [s, m, rad], scene
@@ -239,8 +281,21 @@ class ApproachResult:
             "miss": self.miss,
             "heading_miss": self.heading_miss,
             "articulation_at_impact": list(self.articulation_at_impact),
+            "start_articulation": list(self.start_articulation),
+            **({} if self.steering is None else {
+                "max_lateral_error": self.max_lateral_error,
+                "max_steer": float(np.max(np.abs(self.steering["delta"]))) if len(self.steering["delta"]) else 0.0}),
             "warnings": list(self.warnings),
         }
+
+    @property
+    def max_lateral_error(self) -> float | None:
+        """With a driver: the largest offset of the reference point from the path over the driver's
+        updates up to the impact [m]; None without one."""
+        if self.steering is None:
+            return None
+        keep = self.steering["t"] <= 1e-12
+        return float(np.max(np.abs(self.steering["offset"][keep]))) if np.any(keep) else 0.0
 
 
 def path_length(sol, t: np.ndarray) -> np.ndarray:
@@ -257,7 +312,7 @@ def path_length(sol, t: np.ndarray) -> np.ndarray:
 
 
 def _run(vehicle: Vehicle, spec: ApproachSpec, speed: float, position, heading: float, road: Road,
-         options: RunoutOptions) -> RunoutResult:
+         options: RunoutOptions, articulation=None) -> RunoutResult:
     """The braking phase from the start pose, long enough to reach the impact (not on to rest).
 
     The run is first limited to a time the impact is reached in when the vehicle brakes evenly
@@ -266,7 +321,7 @@ def _run(vehicle: Vehicle, spec: ApproachSpec, speed: float, position, heading: 
     From a start position the run goes on to rest (the closest pass is found on it).
     """
     vel = speed * np.array([math.cos(heading), math.sin(heading)])
-    init = chain_states(vehicle, position, heading, vel)
+    init = chain_states(vehicle, position, heading, vel, spec.yaw_rates, articulation)
 
     if spec.mode == "distance":
         limit = 2.0 * spec.distance / speed + 0.1
@@ -286,6 +341,165 @@ def _run(vehicle: Vehicle, spec: ApproachSpec, speed: float, position, heading: 
         if spec.mode == "distance" and run.bodies[first].distance >= spec.distance:
             return run
         limit *= 2.0
+
+
+def path_start(vehicle: Vehicle, driver: DriverSpec, target, distance: float, tolerance: float):
+    """``(position, heading, s)``: the first unit's CG and heading at the start of a driven approach
+    and the reference point's arc length there: the reference point on the path ``distance`` before
+    the point of the path nearest the impact position ``target``, the unit along the path.
+
+    Raises
+    ------
+    ScenarioError
+        The path passes the impact position further than ``tolerance`` plus 2 m (the CG sits a
+        little inside a curve of the reference point's path), or does not reach back ``distance``.
+    """
+    geom = steer_geometry(vehicle, driver.key)
+    path = driver.path
+    s_imp, off = path.locate(target)
+    if abs(off) > tolerance + 2.0:
+        raise ScenarioError(f"passes {abs(off):.2f} m from the first body's position at impact; the path must reach the "
+                            f"impact position (within {tolerance + 2.0:.2f} m: the tolerance plus 2 m)",
+                            field=f"{driver.key}.points")
+    if s_imp > path.length + 1e-9 or s_imp < -1e-9:
+        raise ScenarioError("does not reach the impact position: the point nearest it lies beyond the path's "
+                            f"{'end' if s_imp > 0 else 'start'}; extend the path past the impact",
+                            field=f"{driver.key}.points")
+    s0 = s_imp - distance
+    if s0 < -1e-9:
+        raise ScenarioError(f"starts only {s_imp:.2f} m before the impact position along it; the approach's distance of "
+                            f"{distance:.2f} m needs the path to reach back that far: extend the path or shorten distance",
+                            field=f"{driver.key}.points")
+    h0 = path.heading(max(s0, 0.0))
+    p_ref = path.point(max(s0, 0.0))
+    cg = p_ref - geom.x_rear * np.array([math.cos(h0), math.sin(h0)])
+    return cg, h0, max(s0, 0.0)
+
+
+def check_path(vehicle: Vehicle, driver: DriverSpec) -> None:
+    """Refuse a path the vehicle cannot follow: a turn tighter than its smallest radius at ``max_steer``."""
+    geom = steer_geometry(vehicle, driver.key)
+    r_path, s_at = driver.path.min_radius()
+    r_min = geom.min_radius(driver.max_steer)
+    if r_path < r_min:
+        raise ScenarioError(
+            f"turns at a radius of {r_path:.2f} m ({s_at:.1f} m along it), tighter than the smallest radius of "
+            f"{vehicle.name!r} at max_steer = {math.degrees(driver.max_steer):.1f} deg: {r_min:.2f} m (wheelbase "
+            f"{geom.wheelbase:.2f} m / tan(max_steer)); ease the turn to at least {r_min:.2f} m or raise max_steer to "
+            f"{math.degrees(math.atan(geom.wheelbase / r_path)):.1f} deg", field=f"{driver.key}.points")
+
+
+class _TimeLimitExpected(logging.Filter):
+    """Drops the engine's "did not reach rest (time_limit)" records: a driver's interval ends on its time
+    limit by design."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return not (record.getMessage().startswith("run-out did not reach rest (time_limit)"))
+
+
+@contextlib.contextmanager
+def _expected_time_limits():
+    log = logging.getLogger("crashsim")
+    f = _TimeLimitExpected()
+    log.addFilter(f)
+    try:
+        yield
+    finally:
+        log.removeFilter(f)
+
+
+def _segment_wheels(resolved, wheels: WheelSettings, t0: float, t1: float, steer: Mapping[str, float]) -> WheelSettings:
+    """The wheel settings of ``[t0, t1)`` on a time line starting at ``t0``: those in force at ``t0``
+    (the steered wheels at ``steer``), the scheduled changes inside the interval and the air brakes
+    moved by ``-t0``."""
+    now = resolved.at(t0)
+    base = {spec.key: (replace(w, steer=steer[spec.key]) if spec.key in steer else w)
+            for spec, w in zip(resolved.specs, now)}
+    sched = [ScheduledChange(c.time - t0, c.wheels, c.changes) for c in wheels.schedule if t0 < c.time < t1]
+    brakes = wheels.brakes
+    if brakes is not None and t0 > 0.0:
+        brakes = replace(brakes, apply=brakes.apply - t0, release=None if brakes.release is None else brakes.release - t0)
+    return WheelSettings(wheels=base, schedule=sched, brakes=brakes)
+
+
+def _driven_run(vehicle: Vehicle, spec: ApproachSpec, speed: float, target, road: Road, options: RunoutOptions,
+                articulation=None) -> tuple[RunoutResult, dict]:
+    """The approach steered by the driver (:mod:`crashsim.motion.driver`), and its steering record.
+
+    Two passes: the driver's decisions first, one update interval at a time (each interval a run
+    from the state at its start, the driver looking at that state), until the first body's CG has
+    passed the impact position (or the vehicle rests, or the path is left behind); then the whole
+    approach as one run from the start with those steer angles as scheduled wheel changes, the run
+    the result is read from.  The two differ by the integrator's restarts only (its tolerance).
+    """
+    driver = spec.driver
+    geom = steer_geometry(vehicle, driver.key)
+    first = vehicle.bodies[0].name
+    resolved = spec.wheels.resolve(vehicle)
+    steered = [s for s in resolved.specs if s.body == first and s.axle_index == geom.axle]
+    for t_ph, settings in resolved.phases:
+        for s, w in zip(resolved.specs, settings):
+            if s in steered and (w.steer != 0.0 or w.self_steer_limit is not None):
+                raise ScenarioError(f"the driver steers wheel {s.label!r} along the path; its approach settings steer it "
+                                    f"too (from {t_ph:g} s): remove steer / self_steer_limit there",
+                                    field=f"{spec.key}.wheels")
+    p0, h0, s_ref = path_start(vehicle, driver, target, spec.distance, spec.tolerance)
+    vel = speed * np.array([math.cos(h0), math.sin(h0)])
+    yaw_rates = spec.yaw_rates
+    if yaw_rates is None:  # already turning with the path where it starts
+        kappa = driver.path.curvature(s_ref, max(driver.min_preview, driver.preview_time * speed) / 2.0)
+        yaw_rates = (speed * kappa,) * len(vehicle.bodies)
+    state = chain_states(vehicle, p0, h0, vel, yaw_rates, articulation)
+    dt = driver.update
+    seg_opts = replace(options, t_max=dt)
+    with _expected_time_limits():
+        return _drive(vehicle, spec, driver, geom, first, resolved, steered, p0, h0, vel, yaw_rates, articulation,
+                      state, s_ref, dt, seg_opts, road, options, speed)
+
+
+def _drive(vehicle, spec, driver, geom, first, resolved, steered, p0, h0, vel, yaw_rates, articulation, state, s_ref,
+           dt, seg_opts, road, options, speed):
+    """The two passes of :func:`_driven_run`."""
+    rec = {k: [] for k in ("t", "delta", "left", "right", "s", "offset")}
+    wheel_angles = []
+    delta_prev = None
+    s_impact = s_ref + spec.distance
+    k = 0
+    while True:
+        t0 = k * dt
+        cg = state[first]
+        beta = reference_slip(geom, cg.heading, cg.velocity, cg.yaw_rate)
+        slip = beta if k == 0 else slip + min(dt / SLIP_TIME, 1.0) * (beta - slip)
+        raw, s_ref, offset = pursuit_steer(geom, driver, cg.position, cg.heading, float(np.hypot(*cg.velocity)), s_ref,
+                                           slip)
+        delta = min(max(raw, -driver.max_steer), driver.max_steer)
+        if delta_prev is not None:
+            step = driver.max_steer_rate * dt
+            delta = min(max(delta, delta_prev - step), delta_prev + step)
+        left, right = ackermann(geom, delta)
+        angles = {s.key: (left if s.side == "left" else right) for s in steered}
+        for key, val in zip(rec, (t0, delta, left, right, s_ref, offset)):
+            rec[key].append(val)
+        wheel_angles.append(angles)
+        delta_prev = delta
+        run = run_runout([vehicle], state, {vehicle.name: _segment_wheels(resolved, spec.wheels, t0, t0 + dt, angles)},
+                         road, seg_opts).vehicles[vehicle.name]
+        state = {b.name: run.bodies[b.name].final for b in vehicle.bodies}
+        k += 1
+        # past the impact: the reference point (behind the CG) 2 m beyond the impact position's place on the path
+        if run.status == "rest" or k * dt >= options.t_max or s_ref > s_impact + 2.0:
+            break
+        if run.status != "time_limit":  # a solver failure
+            break
+    t_end = k * dt
+    sched = [ScheduledChange(i * dt, key, {"steer": a}) for i in range(1, len(wheel_angles))
+             for key, a in wheel_angles[i].items()]
+    whole = WheelSettings(wheels={s.key: (replace(w, steer=wheel_angles[0][s.key]) if s.key in wheel_angles[0] else w)
+                                  for s, w in zip(resolved.specs, resolved.phases[0][1])},
+                          schedule=tuple(spec.wheels.schedule) + tuple(sched), brakes=spec.wheels.brakes)
+    init = chain_states(vehicle, p0, h0, vel, yaw_rates, articulation)
+    run = run_runout([vehicle], init, {vehicle.name: whole}, road, replace(options, t_max=t_end)).vehicles[vehicle.name]
+    return run, {key: np.asarray(v, dtype=float) for key, v in rec.items()}
 
 
 def _end_time(run: RunoutResult, spec: ApproachSpec, vehicle: Vehicle, target) -> tuple[float, float]:
@@ -367,18 +581,93 @@ def simulate_approach(vehicle: Vehicle, spec: ApproachSpec, impact_states: Mappi
         speed = approach_speed_at_braking(vehicle, spec, impact_states, road, options, speed_at_impact)
     else:
         speed = float(spec.speed)
-    res = _approach(vehicle, spec, impact_states, road, options, speed)
+    res = _approach_full(vehicle, spec, impact_states, road, options, speed)
     return replace(res, speed_solved=solved)
 
 
-def _approach(vehicle, spec, impact_states, road, options, speed) -> ApproachResult:
+def _approach_full(vehicle, spec, impact_states, road, options, speed) -> ApproachResult:
+    """:func:`_approach`, with the articulation at the start solved where the spec asks for it."""
+    if not spec.solve_articulation or len(vehicle.bodies) < 2:
+        return _approach(vehicle, spec, impact_states, road, options, speed)
+    return solve_start_articulation(vehicle, spec, impact_states, road, options, speed)
+
+
+def impact_articulation(vehicle: Vehicle, impact_states) -> np.ndarray:
+    """Articulation angles of the impact configuration [rad], front to rear."""
+    return np.array([float(impact_states[a.name].heading - impact_states[b.name].heading)
+                     for a, b in zip(vehicle.bodies[:-1], vehicle.bodies[1:])])
+
+
+def solve_start_articulation(vehicle, spec, impact_states, road, options, speed, *, tol: float = 1e-6,
+                             max_iter: int = 12) -> ApproachResult:
+    """The approach whose articulation at the end is the impact configuration's, by the articulation
+    at the start (``spec.articulation`` the first guess, else the impact's): Newton's method with a
+    forward-difference Jacobian, each step halved while it does not reduce the miss.
+
+    Raises
+    ------
+    ScenarioError
+        No articulation at the start within the hitches' stops reaches it (the end articulation does
+        not depend enough on the start's: give yaw_rates, or the articulation itself).
+    """
+    target = impact_articulation(vehicle, impact_states)
+    limits = np.array([h.articulation_limit if h.articulation_limit is not None else math.pi
+                       for h in vehicle.hitches])
+    x = np.array(spec.articulation if spec.articulation is not None else target, dtype=float)
+
+    def run(a):
+        res = _approach(vehicle, spec, impact_states, road, options, speed, articulation=tuple(a))
+        return res, np.asarray(res.articulation_at_impact) - target
+
+    res, r = run(x)
+    h = 1e-4
+    for _ in range(max_iter):
+        if float(np.max(np.abs(r))) < tol:
+            return res
+        J = np.empty((len(x), len(x)))
+        for j in range(len(x)):
+            dx = np.zeros_like(x)
+            dx[j] = h
+            J[:, j] = (run(x + dx)[1] - r) / h
+        try:
+            step = -np.linalg.solve(J, r)
+        except np.linalg.LinAlgError:
+            break
+        lam = 1.0
+        for _ in range(6):
+            xn = np.clip(x + lam * step, -limits, limits)
+            rn_res, rn = run(xn)
+            if np.max(np.abs(rn)) < np.max(np.abs(r)):
+                x, res, r = xn, rn_res, rn
+                break
+            lam *= 0.5
+        else:
+            break
+    if float(np.max(np.abs(r))) < tol:
+        return res
+    raise ScenarioError(
+        f"no articulation at the start within the hitches' stops ends the approach at the impact configuration's "
+        f"articulation {np.round(np.degrees(target), 2).tolist()} deg (closest: "
+        f"{np.round(np.degrees(target + r), 2).tolist()} deg from a start at {np.round(np.degrees(x), 2).tolist()} "
+        "deg); give yaw_rates at the start, or the articulation itself without solve_articulation",
+        field=f"{spec.key}.solve_articulation")
+
+
+def _approach(vehicle, spec, impact_states, road, options, speed, articulation=None) -> ApproachResult:
     first = vehicle.bodies[0].name
     target = np.asarray(impact_states[first].position, dtype=float)
     h_imp = float(impact_states[first].heading)
+    articulation = spec.articulation if articulation is None else articulation
+    steering = None
     if spec.mode == "start":
         p0, h0 = np.asarray(spec.start_position, float), float(spec.start_heading)
-        run = _run(vehicle, spec, speed, p0, h0, road, options)
+        run = _run(vehicle, spec, speed, p0, h0, road, options, articulation)
         ti, dist = _end_time(run, spec, vehicle, target)
+        R, T = np.eye(2), np.zeros(2)
+    elif spec.mode == "path":
+        run, steering = _driven_run(vehicle, spec, speed, target, road, options, articulation)
+        ti, dist = _end_time(run, spec, vehicle, target)
+        steering = {k: (v - ti if k == "t" else v) for k, v in steering.items()}
         R, T = np.eye(2), np.zeros(2)
     else:
         # first guess: straight back along the impact heading; placed exactly by a rigid motion
@@ -386,7 +675,7 @@ def _approach(vehicle, spec, impact_states, road, options, speed) -> ApproachRes
         p0 = target - guess * np.array([math.cos(h_imp), math.sin(h_imp)])
         h0 = h_imp
         for _ in range(8):
-            run = _run(vehicle, spec, speed, p0, h0, road, options)
+            run = _run(vehicle, spec, speed, p0, h0, road, options, articulation)
             ti, dist = _end_time(run, spec, vehicle, target)
             end = np.asarray(run.bodies[first].sol(ti))
             phi = h_imp - float(end[2])
@@ -422,14 +711,15 @@ def _approach(vehicle, spec, impact_states, road, options, speed) -> ApproachRes
         [math.cos(bodies[first][0, 3]), math.sin(bodies[first][0, 3])])
     miss, hmiss = 0.0, 0.0
     warnings = []
-    if spec.mode == "start":
+    if spec.mode in ("start", "path"):
         miss = float(np.hypot(*(np.asarray(states[first].position) - target)))
         hmiss = float((heading_first - h_imp + math.pi) % (2 * math.pi) - math.pi)
         if miss > spec.tolerance:
+            where = "from start_position" if spec.mode == "start" else "along the path"
             raise UnreachableImpactError(
-                f"the approach from start_position passes the impact position {miss:.2f} m away at its closest "
+                f"the approach {where} passes the impact position {miss:.2f} m away at its closest "
                 f"(tolerance {spec.tolerance:.2f} m): it does not reach the impact configuration",
-                field=f"{spec.key}.start_position")
+                field=f"{spec.key}.start_position" if spec.mode == "start" else f"{spec.key}.path")
     art = tuple(float(states[a.name].heading - states[b.name].heading)
                 for a, b in zip(vehicle.bodies[:-1], vehicle.bodies[1:]))
     for i, (a, b) in enumerate(zip(vehicle.bodies[:-1], vehicle.bodies[1:])):
@@ -437,7 +727,7 @@ def _approach(vehicle, spec, impact_states, road, options, speed) -> ApproachRes
         if abs(art[i] - given) > math.radians(2.0):
             warnings.append(f"the approach ends with articulation {math.degrees(art[i]):.1f} deg at the hitch "
                             f"{a.name}/{b.name}; the impact configuration has {math.degrees(given):.1f} deg")
-    if spec.mode == "start" and abs(hmiss) > math.radians(2.0):
+    if spec.mode in ("start", "path") and abs(hmiss) > math.radians(2.0):
         warnings.append(f"the approach reaches the impact position with heading {math.degrees(hmiss):+.1f} deg off "
                         "the impact configuration")
     tracks = {k: _trim_track(w, ti, R, T) for k, w in run.wheels.items()}
@@ -447,7 +737,8 @@ def _approach(vehicle, spec, impact_states, road, options, speed) -> ApproachRes
         impact_states=states, bodies=bodies, tracks=tracks, braking_start=start,
         perception_point=(float(perception[0]), float(perception[1])), miss=miss, heading_miss=hmiss,
         articulation_at_impact=art, runout=run, warnings=tuple(warnings),
-        placement=(math.atan2(R[1, 0], R[0, 0]), float(T[0]), float(T[1])))
+        placement=(math.atan2(R[1, 0], R[0, 0]), float(T[0]), float(T[1])), steering=steering,
+        start_articulation=tuple(float(a) for a in (articulation or (0.0,) * (len(vehicle.bodies) - 1))))
 
 
 def approach_speed_at_braking(vehicle: Vehicle, spec: ApproachSpec, impact_states, road: Road, options: RunoutOptions,
@@ -468,7 +759,7 @@ def approach_speed_at_braking(vehicle: Vehicle, spec: ApproachSpec, impact_state
 
     def f(v):
         try:
-            return _approach(vehicle, spec, impact_states, road, options, v).speed_at_impact - speed_at_impact
+            return _approach_full(vehicle, spec, impact_states, road, options, v).speed_at_impact - speed_at_impact
         except UnreachableImpactError:
             return -speed_at_impact  # stops before the impact: far too slow
 

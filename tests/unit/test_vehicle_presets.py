@@ -190,8 +190,8 @@ def test_combination_runs_to_rest(label):
     assert out["bodies"]["b0"]["rest"]["y"] > 0
 
 
-@pytest.mark.parametrize("name", NEW)
-def test_the_plan_of_every_new_preset_is_legible(name):
+@pytest.mark.parametrize("name", sorted(presets()))
+def test_the_plan_of_every_preset_is_legible(name):
     """Every label inside the axes, and the tyres of one side of a short body apart (a motorcycle's)."""
     import matplotlib.pyplot as plt
 

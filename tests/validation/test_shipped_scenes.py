@@ -28,7 +28,8 @@ def test_there_are_shipped_scenes():
     names = {p.stem for p in SCENES}
     assert {"intersection_car_trailer_wheels", "barrier_15deg", "barrier_75deg", "car_trailer_side_impact",
             "median_barrier_slide", "third_vehicle_waiting_car", "trailer_swings_into_car",
-            "verge_run_off", "truck_brakes_into_car", "truck_downgrade_abs"} <= names
+            "verge_run_off", "truck_brakes_into_car", "truck_downgrade_abs",
+            "suv_travel_trailer_struck", "tractor_tanker_struck"} <= names  # the last two: docs/vehicle-presets.md
 
 
 @pytest.mark.parametrize("path", SCENES, ids=[p.stem for p in SCENES])

@@ -287,6 +287,10 @@ APPROACH = Section("approach", [
     Field("yaw_rates", Kind.ANGULAR_VELOCITY, counts=(1, 2, 3, 4, 5), required=False, minimum=-MAX_YAW_RATE,
           maximum=MAX_YAW_RATE, example='["0 deg/s", "-12 deg/s"]',
           description="Yaw rate of each body at the start, front to rear (default none)"),
+    Field("through_impact", "bool", default=False,
+          description="One time line: the approach's wheel states, scheduled changes, air brakes and last steer angles "
+                      "carry on through the impact into the run-out (the vehicle's own tyres section then gives no base; "
+                      "its wheel_changes, at times after the impact, apply on top; give brakes once, here)"),
     Field("solve_articulation", "bool", default=False,
           description="Solve the articulation at the start (articulation: the first guess) so that the approach ends "
                       "at the impact configuration's articulation"),
@@ -1271,12 +1275,20 @@ class ApproachInput:
     speed_at_impact : float or None
         The file's speed at impact (``vehicles.<name>.speed``); None when the approach gives
         the speed at the start of braking.
+    through_impact : bool
+        The approach's wheel settings carry on into the run-out on one time line
+        (:func:`crashsim.motion.approach.continued_wheels`).
+    runout_wheels : WheelSettings or None
+        The file's own run-out wheel settings of the vehicle (with ``through_impact`` their
+        scheduled changes apply on top of the continued ones).
     """
 
     spec: Any
     road: Road
     options: RunoutOptions
     speed_at_impact: float | None
+    through_impact: bool = False
+    runout_wheels: Any = None
 
 
 def _approach_input(veh: Vehicle, v: dict, runout: "RunoutSpec | None", file: str | None,
@@ -1316,6 +1328,9 @@ def _approach_input(veh: Vehicle, v: dict, runout: "RunoutSpec | None", file: st
         raise _err(f"vehicle {veh.name!r} has no hitch: there is no articulation to solve", f"{key}.solve_articulation",
                    file)
     # the section's defaults are filled in when it is absent: a path is given by its points or its line
+    if a["through_impact"] and v.get("brakes") is not None:
+        raise _err("with through_impact the approach's air brakes carry on into the run-out: give the brakes once, in "
+                   f"{key}.brakes, and remove vehicles.{veh.name}.brakes", f"vehicles.{veh.name}.brakes", file)
     given = a["path"] is not None and (a["path"]["points"] is not None or a["path"]["line"] is not None)
     driver = _approach_driver(veh, v, a, key, lines, file) if given else None
     try:
@@ -1326,7 +1341,8 @@ def _approach_input(veh: Vehicle, v: dict, runout: "RunoutSpec | None", file: st
                             None if a["yaw_rates"] is None else tuple(a["yaw_rates"]), a["solve_articulation"], driver)
     except ScenarioError as exc:
         raise with_file(exc, file) from None
-    return ApproachInput(spec, road, options, v["speed"])
+    return ApproachInput(spec, road, options, v["speed"], a["through_impact"],
+                         runout.wheels.get(veh.name) if runout is not None else None)
 
 
 def _approach_driver(veh: Vehicle, v: dict, a: dict, key: str, lines, file: str | None) -> DriverSpec:

@@ -17,13 +17,14 @@ import numpy as np
 import pytest
 
 from crashsim.errors import ScenarioError
-from crashsim.motion import Road, RunoutOptions
+from crashsim.motion import Road, RunoutOptions, simulate_runout
 from crashsim.motion.approach import ApproachSpec, simulate_approach
 from crashsim.motion.driver import DriverSpec, Path, ackermann, pursuit_steer, steer_geometry
 from crashsim.motion.wheels import WheelSetting, WheelSettings
 from crashsim.scenario import scenario_from_dict
 from crashsim.validation.offtracking import _axle_path, closed_form, combination, fit_circle
-from crashsim.vehicles import Axle, Body, BodyState, Hitch, Vehicle
+from crashsim.scene.run import run_scene
+from crashsim.vehicles import Axle, Body, BodyState, Hitch, Vehicle, chain_states
 
 SCENE = FilePath(__file__).parents[1] / "data" / "driven_curve.toml"
 
@@ -225,3 +226,45 @@ def test_a_swaying_caravan_ends_at_the_impact_articulation_when_solved():
     assert res.articulation_at_impact[0] == pytest.approx(given, abs=1e-5)
     assert not res.warnings
     assert res.start_articulation[0] != pytest.approx(given, abs=1e-3)  # it was solved, not copied
+
+
+def test_one_time_line_carries_the_approach_braking_through_the_impact():
+    """A truck brakes (the tractor locks 0.3 s after the start of braking, the trailer 1.5 s after it,
+    after the impact) and strikes a light object: with through_impact the run-out continues the
+    approach's schedule on one time line, so the stopping distance is that of one uninterrupted
+    braking run from the start of braking (the object changes it by its momentum only)."""
+    d = tomllib.loads((FilePath(__file__).parents[2] / "scenarios" / "scenes" / "truck_brakes_into_car.toml").read_text())
+    d.pop("evidence", None)
+    d.pop("uncertainty", None)
+    d.pop("fit", None)
+    a = d["vehicles"]["truck"]["approach"]
+    a.update(distance="15 m", reaction_time="0 s", through_impact=True,
+             tyres={"state": "rolling", "cornering_coefficient": 6.0, "rolling_resistance": 0.008},
+             wheel_changes=[{"at": "0.3 s", "select": "tractor", "state": "locked"},
+                            {"at": "1.5 s", "select": "trailer", "state": "locked"}])
+    car = d["vehicles"]["car"]
+    car["bodies"][0].update(mass="2 kg", yaw_inertia="1 kg m^2")
+    sc = scenario_from_dict(d)
+    res = run_scene(sc)
+    ap = sc.approaches["truck"]
+    assert 0.3 < ap.time_to_impact < 1.5  # the trailer locks after the impact
+    total = ap.distance + res.runout["truck"].bodies["tractor"].distance
+    # the same braking as one run from the start of braking
+    ai = sc.approach_inputs["truck"]
+    veh = next(v for v in sc.vehicles if v.name == "truck")
+    start = ap.runout.bodies["tractor"].initial
+    init = chain_states(veh, start.position, start.heading, start.velocity)
+    one = simulate_runout(veh, init, ai.spec.wheels, ai.road, ai.options)
+    assert one.status == "rest"
+    # a 2 kg object against a 40 t truck at ~14 m/s: it and the truck's later touches of it shorten
+    # the stop by millimetres (a 20 kg one, pushed along, by 7 cm)
+    assert total == pytest.approx(one.bodies["tractor"].distance, abs=0.05)
+    # without the one time line the run-out takes the file's own wheels (all locked from the impact)
+    a["through_impact"] = False
+    apart = scenario_from_dict(d)
+    res_apart = run_scene(apart)
+    total_apart = apart.approaches["truck"].distance + res_apart.runout["truck"].bodies["tractor"].distance
+    assert abs(total_apart - one.bodies["tractor"].distance) > 1.0
+    # and the trailer's wheels locked 1.5 s after the start of braking, on the run-out's time line
+    wheels = sc.runout.wheels["truck"]
+    assert any(abs(c.time - (1.5 - ap.time_to_impact)) < 1e-9 for c in wheels.schedule)

@@ -68,7 +68,7 @@ from .road import Road
 from .runout import run_runout
 from .wheels import ScheduledChange, WheelSettings
 
-__all__ = ["ApproachSpec", "ApproachResult", "simulate_approach", "approach_speed_at_braking"]
+__all__ = ["ApproachSpec", "ApproachResult", "simulate_approach", "approach_speed_at_braking", "continued_wheels"]
 
 #: Placement of the approach path with friction zones: iterate until the start moves less than this [m].
 _PLACEMENT_TOL = 1e-4
@@ -288,6 +288,15 @@ class ApproachResult:
             "warnings": list(self.warnings),
         }
 
+    def steer_at_impact(self) -> dict:
+        """With a driver: the steered wheels' angles of its last update before the impact
+        ``{wheel key: angle [rad]}``; empty without one."""
+        if self.steering is None or "keys" not in self.steering:
+            return {}
+        k = int(np.searchsorted(self.steering["t"], 1e-12, side="right")) - 1
+        return {key: float(self.steering["left" if side == "left" else "right"][max(k, 0)])
+                for key, side in self.steering["keys"]}
+
     @property
     def max_lateral_error(self) -> float | None:
         """With a driver: the largest offset of the reference point from the path over the driver's
@@ -408,6 +417,18 @@ def _expected_time_limits():
         log.removeFilter(f)
 
 
+def continued_wheels(vehicle: Vehicle, approach: WheelSettings, t0: float, steer: Mapping[str, float] | None = None,
+                     later: WheelSettings | None = None) -> WheelSettings:
+    """The approach's wheel settings carried on from ``t0`` on a time line that starts there: the
+    settings in force at ``t0`` (the steered wheels at ``steer``), its later changes and its air
+    brakes moved by ``-t0`` (one time line through the impact: ``through_impact``), and the changes of
+    ``later`` (the run-out's own, times after the impact) on top."""
+    out = _segment_wheels(approach.resolve(vehicle), approach, t0, math.inf, steer or {})
+    if later is None or not later.schedule:
+        return out
+    return replace(out, schedule=tuple(out.schedule) + tuple(later.schedule))
+
+
 def _segment_wheels(resolved, wheels: WheelSettings, t0: float, t1: float, steer: Mapping[str, float]) -> WheelSettings:
     """The wheel settings of ``[t0, t1)`` on a time line starting at ``t0``: those in force at ``t0``
     (the steered wheels at ``steer``), the scheduled changes inside the interval and the air brakes
@@ -499,7 +520,9 @@ def _drive(vehicle, spec, driver, geom, first, resolved, steered, p0, h0, vel, y
                           schedule=tuple(spec.wheels.schedule) + tuple(sched), brakes=spec.wheels.brakes)
     init = chain_states(vehicle, p0, h0, vel, yaw_rates, articulation)
     run = run_runout([vehicle], init, {vehicle.name: whole}, road, replace(options, t_max=t_end)).vehicles[vehicle.name]
-    return run, {key: np.asarray(v, dtype=float) for key, v in rec.items()}
+    out = {key: np.asarray(v, dtype=float) for key, v in rec.items()}
+    out["keys"] = tuple((s.key, s.side) for s in steered)
+    return run, out
 
 
 def _end_time(run: RunoutResult, spec: ApproachSpec, vehicle: Vehicle, target) -> tuple[float, float]:

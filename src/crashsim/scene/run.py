@@ -15,7 +15,7 @@ from ..evidence.checks import REST_MISFIT_SHARE, evaluate_evidence, wheel_matche
 from ..impact import ImpactResult, solve_impact
 from ..impact.problem import ImpactProblem
 from ..motion import make_hitch_consistent
-from ..motion.approach import simulate_approach
+from ..motion.approach import continued_wheels, simulate_approach
 from ..motion.result import time_grid
 from ..motion.runout import CONTACT_LEVELS, run_runout
 from ..motion.wheels import enumerate_wheels, wheel_labels
@@ -498,13 +498,20 @@ def simulate_approaches(scenario):
         states.update(chain_states(veh, v["position"], v["heading"], end[veh.bodies[0].name].velocity,
                                    [end[b.name].yaw_rate for b in veh.bodies],
                                    [b["articulation"] for b in v["bodies"][1:]]))
+    runout = scenario.runout
+    continued = {name: continued_wheels(veh, scenario.approach_inputs[name].spec.wheels, res.time_to_impact,
+                                        res.steer_at_impact(), scenario.approach_inputs[name].runout_wheels)
+                 for veh in scenario.vehicles for name, res in approaches.items()
+                 if veh.name == name and scenario.approach_inputs[name].through_impact}
+    if continued and runout is not None:
+        runout = replace(runout, wheels={**runout.wheels, **continued})
     p = scenario.impact
     try:
         problem = ImpactProblem(p.vehicles, {b.name: states[b.name] for v in p.vehicles for b in v.bodies}, p.body1,
                                 p.body2, p.surface, p.constraints, p.external)
     except ScenarioError as exc:
         raise ScenarioError(str(exc), field=exc.field, file=scenario.path) from None
-    out = replace(scenario, states=states, impact=problem, approaches=approaches)
+    out = replace(scenario, states=states, impact=problem, approaches=approaches, runout=runout)
     if scenario.file_data is not None:
         object.__setattr__(out, "_file_data", scenario.file_data)
     return out

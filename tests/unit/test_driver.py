@@ -256,7 +256,7 @@ def test_one_time_line_carries_the_approach_braking_through_the_impact():
     init = chain_states(veh, start.position, start.heading, start.velocity)
     one = simulate_runout(veh, init, ai.spec.wheels, ai.road, ai.options)
     assert one.status == "rest"
-    # a 2 kg object against a 40 t truck at ~14 m/s: it and the truck's later touches of it shorten
+    # a 2 kg object against a 40 t truck at 23 m/s: it and the truck's later touches of it shorten
     # the stop by millimetres (a 20 kg one, pushed along, by 7 cm)
     assert total == pytest.approx(one.bodies["tractor"].distance, abs=0.05)
     # without the one time line the run-out takes the file's own wheels (all locked from the impact)

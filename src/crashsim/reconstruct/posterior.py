@@ -1,4 +1,5 @@
-"""The posterior of the unknowns given the evidence, sampled by MCMC (emcee's ensemble sampler).
+"""The posterior of the unknowns given the evidence, sampled by MCMC (emcee's ensemble sampler, or
+independence Metropolis-Hastings from the fit: ``[posterior] sampler``).
 
 Where ``crashsim fit`` finds the best values and linearises around them, the posterior maps
 how probable every combination of the unknowns is, given the evidence and what was known
@@ -31,6 +32,11 @@ Sampling
 support, and move by emcee's stretch move (or differential evolution). Derived quantities
 (delta-v of every body of the first impact, speeds after it, its energy loss fractions) come
 with every sample (emcee blobs).
+
+With ``sampler = "imh"`` the fit runs first and one chain proposes from a Student-t built from its
+best values and covariance, refitted to the chain in the burn-in and then fixed
+(:mod:`crashsim.reconstruct.samplers`); each step is one scene, a batch of proposals runs in
+parallel, and ``walkers``, ``move``, ``init_scale`` and chain files do not apply.
 
 Determinism, parallelism and resume
 -----------------------------------

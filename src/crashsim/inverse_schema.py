@@ -150,6 +150,11 @@ MIN_KEPT_STEPS = 50
 MIN_STEPS_DEFAULT_BURN = next(n for n in range(MIN_KEPT_STEPS, 4 * MIN_KEPT_STEPS) if n - n // 4 >= MIN_KEPT_STEPS)
 
 POSTERIOR = Section("posterior", [
+    Field("sampler", choices=("emcee", "imh"), default="emcee",
+          description="emcee: the ensemble sampler (walkers, move, chain files); imh: independence "
+                      "Metropolis-Hastings with a Student-t proposal built from the fit's best values and "
+                      "covariance, refitted to the chain during the burn-in (one chain, each step one scene; "
+                      "the fit is run first; steps and burn count scene evaluations; no chain file)"),
     Field("walkers", "int", default=32, minimum=2, maximum=100000,
           description="Walkers of the ensemble sampler (emcee); at least twice the number of [fit] unknowns"),
     Field("steps", "int", default=2000, minimum=MIN_KEPT_STEPS, maximum=10_000_000,

@@ -85,6 +85,23 @@ def test_posterior_matches_the_closed_form():
     costs a third; the likelihood and the prior under test are the same for every move."""
     res = run_posterior(rebound(walkers=8, steps=450, burn=100, seed=7, init_scale=0.1, move="de"), workers=2,
                         progress=False, engine=ENGINE)
+    _check_against_the_quadrature(res)
+
+
+@pytest.mark.slow  # a fit and about 1500 scenes
+def test_the_independence_sampler_matches_the_closed_form():
+    """The same closed form with sampler = "imh" (its proposal from the fit, refitted in the burn-in),
+    stopped at a target effective sample size: one scene per step, and fewer than 4 per effective sample."""
+    res = run_posterior(rebound(sampler="imh", steps=3000, burn=200, ess=400, check_every=100, seed=7), workers=2,
+                        progress=False, engine=ENGINE)
+    assert res.spec.sampler == "imh" and res.chain.shape[1] == 1
+    assert res.evaluations == res.steps + 1  # the start (the best fit) and one scene per step
+    assert res.steps < 3000 and res.ess[0] >= 400
+    assert res.evaluations / res.ess[0] < 4
+    _check_against_the_quadrature(res)
+
+
+def _check_against_the_quadrature(res):
     assert res.success, res.warnings
     v = np.linspace(LO, HI, 40001)
     dens = np.exp(-(_d(v) - D_OBS) ** 2 / (2 * SIGMA**2))
@@ -122,6 +139,31 @@ def test_same_seed_same_chain():
     assert np.array_equal(a.blobs, b.blobs, equal_nan=True)
     assert not np.array_equal(a.chain, c.chain)
     assert a.chain.shape == (60, 8, 1) and np.all(np.isfinite(a.log_prob))
+
+
+def test_independence_sampler_same_seed_same_chain_in_any_pool():
+    """sampler = "imh": the proposals and the acceptance tests draw from generators of the seed alone
+    and each batch of scenes comes back in order, so one worker or two give the same chain."""
+    data = rebound(sampler="imh", steps=120, burn=40, seed=5)
+    a = run_posterior(data, workers=1, progress=False, engine=ENGINE)
+    b = run_posterior(data, workers=2, progress=False, engine=ENGINE)
+    c = run_posterior(rebound(sampler="imh", steps=120, burn=40, seed=6), workers=1, progress=False, engine=ENGINE)
+    assert a.chain.shape == (120, 1, 1) and np.all(np.isfinite(a.log_prob))
+    assert np.array_equal(a.chain, b.chain) and np.array_equal(a.log_prob, b.log_prob)
+    assert np.array_equal(a.blobs, b.blobs, equal_nan=True)
+    assert not np.array_equal(a.chain, c.chain)
+    assert a.fit is not None  # the fit runs first: the proposal is built from it
+    assert "independence Metropolis-Hastings" in a.report() and a.to_dict()["spec"]["sampler"] == "imh"
+
+
+def test_a_sampler_not_known_and_a_chain_file_for_the_independence_sampler(tmp_path, capsys):
+    with pytest.raises(ScenarioError) as e:
+        PosteriorSpec.from_dict({"sampler": "hmc"}, file="scene.toml")
+    assert e.value.field == "posterior.sampler" and "hmc" in str(e.value) and "imh" in str(e.value)
+    with pytest.raises(ScenarioError) as e:
+        run_posterior(rebound(sampler="imh"), workers=1, progress=False, chain_path=tmp_path / "c.npz", engine=ENGINE)
+    assert e.value.field == "posterior.sampler" and "chain file" in str(e.value)
+    PosteriorSpec(sampler="imh", walkers=1).check(4)  # one chain: the walkers' rule is emcee's
 
 
 def test_resumed_chain_equals_an_uninterrupted_one(tmp_path):
@@ -287,7 +329,7 @@ def test_the_shipped_fit_scene_has_a_valid_posterior_table():
     raw = load_toml(Path(__file__).resolve().parents[2] / "scenarios" / "fit" / "intersection_fit.toml")
     spec = PosteriorSpec.from_dict(raw["posterior"])
     spec.check(len(raw["fit"]["unknowns"]))
-    assert spec.start == "fit" and spec.prior == "fit" and spec.move == "de"
+    assert spec.start == "fit" and spec.prior == "fit" and spec.sampler == "imh"
     assert spec.ess == 1000 and spec.tolerance == "evidence" and spec.steps > spec.burn_steps
 
 

@@ -83,3 +83,39 @@ def test_shipped_scene_monte_carlo(tmp_path):
     assert [p.name for p in paths] == ["mc_histograms.png", "mc_rest_clouds.png", "mc_tornado_trailer.png",
                                        "mc_tornado_car.png"]
     assert all(p.stat().st_size > 10_000 for p in paths)
+
+
+@pytest.mark.slow  # a fit and about 15 000 scenes (two posteriors): minutes on a 2-core machine
+def test_shipped_posterior_the_file_s_sampler_agrees_with_emcee():
+    """The file's sampler (independence Metropolis-Hastings from the fit) and emcee's differential
+    evolution (the sampler shipped before, 20 walkers around the best fit) sample the same posterior:
+    each unknown's p2.5, p50, p97.5 and mean differ by less than four Monte Carlo standard errors of
+    the difference (a percentile q: sqrt(q (1 - q) / ESS) / density, the density from the samples'
+    spread between q -+ 5 %; the mean: sd / sqrt(ESS); each chain with its own ESS of that unknown).
+    Shorter chains than the file's (a 300-sample target; 600 emcee steps): the tolerances follow."""
+    import math
+    from dataclasses import replace
+
+    from crashsim.reconstruct.posterior import PosteriorSpec, run_posterior
+
+    raw = load_toml(FILE)
+    spec = PosteriorSpec.from_dict(raw["posterior"])
+    assert spec.sampler == "imh"
+    new = run_posterior(raw, replace(spec, ess=300), workers=2, progress=False, engine=ENGINE, file=str(FILE))
+    old = run_posterior(raw, replace(spec, sampler="emcee", walkers=20, move="de", steps=600, burn=150, ess=None),
+                        workers=2, progress=False, engine=ENGINE, file=str(FILE))
+    assert new.ess.min() >= 300 and old.ess.min() > 200
+    assert new.evaluations / new.ess.min() < old.evaluations / old.ess.min()
+
+    def err(samples, q, ess):
+        lo_q, hi_q = max(q - 5, 0.5), min(q + 5, 99.5)
+        lo, hi = np.percentile(samples, [lo_q, hi_q])
+        return math.sqrt(q / 100 * (1 - q / 100) / ess) / ((hi_q - lo_q) / 100 / (hi - lo))
+
+    for i, u in enumerate(new.unknowns):
+        a, b = new.samples[:, i], old.samples[:, i]
+        for q in (2.5, 50.0, 97.5):
+            d = new.percentiles[u.path][f"p{q:g}"] - old.percentiles[u.path][f"p{q:g}"]
+            assert abs(d) < 4 * math.hypot(err(a, q, new.ess[i]), err(b, q, old.ess[i])), (u.path, q, d)
+        d = new.percentiles[u.path]["mean"] - old.percentiles[u.path]["mean"]
+        assert abs(d) < 4 * math.hypot(np.std(a) / math.sqrt(new.ess[i]), np.std(b) / math.sqrt(old.ess[i]))

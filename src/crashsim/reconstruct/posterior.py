@@ -1,4 +1,5 @@
-"""The posterior of the unknowns given the evidence, sampled by MCMC (emcee's ensemble sampler).
+"""The posterior of the unknowns given the evidence, sampled by MCMC (emcee's ensemble sampler, or
+independence Metropolis-Hastings from the fit: ``[posterior] sampler``).
 
 Where ``crashsim fit`` finds the best values and linearises around them, the posterior maps
 how probable every combination of the unknowns is, given the evidence and what was known
@@ -31,6 +32,11 @@ Sampling
 support, and move by emcee's stretch move (or differential evolution). Derived quantities
 (delta-v of every body of the first impact, speeds after it, its energy loss fractions) come
 with every sample (emcee blobs).
+
+With ``sampler = "imh"`` the fit runs first and one chain proposes from a Student-t built from its
+best values and covariance, refitted to the chain in the burn-in and then fixed
+(:mod:`crashsim.reconstruct.samplers`); each step is one scene, a batch of proposals runs in
+parallel, and ``walkers``, ``move``, ``init_scale`` and chain files do not apply.
 
 Determinism, parallelism and resume
 -----------------------------------
@@ -84,6 +90,7 @@ from .fit import FitProblem, FitSpec, NotAtRest, fit_scene
 from .montecarlo import DEFAULT_SAMPLE_TIME_LIMIT, MCResult, UncertaintySpec, scene_outputs
 from .overrides import INVERSE_SECTIONS, default_engine, file_contents
 from .parallel import Executor, Progress, child_seed, choose_backend
+from .samplers import IMH_NU, IMH_SCALE, StudentT, box_covariance, chain_moments, independence_chain
 from .tolerance import SampleTolerance, evidence_tolerance, with_tolerance
 #: The kept chain should be this many autocorrelation times long (emcee's documentation: "you
 #: should not trust an estimate of tau unless the chain is longer than about 50 tau").
@@ -119,6 +126,7 @@ class PosteriorSpec:
     ess: int | None = None
     check_every: int = 100
     tolerance: str = "evidence"
+    sampler: str = "emcee"
 
     @property
     def burn_steps(self) -> int:
@@ -129,14 +137,15 @@ class PosteriorSpec:
     def from_dict(cls, raw: dict | None, *, file: str | None = None) -> "PosteriorSpec":
         d = validate_posterior(raw or {}, file=file)
         return cls(**{k: d[k] for k in ("walkers", "steps", "burn", "thin", "seed", "prior", "start", "init_scale",
-                                        "move", "checkpoint_every", "ess", "check_every", "tolerance")})
+                                        "move", "checkpoint_every", "ess", "check_every", "tolerance",
+                                        "sampler")})
 
     def to_dict(self) -> dict:
         return dict(self.__dict__, burn_steps=self.burn_steps)
 
     def check(self, n_unknowns: int, *, file: str | None = None) -> None:
         """Walkers, burn-in and thinning that leave the diagnostics something to work on."""
-        if self.walkers < 2 * n_unknowns:
+        if self.sampler == "emcee" and self.walkers < 2 * n_unknowns:
             raise ScenarioError(f"walkers = {self.walkers}: the ensemble sampler needs at least twice the number of "
                                 f"unknowns ({n_unknowns}), i.e. >= {2 * n_unknowns}", field="posterior.walkers",
                                 file=file)
@@ -479,7 +488,12 @@ class PosteriorResult:
         lines.append(f"units: {system_label(system)}; run-out engine: {self.engine}; "
                      f"{self.backend}, {self.workers} worker(s); "
                      f"{self.evaluations} scene evaluations in {self.elapsed:.1f} s")
-        lines.append(f"emcee {sp.move} move: {sp.walkers} walkers x {self.steps} steps{resumed}; burn-in "
+        if sp.sampler == "imh":
+            lines.append(f"independence Metropolis-Hastings (Student-t proposal, nu = {IMH_NU:g}, from the fit, refitted "
+                         f"in the burn-in): one chain of {self.steps} steps, one scene each; burn-in {sp.burn_steps}, "
+                         f"thin {sp.thin}: {self.samples.shape[0]} samples kept; seed {sp.seed}")
+        else:
+            lines.append(f"emcee {sp.move} move: {sp.walkers} walkers x {self.steps} steps{resumed}; burn-in "
                      f"{sp.burn_steps}, thin {sp.thin}: {self.samples.shape[0]} samples kept ({kept} per walker); "
                      f"seed {sp.seed}; start: {'best fit' if sp.start == 'fit' else '[fit] initial values'}")
         if sp.ess is not None:
@@ -543,8 +557,12 @@ class PosteriorResult:
         lines.append("")
         lines.append("Diagnostics")
         acc = self.acceptance
-        lines.append(f"  acceptance fraction: mean {np.mean(acc):.3f} (walkers {np.min(acc):.3f} to {np.max(acc):.3f}; "
-                     f"good: {ACCEPTANCE_RANGE[0]:g} to {ACCEPTANCE_RANGE[1]:g})")
+        if sp.sampler == "imh":
+            lines.append(f"  acceptance fraction: {np.mean(acc):.3f} (the proposal's overlap with the posterior; "
+                         f"good: above {ACCEPTANCE_RANGE[0]:g})")
+        else:
+            lines.append(f"  acceptance fraction: mean {np.mean(acc):.3f} (walkers {np.min(acc):.3f} to "
+                         f"{np.max(acc):.3f}; good: {ACCEPTANCE_RANGE[0]:g} to {ACCEPTANCE_RANGE[1]:g})")
         rows = [["unknown", "autocorrelation time", "effective samples", f"kept / tau (want >= {TAU_FACTOR})"]]
         for i, u in enumerate(self.unknowns):
             t = self.tau[i]
@@ -802,6 +820,12 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
         spec = PosteriorSpec.from_dict(spec if spec is not None else scenario_data.get("posterior"), file=file)
     over = {k: v for k, v in (("steps", steps), ("seed", seed), ("start", start)) if v is not None}
     spec = replace(spec, **over)  # --steps below the minimum: spec.check names the minimum for this burn-in
+    if spec.sampler == "imh":
+        if chain_path is not None:
+            raise ScenarioError("a chain file (--chain) resumes the emcee sampler; sampler = \"imh\" runs its chain "
+                                "in one go: drop the chain file or set sampler = \"emcee\"", field="posterior.sampler",
+                                file=file)
+        spec = replace(spec, start="fit")  # its proposal is built from the fit: it starts there
     with in_file(file):
         fit_spec = FitSpec.from_dict(scenario_data["fit"], scenario_data, file=file)
     spec.check(len(fit_spec.unknowns), file=file)
@@ -819,6 +843,7 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
     if spec.start == "fit":
         fr = fit_scene(scenario_data, fit_spec, engine=engine, workers=workers, file=file, sample_time_limit=limit)
         x0 = np.asarray(fr.x, float)
+        fit_cov = np.asarray(fr.covariance, float)
         fit_summary = {"x": [float(v) for v in fr.x], "confidence": fr.confidence, "chi2": fr.chi2,
                        "interval": [[float(a) if np.isfinite(a) else None for a in row] for row in fr.interval],
                        "stderr": [float(s) if np.isfinite(s) else None for s in fr.stderr]}
@@ -860,6 +885,11 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
         elapsed0 = 0.0
 
     backend, nw = choose_backend(workers, dask_address)
+    if spec.sampler == "imh":
+        span = problem.fit.span
+        return _run_imh(problem, spec, z0, fit_cov / np.outer(span, span), derived, run_hash, backend, nw, workers,
+                        dask_address, progress, sampled_data, fit_spec, priors, engine, file, limit, x0, fit_summary,
+                        tolerance, t0)
     payload = {"data": sampled_data, "fit_spec": fit_spec, "priors": priors, "engine": engine, "file": file,
                "time_limit": float(limit), "derived": derived, "hash": run_hash}
     todo = spec.steps - len(z_all)
@@ -932,6 +962,81 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
                      None if chain_path is None else str(chain_path), fit_summary, file, nominal, tolerance)
 
 
+#: The independence sampler's settle check (:func:`settle_step`) takes the median of blocks of this many steps.
+IMH_SETTLE_BLOCK = 100
+#: Rounds of the independence sampler's burn-in, each refitting the proposal to the chain of the round before.
+IMH_ROUNDS = 2
+
+
+def _run_imh(problem, spec, z0, cov_z, derived, run_hash, backend, nw, workers, dask_address, progress, sampled_data,
+             fit_spec, priors, engine, file, limit, x0, fit_summary, tolerance, t0) -> PosteriorResult:
+    """Independence Metropolis-Hastings (:func:`~crashsim.reconstruct.samplers.independence_chain`).
+
+    The burn-in (``spec.burn_steps`` steps) runs in :data:`IMH_ROUNDS` rounds: the first proposes from
+    the fit's Gaussian (best values and linearised covariance in the scaled unknowns, each sd capped at
+    its bound range) as a Student-t with scale :data:`~crashsim.reconstruct.samplers.IMH_SCALE`; each
+    round after it from the mean and covariance of the chain of the round before. The proposal is then
+    fixed for the kept chain (an adaptation that stops: the kept chain is a plain Metropolis-Hastings
+    chain of that proposal). With ``ess`` the kept chain runs in blocks of ``check_every`` steps until
+    the target is met.
+    """
+    burn = spec.burn_steps
+    spec = replace(spec, walkers=1, burn=burn)
+    payload = {"data": sampled_data, "fit_spec": fit_spec, "priors": priors, "engine": engine, "file": file,
+               "time_limit": float(limit), "derived": derived, "hash": run_hash}
+    rng_prop = np.random.default_rng(child_seed(spec.seed, 1))
+    rng_acc = np.random.default_rng(child_seed(spec.seed, 2))
+    z_all, lp_all, bl_all, acc_all = [], [], [], []
+    bar = Progress(progress, spec.steps, initial=0, desc="posterior (MCMC)", unit="step", show=True)
+    pool = _EmceePool(Executor(_problem_for, payload, backend, nw, dask_address=dask_address, local=problem))
+    nw = pool.workers if backend == "dask" else nw
+    batch = max(10, min(spec.check_every, 50 * max(1, pool.workers)))
+    proposal = StudentT.from_cov(z0, box_covariance(cov_z), scale=IMH_SCALE)
+    accepted = 0
+    try:
+        lp0, blob0 = pool.map(None, [z0])[0]
+        state = (np.asarray(z0, float), lp0, blob0)
+
+        def run(n, proposal):
+            nonlocal state, accepted
+            for z, lp, blob, acc in independence_chain(lambda ys: pool.map(None, ys), proposal, state, n, rng_prop,
+                                                       rng_acc, batch):
+                accepted += acc
+                z_all.append(np.array(z, float)[None, :])
+                lp_all.append(np.array([lp], float))
+                bl_all.append(np.array(blob, float).reshape(1, len(derived)))
+                acc_all.append(np.array([accepted], float))
+                state = (z, lp, blob)
+                bar.update(1, len(z_all))
+
+        rounds = [burn // IMH_ROUNDS + (1 if k < burn % IMH_ROUNDS else 0) for k in range(IMH_ROUNDS)]
+        for n in rounds:
+            if n == 0:
+                continue
+            start = len(z_all)
+            run(n, proposal)
+            moments = chain_moments(np.concatenate(z_all[start:]))
+            if moments is not None:
+                proposal = StudentT.from_cov(moments[0], moments[1], scale=IMH_SCALE)
+        block = spec.check_every if spec.ess is not None else spec.steps - burn
+        while len(z_all) < spec.steps:
+            run(min(block, spec.steps - len(z_all)), proposal)
+            if spec.ess is not None and _enough(z_all, spec):
+                break
+    finally:
+        pool.close()
+        bar.close()
+    spec = replace(spec, steps=len(z_all))
+    nominal = None
+    try:
+        nominal = problem.fit.full_scene(z0)
+    except Exception:  # pragma: no cover - evaluated above already
+        nominal = None
+    return _assemble(problem, spec, np.array(z_all), np.array(lp_all), np.array(bl_all), np.array(acc_all), derived,
+                     x0, dict(pool.failures), pool.evaluations, time.perf_counter() - t0, engine, backend, nw, 0, None,
+                     fit_summary, file, nominal, tolerance)
+
+
 def _enough(z_all: list, spec: PosteriorSpec) -> bool:
     """True when the chain so far meets ``spec.ess``: every unknown has at least that many
     effective samples, and the kept chain passes the length diagnostics (at least
@@ -987,7 +1092,12 @@ def _assemble(problem, spec, z, lp, blobs, acc, derived, x0, failures, evaluatio
     if np.isfinite(tmax) and burn < 2 * tmax:
         warnings.append(f"the burn-in ({burn} steps) is shorter than two autocorrelation times ({2 * tmax:.0f} steps): "
                         "the start may still show in the summaries")
-    settled = settle_step(lp, len(fs.unknowns))
+    if spec.sampler == "imh":  # one chain: the per-step median of the walkers is that of blocks of consecutive steps
+        b = IMH_SETTLE_BLOCK
+        blocked = settle_step(lp[:lp.shape[0] // b * b].reshape(-1, b), len(fs.unknowns))
+        settled = None if blocked is None else blocked * b
+    else:
+        settled = settle_step(lp, len(fs.unknowns))
     if settled is not None and burn < settled:
         _log.warning("posterior: the log-probability settles at step %d, after the burn-in of %d steps", settled, burn)
         warnings.append(f"the log-probability settles only at step {settled} (the walkers' median reaches its final "
@@ -995,9 +1105,13 @@ def _assemble(problem, spec, z, lp, blobs, acc, derived, x0, failures, evaluatio
                         f"steps: the summaries include samples still climbing from the start; set posterior.burn >= "
                         f"{settled} (and steps accordingly)")
     am = float(np.mean(acceptance))
-    if not ACCEPTANCE_RANGE[0] <= am <= ACCEPTANCE_RANGE[1]:
+    high = ACCEPTANCE_RANGE[1] if spec.sampler == "emcee" else 1.0  # an independence sampler near 1 is at its best
+    if not ACCEPTANCE_RANGE[0] <= am <= high:
         warnings.append(f"mean acceptance fraction {am:.3f} is outside {ACCEPTANCE_RANGE[0]:g}-{ACCEPTANCE_RANGE[1]:g}: "
-                        + ("the walkers hardly move (a narrow or curved posterior, or stuck walkers)" if am < 0.15
+                        + (("the walkers hardly move (a narrow or curved posterior, or stuck walkers)"
+                            if spec.sampler == "emcee" else "the proposal from the fit covers the posterior poorly "
+                            "(a posterior far from its Gaussian: sampler = \"emcee\" explores it better)")
+                           if am < 0.15
                            else "usual for the stretch move with one or two unknowns, or a posterior much wider than "
                                 "the walkers' spread; harmless when the chain is long enough in autocorrelation times"))
     stuck = int(np.sum(acceptance == 0))

@@ -102,12 +102,18 @@ def plot_corner(post, *, derived: bool = True, system: str | None = None, fig=No
                         fill_contours=False, color="#4C72B0", truths=truths, truth_color="#C44E52", fig=fig,
                         label_kwargs={"fontsize": 9}, title_kwargs={"fontsize": 8})
     sp = post.spec
-    head = (f"Posterior ({sp.prior} prior): {post.samples.shape[0]} samples, {sp.walkers} walkers x {post.steps} steps, "
+    head = (f"Posterior ({sp.prior} prior): {post.samples.shape[0]} samples, {_chains(sp, post.steps)}, "
             f"burn-in {sp.burn_steps}, thin {sp.thin}; 2.5/50/97.5 % dashed")
     if post.fit is not None:
         head += "; red: the best fit"
     fig.suptitle(head, fontsize=10)
     return fig
+
+
+def _chains(spec, steps: int) -> str:
+    if spec.sampler == "imh":
+        return f"one independence Metropolis-Hastings chain of {steps} steps"
+    return f"{spec.walkers} walkers x {steps} steps"
 
 
 def plot_traces(post, *, system: str | None = None, axes=None, max_walkers: int = 64):
@@ -122,7 +128,7 @@ def plot_traces(post, *, system: str | None = None, axes=None, max_walkers: int 
     n = len(post.unknowns)
     if axes is None:
         fig, axes = plt.subplots(n + 1, 1, figsize=(8.0, 1.8 * (n + 1)), sharex=True, layout="constrained")
-        fig.suptitle(f"Traces: {post.spec.walkers} walkers, burn-in ({post.spec.burn_steps} steps) shaded; "
+        fig.suptitle(f"Traces: {_chains(post.spec, post.steps)}, burn-in ({post.spec.burn_steps} steps) shaded; "
                      f"mean acceptance {np.mean(post.acceptance):.2f}", fontsize=10)
     axes = np.atleast_1d(axes)
     steps = np.arange(post.steps)

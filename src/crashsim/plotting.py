@@ -20,10 +20,11 @@ import numpy as np
 
 from .errors import ScenarioError
 from .evidence.crush import profile_outline
-from .figure_options import LABEL_KINDS, LEGEND_MODES, PAPER_SIZES, check_hide, parse_scale
+from .figure_options import LABEL_KINDS, LEGEND_MODES, PAPER_SIZES, check_hide, check_view, parse_scale
 from .geometry import rotate, to_body, to_world
 from .motion.approach import path_length
 from .motion.road import points_in_polygon, signed_distance
+from .plot_detail import INSET_MARGIN, add_impact_inset, impact_window, needs_inset
 from .report import fmt
 from .survey.underlay import draw_underlay, scene_underlay
 from .units import Kind, convert, resolve_system, to_unit
@@ -684,7 +685,8 @@ def layout_print(ax, sheet: PrintSheet) -> None:
 
 def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evidence: bool = True,
                arrows: bool = True, system: str | None = None, legend="compact", axles: bool = True,
-               approach: bool = True, hide=(), paper: str | None = None, scale: float | None = None):
+               approach: bool = True, hide=(), paper: str | None = None, scale: float | None = None,
+               view=None, zoom: str | None = None, inset: bool | None = None):
     """Scale diagram of a reconstructed scene in the ground frame: impact, run-out, evidence.
 
     Parameters
@@ -775,6 +777,7 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     from matplotlib.patches import Patch
 
     system = figure_system(scene, system)
+    window = _detail_window(scene, view, zoom)
     new = ax is None
     if new:
         # laid out by layout_scene_figure (exact equal-aspect box plus legend), not by a layout engine
@@ -940,6 +943,9 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     # room at the bottom for the scale bar and at the top for the axes indicator
     lo[1] -= 0.05 * span
     hi[1] += 0.05 * span
+    if window is not None:  # a detail view: the window as given, what lies outside cut off
+        lo, hi = S.d(window[0]), S.d(window[1])
+        _drop_texts_outside(S, lo, hi)
     mode = legend_mode(legend)
     sheet = None
     for w in tuple(getattr(scene, "warnings", ()) or ()):
@@ -981,7 +987,8 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     else:
         if new:
             layout_scene_figure(ax, outside, below)
-        _fit_texts(S)
+        if window is None:
+            _fit_texts(S)
         if new:
             layout_scene_figure(ax, outside, below)
         if new and mode == "inside":
@@ -992,12 +999,42 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     if leg is not None and mode not in _OUTSIDE:
         fixed.append(leg)
     ax.figure.draw_without_rendering()
+    if (new if inset is None else inset) and window is None:
+        w_lo, w_hi = (S.d(c) for c in impact_window(scene, INSET_MARGIN))
+        if needs_inset(w_lo, w_hi, ax.get_xlim()):
+            fixed.append(add_impact_inset(ax, w_lo, w_hi, avoid=np.vstack(S.points), fixed=fixed, unit=S.lunit))
     S.fixed = fixed
     S.unplaced = place_labels(ax, S.texts, fixed, np.vstack(S.points))
     _DRAWINGS[ax] = S
     if S.unplaced:
         _log.info("scene figure: %d label(s) found no free place and may overlap others", S.unplaced)
     return ax
+
+
+def _detail_window(scene, view, zoom):
+    """The window of a detail view [m] as (lower-left, upper-right), or None for the framed scene."""
+    if view is not None and zoom is not None:
+        raise ScenarioError("give a view or a zoom, not both", field="zoom")
+    if zoom is not None:
+        if zoom != "impact":
+            raise ScenarioError(f"unknown zoom {zoom!r}; allowed: impact", field="zoom")
+        return impact_window(scene)
+    if view is None:
+        return None
+    x0, y0, x1, y1 = check_view(view, field="view")
+    return np.array([x0, y0]), np.array([x1, y1])
+
+
+def _drop_texts_outside(S: SceneDrawing, lo, hi) -> None:
+    """Leave out the labels anchored outside the box [lo, hi] (display units) of a detail view."""
+    keep = []
+    for t in S.texts:
+        x, y = t.xy
+        if lo[0] <= x <= hi[0] and lo[1] <= y <= hi[1]:
+            keep.append(t)
+        else:
+            t.remove()
+    S.texts[:] = keep
 
 
 def _legend_headroom(ax, leg, below: bool) -> None:
@@ -2475,7 +2512,8 @@ def plot_histories(scene, axes=None, *, system: str | None = None):
 
 def save_scene_figures(scene, path, *, histories_path=None, dpi: int = 150, interval: float | None = None,
                        system: str | None = None, time_distance_path=None, approach: bool = True, legend="compact",
-                       hide=(), paper: str | None = None, scale: float | None = None) -> list:
+                       hide=(), paper: str | None = None, scale: float | None = None, view=None,
+                       zoom: str | None = None) -> list:
     """Write the scene diagram (and optionally the histories) to files; closes its figures.
 
     Parameters
@@ -2489,8 +2527,9 @@ def save_scene_figures(scene, path, *, histories_path=None, dpi: int = 150, inte
         Time-distance and speed-time chart (:func:`plot_time_distance`), same suffixes.
     approach : bool
         Draw the approaches on the scene diagram (see :func:`plot_scene`).
-    legend, hide, paper, scale
-        Legend, hidden label kinds and print sheet of the scene diagram (see :func:`plot_scene`).
+    legend, hide, paper, scale, view, zoom
+        Legend, hidden label kinds, print sheet and detail view of the scene diagram (see
+        :func:`plot_scene`).
     dpi : int
         Resolution of raster output [dots per inch].
     interval : float, optional
@@ -2524,8 +2563,10 @@ def save_scene_figures(scene, path, *, histories_path=None, dpi: int = 150, inte
         print_sheet(paper, (0.0, 0.0), (1.0, 1.0), 1.0)  # a known paper, before anything is drawn
     plt = _plt()
     written = []
+    if view is not None:
+        check_view(view, field="view")  # before anything is drawn
     ax = plot_scene(scene, interval=interval, system=system, approach=approach, legend=legend, hide=hide, paper=paper,
-                    scale=scale)
+                    scale=scale, view=view, zoom=zoom)
     try:
         targets[0].parent.mkdir(parents=True, exist_ok=True)
         ax.figure.savefig(targets[0], dpi=dpi)

@@ -93,7 +93,7 @@ def _copy_into(ax, inset) -> int:
     return n
 
 
-def add_impact_inset(ax, lo, hi, *, avoid=None, fixed=(), unit: str = "m", size: float = 0.36):
+def add_impact_inset(ax, lo, hi, *, avoid=None, fixed=(), unit: str = "m", size: float = 0.28):
     """An inset of the window [``lo``, ``hi``] (display units) of the scene axes ``ax``, in the corner
     (along the top or the bottom edge) where it covers none of the ``fixed`` artists' boxes and not the
     window itself if it can, and the fewest of the points ``avoid``;

@@ -24,6 +24,8 @@ from .figure_options import LABEL_KINDS, LEGEND_MODES, PAPER_SIZES, check_hide, 
 from .geometry import rotate, to_body, to_world
 from .motion.approach import path_length
 from .motion.road import points_in_polygon, signed_distance
+from .plot_events import mark_impacts
+from .plot_loads import draw_roll_panel, has_roll_panel
 from .plot_detail import INSET_MARGIN, add_impact_inset, impact_window, needs_inset
 from .report import fmt
 from .survey.underlay import draw_underlay, scene_underlay
@@ -1241,16 +1243,6 @@ def plot_time_distance(scene, axes=None, *, system: str | None = None):
         if scene.runout and v.name in scene.runout:
             drawn["rest"] |= scene.runout[v.name].bodies[v.bodies[0].name].time_to_rest is not None
     impacts = [(1, 0.0)] + [(ev.number, ev.t) for ev in (scene.joint.impact_events() if scene.joint is not None else ())]
-    impact_labels = []
-    for number, ti in impacts:
-        color = "#b30000" if number == 1 else "#e07b00"
-        for axx in (ax_s, ax_v):
-            axx.axvline(ti, color=color, lw=1.0, ls="-" if number == 1 else "--", zorder=1)
-        # one row lower for every label it would overlap (impacts close in time)
-        label = ax_s.annotate("impact" if number == 1 else f"impact {number}", (ti, 1.0),
-                              xycoords=("data", "axes fraction"), xytext=(3, -10), textcoords="offset points",
-                              fontsize=7, color=color, gid=f"td:impact:{number}", path_effects=_halo(2.0))
-        impact_labels.append(label)
     ax_s.axhline(0.0, color="0.6", lw=0.6)
     ax_s.set_ylabel(f"distance from the impact [{lu}]")
     ax_v.set_ylabel(f"speed [{vu}]")
@@ -1273,18 +1265,10 @@ def plot_time_distance(scene, axes=None, *, system: str | None = None):
     # beside the panels: never over the impact labels or the curves
     ax_s.legend(handles + [h for h, _ in extra], labels + [t for _, t in extra], fontsize=7, loc="upper left",
                 bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, frameon=False)
-    # impact labels: one row lower for every label one would overlap (impacts close in time),
-    # measured once the layout is final
+    # every impact a line; impacts close in time one band with one label ("impacts 5-12"), measured
+    # once the layout is final (plot_events)
     fig.draw_without_rendering()
-    r = fig.canvas.get_renderer()
-    boxes = []
-    for label in impact_labels:
-        for row in range(len(impact_labels)):
-            label.xyann = (3, -10 - 9 * row)
-            bb = text_box(label, r)
-            if not any(bb.padded(3.0).overlaps(q) for q in boxes):
-                break
-        boxes.append(bb)
+    mark_impacts(ax_s, (ax_s, ax_v), impacts, halo=_halo(2.0), text_box=text_box)
     ax_s.set_title(_wrap(f"Time-distance: {sc.title}", 100), fontsize=10)
     return fig
 
@@ -2022,15 +2006,15 @@ _INK_STEP = 2.0
 
 def line_ink(ax, exclude=()) -> np.ndarray:
     """Pixel positions along every line and outline edge drawn in the axes, shape (n, 2): the
-    vertices of each Line2D and patch (leader lines and ``exclude`` left out) and points every
+    vertices of each Line2D and patch (leader lines, the inset's window and ``exclude`` left out) and points every
     :data:`_INK_STEP` pixels between them, inside the axes."""
     from matplotlib.lines import Line2D
 
     frame = ax.get_window_extent(ax.figure.canvas.get_renderer())
     out = []
     for a in [*ax.lines, *ax.patches]:
-        if not a.get_visible() or a in exclude or (a.get_gid() or "").startswith("leader:"):
-            continue
+        if not a.get_visible() or a in exclude or (a.get_gid() or "").startswith(("leader:", "inset-window")):
+            continue  # leaders, and the inset's dashed window (a guide a label may cross)
         if isinstance(a, Line2D):
             if a.get_linestyle() in ("None", "none", "", " "):
                 continue  # markers only
@@ -2360,10 +2344,12 @@ def _scene_legend(S: SceneDrawing, mode: str, below: bool, compact: bool = False
 
 
 def history_panels(scene) -> int:
-    """Panels of :func:`plot_histories` for ``scene``: 3, or 4 when bodies stayed in sustained
-    contact during the run-out (the contact-force panel)."""
+    """Panels of :func:`plot_histories` for ``scene``: 3, one more when bodies stayed in sustained
+    contact during the run-out (the contact-force panel), one more where the rollover check ran (the
+    lateral-acceleration and load-transfer panel, :func:`crashsim.plot_loads.draw_roll_panel`)."""
     joint = getattr(scene, "joint", None)
-    return 4 if joint is not None and any(p.sustained for p in joint.pairs) else 3
+    contact = joint is not None and any(p.sustained for p in joint.pairs)
+    return 3 + int(contact) + int(has_roll_panel(scene))
 
 
 #: Impacts closer in time than this share of the histories' time axis get their labels on separate rows.
@@ -2413,12 +2399,14 @@ def plot_histories(scene, axes=None, *, system: str | None = None):
         raise ScenarioError(f"scene {scene.scenario.title!r} has no run-out (impact only): there are no time "
                             "histories to plot; add a [runout] section to the scenario", field="runout")
     n_panels = history_panels(scene)
+    roll = has_roll_panel(scene)
+    contact = n_panels - int(roll) == 4
     new = axes is None
     if new:
         fig, axes = _plt().subplots(n_panels, 1, figsize=(8.0, 2.85 * n_panels), sharex=True, layout="constrained")
     axes = np.asarray(axes, dtype=object).ravel()
     if len(axes) != n_panels:
-        what = "speed, yaw rate, articulation" + (", contact force" if n_panels == 4 else "")
+        what = "speed, yaw rate, articulation" + (", contact force" if contact else "") + (", roll" if roll else "")
         raise ScenarioError(f"needs {n_panels} axes ({what}), got {len(axes)}", field="axes")
     ax_v, ax_w, ax_a = axes[:3]
     kv, vunit = to_unit(1.0, Kind.SPEED, system)
@@ -2473,7 +2461,9 @@ def plot_histories(scene, axes=None, *, system: str | None = None):
     ax_a.set_ylabel("articulation [deg]")
     axes[-1].set_xlabel("time after separation [s]")
     joint = getattr(scene, "joint", None)
-    if n_panels == 4:
+    if roll:
+        draw_roll_panel(axes[-1], scene, {vn: (f[2], f[1]) for vn, f in family.items()}, styles)
+    if contact:
         ax_f = axes[3]
         kf, funit = to_unit(1.0, Kind.FORCE, system)
         for k, p in enumerate(q for q in joint.pairs if q.sustained):

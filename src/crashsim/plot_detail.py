@@ -15,11 +15,14 @@ import numpy as np
 
 from .geometry import to_world
 
-__all__ = ["IMPACT_MARGIN", "INSET_MARGIN", "INSET_BELOW", "impact_window", "needs_inset", "add_impact_inset"]
+__all__ = ["IMPACT_MARGIN", "INSET_MARGIN", "MIN_ENLARGEMENT", "INSET_BELOW", "impact_window", "needs_inset", "add_impact_inset"]
 
 #: Margin of the impact window around the outlines at impact: at least this many metres, and at least
 #: this fraction of the outlines' larger span.
 IMPACT_MARGIN = (2.0, 0.15)
+
+#: An inset is drawn only if it enlarges the window at least this much (else the overview shows it as well).
+MIN_ENLARGEMENT = 2.0
 
 #: The margin of the inset's window: tighter than the zoom's, the inset being small.
 INSET_MARGIN = (1.0, 0.08)
@@ -102,8 +105,8 @@ def add_impact_inset(ax, lo, hi, *, avoid=None, fixed=(), unit: str = "m", size:
 
     Returns
     -------
-    matplotlib Axes
-        Equal aspect, no ticks, gid ``"inset:impact"``; its scale bar is the line with gid
+    matplotlib Axes or None
+        None when it would enlarge the window less than :data:`MIN_ENLARGEMENT` times. Equal aspect, no ticks, gid ``"inset:impact"``; its scale bar is the line with gid
         ``"inset:scalebar"`` and its length in ``unit`` in the text beside it.
     """
     from matplotlib.patches import Rectangle
@@ -117,6 +120,8 @@ def add_impact_inset(ax, lo, hi, *, avoid=None, fixed=(), unit: str = "m", size:
     h = w * frame.width * aspect / frame.height
     if h > 0.62:
         w, h = w * 0.62 / h, 0.62
+    if w * (x1 - x0) / (hi[0] - lo[0]) < MIN_ENLARGEMENT:
+        return None
     r = fig.canvas.get_renderer()
     boxes = [a.get_window_extent(r) for a in fixed]
     pts = None if avoid is None or len(avoid) == 0 else ax.transAxes.inverted().transform(

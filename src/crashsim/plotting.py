@@ -1004,7 +1004,9 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     if (new if inset is None else inset) and window is None:
         w_lo, w_hi = (S.d(c) for c in impact_window(scene, INSET_MARGIN))
         if needs_inset(w_lo, w_hi, ax.get_xlim()):
-            fixed.append(add_impact_inset(ax, w_lo, w_hi, avoid=np.vstack(S.points), fixed=fixed, unit=S.lunit))
+            inset_ax = add_impact_inset(ax, w_lo, w_hi, avoid=np.vstack(S.points), fixed=fixed, unit=S.lunit)
+            if inset_ax is not None:
+                fixed.append(inset_ax)
     S.fixed = fixed
     S.unplaced = place_labels(ax, S.texts, fixed, np.vstack(S.points))
     _DRAWINGS[ax] = S

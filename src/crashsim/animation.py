@@ -455,7 +455,7 @@ def scene_animation(scene, *, dt: float = 0.05, system: str | None = None, t_end
             raise ScenarioError(f"time between frames {dt:g} s gives {len(times)} frames from the start of braking "
                                 f"({-t0:.4g} s) to {float(t_end):.4g} s; at most {MAX_FRAMES}", field="dt")
 
-    ax = plot_scene(scene, times=(), system=system, approach=approach, legend=legend)
+    ax = plot_scene(scene, times=(), system=system, approach=approach, legend=legend, inset=False)
     fig = ax.figure
     S = scene_drawing(ax)
     outlines, pins = {}, {}

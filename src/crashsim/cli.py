@@ -18,9 +18,10 @@ from pathlib import Path
 from ._jit import cache_dir, ready
 from ._version import __version__
 from .errors import CrashsimError, ScenarioError, SolverError
-from .figure_options import ANIMATION_LEGENDS, LABEL_KINDS, LEGEND_MODES, PAPER_SIZES, VIEWS, check_hide, parse_scale
+from .figure_options import (ANIMATION_LEGENDS, LABEL_KINDS, LEGEND_MODES, PAPER_SIZES, VIEWS, ZOOMS, check_hide,
+                             check_view, parse_scale)
 from .outputs import check_output_dir, check_output_file, check_workers
-from .units import Kind, format_value, parse, resolve_system
+from .units import Kind, format_value, parse, resolve_system, to_unit
 
 # The light face: the parser, --help, --version and the checks of options and output paths need
 # none of the physics, so a command imports what it runs (the scenario loader, the kernels, SciPy,
@@ -44,6 +45,19 @@ def _hide(text: str) -> frozenset:
         return check_hide(text)
     except ScenarioError as exc:
         raise argparse.ArgumentTypeError(str(exc).split(": ", 1)[-1]) from None
+
+
+class _ViewAction(argparse.Action):
+    """``--view X0 Y0 X1 Y1``: four numbers with X1 > X0 and Y1 > Y0, checked as the line is parsed
+    (before the file is read or anything compiled or run); stored as written, converted once the
+    file's length unit is known."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        try:
+            check_view(values, field="--view", unit="")
+        except ScenarioError as exc:
+            parser.error(f"argument --view: {str(exc).split(': ', 1)[-1]}")
+        setattr(namespace, self.dest, list(values))
 
 
 def _scale(text: str) -> float:
@@ -283,6 +297,10 @@ def _cmd_plot(args) -> int:
 
     interval = None if args.interval is None else parse(args.interval, Kind.TIME, field="--interval")
     scenario = _load(args.file)
+    args.view_si = None
+    if args.view is not None:  # the file's length unit -> m
+        per_m, unit = to_unit(1.0, Kind.LENGTH, resolve_system(None, scenario.units))
+        args.view_si = tuple(v / per_m for v in check_view(args.view, field="--view", unit=unit))
     if args.paper is not None or args.scale is not None:  # the sheet against what is known before the run
         check_sheet(scenario, args.paper or "A4", args.scale, approach=not args.no_approach, field="--scale")
     _figure_inputs(scenario)
@@ -305,7 +323,8 @@ def _save_figures(args, scene, interval) -> list:
                               dpi=args.dpi, interval=interval, system=args.units,
                               time_distance_path=args.time_distance and Path(args.time_distance),
                               approach=not args.no_approach, legend=args.legend, hide=args.hide or (),
-                              paper=args.paper, scale=args.scale)
+                              paper=args.paper, scale=args.scale, view=getattr(args, "view_si", None),
+                              zoom=args.zoom)
 
 
 def _cmd_animate(args) -> int:
@@ -482,6 +501,13 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("--no-approach", action="store_true",
                     help="leave the approaches out of the scene diagram (a close view of impact and run-out)")
     pl.add_argument("--interval", metavar="TIME", help='time between ghost outlines, e.g. "0.5 s"')
+    detail = pl.add_mutually_exclusive_group()
+    detail.add_argument("--view", nargs=4, metavar=("X0", "Y0", "X1", "Y1"), action=_ViewAction,
+                        help="a detail view: the window from (X0, Y0) to (X1, Y1) in the file's length unit "
+                             "(m, or ft with units = \"US\"), X1 > X0 and Y1 > Y0")
+    detail.add_argument("--zoom", choices=ZOOMS, default=None,
+                        help="impact: a window around the outlines at impact of the bodies in the first impact, "
+                             "with a margin (without it, an overview whose impact is small gets an inset of it)")
     pl.add_argument("--units", type=_units, default=None, help="SI or US: units of the figure (default: the scenario's)")
     pl.add_argument("--dpi", type=int, default=150)
     pl.add_argument("--legend", choices=LEGEND_MODES, default="compact",

@@ -14,7 +14,8 @@ import re
 
 from .errors import ScenarioError
 
-__all__ = ["LEGEND_MODES", "PAPER_SIZES", "LABEL_KINDS", "VIEWS", "ANIMATION_LEGENDS", "check_hide", "parse_scale"]
+__all__ = ["LEGEND_MODES", "PAPER_SIZES", "LABEL_KINDS", "VIEWS", "ANIMATION_LEGENDS", "ZOOMS", "check_hide", "check_view",
+           "parse_scale"]
 
 #: Where the legend of a scene figure goes: compact (one line per entry, the evidence as one entry)
 #: under or beside the diagram, in full under or beside it, small inside it, or none.
@@ -30,6 +31,9 @@ LABEL_KINDS = ("impacts", "names", "pdof", "delta-v", "approach", "obstacles", "
 
 #: Views of an animation: a camera framed on the vehicles at each frame, or the whole scene still.
 VIEWS = ("follow", "scene")
+
+#: Detail windows of a scene figure by name (``crashsim plot --zoom``): the impact configuration.
+ZOOMS = ("impact",)
 
 #: Legends of an animation: compact, outside the view (:func:`crashsim.plotting.plot_scene`'s
 #: ``legend="compact"``), or none.
@@ -89,3 +93,43 @@ def parse_scale(text, *, field: str = "scale") -> float:
         raise ScenarioError(f"scale {raw!r} is not a drawing scale; allowed 1:N with N >= 1, e.g. \"1:200\", "
                             "or an engineer's scale 1\" = F' with F > 0 feet, e.g. 1\" = 40'", field=field)
     return n
+
+
+def check_view(values, *, field: str = "view", unit: str = "m") -> tuple[float, float, float, float]:
+    """The window ``X0 Y0 X1 Y1`` of a detail view as four floats (strings as written on the
+    command line, or numbers), with X1 > X0 and Y1 > Y0, in ``unit`` (named in the message; ""
+    for the file's length unit, not known yet).
+
+    Raises
+    ------
+    ScenarioError
+        For other than four finite numbers, or an empty window (field ``field``).
+
+    Examples
+    --------
+    >>> check_view(["-5", "0", "20", "12.5"])
+    (-5.0, 0.0, 20.0, 12.5)
+    """
+    u = f" {unit}" if unit else ""
+    where = f"[{unit}]" if unit else "(in the file's length unit)"
+    items = [str(v).strip() for v in values] if not isinstance(values, str) else values.replace(",", " ").split()
+    shown = " ".join(items)
+    if len(items) != 4:
+        raise ScenarioError(f"view {shown!r} has {len(items)} value(s); allowed: four numbers X0 Y0 X1 Y1 {where} "
+                            "with X1 > X0 and Y1 > Y0, e.g. -5 0 20 12", field=field)
+    out = []
+    for name, text in zip(("X0", "Y0", "X1", "Y1"), items):
+        try:
+            v = float(text)
+        except ValueError:
+            v = float("nan")
+        if not math.isfinite(v):
+            raise ScenarioError(f"view {name} = {text!r} is not a number; allowed: four numbers X0 Y0 X1 Y1 "
+                                f"{where} with X1 > X0 and Y1 > Y0", field=field)
+        out.append(v)
+    x0, y0, x1, y1 = out
+    for a, b, lo_name, hi_name in ((x0, x1, "X0", "X1"), (y0, y1, "Y0", "Y1")):
+        if not b > a:
+            raise ScenarioError(f"view {shown!r}: {hi_name} = {b:g}{u} is not above {lo_name} = {a:g}{u}; "
+                                f"allowed: {hi_name} > {lo_name}", field=field)
+    return x0, y0, x1, y1

@@ -20,10 +20,13 @@ import numpy as np
 
 from .errors import ScenarioError
 from .evidence.crush import profile_outline
-from .figure_options import LABEL_KINDS, LEGEND_MODES, PAPER_SIZES, check_hide, parse_scale
+from .figure_options import LABEL_KINDS, LEGEND_MODES, PAPER_SIZES, check_hide, check_view, parse_scale
 from .geometry import rotate, to_body, to_world
 from .motion.approach import path_length
 from .motion.road import points_in_polygon, signed_distance
+from .plot_events import mark_impacts
+from .plot_loads import draw_roll_panel, has_roll_panel
+from .plot_detail import INSET_MARGIN, add_impact_inset, impact_window, needs_inset
 from .report import fmt
 from .survey.underlay import draw_underlay, scene_underlay
 from .units import Kind, convert, resolve_system, to_unit
@@ -684,7 +687,8 @@ def layout_print(ax, sheet: PrintSheet) -> None:
 
 def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evidence: bool = True,
                arrows: bool = True, system: str | None = None, legend="compact", axles: bool = True,
-               approach: bool = True, hide=(), paper: str | None = None, scale: float | None = None):
+               approach: bool = True, hide=(), paper: str | None = None, scale: float | None = None,
+               view=None, zoom: str | None = None, inset: bool | None = None):
     """Scale diagram of a reconstructed scene in the ground frame: impact, run-out, evidence.
 
     Parameters
@@ -775,6 +779,7 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     from matplotlib.patches import Patch
 
     system = figure_system(scene, system)
+    window = _detail_window(scene, view, zoom)
     new = ax is None
     if new:
         # laid out by layout_scene_figure (exact equal-aspect box plus legend), not by a layout engine
@@ -940,6 +945,9 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     # room at the bottom for the scale bar and at the top for the axes indicator
     lo[1] -= 0.05 * span
     hi[1] += 0.05 * span
+    if window is not None:  # a detail view: the window as given, what lies outside cut off
+        lo, hi = S.d(window[0]), S.d(window[1])
+        _drop_texts_outside(S, lo, hi)
     mode = legend_mode(legend)
     sheet = None
     for w in tuple(getattr(scene, "warnings", ()) or ()):
@@ -981,7 +989,8 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     else:
         if new:
             layout_scene_figure(ax, outside, below)
-        _fit_texts(S)
+        if window is None:
+            _fit_texts(S)
         if new:
             layout_scene_figure(ax, outside, below)
         if new and mode == "inside":
@@ -992,12 +1001,44 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     if leg is not None and mode not in _OUTSIDE:
         fixed.append(leg)
     ax.figure.draw_without_rendering()
+    if (new if inset is None else inset) and window is None:
+        w_lo, w_hi = (S.d(c) for c in impact_window(scene, INSET_MARGIN))
+        if needs_inset(w_lo, w_hi, ax.get_xlim()):
+            inset_ax = add_impact_inset(ax, w_lo, w_hi, avoid=np.vstack(S.points), fixed=fixed, unit=S.lunit)
+            if inset_ax is not None:
+                fixed.append(inset_ax)
     S.fixed = fixed
     S.unplaced = place_labels(ax, S.texts, fixed, np.vstack(S.points))
     _DRAWINGS[ax] = S
     if S.unplaced:
         _log.info("scene figure: %d label(s) found no free place and may overlap others", S.unplaced)
     return ax
+
+
+def _detail_window(scene, view, zoom):
+    """The window of a detail view [m] as (lower-left, upper-right), or None for the framed scene."""
+    if view is not None and zoom is not None:
+        raise ScenarioError("give a view or a zoom, not both", field="zoom")
+    if zoom is not None:
+        if zoom != "impact":
+            raise ScenarioError(f"unknown zoom {zoom!r}; allowed: impact", field="zoom")
+        return impact_window(scene)
+    if view is None:
+        return None
+    x0, y0, x1, y1 = check_view(view, field="view")
+    return np.array([x0, y0]), np.array([x1, y1])
+
+
+def _drop_texts_outside(S: SceneDrawing, lo, hi) -> None:
+    """Leave out the labels anchored outside the box [lo, hi] (display units) of a detail view."""
+    keep = []
+    for t in S.texts:
+        x, y = t.xy
+        if lo[0] <= x <= hi[0] and lo[1] <= y <= hi[1]:
+            keep.append(t)
+        else:
+            t.remove()
+    S.texts[:] = keep
 
 
 def _legend_headroom(ax, leg, below: bool) -> None:
@@ -1204,16 +1245,6 @@ def plot_time_distance(scene, axes=None, *, system: str | None = None):
         if scene.runout and v.name in scene.runout:
             drawn["rest"] |= scene.runout[v.name].bodies[v.bodies[0].name].time_to_rest is not None
     impacts = [(1, 0.0)] + [(ev.number, ev.t) for ev in (scene.joint.impact_events() if scene.joint is not None else ())]
-    impact_labels = []
-    for number, ti in impacts:
-        color = "#b30000" if number == 1 else "#e07b00"
-        for axx in (ax_s, ax_v):
-            axx.axvline(ti, color=color, lw=1.0, ls="-" if number == 1 else "--", zorder=1)
-        # one row lower for every label it would overlap (impacts close in time)
-        label = ax_s.annotate("impact" if number == 1 else f"impact {number}", (ti, 1.0),
-                              xycoords=("data", "axes fraction"), xytext=(3, -10), textcoords="offset points",
-                              fontsize=7, color=color, gid=f"td:impact:{number}", path_effects=_halo(2.0))
-        impact_labels.append(label)
     ax_s.axhline(0.0, color="0.6", lw=0.6)
     ax_s.set_ylabel(f"distance from the impact [{lu}]")
     ax_v.set_ylabel(f"speed [{vu}]")
@@ -1236,18 +1267,10 @@ def plot_time_distance(scene, axes=None, *, system: str | None = None):
     # beside the panels: never over the impact labels or the curves
     ax_s.legend(handles + [h for h, _ in extra], labels + [t for _, t in extra], fontsize=7, loc="upper left",
                 bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, frameon=False)
-    # impact labels: one row lower for every label one would overlap (impacts close in time),
-    # measured once the layout is final
+    # every impact a line; impacts close in time one band with one label ("impacts 5-12"), measured
+    # once the layout is final (plot_events)
     fig.draw_without_rendering()
-    r = fig.canvas.get_renderer()
-    boxes = []
-    for label in impact_labels:
-        for row in range(len(impact_labels)):
-            label.xyann = (3, -10 - 9 * row)
-            bb = text_box(label, r)
-            if not any(bb.padded(3.0).overlaps(q) for q in boxes):
-                break
-        boxes.append(bb)
+    mark_impacts(ax_s, (ax_s, ax_v), impacts, halo=_halo(2.0), text_box=text_box)
     ax_s.set_title(_wrap(f"Time-distance: {sc.title}", 100), fontsize=10)
     return fig
 
@@ -1985,15 +2008,15 @@ _INK_STEP = 2.0
 
 def line_ink(ax, exclude=()) -> np.ndarray:
     """Pixel positions along every line and outline edge drawn in the axes, shape (n, 2): the
-    vertices of each Line2D and patch (leader lines and ``exclude`` left out) and points every
+    vertices of each Line2D and patch (leader lines, the inset's window and ``exclude`` left out) and points every
     :data:`_INK_STEP` pixels between them, inside the axes."""
     from matplotlib.lines import Line2D
 
     frame = ax.get_window_extent(ax.figure.canvas.get_renderer())
     out = []
     for a in [*ax.lines, *ax.patches]:
-        if not a.get_visible() or a in exclude or (a.get_gid() or "").startswith("leader:"):
-            continue
+        if not a.get_visible() or a in exclude or (a.get_gid() or "").startswith(("leader:", "inset-window")):
+            continue  # leaders, and the inset's dashed window (a guide a label may cross)
         if isinstance(a, Line2D):
             if a.get_linestyle() in ("None", "none", "", " "):
                 continue  # markers only
@@ -2323,10 +2346,12 @@ def _scene_legend(S: SceneDrawing, mode: str, below: bool, compact: bool = False
 
 
 def history_panels(scene) -> int:
-    """Panels of :func:`plot_histories` for ``scene``: 3, or 4 when bodies stayed in sustained
-    contact during the run-out (the contact-force panel)."""
+    """Panels of :func:`plot_histories` for ``scene``: 3, one more when bodies stayed in sustained
+    contact during the run-out (the contact-force panel), one more where the rollover check ran (the
+    lateral-acceleration and load-transfer panel, :func:`crashsim.plot_loads.draw_roll_panel`)."""
     joint = getattr(scene, "joint", None)
-    return 4 if joint is not None and any(p.sustained for p in joint.pairs) else 3
+    contact = joint is not None and any(p.sustained for p in joint.pairs)
+    return 3 + int(contact) + int(has_roll_panel(scene))
 
 
 #: Impacts closer in time than this share of the histories' time axis get their labels on separate rows.
@@ -2376,12 +2401,14 @@ def plot_histories(scene, axes=None, *, system: str | None = None):
         raise ScenarioError(f"scene {scene.scenario.title!r} has no run-out (impact only): there are no time "
                             "histories to plot; add a [runout] section to the scenario", field="runout")
     n_panels = history_panels(scene)
+    roll = has_roll_panel(scene)
+    contact = n_panels - int(roll) == 4
     new = axes is None
     if new:
         fig, axes = _plt().subplots(n_panels, 1, figsize=(8.0, 2.85 * n_panels), sharex=True, layout="constrained")
     axes = np.asarray(axes, dtype=object).ravel()
     if len(axes) != n_panels:
-        what = "speed, yaw rate, articulation" + (", contact force" if n_panels == 4 else "")
+        what = "speed, yaw rate, articulation" + (", contact force" if contact else "") + (", roll" if roll else "")
         raise ScenarioError(f"needs {n_panels} axes ({what}), got {len(axes)}", field="axes")
     ax_v, ax_w, ax_a = axes[:3]
     kv, vunit = to_unit(1.0, Kind.SPEED, system)
@@ -2436,7 +2463,9 @@ def plot_histories(scene, axes=None, *, system: str | None = None):
     ax_a.set_ylabel("articulation [deg]")
     axes[-1].set_xlabel("time after separation [s]")
     joint = getattr(scene, "joint", None)
-    if n_panels == 4:
+    if roll:
+        draw_roll_panel(axes[-1], scene, {vn: (f[2], f[1]) for vn, f in family.items()}, styles)
+    if contact:
         ax_f = axes[3]
         kf, funit = to_unit(1.0, Kind.FORCE, system)
         for k, p in enumerate(q for q in joint.pairs if q.sustained):
@@ -2475,7 +2504,8 @@ def plot_histories(scene, axes=None, *, system: str | None = None):
 
 def save_scene_figures(scene, path, *, histories_path=None, dpi: int = 150, interval: float | None = None,
                        system: str | None = None, time_distance_path=None, approach: bool = True, legend="compact",
-                       hide=(), paper: str | None = None, scale: float | None = None) -> list:
+                       hide=(), paper: str | None = None, scale: float | None = None, view=None,
+                       zoom: str | None = None) -> list:
     """Write the scene diagram (and optionally the histories) to files; closes its figures.
 
     Parameters
@@ -2489,8 +2519,9 @@ def save_scene_figures(scene, path, *, histories_path=None, dpi: int = 150, inte
         Time-distance and speed-time chart (:func:`plot_time_distance`), same suffixes.
     approach : bool
         Draw the approaches on the scene diagram (see :func:`plot_scene`).
-    legend, hide, paper, scale
-        Legend, hidden label kinds and print sheet of the scene diagram (see :func:`plot_scene`).
+    legend, hide, paper, scale, view, zoom
+        Legend, hidden label kinds, print sheet and detail view of the scene diagram (see
+        :func:`plot_scene`).
     dpi : int
         Resolution of raster output [dots per inch].
     interval : float, optional
@@ -2524,8 +2555,10 @@ def save_scene_figures(scene, path, *, histories_path=None, dpi: int = 150, inte
         print_sheet(paper, (0.0, 0.0), (1.0, 1.0), 1.0)  # a known paper, before anything is drawn
     plt = _plt()
     written = []
+    if view is not None:
+        check_view(view, field="view")  # before anything is drawn
     ax = plot_scene(scene, interval=interval, system=system, approach=approach, legend=legend, hide=hide, paper=paper,
-                    scale=scale)
+                    scale=scale, view=view, zoom=zoom)
     try:
         targets[0].parent.mkdir(parents=True, exist_ok=True)
         ax.figure.savefig(targets[0], dpi=dpi)

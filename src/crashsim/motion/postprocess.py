@@ -470,6 +470,15 @@ def _lean_view(view: _VehicleView, keep: list) -> _VehicleView:
                         view.loads, view.mass, view.inertia, view.options_dict)
 
 
+def _roll_with_history(summary: dict, t, series: dict) -> dict:
+    """The rollover verdict with its sampled indicators under ``"history"`` (for the figures; not in the
+    JSON): ``{"t": (K,) [s], body: {"ltr": (K,), "lateral_acceleration_g": (K,)}}``."""
+    history = {"t": np.asarray(t, dtype=float)}
+    for name, (ltr, ay) in series.items():
+        history[name] = {"ltr": np.asarray(ltr, dtype=float), "lateral_acceleration_g": np.asarray(ay, dtype=float)}
+    return {**summary, "history": history}
+
+
 def _vehicle_statics(model) -> dict:
     """Per vehicle of a scene model, what its results need of the model: its state rows and its
     :class:`_VehicleView`; built once per model (a model reused across runs keeps them)."""
@@ -576,6 +585,7 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
         monitor = RollMonitor.of(model)
         starts = np.array([a for a, _, _ in table], dtype=float)
         events[:] = with_events(events, monitor.events(T, seg_of, Y, arrays.memb if table else [], starts, sol))
+        roll_ltr, roll_ay = monitor.series(T, seg_of, Y, arrays.memb if table else [])
     if lean is None:
         events[:] = event_places(model, sol, events)
     missed = None
@@ -643,7 +653,9 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
             kinetic_energies=(_ke(model, y_initial, b0, b1), _ke(model, y_end, b0, b1)),
             energy_dissipated=float(quad[nb + 2 * nw + w0: nb + 2 * nw + w1].sum()),
             gravity_work=float(w_grav[b0:b1].sum()),
-            rollover=roll_summary(v_events, [b.name for b in v.bodies], monitor.thresholds[b0:b1]) if roll else None))
+            rollover=_roll_with_history(roll_summary(v_events, [b.name for b in v.bodies], monitor.thresholds[b0:b1]),
+                                        Tv, {b.name: (roll_ltr[b0 + i, cols], roll_ay[b0 + i, cols])
+                                             for i, b in enumerate(v.bodies)}) if roll else None))
 
     # ---- pairs and the ledger
     n_imp = {}

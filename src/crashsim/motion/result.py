@@ -373,8 +373,9 @@ class RunoutResult:
     rollover : dict or None
         With the wheel-lift and rollover check on (:mod:`crashsim.motion.rollover`): each body's
         threshold [g], whether a body rolled, which bodies lifted wheels, and ``valid_until_s``,
-        the time from which the planar result is outside its validity (None: throughout within);
-        None when the check is off.
+        the time from which the planar result is outside its validity (None: throughout within),
+        and under ``"history"`` each body's sampled load transfer ratio and lateral acceleration [g]
+        (figures only: not in the JSON); None when the check is off.
     """
 
     vehicle: str
@@ -544,7 +545,8 @@ class RunoutResult:
                 "hitches": hitches,
                 "events": [{"t_s": e.t, "kind": e.kind, "detail": e.detail, "energy_J": e.energy, **e.data}
                            for e in self.events],
-                **({"rollover": self.rollover} if self.rollover is not None else {}),
+                **({"rollover": {k: v for k, v in self.rollover.items() if k != "history"}}
+                   if self.rollover is not None else {}),
             }
         )
 

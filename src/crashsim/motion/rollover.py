@@ -260,6 +260,19 @@ class RollMonitor:
         return (abs(float(np.dot(self.side[on], n)) / tot) if tot > 0 else 0.0) - 1.0
 
     # ---------------------------------------------------------------- events
+    def series(self, T: np.ndarray, seg_of: np.ndarray, Y: np.ndarray, memb) -> tuple[np.ndarray, np.ndarray]:
+        """Every body's unit load transfer ratio and lateral acceleration [g] at the samples, (nb, K) each
+        (the values the events are found on; ``memb`` the zone membership of every segment)."""
+        ltr = np.zeros((self.nb, len(T)))
+        ay = np.zeros((self.nb, len(T)))
+        if not len(T):
+            return ltr, ay
+        for s in np.unique(seg_of).tolist():  # the normal factor is constant in a segment
+            cols = seg_of == s
+            gn = self.normal_factor(memb[s]) if len(memb) else np.ones(self.n0.shape[0])
+            _, ltr[:, cols], ay[:, cols], _, _ = self.values(Y[:, cols], gn)
+        return ltr, ay
+
     def events(self, T: np.ndarray, seg_of: np.ndarray, Y: np.ndarray, memb, starts: np.ndarray, sol) -> list:
         """The first crossing of every indicator of every body, as :class:`RunoutEvent` (sorted by time).
 

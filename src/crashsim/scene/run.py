@@ -89,7 +89,8 @@ class SceneResult:
     def rollover(self) -> dict:
         """By vehicle, its wheel-lift and rollover summary (:attr:`RunoutResult.rollover`); empty when the
         check is off."""
-        return {v: r.rollover for v, r in (self.runout or {}).items() if getattr(r, "rollover", None) is not None}
+        return {v: {k: x for k, x in r.rollover.items() if k != "history"}  # the sampled indicators: figures only
+                for v, r in (self.runout or {}).items() if getattr(r, "rollover", None) is not None}
 
     def energy_ledger(self) -> dict | None:
         """The scene's energy ledger from the approach to rest [J] (None without a joint run-out).

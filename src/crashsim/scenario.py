@@ -1292,7 +1292,7 @@ class ApproachInput:
 
 
 def _approach_input(veh: Vehicle, v: dict, runout: "RunoutSpec | None", file: str | None,
-                    lines=()) -> ApproachInput:
+                    lines=(), path_given: bool = False) -> ApproachInput:
     """What the approach of ``veh`` (``v["approach"]``) needs, checked (its simulation comes later)."""
     a = v["approach"]
     key = f"vehicles.{veh.name}.approach"
@@ -1327,11 +1327,11 @@ def _approach_input(veh: Vehicle, v: dict, runout: "RunoutSpec | None", file: st
     if a["solve_articulation"] and n < 2:
         raise _err(f"vehicle {veh.name!r} has no hitch: there is no articulation to solve", f"{key}.solve_articulation",
                    file)
-    # the section's defaults are filled in when it is absent: a path is given by its points or its line
     if a["through_impact"] and v.get("brakes") is not None:
         raise _err("with through_impact the approach's air brakes carry on into the run-out: give the brakes once, in "
                    f"{key}.brakes, and remove vehicles.{veh.name}.brakes", f"vehicles.{veh.name}.brakes", file)
-    given = a["path"] is not None and (a["path"]["points"] is not None or a["path"]["line"] is not None)
+    # the schema fills in the section's defaults when it is absent: a path is given by its table in the file
+    given = a["path"] is not None and (path_given or a["path"]["points"] is not None or a["path"]["line"] is not None)
     driver = _approach_driver(veh, v, a, key, lines, file) if given else None
     try:
         spec = ApproachSpec(wheels, a["speed"], a["distance"], a["time"],
@@ -1619,8 +1619,10 @@ def _from_validated(d: dict, data: dict, merged: dict, source, file: str | None,
     for veh in vehicles:
         v = d["vehicles"][veh.name]
         if v["approach"] is not None and not runout_lost:
+            raw = ((merged.get("vehicles") or {}).get(veh.name) or {}).get("approach") or {}
             approach_inputs[veh.name] = _approach_input(veh, v, runout, file,
-                                                        (d.get("map") or {}).get("lines") or ())
+                                                        (d.get("map") or {}).get("lines") or (),
+                                                        path_given="path" in raw)
     later = _Problems(file, lenient)
     imp = d["impact"]
     problem = None

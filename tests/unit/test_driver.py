@@ -175,6 +175,8 @@ def test_driven_scene_runs_and_reports_the_driver():
      "vehicles.truck.approach.distance", "with a path give distance"),
     (lambda d: d["vehicles"]["truck"]["approach"].__setitem__("articulation", ["5 deg", "1 deg"]),
      "vehicles.truck.approach.articulation", "give 1 value"),
+    (lambda d: d["vehicles"]["truck"]["approach"].__setitem__("path", {}),
+     "vehicles.truck.approach.path.points", "give the path's points or the name"),
     (lambda d: d["vehicles"]["truck"]["approach"].__setitem__("articulation", ["120 deg"]),
      "vehicles.truck.approach.articulation", "beyond its articulation stop"),
 ])

@@ -470,56 +470,47 @@ def _driven_run(vehicle: Vehicle, spec: ApproachSpec, speed: float, target, road
     if yaw_rates is None:  # already turning with the path where it starts
         kappa = driver.path.curvature(s_ref, max(driver.min_preview, driver.preview_time * speed) / 2.0)
         yaw_rates = (speed * kappa,) * len(vehicle.bodies)
-    state = chain_states(vehicle, p0, h0, vel, yaw_rates, articulation)
+    start = chain_states(vehicle, p0, h0, vel, yaw_rates, articulation)
     dt = driver.update
     seg_opts = replace(options, t_max=dt)
-    with _expected_time_limits():
-        return _drive(vehicle, spec, driver, geom, first, resolved, steered, p0, h0, vel, yaw_rates, articulation,
-                      state, s_ref, dt, seg_opts, road, options, speed)
-
-
-def _drive(vehicle, spec, driver, geom, first, resolved, steered, p0, h0, vel, yaw_rates, articulation, state, s_ref,
-           dt, seg_opts, road, options, speed):
-    """The two passes of :func:`_driven_run`."""
     rec = {k: [] for k in ("t", "delta", "left", "right", "s", "offset")}
     wheel_angles = []
     delta_prev = None
     s_impact = s_ref + spec.distance
+    state = start
     k = 0
-    while True:
-        t0 = k * dt
-        cg = state[first]
-        beta = reference_slip(geom, cg.heading, cg.velocity, cg.yaw_rate)
-        slip = beta if k == 0 else slip + min(dt / SLIP_TIME, 1.0) * (beta - slip)
-        raw, s_ref, offset = pursuit_steer(geom, driver, cg.position, cg.heading, float(np.hypot(*cg.velocity)), s_ref,
-                                           slip)
-        delta = min(max(raw, -driver.max_steer), driver.max_steer)
-        if delta_prev is not None:
-            step = driver.max_steer_rate * dt
-            delta = min(max(delta, delta_prev - step), delta_prev + step)
-        left, right = ackermann(geom, delta)
-        angles = {s.key: (left if s.side == "left" else right) for s in steered}
-        for key, val in zip(rec, (t0, delta, left, right, s_ref, offset)):
-            rec[key].append(val)
-        wheel_angles.append(angles)
-        delta_prev = delta
-        run = run_runout([vehicle], state, {vehicle.name: _segment_wheels(resolved, spec.wheels, t0, t0 + dt, angles)},
-                         road, seg_opts).vehicles[vehicle.name]
-        state = {b.name: run.bodies[b.name].final for b in vehicle.bodies}
-        k += 1
-        # past the impact: the reference point (behind the CG) 2 m beyond the impact position's place on the path
-        if run.status == "rest" or k * dt >= options.t_max or s_ref > s_impact + 2.0:
-            break
-        if run.status != "time_limit":  # a solver failure
-            break
-    t_end = k * dt
-    sched = [ScheduledChange(i * dt, key, {"steer": a}) for i in range(1, len(wheel_angles))
-             for key, a in wheel_angles[i].items()]
-    whole = WheelSettings(wheels={s.key: (replace(w, steer=wheel_angles[0][s.key]) if s.key in wheel_angles[0] else w)
-                                  for s, w in zip(resolved.specs, resolved.phases[0][1])},
-                          schedule=tuple(spec.wheels.schedule) + tuple(sched), brakes=spec.wheels.brakes)
-    init = chain_states(vehicle, p0, h0, vel, yaw_rates, articulation)
-    run = run_runout([vehicle], init, {vehicle.name: whole}, road, replace(options, t_max=t_end)).vehicles[vehicle.name]
+    with _expected_time_limits():
+        while True:
+            t0 = k * dt
+            cg = state[first]
+            beta = reference_slip(geom, cg.heading, cg.velocity, cg.yaw_rate)
+            slip = beta if k == 0 else slip + min(dt / SLIP_TIME, 1.0) * (beta - slip)
+            raw, s_ref, offset = pursuit_steer(geom, driver, cg.position, cg.heading, float(np.hypot(*cg.velocity)),
+                                               s_ref, slip)
+            delta = min(max(raw, -driver.max_steer), driver.max_steer)
+            if delta_prev is not None:
+                step = driver.max_steer_rate * dt
+                delta = min(max(delta, delta_prev - step), delta_prev + step)
+            left, right = ackermann(geom, delta)
+            angles = {s.key: (left if s.side == "left" else right) for s in steered}
+            for key, val in zip(rec, (t0, delta, left, right, s_ref, offset)):
+                rec[key].append(val)
+            wheel_angles.append(angles)
+            delta_prev = delta
+            seg = _segment_wheels(resolved, spec.wheels, t0, t0 + dt, angles)
+            run = run_runout([vehicle], state, {vehicle.name: seg}, road, seg_opts).vehicles[vehicle.name]
+            state = {b.name: run.bodies[b.name].final for b in vehicle.bodies}
+            k += 1
+            # past the impact: the reference point (behind the CG) 2 m beyond the impact position's place on the path
+            if run.status != "time_limit" or k * dt >= options.t_max or s_ref > s_impact + 2.0:
+                break  # at rest, a solver failure, the time limit, or past the impact
+        # the whole approach: the file's settings with the first steer angles, the driver's later ones scheduled
+        sched = [ScheduledChange(i * dt, key, {"steer": a}) for i in range(1, len(wheel_angles))
+                 for key, a in wheel_angles[i].items()]
+        whole = _segment_wheels(resolved, spec.wheels, 0.0, math.inf, wheel_angles[0])
+        whole = replace(whole, schedule=tuple(whole.schedule) + tuple(sched))
+        run = run_runout([vehicle], start, {vehicle.name: whole}, road,
+                         replace(options, t_max=k * dt)).vehicles[vehicle.name]
     out = {key: np.asarray(v, dtype=float) for key, v in rec.items()}
     out["keys"] = tuple((s.key, s.side) for s in steered)
     return run, out
@@ -745,8 +736,8 @@ def _approach(vehicle, spec, impact_states, road, options, speed, articulation=N
                 field=f"{spec.key}.start_position" if spec.mode == "start" else f"{spec.key}.path")
     art = tuple(float(states[a.name].heading - states[b.name].heading)
                 for a, b in zip(vehicle.bodies[:-1], vehicle.bodies[1:]))
-    for i, (a, b) in enumerate(zip(vehicle.bodies[:-1], vehicle.bodies[1:])):
-        given = float(impact_states[a.name].heading - impact_states[b.name].heading)
+    for i, ((a, b), given) in enumerate(zip(zip(vehicle.bodies[:-1], vehicle.bodies[1:]),
+                                            impact_articulation(vehicle, impact_states))):
         if abs(art[i] - given) > math.radians(2.0):
             warnings.append(f"the approach ends with articulation {math.degrees(art[i]):.1f} deg at the hitch "
                             f"{a.name}/{b.name}; the impact configuration has {math.degrees(given):.1f} deg")

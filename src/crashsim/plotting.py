@@ -1178,7 +1178,7 @@ def plot_time_distance(scene, axes=None, *, system: str | None = None):
     sc = scene.scenario
     movable = [v for v in sc.vehicles if not v.is_barrier]
     drawn = {"perception": False, "braking": False, "rest": False, "recorded": False, "lower": False,
-             "constant": False}
+             "constant": False, "table": False}
     colors = {v.name: _FAMILIES[i % len(_FAMILIES)][2] for i, v in enumerate(movable)}
     for v in movable:
         c = colors[v.name]
@@ -1206,6 +1206,12 @@ def plot_time_distance(scene, axes=None, *, system: str | None = None):
                           gid=f"td:constant:{v.name}")
                 ax_v.plot([te, t0], [kv * a.speed_at_braking] * 2, ":", color=c, lw=1.3)
                 drawn["constant"] = True
+            inp = getattr(sc, "approach_inputs", {}).get(v.name)
+            table = None if inp is None else inp.spec.recorded
+            if table is not None and table.speed is not None:  # the recorder's table the approach was driven by
+                ax_v.plot(table.t, kv * np.asarray(table.speed), "x", color="0.15", ms=5, mew=1.2, zorder=6,
+                          gid=f"td:table:{v.name}")
+                drawn["table"] = True
             ax_s.annotate(f"{v.name}: braking {fmt(a.speed_at_braking, 'speed', system)}", (tb, kl * sb),
                           xytext=(4, -10), textcoords="offset points", fontsize=7, color=c)
         if scene.runout and v.name in scene.runout:
@@ -1262,7 +1268,9 @@ def plot_time_distance(scene, axes=None, *, system: str | None = None):
               "recorded speed (bar: tolerance)", "recorded"),
              (Line2D([], [], ls="none", marker="^", ms=5.5, mfc="white", mec=_EVIDENCE, mew=1.4),
               "recorded, braking: a lower bound", "lower"),
-             (Line2D([], [], ls=":", color="0.2", lw=1.3), "constant speed before the approach (assumed)", "constant")]
+             (Line2D([], [], ls=":", color="0.2", lw=1.3), "constant speed before the approach (assumed)", "constant"),
+             (Line2D([], [], ls="none", marker="x", color="0.15", ms=5, mew=1.2),
+              "recorder's table (drives the approach)", "table")]
     extra = [(h, t) for h, t, key in extra if drawn[key]]
     # beside the panels: never over the impact labels or the curves
     ax_s.legend(handles + [h for h, _ in extra], labels + [t for _, t in extra], fontsize=7, loc="upper left",

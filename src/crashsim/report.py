@@ -443,8 +443,10 @@ def format_approach(approaches: dict, system: str = "SI") -> str:
     lines = ["Approach before the impact (simulated from the start of braking; constant speed before it)"]
     for name, a in approaches.items():
         how = {"distance": "braking distance given", "time": "braking time given",
-               "start": "start position given", "path": "driven along a path from a distance given"}[a.mode]
-        speed_note = "solved from the speed at impact" if a.speed_solved else "given"
+               "start": "start position given", "path": "driven along a path from a distance given",
+               "recorded": "driven by a recorder's table from its first sample"}[a.mode]
+        speed_note = ("the table's first" if a.speed_control is not None
+                      else "solved from the speed at impact" if a.speed_solved else "given")
         lines.append(f"  vehicle {name} ({how}; speed at braking {speed_note})")
         rows = [
             ["speed at the start of braking", fmt(a.speed_at_braking, "speed", s)],
@@ -467,8 +469,16 @@ def format_approach(approaches: dict, system: str = "SI") -> str:
             st = a.steering
             before = st["t"] <= 1e-12
             peak = float(np.max(np.abs(st["delta"][before]))) if np.any(before) else 0.0
-            rows.append(["driver (pure pursuit), path error", fmt(a.max_lateral_error, "length", s),
-                         f"largest offset of the rear axles' centre from the path; largest steer {math.degrees(peak):.1f} deg"])
+            if a.mode == "recorded":
+                rows.append(["recorded steering", f"{math.degrees(peak):.1f} deg",
+                             "largest steer angle of the first axle's centre (steering-wheel angle / ratio)"])
+            else:
+                rows.append(["driver (pure pursuit), path error", fmt(a.max_lateral_error, "length", s),
+                             "largest offset of the rear axles' centre from the path; largest steer "
+                             f"{math.degrees(peak):.1f} deg"])
+        if a.speed_control is not None:
+            rows.append(["recorded speeds, followed within", fmt(a.max_speed_error, "speed", s),
+                         "largest difference of the CG speed from the table's (speed controller)"])
         if a.mode in ("start", "path"):
             rows.append(["miss of the impact position", fmt(a.miss, "length", s),
                          f"heading off by {math.degrees(a.heading_miss):+.1f} deg"])

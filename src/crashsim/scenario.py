@@ -260,6 +260,34 @@ APPROACH_PATH = Section("path", [
                                "so that the centre of its rear axles follows it; needs distance (the start lies that "
                                "far before the impact position along the path)")
 
+MAX_STEERING_WHEEL_ANGLE = 6 * math.pi  # three turns either way [rad]
+
+APPROACH_RECORDED_SAMPLE = Section("sample", [
+    Field("time", Kind.TIME, minimum=-MAX_APPROACH_TIME, maximum=0, example="-2.5 s",
+          description="Time of the sample relative to the impact (the recorder's trigger), negative before it"),
+    Field("speed", Kind.SPEED, required=False, minimum=0, maximum=MAX_SPEED, example="52 mph",
+          description="Recorded speed (give it in every sample or in none)"),
+    Field("steering", Kind.ANGLE, required=False, minimum=-MAX_STEERING_WHEEL_ANGLE, maximum=MAX_STEERING_WHEEL_ANGLE,
+          example="-15 deg", description="Recorded steering-wheel angle (give it in every sample or in none)"),
+], description="One sample of the recorder's pre-crash table")
+APPROACH_RECORDED = Section("recorded", [
+    Field("steering_ratio", "float", required=False, minimum=5, maximum=40, example="16",
+          description="Overall steering ratio: steering-wheel angle over the steer angle of the first axle's centre "
+                      "(with steering samples)"),
+    Field("steering_positive", choices=("left", "right"), default="left", example="left",
+          description="Which turn a positive recorded steering angle is: left (counter-clockwise, most recorders) "
+                      "or right; check the recorder's documentation"),
+    Field("update", Kind.TIME, minimum=0.01, maximum=0.5, default="0.05 s", example="0.05 s",
+          description="Interval of the speed controller's decisions and of the steering's steps"),
+    Field("speed_time", Kind.TIME, minimum=0.05, maximum=5, default="0.3 s", example="0.3 s",
+          description="Time constant of the speed controller (how fast a speed error is taken out)"),
+], subsections=[ArrayOf("samples", APPROACH_RECORDED_SAMPLE, min_items=2,
+                        description="The samples, e.g. [{time = \"-5 s\", speed = \"55 mph\", steering = \"0 deg\"}, "
+                                    "...]")],
+    required=False, description="A recorder's pre-crash table that drives the approach from its first sample to the "
+                                "impact (docs/approach.md): its steering steers the first axle, its speeds set the "
+                                "brakes; give neither distance, time, start_position nor a path")
+
 APPROACH = Section("approach", [
     Field("speed", Kind.SPEED, required=False, minimum=0, exclusive_minimum=True, maximum=MAX_SPEED, example="55 mph",
           description="CG speed of the first body at the start of braking; absent: solved from the speed at impact "
@@ -296,6 +324,7 @@ APPROACH = Section("approach", [
                       "at the impact configuration's articulation"),
 ], subsections=[
     APPROACH_PATH,
+    APPROACH_RECORDED,
     Section("tyres", _wheel_fields(False), description="Wheel state and tyre data of every wheel from the start of "
                                                        "braking (e.g. state = \"locked\")"),
     ArrayOf("wheels", WHEEL, required=False, description="Per-wheel overrides of the approach's tyres section"),
@@ -703,7 +732,8 @@ SCHEMA = Section("scenario file", subsections=[
 from .inverse_schema import with_inverse_sections  # noqa: E402
 from .evidence.crush import CrushEvidence, crush_groups
 from .motion.approach import ApproachSpec, check_path, path_start, simulate_approach
-from .motion.driver import DriverSpec, Path as DrivePath
+from .motion.driver import DriverSpec, Path as DrivePath, steer_geometry
+from .motion.recorded import RecordedDrive, rising_speed
 from .motion.loads import STANDARD_GRAVITY
 from .motion.road import signed_distance
 from .plotting import is_color
@@ -1292,7 +1322,7 @@ class ApproachInput:
 
 
 def _approach_input(veh: Vehicle, v: dict, runout: "RunoutSpec | None", file: str | None,
-                    lines=(), path_given: bool = False) -> ApproachInput:
+                    lines=(), path_given: bool = False, raw_recorded: dict | None = None) -> ApproachInput:
     """What the approach of ``veh`` (``v["approach"]``) needs, checked (its simulation comes later)."""
     a = v["approach"]
     key = f"vehicles.{veh.name}.approach"
@@ -1333,12 +1363,19 @@ def _approach_input(veh: Vehicle, v: dict, runout: "RunoutSpec | None", file: st
     # the schema fills in the section's defaults when it is absent: a path is given by its table in the file
     given = a["path"] is not None and (path_given or a["path"]["points"] is not None or a["path"]["line"] is not None)
     driver = _approach_driver(veh, v, a, key, lines, file) if given else None
+    recorded = None
+    speed = a["speed"]
+    if raw_recorded is not None:
+        recorded = _approach_recorded(veh, v, a, key, raw_recorded, file)
+        if recorded.speed is not None:
+            speed = recorded.speed[0]
     try:
-        spec = ApproachSpec(wheels, a["speed"], a["distance"], a["time"],
+        spec = ApproachSpec(wheels, speed, a["distance"], a["time"],
                             None if a["start_position"] is None else tuple(a["start_position"]), a["start_heading"],
                             a["reaction_time"], a["tolerance"], key,
                             None if a["articulation"] is None else tuple(a["articulation"]),
-                            None if a["yaw_rates"] is None else tuple(a["yaw_rates"]), a["solve_articulation"], driver)
+                            None if a["yaw_rates"] is None else tuple(a["yaw_rates"]), a["solve_articulation"], driver,
+                            recorded)
     except ScenarioError as exc:
         raise with_file(exc, file) from None
     return ApproachInput(spec, road, options, v["speed"], a["through_impact"],
@@ -1372,6 +1409,82 @@ def _approach_driver(veh: Vehicle, v: dict, a: dict, key: str, lines, file: str 
     except ScenarioError as exc:
         raise with_file(exc, file) from None
     return driver
+
+
+def _recorded_speeds(a: dict) -> bool:
+    """The approach's recorded table (if any) gives speeds: the speed at its start."""
+    r = a.get("recorded")
+    return bool(r and r.get("samples") and all(x.get("speed") is not None for x in r["samples"]))
+
+
+def _approach_recorded(veh: Vehicle, v: dict, a: dict, key: str, raw: dict, file: str | None) -> RecordedDrive:
+    """The recorder's table of ``[vehicles.<name>.approach.recorded]``: each column in every sample or in
+    none, steering with its ratio, no speed rise the model has no engine for, and no other way of placing
+    the approach's start given beside it."""
+    r = a["recorded"]
+    rkey = f"{key}.recorded"
+    samples = r["samples"]
+    raw_samples = raw.get("samples") if isinstance(raw.get("samples"), list) else []
+    for other in ("distance", "time", "start_position"):
+        if a[other] is not None:
+            raise _err(f"the recorded table places the approach's start at its first sample ({samples[0]['time']:g} s "
+                       f"before the impact): remove {other}", f"{key}.{other}", file)
+    if a["path"] is not None and (a["path"]["points"] is not None or a["path"]["line"] is not None):
+        raise _err("give a path or a recorded table to drive the approach, not both", f"{key}.path", file)
+    if a["reaction_time"]:
+        raise _err("the recorded table starts the simulated approach at its first sample; a reaction time before it "
+                   "has no place: remove reaction_time", f"{key}.reaction_time", file)
+    columns = {}
+    for col in ("speed", "steering"):
+        have = [x[col] is not None for x in samples]
+        if any(have) and not all(have):
+            j = have.index(False)
+            raise _err(f"sample {j} has no {col}, others do: give {col} in every sample or in none",
+                       f"{rkey}.samples[{j}].{col}", file)
+        columns[col] = [x[col] for x in samples] if all(have) else None
+    times = [x["time"] for x in samples]
+    for j in range(1, len(times)):
+        if times[j] <= times[j - 1]:
+            raise _err(f"{_written(raw_samples[j].get('time')) if j < len(raw_samples) else times[j]} follows "
+                       f"{_written(raw_samples[j - 1].get('time')) if j < len(raw_samples) else times[j - 1]}: sample "
+                       "times must increase", f"{rkey}.samples[{j}].time", file)
+    if times[0] >= 0.0:
+        raise _err("the first sample must lie before the impact (a negative time)", f"{rkey}.samples[0].time", file)
+    speed = columns["speed"]
+    if speed is not None:
+        if v["speed"] is not None:
+            raise _err("the recorded speeds give the speed at the start; the speed at impact follows from the approach: "
+                       f"remove vehicles.{veh.name}.speed", f"vehicles.{veh.name}.speed", file)
+        if a["speed"] is not None:
+            raise _err("the recorded speeds give the speed at the start: remove approach.speed", f"{key}.speed", file)
+        rise = rising_speed(times, speed)
+        if rise is not None:
+            i, j = rise
+            written = [_written(raw_samples[k].get("speed")) if k < len(raw_samples) else f"{speed[k]:g} m/s"
+                       for k in (i, j)]
+            raise _err(f"the recorded speed rises from {written[0]} (sample {i}) to {written[1]}: the approach has no "
+                       "drive force (an engine), it can hold a speed but not gain one; start the table where the rise "
+                       "ends, or give no speeds (the steering alone then drives, the speed given as for any approach); "
+                       "a rise of up to 1 km/h, the recording's resolution, is accepted",
+                       f"{rkey}.samples[{j}].speed", file)
+    steer = None
+    if columns["steering"] is not None:
+        if r["steering_ratio"] is None:
+            raise _err("the steering samples need the overall steering ratio (steering-wheel angle over the road wheels' "
+                       "steer angle, e.g. 16)", f"{rkey}.steering_ratio", file)
+        sign = 1.0 if r["steering_positive"] == "left" else -1.0
+        steer = tuple(sign * x / r["steering_ratio"] for x in columns["steering"])
+    elif r["steering_ratio"] is not None:
+        raise _err("no sample has steering: remove steering_ratio, or give steering in every sample",
+                   f"{rkey}.steering_ratio", file)
+    try:
+        drive = RecordedDrive(tuple(times), None if speed is None else tuple(speed), steer, r["update"],
+                              r["speed_time"], rkey)
+        if steer is not None:
+            steer_geometry(veh, rkey)
+    except ScenarioError as exc:
+        raise with_file(exc, file) from None
+    return drive
 
 
 def frame_xform(frame: str, states: dict, key: str, file: str | None):
@@ -1594,7 +1707,8 @@ def _from_validated(d: dict, data: dict, merged: dict, source, file: str | None,
                            "an [vehicles.<name>.approach] with the speed at the start of braking",
                            f"vehicles.{name}.speed", file)
         with problems.each():
-            if v["approach"] is not None and v["approach"]["speed"] is None and v["speed"] is None:
+            if (v["approach"] is not None and v["approach"]["speed"] is None and v["speed"] is None
+                    and not _recorded_speeds(v["approach"])):
                 raise _err("the approach needs the speed at the start of braking (approach.speed) or the speed at "
                            "impact (speed)", f"vehicles.{name}.approach.speed", file)
         with problems.each():
@@ -1622,7 +1736,9 @@ def _from_validated(d: dict, data: dict, merged: dict, source, file: str | None,
             raw = ((merged.get("vehicles") or {}).get(veh.name) or {}).get("approach") or {}
             approach_inputs[veh.name] = _approach_input(veh, v, runout, file,
                                                         (d.get("map") or {}).get("lines") or (),
-                                                        path_given="path" in raw)
+                                                        path_given="path" in raw,
+                                                        raw_recorded=raw.get("recorded") if isinstance(
+                                                            raw.get("recorded"), dict) else None)
     later = _Problems(file, lenient)
     imp = d["impact"]
     problem = None

@@ -62,6 +62,7 @@ from ..vehicles import BodyState, Vehicle, chain_states
 from .loads import STANDARD_GRAVITY
 from .driver import SLIP_TIME, DriverSpec, ackermann, pursuit_steer, reference_slip, steer_geometry
 from .options import RunoutOptions
+from .recorded import RecordedDrive, speed_demand, wheel_setting_for
 from .postprocess import split_track
 from .result import RunoutResult, TrackSegment, WheelTrack
 from .road import Road
@@ -109,6 +110,10 @@ class ApproachSpec:
     driver : DriverSpec, optional
         A driver that steers along a path (with ``distance``: the start lies that far before the
         impact position along the path).
+    recorded : RecordedDrive, optional
+        A recorder's table that steers and brakes the vehicle (:mod:`crashsim.motion.recorded`);
+        the approach then runs from its first sample (``time`` is minus that sample's time, and is
+        set from it when not given).
     """
 
     wheels: WheelSettings
@@ -124,8 +129,21 @@ class ApproachSpec:
     yaw_rates: tuple | None = None
     solve_articulation: bool = False
     driver: DriverSpec | None = None
+    recorded: RecordedDrive | None = None
 
     def __post_init__(self):
+        if self.recorded is not None:
+            if self.driver is not None or self.distance is not None or self.start_position is not None:
+                raise ScenarioError("a recorded table drives the approach from its first sample: give neither a path, "
+                                    "distance nor start_position", field=f"{self.key}.recorded")
+            if self.recorded.speed is not None and self.wheels.brakes is not None:
+                raise ScenarioError("the recorded speeds set the brakes; the approach's air brakes would too: remove "
+                                    f"{self.key}.brakes", field=f"{self.key}.brakes")
+            if self.time is None:
+                object.__setattr__(self, "time", self.recorded.duration)
+            elif abs(self.time - self.recorded.duration) > 1e-9:
+                raise ScenarioError(f"time = {self.time:g} s, but the recorded table starts {self.recorded.duration:g} s "
+                                    "before the impact: remove time", field=f"{self.key}.time")
         if self.driver is not None and (self.distance is None or self.time is not None
                                         or self.start_position is not None):
             raise ScenarioError("with a path give distance (how far before the impact position the approach starts, "
@@ -141,6 +159,8 @@ class ApproachSpec:
     def mode(self) -> str:
         if self.driver is not None:
             return "path"
+        if self.recorded is not None:
+            return "recorded"
         return "distance" if self.distance is not None else "time" if self.time is not None else "start"
 
 
@@ -185,6 +205,12 @@ class ApproachResult:
         ``offset`` [m] (left positive); None without one.
     start_articulation : tuple of float
         Articulation angles at the start [rad] (given, or solved with ``solve_articulation``).
+        With a recorded table's steering, ``steering`` holds ``t``, ``delta``, ``left``, ``right`` (no
+        path, so no ``s`` or ``offset``).
+    speed_control : dict of str to ndarray, or None
+        With a recorded table's speeds: at each of the controller's updates ``t`` [s] (relative to the
+        impact), the table's speed ``target`` and the first body's CG speed ``speed`` [m/s] there, and
+        the longitudinal force coefficient ``demand`` [-] it set; None without one.
     """
 
     vehicle: str
@@ -209,6 +235,7 @@ class ApproachResult:
     placement: tuple = (0.0, 0.0, 0.0)  # (rotation [rad], x, y [m]): the run's frame -> the scene's
     steering: dict | None = field(default=None, repr=False)
     start_articulation: tuple = ()
+    speed_control: dict | None = field(default=None, repr=False)
 
     def pose(self, body: str, t: float) -> tuple[tuple[float, float], float]:
         """``((x, y), heading)`` of ``body`` at time ``t`` relative to the impact [s, m, rad], scene
@@ -282,9 +309,14 @@ class ApproachResult:
             "heading_miss": self.heading_miss,
             "articulation_at_impact": list(self.articulation_at_impact),
             "start_articulation": list(self.start_articulation),
+            **({} if self.speed_control is None else {
+                "max_speed_error": self.max_speed_error,
+                "speed_control": {k: v.tolist() for k, v in self.speed_control.items()}}),
             **({} if self.steering is None else {
                 "max_lateral_error": self.max_lateral_error,
-                "max_steer": float(np.max(np.abs(self.steering["delta"]))) if len(self.steering["delta"]) else 0.0}),
+                "max_steer": float(np.max(np.abs(self.steering["delta"]))) if len(self.steering["delta"]) else 0.0,
+                "steering": {k: (v.tolist() if isinstance(v, np.ndarray) else [list(x) for x in v])
+                             for k, v in self.steering.items()}}),
             "warnings": list(self.warnings),
         }
 
@@ -301,10 +333,20 @@ class ApproachResult:
     def max_lateral_error(self) -> float | None:
         """With a driver: the largest offset of the reference point from the path over the driver's
         updates up to the impact [m]; None without one."""
-        if self.steering is None:
+        if self.steering is None or "offset" not in self.steering:
             return None
         keep = self.steering["t"] <= 1e-12
         return float(np.max(np.abs(self.steering["offset"][keep]))) if np.any(keep) else 0.0
+
+    @property
+    def max_speed_error(self) -> float | None:
+        """With a recorded table's speeds: the largest difference of the first body's CG speed from the
+        table's at the controller's updates up to the impact [m/s]; None without one."""
+        if self.speed_control is None:
+            return None
+        c = self.speed_control
+        keep = c["t"] <= 1e-12
+        return float(np.max(np.abs(c["speed"][keep] - c["target"][keep]))) if np.any(keep) else 0.0
 
 
 def path_length(sol, t: np.ndarray) -> np.ndarray:
@@ -429,12 +471,15 @@ def continued_wheels(vehicle: Vehicle, approach: WheelSettings, t0: float, steer
     return replace(out, schedule=tuple(out.schedule) + tuple(later.schedule))
 
 
-def _segment_wheels(resolved, wheels: WheelSettings, t0: float, t1: float, steer: Mapping[str, float]) -> WheelSettings:
+def _segment_wheels(resolved, wheels: WheelSettings, t0: float, t1: float, steer: Mapping[str, float],
+                    control: Mapping[str, Mapping] | None = None) -> WheelSettings:
     """The wheel settings of ``[t0, t1)`` on a time line starting at ``t0``: those in force at ``t0``
-    (the steered wheels at ``steer``), the scheduled changes inside the interval and the air brakes
-    moved by ``-t0``."""
+    (the steered wheels at ``steer``, the wheels in ``control`` changed by it), the scheduled changes
+    inside the interval and the air brakes moved by ``-t0``."""
     now = resolved.at(t0)
-    base = {spec.key: (replace(w, steer=steer[spec.key]) if spec.key in steer else w)
+    control = control or {}
+    base = {spec.key: replace(w, **({"steer": steer[spec.key]} if spec.key in steer else {}),
+                              **control.get(spec.key, {}))
             for spec, w in zip(resolved.specs, now)}
     sched = [ScheduledChange(c.time - t0, c.wheels, c.changes) for c in wheels.schedule if t0 < c.time < t1]
     brakes = wheels.brakes
@@ -516,6 +561,77 @@ def _driven_run(vehicle: Vehicle, spec: ApproachSpec, speed: float, target, road
     return run, out
 
 
+def _recorded_run(vehicle: Vehicle, spec: ApproachSpec, speed: float, position, heading: float, road: Road,
+                  options: RunoutOptions, articulation=None) -> tuple[RunoutResult, dict | None, dict | None]:
+    """The approach driven by a recorder's table (:mod:`crashsim.motion.recorded`): ``(run, steering,
+    speed_control)``, the records None where the table gives no steering or no speeds.
+
+    Steering alone is open loop: one run with the steer angles as scheduled changes.  With speeds, the
+    controller decides one ``update`` interval at a time (each a run from the state at its start), and
+    the whole approach is then run once with its decisions as scheduled changes, as the path driver's.
+    """
+    drive = spec.recorded
+    first = vehicle.bodies[0].name
+    resolved = spec.wheels.resolve(vehicle)
+    dt = drive.update
+    n = int(math.ceil(drive.duration / dt - 1e-9)) + 1  # updates: past the impact by less than one interval
+    times = np.arange(n) * dt
+    angles = [{} for _ in range(n)]
+    steering = None
+    if drive.steer is not None:
+        geom = steer_geometry(vehicle, f"{spec.key}.recorded")
+        steered = [s for s in resolved.specs if s.body == first and s.axle_index == geom.axle]
+        for t_ph, settings in resolved.phases:
+            for s, w in zip(resolved.specs, settings):
+                if s in steered and (w.steer != 0.0 or w.self_steer_limit is not None):
+                    raise ScenarioError(f"the recorded steering steers wheel {s.label!r}; the approach settings steer "
+                                        f"it too (from {t_ph:g} s): remove steer / self_steer_limit there",
+                                        field=f"{spec.key}.wheels")
+        delta = drive.steer_at(times)
+        lr = [ackermann(geom, float(d)) for d in delta]
+        angles = [{s.key: (left if s.side == "left" else right) for s in steered} for left, right in lr]
+        steering = {"t": times.copy(), "delta": delta, "left": np.array([a for a, _ in lr]),
+                    "right": np.array([b for _, b in lr]), "keys": tuple((s.key, s.side) for s in steered)}
+    vel = speed * np.array([math.cos(heading), math.sin(heading)])
+    start = chain_states(vehicle, position, heading, vel, spec.yaw_rates, articulation)
+    controls = [{} for _ in range(n)]
+    speed_control = None
+    if drive.speed is not None:
+        rec = {k: [] for k in ("t", "target", "speed", "demand")}
+        seg_opts = replace(options, t_max=dt)
+        state = start
+        with _expected_time_limits():
+            for k in range(n):
+                t0 = float(times[k])
+                cg = state[first]
+                v = float(np.hypot(*cg.velocity))
+                d = speed_demand(drive, t0, v)
+                mu = float(road.mu_at(np.asarray([cg.position]))[0])
+                controls[k] = {s.key: wheel_setting_for(d, w.rolling_resistance or 0.0, mu * w.mu_factor)
+                               for s, w in zip(resolved.specs, resolved.at(t0)) if w.state in ("rolling", "braked")}
+                for key, val in zip(rec, (t0, float(drive.speed_at(t0)), v, d)):
+                    rec[key].append(val)
+                seg = _segment_wheels(resolved, spec.wheels, t0, t0 + dt, angles[k], controls[k])
+                run = run_runout([vehicle], state, {vehicle.name: seg}, road, seg_opts).vehicles[vehicle.name]
+                state = {b.name: run.bodies[b.name].final for b in vehicle.bodies}
+                if run.status != "time_limit":
+                    n = k + 1  # at rest, or a solver failure: the whole run shows it
+                    break
+        speed_control = {key: np.asarray(v, dtype=float) for key, v in rec.items()}
+    sched = [ScheduledChange(float(times[k]), key, {**({"steer": angles[k][key]} if key in angles[k] else {}),
+                                                    **controls[k].get(key, {})})
+             for k in range(1, n) for key in dict.fromkeys([*angles[k], *controls[k]])]
+    whole = _segment_wheels(resolved, spec.wheels, 0.0, math.inf, angles[0], controls[0])
+    whole = replace(whole, schedule=tuple(whole.schedule) + tuple(sched))
+    with _expected_time_limits():
+        run = run_runout([vehicle], start, {vehicle.name: whole}, road,
+                         replace(options, t_max=min(max(n * dt, drive.duration + dt), options.t_max))
+                         ).vehicles[vehicle.name]
+    if steering is not None:
+        steering = {k: (v[:n] if isinstance(v, np.ndarray) else v) for k, v in steering.items()}
+    return run, steering, speed_control
+
+
 def _end_time(run: RunoutResult, spec: ApproachSpec, vehicle: Vehicle, target) -> tuple[float, float]:
     """(time of the impact from the start of braking, CG path length to it)."""
     first = vehicle.bodies[0].name
@@ -531,7 +647,7 @@ def _end_time(run: RunoutResult, spec: ApproachSpec, vehicle: Vehicle, target) -
                 "shorten the distance", field=f"{spec.key}.distance")
         ti = float(np.interp(spec.distance, s, grid))
         return ti, float(spec.distance)
-    if spec.mode == "time":
+    if spec.mode in ("time", "recorded"):
         if run.status == "rest" and (b.time_to_rest or t_end) < spec.time:
             raise UnreachableImpactError(
                 f"the vehicle stops {b.time_to_rest or t_end:.3f} s after the start of braking, before the impact "
@@ -672,7 +788,7 @@ def _approach(vehicle, spec, impact_states, road, options, speed, articulation=N
     target = np.asarray(impact_states[first].position, dtype=float)
     h_imp = float(impact_states[first].heading)
     articulation = spec.articulation if articulation is None else articulation
-    steering = None
+    steering = speed_control = None
     if spec.mode == "start":
         p0, h0 = np.asarray(spec.start_position, float), float(spec.start_heading)
         run = _run(vehicle, spec, speed, p0, h0, road, options, articulation)
@@ -689,7 +805,11 @@ def _approach(vehicle, spec, impact_states, road, options, speed, articulation=N
         p0 = target - guess * np.array([math.cos(h_imp), math.sin(h_imp)])
         h0 = h_imp
         for _ in range(8):
-            run = _run(vehicle, spec, speed, p0, h0, road, options, articulation)
+            if spec.recorded is not None:
+                run, steering, speed_control = _recorded_run(vehicle, spec, speed, p0, h0, road, options,
+                                                             articulation)
+            else:
+                run = _run(vehicle, spec, speed, p0, h0, road, options, articulation)
             ti, dist = _end_time(run, spec, vehicle, target)
             end = np.asarray(run.bodies[first].sol(ti))
             phi = h_imp - float(end[2])
@@ -704,6 +824,10 @@ def _approach(vehicle, spec, impact_states, road, options, speed, articulation=N
         else:
             raise ScenarioError("the approach path could not be placed on the impact configuration with the friction "
                                 f"zones (the start still moved {moved:.3g} m)", field=spec.key)
+        if steering is not None:
+            steering = {k: (v - ti if k == "t" else v) for k, v in steering.items()}
+        if speed_control is not None:
+            speed_control = {k: (v - ti if k == "t" else v) for k, v in speed_control.items()}
     states, bodies, start = {}, {}, {}
     for b in vehicle.bodies:
         br = run.bodies[b.name]
@@ -752,7 +876,8 @@ def _approach(vehicle, spec, impact_states, road, options, speed, articulation=N
         perception_point=(float(perception[0]), float(perception[1])), miss=miss, heading_miss=hmiss,
         articulation_at_impact=art, runout=run, warnings=tuple(warnings),
         placement=(math.atan2(R[1, 0], R[0, 0]), float(T[0]), float(T[1])), steering=steering,
-        start_articulation=tuple(float(a) for a in (articulation or (0.0,) * (len(vehicle.bodies) - 1))))
+        start_articulation=tuple(float(a) for a in (articulation or (0.0,) * (len(vehicle.bodies) - 1))),
+        speed_control=speed_control)
 
 
 def approach_speed_at_braking(vehicle: Vehicle, spec: ApproachSpec, impact_states, road: Road, options: RunoutOptions,

@@ -324,7 +324,7 @@ def _save_figures(args, scene, interval) -> list:
                               time_distance_path=args.time_distance and Path(args.time_distance),
                               approach=not args.no_approach, legend=args.legend, hide=args.hide or (),
                               paper=args.paper, scale=args.scale, view=getattr(args, "view_si", None),
-                              zoom=args.zoom)
+                              zoom=args.zoom, wheels_path=args.wheels and Path(args.wheels))
 
 
 def _cmd_animate(args) -> int:
@@ -498,6 +498,9 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("--histories", metavar="FILE", help="also draw speed, yaw rate and articulation histories")
     pl.add_argument("--time-distance", metavar="FILE",
                     help="also draw the time-distance and speed-time chart (approach, impacts, run-out to rest)")
+    pl.add_argument("--wheels", metavar="FILE",
+                    help="also draw the wheel time line: every wheel's state, air-brake level, sliding and the "
+                         "steering, from the approach through the impact to rest, on one time axis")
     pl.add_argument("--no-approach", action="store_true",
                     help="leave the approaches out of the scene diagram (a close view of impact and run-out)")
     pl.add_argument("--interval", metavar="TIME", help='time between ghost outlines, e.g. "0.5 s"')
@@ -680,7 +683,7 @@ def _check_outputs(args) -> None:
     if c == "plot":
         figs = _figure_suffixes()
         for field, path in (("-o", args.output), ("--histories", args.histories),
-                            ("--time-distance", args.time_distance)):
+                            ("--time-distance", args.time_distance), ("--wheels", args.wheels)):
             if path:
                 check_output_file(path, field=field, suffixes=figs, what="a figure")
     if c == "report":

@@ -26,6 +26,7 @@ from .motion.approach import path_length
 from .motion.road import points_in_polygon, signed_distance
 from .plot_events import mark_impacts
 from .plot_loads import draw_roll_panel, has_roll_panel
+from .plot_timeline import plot_wheel_timeline
 from .plot_detail import INSET_MARGIN, add_impact_inset, impact_window, needs_inset
 from .report import fmt
 from .survey.underlay import draw_underlay, scene_underlay
@@ -2513,7 +2514,7 @@ def plot_histories(scene, axes=None, *, system: str | None = None):
 def save_scene_figures(scene, path, *, histories_path=None, dpi: int = 150, interval: float | None = None,
                        system: str | None = None, time_distance_path=None, approach: bool = True, legend="compact",
                        hide=(), paper: str | None = None, scale: float | None = None, view=None,
-                       zoom: str | None = None) -> list:
+                       zoom: str | None = None, wheels_path=None) -> list:
     """Write the scene diagram (and optionally the histories) to files; closes its figures.
 
     Parameters
@@ -2525,6 +2526,9 @@ def save_scene_figures(scene, path, *, histories_path=None, dpi: int = 150, inte
         Run-out histories (:func:`plot_histories`), same suffixes; needs a run-out.
     time_distance_path : str or Path, optional
         Time-distance and speed-time chart (:func:`plot_time_distance`), same suffixes.
+    wheels_path : str or Path, optional
+        The wheel time line (:func:`crashsim.plot_timeline.plot_wheel_timeline`): every wheel's state,
+        air-brake level, sliding and steering from the approach to rest, same suffixes.
     approach : bool
         Draw the approaches on the scene diagram (see :func:`plot_scene`).
     legend, hide, paper, scale, view, zoom
@@ -2550,6 +2554,7 @@ def save_scene_figures(scene, path, *, histories_path=None, dpi: int = 150, inte
     """
     named = [(Path(path), "path")] + ([(Path(histories_path), "histories_path")] if histories_path is not None else [])
     named += [(Path(time_distance_path), "time_distance_path")] if time_distance_path is not None else []
+    named += [(Path(wheels_path), "wheels_path")] if wheels_path is not None else []
     targets = [p for p, _ in named]
     for p, key in named:
         if p.suffix.lower() not in SCENE_FIGURE_SUFFIXES:
@@ -2574,7 +2579,10 @@ def save_scene_figures(scene, path, *, histories_path=None, dpi: int = 150, inte
     finally:
         plt.close(ax.figure)
     for p, key in named[1:]:
-        fig = (plot_histories if key == "histories_path" else plot_time_distance)(scene, system=system)
+        if key == "wheels_path":
+            fig = plot_wheel_timeline(scene)
+        else:
+            fig = (plot_histories if key == "histories_path" else plot_time_distance)(scene, system=system)
         try:
             p.parent.mkdir(parents=True, exist_ok=True)
             fig.savefig(p, dpi=dpi)

@@ -511,7 +511,7 @@ def survey_provenance(scenario) -> dict | None:
     None without a survey: ``rows``, one per record in the order of the import -- ``file``, ``layer``,
     ``entity`` (type and handle, point numbers or feature index), ``kind``, ``target`` (the scene item it
     became, ``evidence.marks[0]``; "" for a record that made none), ``name`` (that item's name), ``note``,
-    ``key`` (the map entry or recorder table that made it) -- and counts: ``items`` (scene items made),
+    ``key`` (the map entry or recorder table that made it) -- and counts: ``n_items`` (scene items made),
     ``entities`` (survey entities and points that made them), ``left_out`` (records that made no item)."""
     records = survey_records(scenario)
     if not records:
@@ -525,7 +525,7 @@ def survey_provenance(scenario) -> dict | None:
                      "kind": _SURVEY_KINDS.get(r.get("kind"), r.get("kind") or ""), "target": target,
                      "name": name if isinstance(name, str) else "", "note": r.get("note") or "", "key": r.get("key") or ""})
     made = [r for r in records if r.get("target") and r.get("kind") != "warning"]
-    return {"rows": rows, "items": len({r["target"] for r in made}), "entities": len(made),
+    return {"rows": rows, "n_items": len({r["target"] for r in made}), "entities": len(made),
             "left_out": sum(1 for r in records if not r.get("target"))}
 
 

@@ -545,6 +545,9 @@ def test_survey_provenance_names_the_source_of_every_imported_item():
     head, *rows = _table_rows(text, "survey-provenance")
     assert head == ["File", "Layer or code", "Entity", "Became", "Scene item", "Map entry", "Note"]
     assert len(rows) == len(records)  # one row per imported record, in their order
+    made = {r["target"] for r in records if r["target"] and r["kind"] != "warning"}
+    body = html.unescape(re.sub(r"<[^>]+>", "", text))
+    assert f"made {len(made)} scene items" in re.sub(r"\s+", " ", body)
     for row, r in zip(rows, records):
         assert row[0] == r["file"] and row[1] == r["layer"], (row, r)
         assert row[2] == f"{r['type']} {r['ref']}".strip()

@@ -25,14 +25,25 @@ import markupsafe
 
 from ._version import __version__
 from .errors import ScenarioError
-from .plotting import figure_system, plot_histories, plot_scene, plot_time_distance
+from .plotting import figure_system, history_panels, plot_histories, plot_scene, plot_time_distance
 from .motion.wheels import wheel_labels
 from .report import closing_error_text, describe_event, format_approach, rollover_cells, validity_text
+from .survey.report import survey_records
 from .units import format_value, system_label, toml_repr
 
 __all__ = ["toml_comments", "input_rows", "sha256_file", "survey_files", "load_json", "inputs_sha256", "made_from",
            "check_result_json", "MADE_FROM", "render_case_report", "write_case_report",
-           "VALIDITY_NOTES", "FILE_COMMENT", "breakable_key", "percent"]
+           "VALIDITY_NOTES", "FILE_COMMENT", "breakable_key", "percent", "report_figures", "figure_scale",
+           "survey_provenance", "FIGURE_DISPLAY_MM", "FIGURE_WIDTH_IN", "MIN_TEXT_PT"]
+
+#: Width at which the report shows every figure [mm] (its CSS width): within the content width of
+#: A4 and US letter (182 mm between the print margins) and of the screen layout (180 mm).
+FIGURE_DISPLAY_MM = 170.0
+#: Width of the report's figures [in]: shown at FIGURE_DISPLAY_MM they are enlarged by 1.08, so that
+#: the smallest type of the figures (6.5 pt labels of the scene diagram) reads at 7 pt or more.
+FIGURE_WIDTH_IN = 6.2
+#: Smallest type of a figure as the report shows it [pt] (tests/report/test_case_report.py measures it).
+MIN_TEXT_PT = 7.0
 
 #: The model's assumptions and limits that every case report carries (README "Limits you should know").
 VALIDITY_NOTES = (
@@ -353,29 +364,48 @@ def _svg(fig) -> str:
     return "data:image/svg+xml;base64," + base64.b64encode(buf.getvalue()).decode("ascii")
 
 
-def _figures(scene, system: str) -> list[dict]:
+def report_figures(scene, system: str | None = None) -> list[dict]:
+    """The figures of the case report of ``scene``: ``id``, ``title`` and ``figure`` (an open matplotlib
+    figure, :data:`FIGURE_WIDTH_IN` wide: shown :data:`FIGURE_DISPLAY_MM` wide, :func:`figure_scale`);
+    the caller closes them."""
     import matplotlib
 
     matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    system = figure_system(scene, system)
+    w = FIGURE_WIDTH_IN
     figs = []
-    ax = plot_scene(scene, system=system, approach=False)
+    ax = plot_scene(scene, system=system, approach=False, width=w)
     figs.append({"id": "scene", "title": "Scene diagram: positions at impact, run-out to rest, evidence",
-                 "uri": _svg(ax.figure)})
+                 "figure": ax.figure})
     if scene.scenario.approaches:
-        ax = plot_scene(scene, system=system)
+        # no inset of the impact: the figure before is the close view of it
+        ax = plot_scene(scene, system=system, width=w, inset=False)
         figs.append({"id": "scene-approach", "title": "Scene diagram with the approaches from the start of braking",
-                     "uri": _svg(ax.figure)})
+                     "figure": ax.figure})
     if scene.runout is not None:
-        axes = plot_histories(scene, system=system)
-        fig = axes[0].figure if hasattr(axes, "__len__") else axes.figure
+        n = history_panels(scene)
+        fig, axes = plt.subplots(n, 1, figsize=(w, 2.3 * n), sharex=True, layout="constrained")
+        plot_histories(scene, axes, system=system)
         figs.append({"id": "histories", "title": "Run-out histories: CG speed, yaw rate, articulation",
-                     "uri": _svg(fig)})
+                     "figure": fig})
     if scene.runout is not None or scene.scenario.approaches:
-        axes = plot_time_distance(scene, system=system)
-        fig = axes[0].figure if hasattr(axes, "__len__") else axes.figure
+        fig, axes = plt.subplots(2, 1, figsize=(w, 4.8), sharex=True, layout="constrained")
+        plot_time_distance(scene, axes, system=system)
         figs.append({"id": "time-distance", "title": "Time-distance and speed-time, from the approach to rest",
-                     "uri": _svg(fig)})
+                     "figure": fig})
     return figs
+
+
+def figure_scale(fig) -> float:
+    """How much the report enlarges ``fig`` (a figure of :func:`report_figures`): its display width
+    (:data:`FIGURE_DISPLAY_MM`) over its own; a text of ``s`` pt in it reads at ``s * figure_scale(fig)`` pt."""
+    return FIGURE_DISPLAY_MM / (float(fig.get_size_inches()[0]) * 25.4)
+
+
+def _figures(scene, system: str) -> list[dict]:
+    return [{"id": f["id"], "title": f["title"], "uri": _svg(f["figure"])} for f in report_figures(scene, system)]
 
 
 def _impacts(scene, system: str) -> list[dict]:
@@ -468,6 +498,35 @@ def _evidence(scene, system: str) -> dict | None:
                      "tolerance": tol, "note": f"closest track: {note}"
                      if "matched_wheel" in c.details else note})
     return {"rows": rows, "n": len(ev.checks), "passed": len(ev.checks) - ev.n_failed}
+
+
+#: What each kind of ``survey.imported`` record says, in the report's provenance table.
+_SURVEY_KINDS = {"label": "label (a text naming the item nearest it)", "ignore": "ignored (map kind = \"ignore\")",
+                 "note": "note of the import", "warning": "warning", "underlay": "orthophoto under the figures",
+                 "recorder": "recorder table"}
+
+
+def survey_provenance(scenario) -> dict | None:
+    """The survey provenance of a scenario (its ``survey.imported`` records, :func:`crashsim.survey.report.survey_records`),
+    None without a survey: ``rows``, one per record in the order of the import -- ``file``, ``layer``,
+    ``entity`` (type and handle, point numbers or feature index), ``kind``, ``target`` (the scene item it
+    became, ``evidence.marks[0]``; "" for a record that made none), ``name`` (that item's name), ``note``,
+    ``key`` (the map entry or recorder table that made it) -- and counts: ``n_items`` (scene items made),
+    ``entities`` (survey entities and points that made them), ``left_out`` (records that made no item)."""
+    records = survey_records(scenario)
+    if not records:
+        return None
+    rows = []
+    for r in records:
+        target = r.get("target") or ""
+        name = _lookup(scenario.data, f"{target}.name") if target else None
+        rows.append({"file": r.get("file") or "", "layer": r.get("layer") or "",
+                     "entity": f"{r.get('type') or ''} {r.get('ref') or ''}".strip(),
+                     "kind": _SURVEY_KINDS.get(r.get("kind"), r.get("kind") or ""), "target": target,
+                     "name": name if isinstance(name, str) else "", "note": r.get("note") or "", "key": r.get("key") or ""})
+    made = [r for r in records if r.get("target") and r.get("kind") != "warning"]
+    return {"rows": rows, "n_items": len({r["target"] for r in made}), "entities": len(made),
+            "left_out": sum(1 for r in records if not r.get("target"))}
 
 
 def _num(v, kind: str | None, system: str) -> str:
@@ -625,6 +684,7 @@ def render_case_report(scene, *, input_files, system: str | None = None, fit: di
         "fit": _fit(fit, system) if fit else None, "mc": _mc(mc, system, output_kinds) if mc else None,
         "posterior": _posterior(posterior, system) if posterior else None,
         "warnings": list(scene.warnings), "notes": notes, "figures": _figures(scene, system) if figures else [],
+        "figure_mm": format(FIGURE_DISPLAY_MM, "g"), "survey": survey_provenance(sc),
         "command": command or f"crashsim report {files_[0].name} -o case.html",
         "validation": validation,
     }

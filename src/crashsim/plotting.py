@@ -266,6 +266,16 @@ def _wrap(text: str, width: int) -> str:
     return "\n".join(textwrap.wrap(text, width, break_on_hyphens=False)) if text else text
 
 
+#: A figure narrower than this [in] gets the time-distance legend under its panels, not beside them.
+NARROW_FIGURE = 8.0
+
+
+def title_chars(width: float, most: int) -> int:
+    """Characters a line of a 10-pt title holds in a figure ``width`` inches wide (about 12 to the
+    inch, less the margins), at most ``most`` (what a wide figure wraps at)."""
+    return max(30, min(most, int(12.5 * (width - 0.8))))
+
+
 def _ghost_times(t_end: float, interval: float) -> np.ndarray:
     """Multiples of ``interval`` inside the run, not closer than interval/4 to its end."""
     n = int(np.floor((t_end - 0.25 * interval) / interval + 1e-9))
@@ -315,6 +325,7 @@ class SceneDrawing:
         self.texts: list = []  # labels anchored in data coordinates
         self.no_outline: set[str] = set()  # bodies drawn as a skeleton
         self.approach = True  # draw the approaches (and pre-impact marks)
+        self.width = _FIGURE_WIDTH  # width of a new figure [in] (plot_scene's width)
         self.hide: frozenset = frozenset()  # label kinds left out (LABEL_KINDS)
         self.far: list[np.ndarray] = []  # obstacle pieces: in the extent only near the scene
         self.fixed: list = []  # artists the labels keep clear of (axes indicator, scale bar, ...)
@@ -689,7 +700,7 @@ def layout_print(ax, sheet: PrintSheet) -> None:
 def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evidence: bool = True,
                arrows: bool = True, system: str | None = None, legend="compact", axles: bool = True,
                approach: bool = True, hide=(), paper: str | None = None, scale: float | None = None,
-               view=None, zoom: str | None = None, inset: bool | None = None):
+               view=None, zoom: str | None = None, inset: bool | None = None, width: float | None = None):
     """Scale diagram of a reconstructed scene in the ground frame: impact, run-out, evidence.
 
     Parameters
@@ -739,6 +750,12 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
         the sheet; in US units the largest engineer's scale, 1" = 10', 20', ... 6000'); A4 if no
         ``paper`` is given. The scale bar states it: "1:200", on a US sheet ``1" = 40'``
         (:func:`engineer_scale_text`).
+    width : float, optional
+        Width of the new figure [in]: a wide scene's figure (legend under it) is this wide, a tall
+        one's at most this (its axes lower than 7 in if need be), the title wrapped to fit. Default:
+        10 in for a wide scene; a tall one as wide as its 7-in-high axes and the legend need. For
+        a figure shown at a known size (the case report's column) so that its type keeps its size.
+        Needs ``ax=None`` and no ``paper`` or ``scale``.
 
     Returns
     -------
@@ -782,11 +799,18 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     system = figure_system(scene, system)
     window = _detail_window(scene, view, zoom)
     new = ax is None
+    if width is not None:
+        if not new or paper is not None or scale is not None:
+            raise ScenarioError("width sizes a new figure: leave ax=None, and paper and scale unset", field="width")
+        if not (isinstance(width, (int, float)) and MIN_WIDTH <= width <= MAX_WIDTH):
+            raise ScenarioError(f"width = {width!r} in is outside the allowed {MIN_WIDTH:g} to {MAX_WIDTH:g} in",
+                                field="width")
     if new:
         # laid out by layout_scene_figure (exact equal-aspect box plus legend), not by a layout engine
         ax = _plt().figure(figsize=(10.0, 6.0)).add_subplot()
     S = SceneDrawing(scene, ax, system)
     S.approach = approach
+    S.width = _FIGURE_WIDTH if width is None else float(width)
     S.hide = check_hide(hide)
     sc = S.sc
     runout = scene.runout or {}
@@ -977,7 +1001,8 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     ax.set_ylabel(f"Y [{S.lunit}]")
     ax.grid(True, color="0.9", lw=0.6, zorder=0)
     ax.set_axisbelow(True)
-    ax.set_title(_wrap(sc.title, 100), fontsize=10)
+    # a figure of a given width: the title wrapped within it (title_chars)
+    ax.set_title(_wrap(sc.title, 100 if width is None else title_chars(width, 100)), fontsize=10)
     north = _north_arrow(S)
     fixed = _axes_indicator(ax) + north + _downhill_arrow(S, 130 if north else 80)
     # a new figure of a wide scene: legend under the diagram; else at the right
@@ -988,14 +1013,15 @@ def plot_scene(scene, ax=None, *, interval: float | None = None, times=None, evi
     if sheet is not None:
         layout_print(ax, sheet)
     else:
+        size = {} if width is None else {"width": S.width, "max_width": S.width}
         if new:
-            layout_scene_figure(ax, outside, below)
+            layout_scene_figure(ax, outside, below, **size)
         if window is None:
             _fit_texts(S)
         if new:
-            layout_scene_figure(ax, outside, below)
+            layout_scene_figure(ax, outside, below, **size)
         if new and mode == "inside":
-            _legend_headroom(ax, leg, below)
+            _legend_headroom(ax, leg, below, **size)
     _draw_scene_underlay(S)
     xl = ax.get_xlim()
     fixed.append(_scale_bar(S, xl[1] - xl[0], sheet))
@@ -1042,7 +1068,7 @@ def _drop_texts_outside(S: SceneDrawing, lo, hi) -> None:
     S.texts[:] = keep
 
 
-def _legend_headroom(ax, leg, below: bool) -> None:
+def _legend_headroom(ax, leg, below: bool, **size) -> None:
     """A legend inside a new figure: a band at the top of the view, added above everything drawn
     (the figure grows to keep the scale), so that it covers none of the scene; the axes
     indicator and north arrow go under it if it would cover them."""
@@ -1063,7 +1089,7 @@ def _legend_headroom(ax, leg, below: bool) -> None:
     # height: the view grows so that the legend's share of it is free
     extra = frac * (y1 - y0) if below else (y1 - y0) * frac / (1.0 - frac)
     ax.set_ylim(y0, y1 + extra)
-    layout_scene_figure(ax, None, below)
+    layout_scene_figure(ax, None, below, **size)
     fig.draw_without_rendering()
     marks = [a for a in ax.texts if a.get_gid() in ("axes-indicator", "north-arrow", "downhill-arrow")]
     lb = leg.get_window_extent(r)
@@ -1273,14 +1299,18 @@ def plot_time_distance(scene, axes=None, *, system: str | None = None):
              (Line2D([], [], ls="none", marker="x", color="0.15", ms=5, mew=1.2),
               "recorder's table (drives the approach)", "table")]
     extra = [(h, t) for h, t, key in extra if drawn[key]]
-    # beside the panels: never over the impact labels or the curves
-    ax_s.legend(handles + [h for h, _ in extra], labels + [t for _, t in extra], fontsize=7, loc="upper left",
-                bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, frameon=False)
+    width = float(fig.get_size_inches()[0])
+    if width >= NARROW_FIGURE:  # beside the panels: never over the impact labels or the curves
+        ax_s.legend(handles + [h for h, _ in extra], labels + [t for _, t in extra], fontsize=7, loc="upper left",
+                    bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, frameon=False)
+    else:  # a narrow figure (the case report's): under the panels, the panels keeping the width
+        fig.legend(handles + [h for h, _ in extra], labels + [t for _, t in extra], fontsize=7,
+                   loc="outside lower center", ncol=2, frameon=False)
     # every impact a line; impacts close in time one band with one label ("impacts 5-12"), measured
     # once the layout is final (plot_events)
     fig.draw_without_rendering()
     mark_impacts(ax_s, (ax_s, ax_v), impacts, halo=_halo(2.0), text_box=text_box)
-    ax_s.set_title(_wrap(f"Time-distance: {sc.title}", 100), fontsize=10)
+    ax_s.set_title(_wrap(f"Time-distance: {sc.title}", title_chars(width, 100)), fontsize=10)
     return fig
 
 
@@ -2197,14 +2227,18 @@ def _axes_indicator(ax) -> list:
 
 #: Width of a new scene figure laid out with the legend under it [in] (:func:`layout_scene_figure`).
 _FIGURE_WIDTH = 10.0
+#: The range of :func:`plot_scene`'s ``width`` [in].
+MIN_WIDTH, MAX_WIDTH = 3.0, 40.0
 
 
-def layout_scene_figure(ax, leg, below: bool, width: float = _FIGURE_WIDTH, height: float = 7.0) -> None:
+def layout_scene_figure(ax, leg, below: bool, width: float = _FIGURE_WIDTH, height: float = 7.0,
+                        max_width: float | None = None) -> None:
     """Size a figure made by :func:`plot_scene` and place its axes: the axes box gets exactly
     the aspect of the limits (equal scale, no wasted band), the legend its measured size.
 
     A wide scene is ``width`` inches wide with the legend under it; a tall one has axes
-    ``height`` inches high and the legend at the right.
+    ``height`` inches high (lower if the figure would be wider than ``max_width``) and the legend
+    at the right.
     """
     fig = ax.figure
     r = fig.canvas.get_renderer()
@@ -2227,6 +2261,10 @@ def layout_scene_figure(ax, leg, below: bool, width: float = _FIGURE_WIDTH, heig
         w_ax = h_ax / aspect
         if w_ax > width:  # very wide but with the legend at the right (legend= a location): cap
             w_ax, h_ax = width, width * aspect
+        if max_width is not None:  # the axes narrower (and lower) so that the figure fits max_width
+            room = max_width - left - right - (leg_w + 0.3 if leg is not None else 0.0)
+            if w_ax > room > 0.5:
+                w_ax, h_ax = room, room * aspect
         w_fig = left + w_ax + right + (leg_w + 0.3 if leg is not None else 0.0)
         # never narrower than the title (a tall scene without a legend at its right)
         half = 0.5 * ax.title.get_window_extent(r).width / fig.dpi + 0.1  # the title is centred on the axes
@@ -2308,10 +2346,11 @@ def _scene_legend(S: SceneDrawing, mode: str, below: bool, compact: bool = False
 
         # under the axes in as many columns (at most 4) as the figure's width holds, centred on the axes
         # (layout_scene_figure: 0.8 in left of them, 0.2 in right): 0.6 in less than the width, and a margin
+        # (S.width: the figure's width, 10 in unless plot_scene was given one)
         under = offset_copy(S.ax.transAxes, fig=S.ax.figure, y=-40, units="points")
         fig = S.ax.figure
         r = fig.canvas.get_renderer()
-        room = (_FIGURE_WIDTH - 0.8) * fig.dpi
+        room = (S.width - 0.8) * fig.dpi
         for ncol in (4, 3, 2, 1):
             leg = S.ax.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, 0.0), bbox_transform=under,
                               borderaxespad=0.0, fontsize=size, frameon=False, handlelength=2.0, ncol=ncol,
@@ -2507,7 +2546,8 @@ def plot_histories(scene, axes=None, *, system: str | None = None):
     else:
         ax_a.text(0.5, 0.5, "no articulated vehicle in this scene", transform=ax_a.transAxes, ha="center",
                   va="center", color="0.4")
-    ax_v.set_title(_wrap(f"{scene.scenario.title}: run-out after separation", 90), fontsize=10)
+    ax_v.set_title(_wrap(f"{scene.scenario.title}: run-out after separation",
+                         title_chars(float(ax_v.figure.get_size_inches()[0]), 90)), fontsize=10)
     return axes[0].figure if new else axes
 
 

@@ -493,3 +493,169 @@ def test_chromium_breaks_keys_at_separators_not_mid_word(mc_result, tmp_path):
     assert len(breaks) >= 5, "the narrow page wraps some keys (else this test measures nothing)"
     bad = [(text, a, b) for text, a, b in breaks if not (a in "._/- " or b == "[")]
     assert not bad, bad[:10]
+
+
+SURVEY_SCENE = ROOT / "scenarios" / "survey" / "truck_brakes_survey.toml"
+
+
+class _Table(HTMLParser):
+    """The rows (cell texts) of the table inside the element with id ``section``."""
+
+    def __init__(self, section: str):
+        super().__init__(convert_charrefs=True)
+        self.section, self.depth, self.rows, self.cell = section, 0, [], None
+
+    def handle_starttag(self, tag, attrs):
+        if self.depth:
+            self.depth += tag not in VOID
+        elif dict(attrs).get("id") == self.section:
+            self.depth = 1
+        if self.depth and tag == "tr":
+            self.rows.append([])
+        if self.depth and tag in ("td", "th"):
+            self.cell = []
+
+    def handle_endtag(self, tag):
+        if not self.depth:
+            return
+        if tag in ("td", "th") and self.cell is not None:
+            self.rows[-1].append("".join(self.cell).strip())
+            self.cell = None
+        self.depth -= 1
+
+    def handle_data(self, data):
+        if self.cell is not None:
+            self.cell.append(data)
+
+
+def _table_rows(text: str, section: str) -> list[list[str]]:
+    p = _Table(section)
+    p.feed(text)
+    return p.rows
+
+
+def test_survey_provenance_names_the_source_of_every_imported_item():
+    from crashsim.survey.report import survey_records
+
+    scene = run_scene(load_scenario(SURVEY_SCENE))
+    records = survey_records(scene.scenario)
+    assert len(records) >= 20  # the shipped survey: two files, a recorder table and an orthophoto
+    text = render_case_report(scene, input_files=[SURVEY_SCENE], figures=False)
+    _check(text)
+    head, *rows = _table_rows(text, "survey-provenance")
+    assert head == ["File", "Layer or code", "Entity", "Became", "Scene item", "Map entry", "Note"]
+    assert len(rows) == len(records)  # one row per imported record, in their order
+    made = {r["target"] for r in records if r["target"] and r["kind"] != "warning"}
+    body = html.unescape(re.sub(r"<[^>]+>", "", text))
+    assert f"made {len(made)} scene items" in re.sub(r"\s+", " ", body)
+    for row, r in zip(rows, records):
+        assert row[0] == r["file"] and row[1] == r["layer"], (row, r)
+        assert row[2] == f"{r['type']} {r['ref']}".strip()
+        assert row[4].startswith(r["target"]) and row[5] == r["key"]
+    by_target = {row[4]: row for row in rows if row[4]}
+    mark = next(v for k, v in by_target.items() if k.startswith("evidence.marks[0]"))
+    assert mark[:4] == ["files/scene.dxf", "SKID-TRACTOR-L", "LWPOLYLINE 9C", "mark"]
+    assert "pre-impact skid" in mark[4]  # the item's name, from the label text of its layer
+    assert any(row[0] == "files/points.csv" and row[1] == "CAR REST" and row[4].startswith("evidence.rest[2]")
+               for row in rows)
+    assert any(row[0] == "files/ecm.csv" and row[4].startswith("evidence.recorder[0]") for row in rows)
+    # the notes of the import are rows too (the drawing's units as read)
+    assert any(row[3] == "note of the import" and "INSUNITS" in row[6] for row in rows)
+
+
+def test_a_scene_without_survey_has_no_provenance_section():
+    scene = run_scene(load_scenario(SCENE))
+    text = render_case_report(scene, input_files=[SCENE], figures=False)
+    assert "survey-provenance" not in _check(text).ids
+    assert "Survey provenance" not in text
+
+
+FIGURE_SCENE = ROOT / "scenarios" / "scenes" / "truck_brakes_into_car.toml"  # approach and run-out: every figure
+
+
+@pytest.fixture(scope="module")
+def report_figs():
+    import matplotlib.pyplot as plt
+
+    from crashsim.casereport import report_figures
+
+    scene = run_scene(load_scenario(FIGURE_SCENE))
+    figs = report_figures(scene, "US")
+    for f in figs:
+        f["figure"].draw_without_rendering()
+    yield scene, figs
+    for f in figs:
+        plt.close(f["figure"])
+
+
+def _texts(fig):
+    """The texts a figure draws: visible, not empty, not the labels of ticks outside the view (matplotlib
+    keeps those, and does not draw them)."""
+    from matplotlib.text import Text
+
+    undrawn = set()
+    for ax in fig.axes:
+        for axis in (ax.xaxis, ax.yaxis):
+            lo, hi = sorted(axis.get_view_interval())
+            tol = 1e-9 * max(abs(lo), abs(hi), 1.0)
+            for tick in axis.get_major_ticks() + axis.get_minor_ticks():
+                if not lo - tol <= tick.get_loc() <= hi + tol:
+                    undrawn |= {id(tick.label1), id(tick.label2)}
+    return [t for t in fig.findobj(Text) if t.get_visible() and t.get_text().strip() and id(t) not in undrawn]
+
+
+def test_report_figures_type_is_at_least_7_pt_as_shown(report_figs):
+    from crashsim.casereport import FIGURE_DISPLAY_MM, MIN_TEXT_PT, figure_scale
+
+    scene, figs = report_figs
+    assert [f["id"] for f in figs] == ["scene", "scene-approach", "histories", "time-distance"]
+    small = []
+    for f in figs:
+        fig = f["figure"]
+        scale = figure_scale(fig)
+        assert scale == pytest.approx(FIGURE_DISPLAY_MM / 25.4 / fig.get_size_inches()[0])
+        texts = _texts(fig)
+        assert len(texts) > 10, f["id"]
+        small += [(f["id"], t.get_text()[:30], round(t.get_fontsize() * scale, 2)) for t in texts
+                  if t.get_fontsize() * scale < MIN_TEXT_PT]
+    assert MIN_TEXT_PT == 7.0
+    assert not small, small
+    # the page shows every figure at that width (its CSS), within the print width of A4 (182 mm)
+    text = render_case_report(scene, input_files=[FIGURE_SCENE], figures=False)
+    assert f"figure img {{ width: {FIGURE_DISPLAY_MM:g}mm;" in text
+    assert FIGURE_DISPLAY_MM <= 182.0
+
+
+def test_report_figures_clip_no_text(report_figs):
+    _, figs = report_figs
+    out = []
+    for f in figs:
+        fig = f["figure"]
+        r = fig.canvas.get_renderer()
+        w, h = fig.bbox.width, fig.bbox.height
+        for t in _texts(fig):
+            bb = t.get_window_extent(r)
+            if bb.x0 < -1 or bb.y0 < -1 or bb.x1 > w + 1 or bb.y1 > h + 1:
+                out.append((f["id"], t.get_text()[:40], [round(v) for v in bb.extents], (round(w), round(h))))
+    assert not out, out
+
+
+def test_plot_figures_keep_their_own_size():
+    """The report's figure width is the report's: ``crashsim plot`` figures keep 10 in (scene), 10.5 in
+    (time-distance); a width outside its range is refused, naming it."""
+    import matplotlib.pyplot as plt
+
+    from crashsim.errors import ScenarioError
+    from crashsim.plotting import MAX_WIDTH, MIN_WIDTH, plot_scene, plot_time_distance
+
+    scene = run_scene(load_scenario(SCENE))
+    ax = plot_scene(scene)
+    assert ax.figure.get_size_inches()[0] == pytest.approx(10.0)
+    fig = plot_time_distance(scene)
+    assert tuple(fig.get_size_inches()) == pytest.approx((10.5, 6.5))
+    plt.close("all")
+    with pytest.raises(ScenarioError, match=r"width = 1 in is outside the allowed 3 to 40 in") as exc:
+        plot_scene(scene, width=1)
+    assert exc.value.field == "width" and (MIN_WIDTH, MAX_WIDTH) == (3.0, 40.0)
+    with pytest.raises(ScenarioError, match="leave ax=None"):
+        plot_scene(scene, width=6.0, paper="A4")

@@ -26,6 +26,7 @@ import markupsafe
 from ._version import __version__
 from .errors import ScenarioError
 from .plotting import figure_system, history_panels, plot_histories, plot_scene, plot_time_distance
+from .plot_timeline import plot_wheel_timeline
 from .motion.wheels import wheel_labels
 from .report import closing_error_text, describe_event, format_approach, rollover_cells, validity_text
 from .survey.report import survey_records
@@ -56,8 +57,9 @@ VALIDITY_NOTES = (
     "force whose stiffness is numerical, not a crush stiffness.",
     "Bodies pressed together at one instant are solved one impulse after another, not as one simultaneous "
     "impact.",
-    "The approach starts straight, without yaw, at the start of braking; the reaction time is at constant "
-    "speed; steering is a fixed angle per wheel changed at scheduled times (no driver model).",
+    "The reaction time before the approach is at constant speed along a straight line. Steering in the approach "
+    "is a fixed angle per wheel changed at scheduled times, a pure-pursuit driver along a path, or a recorder's "
+    "steering table; there is no drive force, so a recorded speed can be held but not gained.",
     "Crush energy is CRASH3's absorbed energy, compared with the energy the impulse model dissipates.",
     "The run-out is planar: roll and pitch are not modelled. At the load_transfer level the wheel-lift and "
     "rollover check (runout.rollover) records when a body's inner wheels lift or it passes its rollover "
@@ -395,6 +397,8 @@ def report_figures(scene, system: str | None = None) -> list[dict]:
         plot_time_distance(scene, axes, system=system)
         figs.append({"id": "time-distance", "title": "Time-distance and speed-time, from the approach to rest",
                      "figure": fig})
+        figs.append({"id": "wheels", "title": "Wheel states, air brakes, sliding and steering on one time line",
+                     "figure": plot_wheel_timeline(scene, width=w)})
     return figs
 
 

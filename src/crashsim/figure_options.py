@@ -15,7 +15,17 @@ import re
 from .errors import ScenarioError
 
 __all__ = ["LEGEND_MODES", "PAPER_SIZES", "LABEL_KINDS", "VIEWS", "ANIMATION_LEGENDS", "ZOOMS", "check_hide", "check_view",
-           "parse_scale"]
+           "parse_scale", "NARROW_FIGURE", "title_chars"]
+
+#: A figure narrower than this [in] gets its legends under its panels, not beside them (the
+#: time-distance chart, the wheel time line).
+NARROW_FIGURE = 8.0
+
+
+def title_chars(width: float, most: int) -> int:
+    """Characters a line of a 10-pt title holds in a figure ``width`` inches wide (about 12 to the
+    inch, less the margins), at most ``most`` (what a wide figure wraps at)."""
+    return max(30, min(most, int(12.5 * (width - 0.8))))
 
 #: Where the legend of a scene figure goes: compact (one line per entry, the evidence as one entry)
 #: under or beside the diagram, in full under or beside it, small inside it, or none.

@@ -19,10 +19,12 @@ sequence: which wheel did what, when, and did the marks agree.
 from __future__ import annotations
 
 import math
+import textwrap
 from dataclasses import replace
 
 import numpy as np
 
+from .figure_options import NARROW_FIGURE, title_chars
 from .motion.brakes import ramp_level
 from .motion.recorded import wheel_setting_for
 
@@ -164,8 +166,10 @@ def wheel_rows(scene) -> list[dict]:
     return rows
 
 
-def plot_wheel_timeline(scene):
-    """The wheel time line figure (module docstring) of a :class:`~crashsim.scene.run.SceneResult`.
+def plot_wheel_timeline(scene, *, width: float = 10.5):
+    """The wheel time line figure (module docstring) of a :class:`~crashsim.scene.run.SceneResult`,
+    ``width`` inches wide (narrower than :data:`~crashsim.figure_options.NARROW_FIGURE`: the legends go
+    under the panels).
 
     Returns
     -------
@@ -180,7 +184,9 @@ def plot_wheel_timeline(scene):
     n = max(len(rows), 1)
     height = 1.2 + 0.24 * n + (1.8 if steered else 0.0)
     ratios = [0.24 * n] + ([1.8] if steered else [])
-    fig, axes = plt.subplots(len(ratios), 1, figsize=(10.5, height), sharex=True, layout="constrained",
+    narrow = width < NARROW_FIGURE
+    height += 0.5 if narrow else 0.0
+    fig, axes = plt.subplots(len(ratios), 1, figsize=(width, height), sharex=True, layout="constrained",
                              gridspec_kw={"height_ratios": ratios}, squeeze=False)
     ax = axes[0, 0]
     labels = []
@@ -200,6 +206,10 @@ def plot_wheel_timeline(scene):
             ax.plot([t0, t1], [y + 0.16, y + 0.16], "-", color="black", lw=2.6, solid_capstyle="butt",
                     gid=f"tl:sliding:{r['key']}")
         labels.append(r["label"])
+    later = [ev.t for ev in (scene.joint.impact_events() if scene.joint is not None else ())]
+    for axx in axes[:, 0]:
+        for t in later:
+            axx.axvline(t, color="#b30000", lw=0.8, ls=(0, (4, 3)), gid="tl:later-impact")
     ax.set_yticks([n - 1 - j + 0.5 for j in range(len(rows))], labels, fontsize=7.5)
     ax.set_ylim(0, n)
     ax.axvline(0.0, color="#b30000", lw=0.9)
@@ -210,11 +220,16 @@ def plot_wheel_timeline(scene):
                if any(b[2] == s for r in rows for b in r["bars"])]
     if any(r["brake"] is not None for r in rows):
         handles.append(Line2D([], [], color="#08306b", lw=1.0, label="air-brake level (0 to 1 of the row)"))
+    if later:
+        handles.append(Line2D([], [], color="#b30000", lw=0.8, ls=(0, (4, 3)), label="later impact"))
     if any(r["sliding"] for r in rows):
         handles.append(Line2D([], [], color="black", lw=2.6, label="sliding (computed)"))
-    ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0,
-              frameon=False)
-    ax.set_title(f"Wheel states, brakes and steering: {scene.scenario.title}", fontsize=10, pad=14)
+    if not narrow:
+        ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0,
+                  frameon=False)
+    title = f"Wheel states, brakes and steering: {scene.scenario.title}"
+    ax.set_title("\n".join(textwrap.wrap(title, title_chars(width, 100), break_on_hyphens=False)), fontsize=10,
+                 pad=14)
     bottom = ax
     if steered:
         ax2 = axes[1, 0]
@@ -225,7 +240,13 @@ def plot_wheel_timeline(scene):
         ax2.axhline(0.0, color="0.6", lw=0.6)
         ax2.set_ylabel("steer angle [deg]", fontsize=8)
         ax2.grid(True, color="0.9", lw=0.6)
-        ax2.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, frameon=False)
+        if not narrow:
+            ax2.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, frameon=False)
+        else:
+            h2, _ = ax2.get_legend_handles_labels()
+            handles += h2
         bottom = ax2
     bottom.set_xlabel("time from the first impact [s]")
+    if narrow:
+        fig.legend(handles=handles, fontsize=7, loc="outside lower center", ncols=3, frameon=False)
     return fig

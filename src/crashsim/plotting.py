@@ -20,7 +20,8 @@ import numpy as np
 
 from .errors import ScenarioError
 from .evidence.crush import profile_outline
-from .figure_options import LABEL_KINDS, LEGEND_MODES, PAPER_SIZES, check_hide, check_view, parse_scale
+from .figure_options import (LABEL_KINDS, LEGEND_MODES, NARROW_FIGURE, PAPER_SIZES, check_hide, check_view,
+                             parse_scale, title_chars)
 from .geometry import rotate, to_body, to_world
 from .motion.approach import path_length
 from .motion.road import points_in_polygon, signed_distance
@@ -264,16 +265,6 @@ def _halo(width: float = 2.5):
 
 def _wrap(text: str, width: int) -> str:
     return "\n".join(textwrap.wrap(text, width, break_on_hyphens=False)) if text else text
-
-
-#: A figure narrower than this [in] gets the time-distance legend under its panels, not beside them.
-NARROW_FIGURE = 8.0
-
-
-def title_chars(width: float, most: int) -> int:
-    """Characters a line of a 10-pt title holds in a figure ``width`` inches wide (about 12 to the
-    inch, less the margins), at most ``most`` (what a wide figure wraps at)."""
-    return max(30, min(most, int(12.5 * (width - 0.8))))
 
 
 def _ghost_times(t_end: float, interval: float) -> np.ndarray:

@@ -45,6 +45,12 @@ def test_every_wheel_has_its_set_states_on_the_impacts_time_axis():
         # a locked wheel slides: the computed sliding covers the locked stretch
         slid = sum(t1 - t0 for t0, t1 in r["sliding"] if t1 <= 1e-9)
         assert slid == pytest.approx(pre[1][1] - pre[1][0], abs=0.02)
+    # the later impacts of the run-out are lines at their times
+    fig = plot_wheel_timeline(scene)
+    drawn = sorted(ln.get_xdata()[0] for ln in fig.axes[0].lines if ln.get_gid() == "tl:later-impact")
+    assert drawn == pytest.approx(sorted(ev.t for ev in scene.joint.impact_events()))
+    assert len(drawn) >= 1
+    matplotlib.pyplot.close(fig)
 
 
 def test_air_brakes_draw_their_ramp_and_every_text_is_legible():

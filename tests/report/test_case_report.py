@@ -608,7 +608,7 @@ def test_report_figures_type_is_at_least_7_pt_as_shown(report_figs):
     from crashsim.casereport import FIGURE_DISPLAY_MM, MIN_TEXT_PT, figure_scale
 
     scene, figs = report_figs
-    assert [f["id"] for f in figs] == ["scene", "scene-approach", "histories", "time-distance"]
+    assert [f["id"] for f in figs] == ["scene", "scene-approach", "histories", "time-distance", "wheels"]
     small = []
     for f in figs:
         fig = f["figure"]

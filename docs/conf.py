@@ -1,7 +1,9 @@
 """Sphinx configuration of the crashsim site (``sphinx-build -W --keep-going -b html docs docs/_build/html``).
 
 The scenario-file schema page is written at build time from ``crashsim schema --format markdown``
-(the validating schema itself), so the documented and the validating schema stay one object.
+(the validating schema itself), so the documented and the validating schema stay one object. The
+gallery's examples run at build time too (``docs/_ext/crashsim_examples.py``): a failing example
+fails the build.
 """
 from __future__ import annotations
 
@@ -13,6 +15,7 @@ from pathlib import Path
 DOCS = Path(__file__).resolve().parent
 ROOT = DOCS.parent
 sys.path.insert(0, str(ROOT / "src"))
+sys.path.insert(0, str(DOCS / "_ext"))
 os.environ.setdefault("MPLBACKEND", "Agg")
 
 import crashsim  # noqa: E402
@@ -24,6 +27,7 @@ copyright = "2026, the crashsim contributors"
 release = version = crashsim.__version__
 
 extensions = [
+    "crashsim_examples",
     "myst_parser",
     "numpydoc",
     "sphinx.ext.autodoc",

@@ -305,8 +305,11 @@ def _plan(ax, result: CaseResult, system: str | None):
     ax.legend(fontsize=6, loc="best")
 
 
-def plot_case(result: CaseResult, path: Path, system: str | None = None, dpi: int = 150) -> Path:
-    """The case's figure: every quantity's error against its band (left), its plan view or history (right)."""
+def plot_case(result: CaseResult, path: Path | None = None, system: str | None = None, dpi: int = 150):
+    """The case's figure: every quantity's error against its band (left), its plan view or history (right).
+
+    Written to ``path`` (and closed; returns the path), or, without a path, returned open (a
+    :class:`matplotlib.figure.Figure`, which a notebook shows)."""
     import matplotlib.pyplot as plt
 
     n = len(result.quantities)
@@ -322,6 +325,8 @@ def plot_case(result: CaseResult, path: Path, system: str | None = None, dpi: in
         ax = fig.add_axes((0.3, bottom, 0.25, top - bottom))
     _forest(ax, result, system)
     fig.suptitle(f"{result.id}: {result.title}", fontsize=9, x=0.01, ha="left")
+    if path is None:
+        return fig
     path = Path(path)
     fig.savefig(path, dpi=dpi)
     plt.close(fig)

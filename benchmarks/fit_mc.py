@@ -127,15 +127,13 @@ def _split(raw, spec, n: int, fast: bool) -> dict[str, float]:
     import crashsim.motion.engine as engine_mod
     import crashsim.motion.impacts as impacts_mod
     import crashsim.motion.runout as runout_mod
-    import crashsim.scene.models as models_mod
     import crashsim.reconstruct.overrides as overrides_mod
     import crashsim.scene.run as scene_mod
-    import crashsim.reconstruct.montecarlo as mc_mod
+    import crashsim.reconstruct.inputs as inputs_mod
     from crashsim.reconstruct.montecarlo import _Runner
 
     saved = overrides_mod.FAST
     overrides_mod.FAST = fast
-    models_mod.clear()
     try:
         runner = _Runner(raw, spec, "compiled", None, 30.0)
         for i in range(5):  # warm: the fast path's base scenario, the cached scene model
@@ -149,21 +147,20 @@ def _split(raw, spec, n: int, fast: bool) -> dict[str, float]:
         tm.wrap(overrides_mod.ScenarioOverrides, "scenario", "scenario")
         tm.wrap(scene_mod, "solve_impact", "impact_all")
         # each function wrapped where its caller looks it up (the modules import these names at their top)
-        tm.wrap(mc_mod, "run_scene", "run_scene")
+        tm.wrap(inputs_mod, "run_scene", "run_scene")
         tm.wrap(scene_mod, "scene_model", "model")
         tm.wrap(runout_mod, "run_model", "run_model")  # the one run-out entry calls the engine
         tm.wrap(engine_mod, "assemble_scene", "assemble")
         tm.wrap(scene_mod, "evaluate_evidence", "evidence")
         try:
             t0 = time.process_time()
-            for i in range(n):  # _Runner.run imports run_scene from its module at each call: the timed one
+            for i in range(n):  # SceneInputs.run looks run_scene up in its module at each call: the timed one
                 runner.run(spec.seed, i)
             total = time.process_time() - t0
         finally:
             tm.restore()
     finally:
         overrides_mod.FAST = saved
-        models_mod.clear()
     T = {k: v / n for k, v in tm.total.items()}
     total /= n
     out = {"impact_eq": T["impact_eq"], "kernel": T["kernel"], "later_lcp": T["later_lcp"], "scenario": T["scenario"],

@@ -91,7 +91,7 @@ def jobs(quick: bool) -> dict:
     out[f"fit {FIT}"] = ["fit", FIT, "--json", "--workers", "1"]
     out[f"mc {FIT}"] = ["mc", FIT, "--json", "--samples", "200", "--workers", "1", "--quiet"]
     if not quick:
-        out[f"posterior {FIT}"] = ["posterior", FIT, "--json", "--steps", "60", "--workers", "1", "--quiet"]
+        out[f"posterior {FIT}"] = ["posterior", FIT, "--json", "--steps", "400", "--workers", "1", "--quiet"]
     return out
 
 

@@ -20,6 +20,11 @@ monte_carlo(scenario_or_path, samples, **options)
     Propagate the ``[uncertainty]`` inputs -> MCResult.
 posterior(scenario_or_path, **options)
     MCMC posterior of the ``[fit]`` unknowns given the evidence -> PosteriorResult.
+Scene(scenario)
+    A scene built once, its inputs varied by name: ``Scene(load(path)).inputs(["vehicles.B.speed"])``
+    gives a SceneInputs whose ``.run([12.5])`` (SI values, one per path) returns the SceneResult, or
+    with ``record=`` only what the record reads; the door fit, Monte Carlo, posterior and the live
+    view run through.
 open_live(path)
     The live view of a scene, served on 127.0.0.1 in the background -> LiveServer (a notebook
     shows it inline; ``.url``, ``.stop()``; the ``live`` extra).
@@ -40,7 +45,7 @@ from .errors import CrashsimError, IllConditionedError, ScenarioError, SolverErr
 _logging.getLogger("crashsim").addHandler(_logging.NullHandler())
 
 __all__ = [
-    "load", "run", "fit", "monte_carlo", "posterior", "open_live",
+    "load", "run", "fit", "monte_carlo", "posterior", "open_live", "Scene",
     "CrashsimError", "IllConditionedError", "ScenarioError", "SolverError",
     "Axle", "Body", "BodyState", "Hitch", "Vehicle", "chain_states",
     "CrushSurface", "ExternalImpulse", "ImpactBatch", "ImpactProblem", "ImpactResult", "TangentialLaw",
@@ -52,6 +57,7 @@ __all__ = [
 __getattr__, __dir__ = _lazy_exports(__name__, {
     **dict.fromkeys(("fit", "load", "monte_carlo", "posterior", "run"), ".api"),
     "open_live": ".live.server",
+    "Scene": ".reconstruct.inputs",
     **dict.fromkeys(("CrushSurface", "ExternalImpulse", "ImpactBatch", "ImpactProblem", "ImpactResult",
                      "TangentialLaw", "VelocityConstraint", "solve_impact", "tyre_friction_impulse"), ".impact"),
     **dict.fromkeys(("Axle", "Body", "BodyState", "Hitch", "Vehicle", "chain_states"), ".vehicles"),

@@ -16,7 +16,6 @@ import numpy as np
 import pytest
 
 import crashsim.reconstruct.overrides as overrides
-from crashsim.scene import models
 from crashsim.evidence.checks import _nearest_on_polyline
 from crashsim.reconstruct.fit import FitProblem, FitSpec
 from crashsim.reconstruct.montecarlo import monte_carlo
@@ -34,7 +33,6 @@ def raw():
 
 def _full_path(monkeypatch):
     monkeypatch.setattr(overrides, "FAST", False)
-    models.clear()
 
 
 def test_fit_residuals_identical(raw, monkeypatch):
@@ -45,10 +43,10 @@ def test_fit_residuals_identical(raw, monkeypatch):
               np.array([0.44, 0.44, 0.375, 0.5]), np.array([0.02, 0.97, 0.01, 0.99])]
     fast = FitProblem(raw, spec, engine=ENGINE, file=str(FILE))
     got = [fast.evaluate(z) for z in points]
-    assert fast.overrides._fast_base is not None
+    assert fast.inputs.patched
     _full_path(monkeypatch)
     full = FitProblem(raw, spec, engine=ENGINE, file=str(FILE))
-    assert not full.overrides.fast
+    assert not full.inputs.patched
     for z, (r_fast, scene_fast) in zip(points, got):
         r_full, scene_full = full.evaluate(z)
         np.testing.assert_allclose(r_fast, r_full, rtol=0, atol=1e-12)

@@ -255,8 +255,9 @@ def replace_approaches(sc):
 
 
 def test_scene_model_on_another_road_equals_a_new_model():
-    """SceneModel.with_road (the cached model of crashsim.scene.models with another road friction) holds the
-    arrays of a model built from scratch on that road; another zone set is refused."""
+    """SceneModel.with_road (the kept model of crashsim.scene.models.ModelReuse on another road friction) holds
+    the arrays of a model built from scratch on that road; another zone set is refused; a ModelReuse gives
+    its model again only to a scene of the same model input objects."""
     from crashsim.motion.scene_model import SceneModel
     from crashsim.motion.road import Road
     from crashsim.scene import models
@@ -276,11 +277,17 @@ def test_scene_model_on_another_road_equals_a_new_model():
     assert not all(np.array_equal(a, c) for a, c in zip(moved.M, base.M))  # the base model is unchanged
     with pytest.raises(ScenarioError):
         base.with_road(Road(0.55, ()))
-    models.clear()
-    m1 = models.scene_model(movable, spec)
-    assert models.scene_model(movable, spec) is m1  # cached
-    m2 = models.scene_model(movable, dataclasses.replace(spec, road=road))
+    reuse = models.ModelReuse()
+    m1 = models.scene_model(movable, spec, reuse)
+    assert models.scene_model(movable, spec, reuse) is m1  # kept
+    assert models.scene_model(movable, spec) is not m1  # without a ModelReuse: built for the run
+    m2 = models.scene_model(movable, dataclasses.replace(spec, road=road), reuse)
     assert m2 is not m1 and m2.road is road and all(np.array_equal(a, b) for a, b in zip(m2.M, fresh.M))
+    # other model inputs (equal values, other objects: a scenario built the full way) get a new model
+    other = dataclasses.replace(spec, wheels=dataclasses.replace(spec.wheels) if dataclasses.is_dataclass(spec.wheels)
+                                else dict(spec.wheels))
+    m3 = models.scene_model(movable, other, reuse)
+    assert m3 is not m1 and all(np.array_equal(a, b) for a, b in zip(m3.M, m1.M))
 
 
 def _law(data, law, key, value):

@@ -12,8 +12,7 @@ import time
 import numpy as np
 
 from ..errors import CrashsimError
-from ..reconstruct import run_scene
-from ..reconstruct.overrides import ScenarioOverrides
+from ..reconstruct.inputs import Scene
 
 __all__ = ["BandRunner", "run_band_chunk", "PATH_POINTS"]
 
@@ -24,16 +23,16 @@ _RUNNERS: dict = {}
 
 
 class BandRunner:
-    """The samples of one scene: its inputs by path, built once (:class:`ScenarioOverrides`)."""
+    """The samples of one scene: its inputs by path, built once (:class:`~crashsim.reconstruct.inputs.SceneInputs`)."""
 
     def __init__(self, payload: dict):
-        self.overrides = ScenarioOverrides(payload["data"], payload["paths"], engine=payload["engine"],
-                                           file=payload["file"], cache=1, field_prefix="uncertainty.inputs")
+        self.inputs = Scene(payload["data"], engine=payload["engine"], file=payload["file"]).inputs(
+            payload["paths"], field="uncertainty.inputs", cache=1)
 
     def run(self, x) -> dict:
         t0 = time.process_time()
         try:
-            scene = run_scene(self.overrides.scenario(x), lean=True)
+            scene = self.inputs.run(x, lean=True)
         except CrashsimError as exc:
             return {"error": f"{type(exc).__name__}: {exc}", "cpu": time.process_time() - t0}
         cpu = time.process_time() - t0  # the sample's scene build and physics, CPU seconds

@@ -28,7 +28,9 @@ from typing import Any, Mapping
 from ..errors import CrashsimError, ScenarioError
 from ..reconstruct import run_scene
 from ..reconstruct.montecarlo import UncertaintySpec, sample_inputs
-from ..reconstruct.overrides import ScenarioOverrides, get_value, resolve_path, set_written
+from ..reconstruct.overrides import get_value, resolve_path, set_written
+from ..reconstruct.inputs import Scene
+from ..scene.models import ModelReuse
 from ..reconstruct.tolerance import evidence_tolerance, tolerance_items, with_tolerance
 from ..scenario import SCHEMA, load_scenario
 from ..schema import in_range, load_toml
@@ -164,8 +166,9 @@ class LiveSession:
 
     def _rebase(self) -> None:
         """The file's own values of the inputs (SI), against which a value counts as changed."""
-        self.overrides = ScenarioOverrides(self.data, list(self.controls), engine=self.engine, file=self.file,
-                                           cache=1, field_prefix="live")
+        self._scene = Scene(self.data, engine=self.engine, file=self.file)
+        self._models = ModelReuse()  # the run-out's scene model, kept across the changes
+        self.overrides = self._scene.inputs(list(self.controls), field="live", cache=1)
         # where the file gives no value, the schema's default the view started from
         self._base = [self.overrides.base_value(i) for i in range(len(self.controls))]
         self._base = [c.value if b is None else b for b, c in zip(self._base, self.controls.values())]
@@ -338,11 +341,10 @@ class LiveSession:
         return sc
 
     def _overrides_for(self, paths: tuple):
-        """The :class:`ScenarioOverrides` of the file and these inputs (a few kept)."""
+        """The :class:`~crashsim.reconstruct.inputs.SceneInputs` of the file and these inputs (a few kept)."""
         o = self._by_paths.get(paths)
         if o is None:
-            o = ScenarioOverrides(self.data, list(paths), engine=self.engine, file=self.file, cache=2,
-                                  field_prefix="live")
+            o = self._scene.inputs(list(paths), field="live", cache=2)
             if len(self._by_paths) >= 8:
                 self._by_paths.pop(next(iter(self._by_paths)))
             self._by_paths[paths] = o
@@ -358,7 +360,7 @@ class LiveSession:
         try:
             sc = self.scenario_for(values)
             t1 = time.perf_counter()
-            result = run_scene(sc)
+            result = run_scene(sc, models=self._models)
             t2 = time.perf_counter()
         except CrashsimError as exc:
             for p, (w, x) in keep.items():

@@ -70,12 +70,12 @@ from ..geometry import wrap_angle
 from ..inverse_schema import CORRELATION_WARNING, validate_fit
 from ..outputs import check_workers
 from ..report import fmt, table
-from ..scene.run import run_scene
 from ..schema import in_range, interval_text
 from ..units import resolve_system, system_label
 from .montecarlo import DEFAULT_SAMPLE_TIME_LIMIT
-from .overrides import (ScenarioOverrides, default_engine, file_contents, forward_data, get_value, parse_value,
+from .overrides import (default_engine, file_contents, forward_data, get_value, parse_value,
                         resolve_path, set_value)
+from .inputs import Scene
 from .parallel import Executor, Progress
 from .write_best import edit_best
 
@@ -470,14 +470,14 @@ class FitProblem:
         self.spec = spec
         self.file = file
         self.engine = default_engine() if engine is None else engine
-        self.overrides = ScenarioOverrides(data, spec.paths, engine=self.engine, file=file,
-                                           field_prefix="fit.unknowns", max_wall_time=sample_time_limit)
+        self.inputs = Scene(data, engine=self.engine, file=file, max_wall_time=sample_time_limit).inputs(
+            spec.paths, field="fit.unknowns")
         self.lower = np.array([u.lower for u in spec.unknowns])
         self.upper = np.array([u.upper for u in spec.unknowns])
         self.span = self.upper - self.lower
         x0 = np.array([u.initial for u in spec.unknowns])
         try:
-            base = self.overrides.scenario(x0)
+            base = self.inputs.scenario(x0)
         except ScenarioError as exc:
             raise ScenarioError(f"the start values of the unknowns give an invalid scenario: {_bare(exc)}",
                                 field=exc.field, file=file) from None
@@ -499,7 +499,7 @@ class FitProblem:
                 x = x0.copy()
                 x[j] = v
                 try:
-                    self.overrides.scenario(x)
+                    self.inputs.scenario(x)
                 except UnreachableImpactError:
                     continue  # valid, but the motion cannot reach the impact there: those evaluations fail
                 except ScenarioError as exc:
@@ -518,7 +518,7 @@ class FitProblem:
 
     def scene(self, x, *, lean: bool | None = None):
         """Run the scene at unknowns ``x`` (SI); ``lean`` default :attr:`lean`."""
-        return run_scene(self.overrides.scenario(x), lean=self.lean if lean is None else lean)
+        return self.inputs.run(x, lean=self.lean if lean is None else lean)
 
     def full_scene(self, z):
         """The full SceneResult at scaled point ``z`` (for reports and figures), or the error that stops it."""

@@ -58,10 +58,11 @@ from ..geometry import circular_mean, unwrap_about_mean
 from ..impact import solve_impact
 from ..inverse_schema import DISTRIBUTIONS, validate_uncertainty
 from ..report import fmt
-from ..scene.run import run_scene, simulate_approaches
+from ..scene.run import simulate_approaches
 from ..schema import interval_text
-from .overrides import INVERSE_SECTIONS, ScenarioOverrides, default_engine, file_contents, parse_value, resolve_path
+from .overrides import INVERSE_SECTIONS, default_engine, file_contents, parse_value, resolve_path
 from .parallel import Executor, Progress, child_seed, choose_backend, chunk_size as default_chunk_size, chunks
+from .inputs import Scene, SceneInputs
 from .tolerance import evidence_tolerance, tolerance_items, with_tolerance
 
 __all__ = ["InputDistribution", "UncertaintySpec", "MCResult", "monte_carlo", "sample_inputs", "load_results",
@@ -363,14 +364,14 @@ class _Runner:
     def __init__(self, data: dict, spec: UncertaintySpec, engine: str, file: str | None,
                  sample_time_limit: float | None = None):
         self.spec = spec
-        self.overrides = ScenarioOverrides(data, spec.paths, engine=engine, file=file, cache=1,
-                                           field_prefix="uncertainty.inputs", max_wall_time=sample_time_limit)
+        self.inputs = Scene(data, engine=engine, file=file, max_wall_time=sample_time_limit).inputs(
+            spec.paths, field="uncertainty.inputs", cache=1)
 
     def run(self, seed: int, i: int) -> dict:
         x = sample_inputs(self.spec, seed, i)
         row: dict[str, Any] = {"i": int(i), "x": [float(v) for v in x]}
         try:
-            scene = run_scene(self.overrides.scenario(x), lean=True)  # what the record reads, the same numbers
+            scene = self.inputs.run(x, lean=True)  # what the record reads, the same numbers
         except CrashsimError as exc:
             row["error"] = f"{type(exc).__name__}: {exc}"
             row["reason"] = failure_reason(exc)
@@ -853,10 +854,10 @@ def _assemble(spec, seed, n, rows: dict, n_resumed, elapsed, engine, backend, wo
                     accepted_input_percentiles=_percentiles(inputs, meets, percentiles), tolerance=tolerance)
 
 
-def _median_scene(ov: ScenarioOverrides, med: np.ndarray):
+def _median_scene(inputs: SceneInputs, med: np.ndarray):
     """The scene with every input at its median, or None (logged) if it cannot be run."""
     try:
-        return run_scene(ov.scenario(med))
+        return inputs.run(med)
     except CrashsimError as exc:
         _log.warning("the scene with every input at its median cannot be run: %s", exc)
         return None
@@ -865,7 +866,7 @@ def _median_scene(ov: ScenarioOverrides, med: np.ndarray):
 def _swings(data, spec: UncertaintySpec, engine, file, q=(0.05, 0.95)) -> tuple[dict, Any]:
     """One-at-a-time swings of the contact bodies' delta-v (the impact only, after the vehicles' approaches where
     the scene has them: their speeds at the impact come from there) and the median scene."""
-    ov = ScenarioOverrides(data, spec.paths, engine=engine, file=file, cache=1, field_prefix="uncertainty.inputs")
+    ov = Scene(data, engine=engine, file=file).inputs(spec.paths, field="uncertainty.inputs", cache=1)
     med = np.array([d.median for d in spec.inputs])
     nominal = _median_scene(ov, med)
     try:
@@ -974,7 +975,7 @@ def monte_carlo(scenario_data: dict, spec: UncertaintySpec | dict | None = None,
         raise ScenarioError(f"the number of samples must be >= 1, got {n}", field="samples")
     engine = default_engine() if engine is None else engine
     # Fail early, in this process, on paths the scenario cannot hold or an invalid median scene.
-    ScenarioOverrides(scenario_data, spec.paths, engine=engine, file=file, field_prefix="uncertainty.inputs")
+    Scene(scenario_data, engine=engine, file=file).inputs(spec.paths, field="uncertainty.inputs")
     run_hash = _run_hash(scenario_data, spec)
     if not (sample_time_limit > 0):
         raise ScenarioError(f"the sample time limit must be > 0 s, got {sample_time_limit!r}", field="sample_time_limit")
@@ -1008,9 +1009,8 @@ def monte_carlo(scenario_data: dict, spec: UncertaintySpec | dict | None = None,
         if tolerance.changed:  # the samples and the median scene at the evidence's tolerance (the swings: impact only)
             scenario_data = with_tolerance(scenario_data, tolerance)
             payload["data"] = scenario_data
-            nominal = _median_scene(ScenarioOverrides(scenario_data, spec.paths, engine=engine, file=file, cache=1,
-                                                      field_prefix="uncertainty.inputs"),
-                                    np.array([d.median for d in spec.inputs]))
+            nominal = _median_scene(Scene(scenario_data, engine=engine, file=file).inputs(
+                spec.paths, field="uncertainty.inputs", cache=1), np.array([d.median for d in spec.inputs]))
 
     backend, nw = choose_backend(workers, dask_address, len(todo))
     bar = Progress(progress, n, initial=n_resumed, desc="Monte Carlo", unit="sample")

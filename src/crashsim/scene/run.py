@@ -25,7 +25,7 @@ from ..report import (format_approach, format_crush, format_events, format_evide
 from ..survey.report import format_survey, survey_records
 from ..units import Kind, format_value, resolve_system, speed_unit_of, system_label, to_unit
 from ..vehicles import BodyState, chain_states
-from .models import scene_model
+from .models import ModelReuse, scene_model
 
 __all__ = ["SceneResult", "run_scene", "rest_misfit_warnings", "simulate_approaches"]
 
@@ -518,7 +518,8 @@ def simulate_approaches(scenario):
     return out
 
 
-def run_scene(scenario, *, lean: bool = False, separation: dict | None = None) -> SceneResult:
+def run_scene(scenario, *, lean: bool = False, separation: dict | None = None,
+              models: ModelReuse | None = None) -> SceneResult:
     """Solve a loaded scenario: the impact, then the run-out of the whole scene if asked for.
 
     At the ``articulated`` and ``load_transfer`` levels every vehicle runs out together, with
@@ -537,6 +538,10 @@ def run_scene(scenario, *, lean: bool = False, separation: dict | None = None) -
     bodies from instead of the impact's separation velocities (at the impact's positions): a run-out
     from measured separation velocities, as the validation suite runs it. The impact is solved and
     reported as usual; an articulated vehicle's bodies are made hitch-consistent as always.
+
+    ``models``: the run-out scene model kept across the samples of one scene
+    (:class:`~crashsim.scene.models.ModelReuse`, owned by a
+    :class:`~crashsim.reconstruct.inputs.SceneInputs`); None builds it for this run.
 
     Raises
     ------
@@ -569,8 +574,8 @@ def run_scene(scenario, *, lean: bool = False, separation: dict | None = None) -
         run = run_runout(movable, initial, spec.wheels, spec.road, spec.options, level=spec.level,
                          contact=spec.contact, pair_contact=spec.pair_contact, obstacles=spec.obstacles,
                          accuracy=spec.accuracy, accuracy_heading=spec.accuracy_heading,
-                         # the scene model reused across fit/MC samples
-                         model=scene_model(movable, spec) if contact and spec.accuracy is None else None,
+                         # the scene model, reused across the samples of one scene
+                         model=scene_model(movable, spec, models) if contact and spec.accuracy is None else None,
                          lean=_track_filter(scenario) if lean and contact else None)
         runout, joint, accuracy = run
     evidence = None

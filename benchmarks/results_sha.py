@@ -10,7 +10,9 @@ its last bits between processors) and are compared there, before and after a cha
 
 ``--quick`` leaves out the scipy engine's runs and the posterior (minutes instead of tens of
 minutes). Timing fields (CPU and elapsed seconds) are removed from a JSON before it is hashed;
-nothing else is. Run from the repository root; exit code 1 when ``--compare`` finds a difference.
+nothing else is; files are named relative to the repository root, so checkouts at other paths
+compare. Run it with the kernels compiled (a first run in a new checkout runs a single scene
+interpreted while they compile: other last bits). Exit code 1 when ``--compare`` finds a difference.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ import contextlib
 import hashlib
 import io
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -74,7 +77,7 @@ def _scene_json(path: str, engine: str):
     from crashsim.scenario import load_scenario
     from crashsim.scene.run import run_scene
 
-    sc = load_scenario(ROOT / path)
+    sc = load_scenario(path)  # relative to the root, as in the CLI's runs: the JSON names the file as given
     if sc.runout is not None:
         sc = replace(sc, runout=replace(sc.runout, options=replace(sc.runout.options, engine=engine)))
     return jsonable(run_scene(sc).to_dict())
@@ -102,6 +105,7 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="compiled engine only, no posterior")
     ap.add_argument("--only", help="only the jobs whose name contains this text")
     a = ap.parse_args(argv)
+    os.chdir(ROOT)  # every file named relative to the root: the hashes do not depend on the checkout's path
     hashes = {}
     for name, args in jobs(a.quick).items():
         if a.only and a.only not in name:

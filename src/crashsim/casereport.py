@@ -26,7 +26,7 @@ import markupsafe
 from ._version import __version__
 from .errors import ScenarioError
 from .plotting import figure_system, history_panels, plot_histories, plot_scene, plot_time_distance
-from .plot_timeline import plot_wheel_timeline
+from .plotting.timeline import plot_wheel_timeline
 from .motion.wheels import wheel_labels
 from .report import closing_error_text, describe_event, format_approach, rollover_cells, validity_text
 from .survey.report import survey_records

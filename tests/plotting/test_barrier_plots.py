@@ -69,7 +69,7 @@ def test_custom_title_and_contact_rule_shown():
 
 
 def test_core_does_not_import_matplotlib():
-    """plotting.py is the only module that imports matplotlib, and only when used."""
+    """crashsim.plotting is the only package that imports matplotlib, and only when used."""
     code = ("import sys, crashsim, crashsim.impact.sweeps, crashsim.plotting; "
             "print('matplotlib' in sys.modules)")
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,

@@ -22,7 +22,7 @@ import crashsim.plotting  # noqa: E402
 import crashsim.reconstruct  # noqa: E402
 from crashsim.cli import main  # noqa: E402
 from crashsim.errors import ScenarioError  # noqa: E402
-from crashsim.plot_detail import INSET_BELOW, INSET_MARGIN, impact_window  # noqa: E402
+from crashsim.plotting.detail import INSET_BELOW, INSET_MARGIN, impact_window  # noqa: E402
 from crashsim.plotting import plot_scene  # noqa: E402
 from crashsim.reconstruct import run_scene  # noqa: E402
 from crashsim.scenario import load_scenario  # noqa: E402

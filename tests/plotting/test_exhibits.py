@@ -361,22 +361,22 @@ def test_a_label_on_a_line_moves_off_it_and_others_stay():
 def test_shipped_scene_labels_cover_fewer_lines(monkeypatch):
     """The Δv, PDOF, approach and obstacle labels of the shipped scenes lie over fewer drawn lines than
     when they are kept clear of each other only."""
-    import crashsim.plotting as plotting
+    import crashsim.plotting.scene as scene_module  # plot_scene calls place_labels there
     from crashsim.plotting import LINE_SHY
 
     def shy_ink(lines: bool) -> int:
         total = 0
         for path in SHIPPED:
             if not lines:
-                monkeypatch.setattr(plotting, "place_labels", functools.partial(ORIGINAL, lines=False))
+                monkeypatch.setattr(scene_module, "place_labels", functools.partial(ORIGINAL, lines=False))
             ax = plot_scene(_scene(path))
-            monkeypatch.setattr(plotting, "place_labels", ORIGINAL)
+            monkeypatch.setattr(scene_module, "place_labels", ORIGINAL)
             texts = [t for t in ax.texts if (t.get_gid() or "").removeprefix("label:") in LINE_SHY]
             total += _ink_under(ax, texts)
             plt.close(ax.figure)
         return total
 
-    ORIGINAL = plotting.place_labels
+    ORIGINAL = scene_module.place_labels
     before, after = shy_ink(False), shy_ink(True)
     assert after < 0.6 * before, (before, after)
 

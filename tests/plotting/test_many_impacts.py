@@ -21,7 +21,7 @@ matplotlib.use("Agg")
 from matplotlib.text import Text  # noqa: E402
 from matplotlib.transforms import Bbox  # noqa: E402
 
-from crashsim.plot_events import group_label, group_times  # noqa: E402
+from crashsim.plotting.events import group_label, group_times  # noqa: E402
 from crashsim.plotting import plot_histories, plot_scene, plot_time_distance  # noqa: E402
 from crashsim.reconstruct import run_scene  # noqa: E402
 from crashsim.scenario import load_scenario  # noqa: E402

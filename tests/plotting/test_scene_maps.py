@@ -21,8 +21,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 from crashsim.motion import FrictionZone, Road  # noqa: E402
 from crashsim.motion.road import points_in_polygon  # noqa: E402
-from crashsim.plotting import (_MAP_STYLES, _clip_polygon, _clip_polyline, plot_scene,  # noqa: E402
-                               save_scene_figures)
+from crashsim.plotting import plot_scene, save_scene_figures  # noqa: E402
+from crashsim.plotting.road import clip_polygon, clip_polyline  # noqa: E402
+from crashsim.plotting.style import MAP_STYLES  # noqa: E402
 from crashsim.reconstruct import run_scene  # noqa: E402
 from crashsim.scenario import MAP_LINE_STYLES, MapLine, load_scenario  # noqa: E402
 from crashsim.units import Kind, to_unit  # noqa: E402
@@ -75,30 +76,30 @@ def _vehicle_box(scene):
 
 def test_clip_polygon_to_a_box():
     square = np.array([[-1.0, -1.0], [3.0, -1.0], [3.0, 3.0], [-1.0, 3.0]])
-    part = _clip_polygon(square, np.array([0.0, 0.0]), np.array([2.0, 1.0]))
+    part = clip_polygon(square, np.array([0.0, 0.0]), np.array([2.0, 1.0]))
     x, y = part[:, 0], part[:, 1]
     area = 0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
     assert area == pytest.approx(2.0)  # the whole box
     assert part.min(axis=0) == pytest.approx([0.0, 0.0]) and part.max(axis=0) == pytest.approx([2.0, 1.0])
     # a triangle half inside: the clipped area is that of the part inside
     tri = np.array([[0.0, 0.0], [2.0, 0.0], [0.0, 2.0]])  # area 2; the part with x >= 1: (1,0) (2,0) (1,1)
-    part = _clip_polygon(tri, np.array([1.0, -5.0]), np.array([5.0, 5.0]))
+    part = clip_polygon(tri, np.array([1.0, -5.0]), np.array([5.0, 5.0]))
     x, y = part[:, 0], part[:, 1]
     assert 0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))) == pytest.approx(0.5)
-    assert len(_clip_polygon(square + 10.0, np.array([0.0, 0.0]), np.array([2.0, 1.0]))) == 0
+    assert len(clip_polygon(square + 10.0, np.array([0.0, 0.0]), np.array([2.0, 1.0]))) == 0
 
 
 def test_clip_polyline_to_a_box():
     lo, hi = np.array([0.0, 0.0]), np.array([10.0, 10.0])
     # in, out through the top, back in, out through the right: two pieces
     line = np.array([[5.0, 5.0], [5.0, 15.0], [8.0, 15.0], [8.0, 5.0], [20.0, 5.0]])
-    pieces = _clip_polyline(line, lo, hi)
+    pieces = clip_polyline(line, lo, hi)
     assert len(pieces) == 2
     np.testing.assert_allclose(pieces[0], [[5.0, 5.0], [5.0, 10.0]])
     np.testing.assert_allclose(pieces[1], [[8.0, 10.0], [8.0, 5.0], [10.0, 5.0]])
-    assert _clip_polyline(np.array([[-5.0, 20.0], [30.0, 20.0]]), lo, hi) == []
+    assert clip_polyline(np.array([[-5.0, 20.0], [30.0, 20.0]]), lo, hi) == []
     # a segment along a side of the box is kept
-    (edge,) = _clip_polyline(np.array([[-5.0, 0.0], [30.0, 0.0]]), lo, hi)
+    (edge,) = clip_polyline(np.array([[-5.0, 0.0], [30.0, 0.0]]), lo, hi)
     np.testing.assert_allclose(edge, [[0.0, 0.0], [10.0, 0.0]])
 
 
@@ -206,7 +207,7 @@ def test_a_near_line_widens_the_view_by_at_most_the_margin():
 # ------------------------------------------------------------------------------- line styles
 
 def test_every_style_is_drawn_its_own_way():
-    assert set(_MAP_STYLES) == set(MAP_LINE_STYLES)
+    assert set(MAP_STYLES) == set(MAP_LINE_STYLES)
     scene = _scene(INTERSECTION)
     lines = [MapLine(f"{s} line", s, np.array([[-10.0, 2.0 * k], [10.0, 2.0 * k]]))
              for k, s in enumerate(MAP_LINE_STYLES)]
@@ -225,7 +226,7 @@ def test_every_style_is_drawn_its_own_way():
     assert matplotlib.colors.same_color(_by_gid(ax, f"map:{len(lines) - 1}").get_color(), "tab:orange")
     texts = [t.get_text() for t in ax.get_legend().get_texts()]
     for s in MAP_LINE_STYLES:
-        assert _MAP_STYLES[s][0] in texts
+        assert MAP_STYLES[s][0] in texts
     assert "road edge (painted)" in texts
 
 
@@ -235,7 +236,7 @@ def test_one_colour_and_one_legend_entry_per_zone_name():
     zone's colour (darkened)."""
     from matplotlib.colors import to_rgb
 
-    from crashsim.plotting import _darker
+    from crashsim.plotting.style import darker
 
     scene = _scene(INTERSECTION)
     lo, hi = _vehicle_box(scene)
@@ -265,7 +266,7 @@ def test_one_colour_and_one_legend_entry_per_zone_name():
     for i in (0, 2):  # each grass label (where drawn) in the grass colour
         label = _by_gid(ax, f"zone-label:{i}")
         if label is not None:
-            assert np.allclose(to_rgb(label.get_color()), _darker(edges[0]))
+            assert np.allclose(to_rgb(label.get_color()), darker(edges[0]))
     plt.close("all")
 
 

@@ -1,4 +1,4 @@
-"""The wheel time line (crashsim.plot_timeline): every wheel's set state, air-brake level, computed
+"""The wheel time line (crashsim.plotting.timeline): every wheel's set state, air-brake level, computed
 sliding and steering on one time axis from the approach to rest, measured on the figure's data."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ import matplotlib
 import numpy as np
 import pytest
 
-from crashsim.plot_timeline import plot_wheel_timeline, wheel_rows
+from crashsim.plotting.timeline import plot_wheel_timeline, wheel_rows
 from crashsim.scenario import load_scenario
 from crashsim.scene.run import run_scene
 

@@ -24,9 +24,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from .figure_options import NARROW_FIGURE, title_chars
-from .motion.brakes import ramp_level
-from .motion.recorded import wheel_setting_for
+from ..figure_options import NARROW_FIGURE, title_chars
+from ..motion.brakes import ramp_level
+from ..motion.recorded import wheel_setting_for
 
 __all__ = ["STATE_COLORS", "wheel_rows", "plot_wheel_timeline"]
 

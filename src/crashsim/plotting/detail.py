@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .geometry import to_world
+from ..geometry import to_world
 
 __all__ = ["IMPACT_MARGIN", "INSET_MARGIN", "MIN_ENLARGEMENT", "INSET_BELOW", "impact_window", "needs_inset", "add_impact_inset"]
 

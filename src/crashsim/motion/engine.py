@@ -60,7 +60,7 @@ from .postprocess import GL_NODES, GL_WEIGHTS, assemble_scene, mode_snapshot, se
 from .result import (BodyHistory, BodyRunout, HitchHistory, PairSummary, RunoutEvent, RunoutResult, SceneRunout,
                      SecondaryImpact, limit_message)
 
-__all__ = ["run_model", "STATUS_OF_CODE"]
+__all__ = ["STATUS_OF_CODE"]
 
 _log = logging.getLogger("crashsim")
 

@@ -126,7 +126,7 @@ def _split(raw, spec, n: int, fast: bool) -> dict[str, float]:
     import crashsim.motion.kernels as kernels_mod
     import crashsim.motion.engine as engine_mod
     import crashsim.motion.impacts as impacts_mod
-    import crashsim.motion.runout as runout_mod
+    import crashsim.motion.simulate as simulate_mod
     import crashsim.reconstruct.overrides as overrides_mod
     import crashsim.scene.run as scene_mod
     import crashsim.reconstruct.inputs as inputs_mod
@@ -149,7 +149,7 @@ def _split(raw, spec, n: int, fast: bool) -> dict[str, float]:
         # each function wrapped where its caller looks it up (the modules import these names at their top)
         tm.wrap(inputs_mod, "run_scene", "run_scene")
         tm.wrap(scene_mod, "scene_model", "model")
-        tm.wrap(runout_mod, "run_model", "run_model")  # the one run-out entry calls the engine
+        tm.wrap(simulate_mod, "run_model", "run_model")  # the contact levels' runner calls the engine
         tm.wrap(engine_mod, "assemble_scene", "assemble")
         tm.wrap(scene_mod, "evaluate_evidence", "evidence")
         try:

@@ -25,7 +25,7 @@ For every level of :mod:`crashsim.motion.levels` -- ``impact``, ``energy``, ``ri
 load_transfer on the subsampled grid 1e-3, 1e-4, 1e-6, 1e-8 to keep the run short), the
 pymunk cross-check at dt = 4, 2, 1, 0.5 ms, the compiled engine (``engine="compiled"``,
 schemes dopri5 and bs3, if the installed crashsim has it) and
-:func:`~crashsim.motion.accuracy.simulate_to_accuracy` at 1 cm:
+:func:`~crashsim.motion.run_runout` to an accuracy target (``accuracy=``) at 1 cm:
 
 * **cost**: median CPU time (``time.process_time``) of one run-out over repeats (3, or fewer
   when a run takes over a second), and nfev.  CPU time, not wall time: the machine is shared.
@@ -67,7 +67,7 @@ import scipy
 
 from crashsim.impact import ExternalImpulse, solve_impact, tyre_friction_impulse
 from crashsim.motion import RunoutOptions, make_hitch_consistent, static_loads
-from crashsim.motion.accuracy import simulate_to_accuracy
+from crashsim.motion.accuracy import _simulate_to_accuracy
 from crashsim.motion.levels import LEVELS, simulate_level
 from crashsim.scene.run import separation_states
 from crashsim.scenario import load_scenario
@@ -276,7 +276,7 @@ def main(argv=None) -> int:
             continue
         for c in cases:
             c0, w0 = time.process_time(), time.perf_counter()
-            res, rep = simulate_to_accuracy(c["vehicle"], c["initial"], c["wheels"], c["road"], 0.01, None,
+            res, rep = _simulate_to_accuracy(c["vehicle"], c["initial"], c["wheels"], c["road"], 0.01, None,
                                             RunoutOptions(**engine_opts))
             cpu, wall = time.process_time() - c0, time.perf_counter() - w0
             add(c, "articulated", "accuracy", f"1 cm, {label}", res, cpu, wall, 1, own="articulated",

@@ -75,12 +75,13 @@ def configure() -> Path:
 
 def kernel_sources(impact: bool = True) -> list[Path]:
     """The source files the compiled kernels are built from, in a fixed order: every module of the
-    run-out kernel package (``motion/kernels/*.py``), the tyre law and the options they compile in
-    (``motion/tyres.py``, ``motion/options.py``), and (``impact``) the impact solver's kernel
-    (``impact/kernel.py``)."""
+    run-out kernel package (``motion/kernels/*.py``), the tyre law, the options and the state layout
+    they compile in (``motion/tyres.py``, ``motion/options.py``, ``motion/layout.py``), and
+    (``impact``) the impact solver's kernel (``impact/kernel.py``)."""
     here = Path(__file__).parent
     motion = here / "motion"
-    paths = sorted((motion / "kernels").glob("*.py")) + [motion / "tyres.py", motion / "options.py"]
+    paths = sorted((motion / "kernels").glob("*.py")) + [motion / "tyres.py", motion / "options.py",
+                                                         motion / "layout.py"]
     if impact:
         paths.append(here / "impact" / "kernel.py")
     return paths

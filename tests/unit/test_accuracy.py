@@ -15,7 +15,7 @@ import pytest
 
 from crashsim.errors import ScenarioError
 from crashsim.motion import Road, RunoutOptions, WheelSetting, WheelSettings, make_hitch_consistent, simulate_runout
-from crashsim.motion.accuracy import SHARES, AccuracyReport, simulate_to_accuracy
+from crashsim.motion.accuracy import SHARES, AccuracyReport, _simulate_to_accuracy
 from crashsim.motion.loads import STANDARD_GRAVITY as G
 from crashsim.vehicles import Axle, Body, BodyState, Hitch, Vehicle, chain_states
 
@@ -54,7 +54,7 @@ def check_honest(res, rep, ref):
 def test_straight_slide_against_the_closed_form():
     v0, mu = 20.0, 0.75
     start = {"car": BodyState((0, 0), 0.0, (v0, 0.0))}
-    res, rep = simulate_to_accuracy(car(), start, None, Road(mu), 0.001)
+    res, rep = _simulate_to_accuracy(car(), start, None, Road(mu), 0.001)
     err = abs(res.bodies["car"].rest_position[0] - v0**2 / (2 * mu * G))
     assert rep.met and err <= rep.estimate_position <= 0.001
     # the report says what was chosen and what it cost
@@ -74,7 +74,7 @@ def test_slide_and_spin_is_honest(method, target):
     """Slide and spin on locked wheels: the case where the straight-slide eps bound alone is 15x too small."""
     start = {"car": BodyState((-0.5, -4.1), 1.5708, (1.76, 4.95), -3.03)}
     ref = simulate_runout(car(), start, None, Road(0.75), REFERENCE)
-    res, rep = simulate_to_accuracy(car(), start, None, Road(0.75), target, math.radians(0.05),
+    res, rep = _simulate_to_accuracy(car(), start, None, Road(0.75), target, math.radians(0.05),
                                     RunoutOptions(method=method))
     check_honest(res, rep, ref)
 
@@ -86,7 +86,7 @@ def test_articulated_rolling_and_locked_is_honest():
                            wheels={"tractor/0": WheelSetting("rolling", cornering_coefficient=8.6, rolling_resistance=0.012)})
     ref = simulate_runout(veh, start, wheels, Road(0.7), REFERENCE)
     for target in (0.01, 0.001):
-        res, rep = simulate_to_accuracy(veh, start, wheels, Road(0.7), target, math.radians(0.1))
+        res, rep = _simulate_to_accuracy(veh, start, wheels, Road(0.7), target, math.radians(0.1))
         check_honest(res, rep, ref)
 
 
@@ -95,7 +95,7 @@ def test_free_rolling_car_chooses_a_small_v_stop():
     wheels = WheelSettings(default=WheelSetting("rolling", cornering_coefficient=8.6, rolling_resistance=0.012))
     start = {"car": BodyState((0, 0), 0.0, (8.0, 0.5), 0.2)}
     ref = simulate_runout(car(), start, wheels, Road(0.75), REFERENCE)
-    res, rep = simulate_to_accuracy(car(), start, wheels, Road(0.75), 0.01)
+    res, rep = _simulate_to_accuracy(car(), start, wheels, Road(0.75), 0.01)
     check_honest(res, rep, ref)
     assert rep.a_min == pytest.approx(0.012 * G)
     assert rep.settings["v_stop"] < 0.03  # below the default
@@ -114,7 +114,7 @@ def test_shipped_intersection_scene_is_honest(vehicle):
     start = make_hitch_consistent(veh, {b.name: states[b.name] for b in veh.bodies})
     w, road = sc.runout.wheels[vehicle], sc.runout.road
     ref = simulate_runout(veh, start, w, road, REFERENCE)
-    res, rep = simulate_to_accuracy(veh, start, w, road, 0.01, math.radians(0.5), sc.runout.options)
+    res, rep = _simulate_to_accuracy(veh, start, w, road, 0.01, math.radians(0.5), sc.runout.options)
     check_honest(res, rep, ref)
     # "1 cm" is met by the first pair of tolerances plus the check: three runs
     assert rep.n_runs == 3 and rep.settings["rtol"] == 1e-4
@@ -123,10 +123,10 @@ def test_shipped_intersection_scene_is_honest(vehicle):
 def test_rigid_level_and_unreachable_target():
     veh = tractor_semitrailer()
     start = chain_states(veh, (0, 0), 0.0, (15.0, 0.0), yaw_rates=[0.2, 0.2])
-    res, rep = simulate_to_accuracy(veh, start, None, Road(0.7), 0.01, level="rigid")
+    res, rep = _simulate_to_accuracy(veh, start, None, Road(0.7), 0.01, level="rigid")
     assert rep.met and res.options["level"] == "rigid"
     # a micrometre with rtol stopped at 1e-4: not met, said so, and the last run is returned
-    res, rep = simulate_to_accuracy(car(), {"car": BodyState((0, 0), 0.0, (20.0, 0.0))}, None, Road(0.7), 1e-6,
+    res, rep = _simulate_to_accuracy(car(), {"car": BodyState((0, 0), 0.0, (20.0, 0.0))}, None, Road(0.7), 1e-6,
                                     min_rtol=1e-4)
     assert not rep.met and "min_rtol" in rep.message
     assert res.options["rtol"] == 1e-4
@@ -136,11 +136,11 @@ def test_rigid_level_and_unreachable_target():
 def test_errors():
     start = {"car": BodyState((0, 0), 0.0, (10.0, 0.0))}
     with pytest.raises(ScenarioError, match="positive"):
-        simulate_to_accuracy(car(), start, None, Road(0.7), 0.0)
+        _simulate_to_accuracy(car(), start, None, Road(0.7), 0.0)
     with pytest.raises(ScenarioError, match="positive"):
-        simulate_to_accuracy(car(), start, None, Road(0.7), 0.01, -1.0)
+        _simulate_to_accuracy(car(), start, None, Road(0.7), 0.01, -1.0)
     with pytest.raises(ScenarioError, match="numerically integrated level"):
-        simulate_to_accuracy(car(), start, None, Road(0.7), 0.01, level="energy")
+        _simulate_to_accuracy(car(), start, None, Road(0.7), 0.01, level="energy")
     no_drag = WheelSettings(default=WheelSetting("rolling", cornering_coefficient=8.6, rolling_resistance=0.0))
     with pytest.raises(ScenarioError, match="never come to rest|no deceleration"):
-        simulate_to_accuracy(car(), start, no_drag, Road(0.7), 0.01)
+        _simulate_to_accuracy(car(), start, no_drag, Road(0.7), 0.01)

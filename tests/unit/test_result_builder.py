@@ -8,7 +8,7 @@ import pytest
 
 from crashsim.motion import Road, RunoutOptions, WheelSettings
 from crashsim.motion.hitches import RunoutModel
-from crashsim.motion.levels import energy_runout
+from crashsim.motion.levels import _energy_runout
 from crashsim.motion.postprocess import ResultInputs, build_result
 from crashsim.motion.loads import STANDARD_GRAVITY as G
 from crashsim.vehicles import Axle, Body, BodyState, Hitch, Vehicle, chain_states
@@ -62,7 +62,7 @@ def test_the_energy_level_builds_through_the_one_builder():
                    axles=(Axle(-3.0, 1.85, True), Axle(-4.3, 1.85, True), Axle(-5.6, 1.85, True)))
     ts = Vehicle("ts", (tractor, trailer), (Hitch((-2.0, 0.0), (6.0, 0.0)),))
     start = chain_states(ts, (0.0, 0.0), 0.0, (15.0, 0.0))
-    res = energy_runout(ts, start, None, Road(0.7))
+    res = _energy_runout(ts, start, None, Road(0.7))
     d = 15.0**2 / (2 * 0.7 * G)
     for name, b in res.bodies.items():
         assert b.rest_position[0] - b.initial.position[0] == pytest.approx(d, rel=1e-12)

@@ -12,7 +12,7 @@ import pytest
 from crashsim.errors import ScenarioError
 from crashsim.impact import solve_impact
 from crashsim.motion import Road, RunoutOptions, Runout, make_hitch_consistent, run_runout, simulate_scene
-from crashsim.motion.accuracy import scene_to_accuracy, simulate_to_accuracy
+from crashsim.motion.accuracy import _scene_to_accuracy, _simulate_to_accuracy
 from crashsim.motion.levels import simulate_level
 from crashsim.scenario import load_scenario
 from crashsim.scene import run_scene
@@ -102,13 +102,13 @@ def test_an_accuracy_target_is_an_option():
     cars = [_car("a"), _car("b")]
     opts = RunoutOptions()
     run = run_runout(cars, start, None, Road(0.75), opts, accuracy=0.01)
-    joint, report = scene_to_accuracy(cars, start, None, Road(0.75), 0.01, None, opts)
+    joint, report = _scene_to_accuracy(cars, start, None, Road(0.75), 0.01, None, opts)
     assert set(run.accuracy) == {"a", "b"} and run.accuracy["a"] is run.accuracy["b"] and report.met
     _same_report(run.accuracy["a"], report)
     for name in ("a", "b"):
         _same(run.vehicles[name], joint.vehicles[name])
     alone = run_runout(cars, start, None, Road(0.75), opts, level="rigid", accuracy=0.01)
-    res, rep = simulate_to_accuracy(cars[0], {"a": start["a"]}, None, Road(0.75), 0.01, None, opts, level="rigid")
+    res, rep = _simulate_to_accuracy(cars[0], {"a": start["a"]}, None, Road(0.75), 0.01, None, opts, level="rigid")
     _same(alone.vehicles["a"], res)
     _same_report(alone.accuracy["a"], rep)
 
@@ -118,3 +118,29 @@ def _same_report(a, b):
                                                                          b.estimate_heading, b.message)
 
 
+
+
+def test_every_level_has_one_runner_of_each_kind_registered_where_it_is_defined():
+    """run_runout dispatches through the registry (crashsim.motion.runners), which holds every level."""
+    from crashsim.motion.levels import LEVELS
+    from crashsim.motion.runners import ACCURACY_RUNNERS, RUNNERS, register_runner
+
+    assert sorted(RUNNERS) == sorted(LEVELS) and sorted(ACCURACY_RUNNERS) == sorted(LEVELS)
+    where = {level: fn.__module__.rsplit(".", 1)[1] for level, fn in RUNNERS.items()}
+    assert where == {"impact": "levels", "energy": "levels", "rigid": "levels", "articulated": "simulate",
+                     "load_transfer": "simulate"}
+    where = {level: fn.__module__.rsplit(".", 1)[1] for level, fn in ACCURACY_RUNNERS.items()}
+    assert where == {"impact": "levels", "energy": "accuracy", "rigid": "accuracy", "articulated": "accuracy",
+                     "load_transfer": "accuracy"}
+    with pytest.raises(ValueError, match="already has a runner"):
+        register_runner("energy")(lambda call: None)
+    assert RUNNERS["energy"].__name__ == "_each_alone"
+
+
+def test_the_runout_entry_points_are_run_runout_and_its_two_conveniences():
+    import crashsim.motion as motion
+    from crashsim.motion import accuracy, engine, levels, runout, simulate
+
+    runs = {name for mod in (motion, accuracy, engine, levels, runout, simulate) for name in mod.__all__
+            if callable(getattr(mod, name)) and ("runout" in name or "simulate" in name or name.startswith("run"))}
+    assert runs == {"run_runout", "simulate_runout", "simulate_scene"}

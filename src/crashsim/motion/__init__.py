@@ -3,11 +3,12 @@
 Public API
 ----------
 run_runout, Runout
-    The one run-out entry: a scene's movable vehicles at a fidelity level (``level=``), on an
+    The one run-out door: a scene's movable vehicles at a fidelity level (``level=``), on an
     engine (``engine=`` or ``RunoutOptions.engine``), optionally to an accuracy target
-    (``accuracy=``); what the scene run, the approach and the warm-up call.
+    (``accuracy=``); what the scene run, the approach and the warm-up call.  The levels are
+    dispatched through a registry (:mod:`crashsim.motion.runners`).
 simulate_runout, simulate_scene
-    Integrate the run-out of one vehicle / of a whole scene (every vehicle together, with
+    Conveniences: integrate the run-out of one vehicle / of a whole scene (every vehicle together, with
     contact between them and with fixed obstacles: secondary impacts by the impulse solver,
     sustained contact as a force), with SciPy's integrators (``RunoutOptions(engine="scipy")``,
     the default) or the numba-compiled engine (``engine="compiled"``: same model, events and
@@ -84,7 +85,8 @@ __getattr__, __dir__ = lazy_exports(__name__, {
     **dict.fromkeys(("BodyHistory", "BodyRunout", "HitchHistory", "PairSummary", "RunoutEvent", "RunoutResult",
                      "SceneRunout", "SecondaryImpact", "TrackSegment", "WheelTrack"), ".result"),
     **dict.fromkeys(("FrictionZone", "Road"), ".road"),
-    **dict.fromkeys(("Runout", "run_runout"), ".runout"),
+    "Runout": ".runners",
+    "run_runout": ".runout",
     **dict.fromkeys(("simulate_runout", "simulate_scene"), ".simulate"),
     **dict.fromkeys(("LATERAL_MODELS", "lateral_force", "tyre_forces"), ".tyres"),
     **dict.fromkeys(("WHEEL_STATES", "ScheduledChange", "WheelSetting", "WheelSettings"), ".wheels"),

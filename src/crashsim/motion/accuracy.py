@@ -1,6 +1,6 @@
 """Run-out to a requested accuracy: the cheapest tolerance that meets it, with an error estimate.
 
-``simulate_to_accuracy(..., target_position=0.01)`` ("1 cm") answers two questions at once:
+``run_runout(..., accuracy=0.01)`` ("1 cm") answers two questions at once:
 which solver settings are needed, and how large the error of the returned result is.  The
 error of a rest position (against the same model integrated exactly, with ``eps`` and
 ``v_stop`` -> 0) has two parts, each with a share of the target:
@@ -100,10 +100,11 @@ from .loads import STANDARD_GRAVITY
 from .options import RunoutOptions
 from .result import RunoutResult
 from .road import Road
+from .runners import Runout, RunoutCall, register_runner
 from .simulate import simulate_scene
 from .wheels import WheelSettings
 
-__all__ = ["AccuracyReport", "AccuracyRun", "SHARES", "simulate_to_accuracy", "scene_to_accuracy"]
+__all__ = ["AccuracyReport", "AccuracyRun", "SHARES"]
 
 _log = logging.getLogger("crashsim")
 
@@ -149,7 +150,7 @@ class AccuracyRun:
 
 @dataclass(frozen=True)
 class AccuracyReport:
-    """What :func:`simulate_to_accuracy` promised and what it cost (SI: m, rad, s).
+    """What a run-out to an accuracy target (:func:`~crashsim.motion.run_runout`, ``accuracy=``) promised and what it cost (SI: m, rad, s).
 
     Attributes
     ----------
@@ -303,7 +304,7 @@ def _largest(fn, lo: float, hi: float) -> float:
 
 
 # ---------------------------------------------------------------------------------------------- driver
-def simulate_to_accuracy(
+def _simulate_to_accuracy(
     vehicle: Vehicle,
     initial: Mapping[str, BodyState],
     wheels: WheelSettings | None,
@@ -356,7 +357,7 @@ def simulate_to_accuracy(
     --------
     >>> from crashsim.vehicles import Axle, Body, Vehicle, BodyState
     >>> car = Vehicle("car", (Body("car", 1500.0, 2500.0, axles=(Axle(1.2, 1.5), Axle(-1.4, 1.5))),))
-    >>> res, rep = simulate_to_accuracy(car, {"car": BodyState((0, 0), 0.0, (20.0, 0.0))}, None, Road(0.75), 0.01)
+    >>> res, rep = _simulate_to_accuracy(car, {"car": BodyState((0, 0), 0.0, (20.0, 0.0))}, None, Road(0.75), 0.01)
     >>> rep.met, rep.estimate_position <= 0.01
     (True, True)
     """
@@ -377,12 +378,12 @@ def simulate_to_accuracy(
     return result, report
 
 
-def scene_to_accuracy(
+def _scene_to_accuracy(
     vehicles, initial, wheels, road: Road, target_position: float, target_heading: float | None = None,
     base_options: RunoutOptions = RunoutOptions(), *, level: str | None = None, start_rtol: float = 1e-3,
     min_rtol: float = 1e-10, atol_ratio: float = 1e-2, **contact,
 ):
-    """:func:`simulate_to_accuracy` for a whole scene (:func:`~crashsim.motion.simulate_scene`, with contact).
+    """:func:`_simulate_to_accuracy` for a whole scene (:func:`~crashsim.motion.simulate_scene`, with contact).
 
     Every body of every vehicle counts; the bounds use the weakest deceleration of any
     vehicle.  ``contact`` takes ``simulate_scene``'s keywords (contact model, pair overrides,
@@ -414,6 +415,28 @@ def scene_to_accuracy(
     if not report.met:
         _log.warning("scene run-out: accuracy target not met: %s", report.message)
     return merged.scene, report
+
+
+@register_runner("energy", "rigid", accuracy=True)
+def _each_to_accuracy(call: RunoutCall) -> Runout:
+    """The runner of the levels without contact to an accuracy target: each movable vehicle alone
+    (``energy`` refuses a target: the hand calculation has no numerical error)."""
+    runout, reports = {}, {}
+    for veh in call.movable:
+        init = {b.name: call.initial[b.name] for b in veh.bodies}
+        runout[veh.name], reports[veh.name] = _simulate_to_accuracy(
+            veh, init, call.wheels.get(veh.name), call.road, call.accuracy, call.accuracy_heading, call.options,
+            level=call.level)
+    return Runout(runout, None, reports)
+
+
+@register_runner("articulated", "load_transfer", accuracy=True)
+def _joint_to_accuracy(call: RunoutCall) -> Runout:
+    """The contact levels' runner to an accuracy target: the scene together (one report for every vehicle)."""
+    joint, report = _scene_to_accuracy(call.movable, call.initial, call.wheels, call.road, call.accuracy,
+                                       call.accuracy_heading, call.options, level=call.level, contact=call.contact,
+                                       pair_contact=call.pair_contact, obstacles=call.obstacles)
+    return Runout(dict(joint.vehicles), joint, {v.name: report for v in call.movable})
 
 
 class _Merged:

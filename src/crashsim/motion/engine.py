@@ -43,7 +43,7 @@ import logging
 import math
 import time
 from dataclasses import dataclass, field
-from typing import Mapping
+from typing import Mapping, NamedTuple
 
 import numpy as np
 from numba.core import event as numba_event
@@ -60,7 +60,7 @@ from .postprocess import GL_NODES, GL_WEIGHTS, assemble_scene, mode_snapshot, se
 from .result import (BodyHistory, BodyRunout, HitchHistory, PairSummary, RunoutEvent, RunoutResult, SceneRunout,
                      SecondaryImpact, limit_message)
 
-__all__ = ["run_model", "STATUS_OF_CODE"]
+__all__ = ["STATUS_OF_CODE"]
 
 _log = logging.getLogger("crashsim")
 
@@ -279,12 +279,32 @@ class WallClock(numba_event.Listener):
         return self.remaining() < 0.0
 
 
+class _Steps(NamedTuple):
+    """The steps and segments of compiled runs: the fields of the same names of
+    :class:`crashsim.motion.kernels.RunOutput` (several calls joined by :meth:`_CompiledIntegrator._joined`)."""
+
+    st_t: np.ndarray
+    st_h: np.ndarray
+    st_y: np.ndarray
+    st_q: np.ndarray
+    sg_t: np.ndarray
+    sg_s: np.ndarray
+    sg_phase: np.ndarray
+    sg_memb: np.ndarray
+    sg_nlk: np.ndarray
+    sg_lkj: np.ndarray
+    sg_lkth: np.ndarray
+    sg_pstate: np.ndarray
+    sg_pref: np.ndarray
+    sg_parked: np.ndarray
+
+
 class _CompiledIntegrator(_Integrator):
     """Segments integrated by the compiled loop (:func:`crashsim.motion.kernels.run`)."""
 
     def __init__(self, model: SceneModel):
         super().__init__(model)
-        self.parts: list[tuple] = []
+        self.parts: list[_Steps] = []
 
     def integrate(self, t, y, D, offsets, clock, counters, quad, log):
         k = kernels()
@@ -292,67 +312,67 @@ class _CompiledIntegrator(_Integrator):
         stops = np.array(model.segment_stops, dtype=float)
         out = k.run(float(t), np.ascontiguousarray(y, dtype=float), model.M, D, offsets, stops, GL_NODES, GL_WEIGHTS,
                     clock.remaining(), counters, quad)
-        status, t_end, y_end = int(out[0]), float(out[1]), np.array(out[2])
-        self.parts.append(out[3:17])
-        lg_t, lg_rec, geo = out[17], out[18], out[19]
-        for tt, row in zip(lg_t.tolist(), lg_rec):
+        status, t_end, y_end = int(out.status), float(out.t_end), np.array(out.y_end)
+        self.parts.append(_Steps(**{f: getattr(out, f) for f in _Steps._fields}))
+        for tt, row in zip(out.lg_t.tolist(), out.lg_rec):
             _log_records(model, tt, row[None, :], log)
-        return status, t_end, y_end, geo if status == k.ST_IMPACT else None
+        return status, t_end, y_end, out.geo if status == k.ST_IMPACT else None
 
     def _joined(self):
+        """The steps and segments of every kernel call so far, one :class:`_Steps` (None before the
+        first call); the segments' step indices count from the first call's first step."""
         if getattr(self, "_cache", None) is not None and self._cache[0] == len(self.parts):
             return self._cache[1]
-        if len(self.parts) == 1:  # one run of the kernel (no later impact): its arrays as they are
-            p = self.parts[0]
-            joined = ([p[i] for i in range(4)], p[5], [p[i] for i in range(4, 14)])
-            self._cache = (1, joined)
-            return joined
-        st = [np.concatenate([p[i] for p in self.parts]) for i in range(4)] if self.parts else None
-        offs = np.cumsum([0] + [len(p[0]) for p in self.parts[:-1]]) if self.parts else []
-        sg_s = np.concatenate([p[5] + off for p, off in zip(self.parts, offs)]) if self.parts else np.zeros((0, 2), np.int64)
-        sg = [np.concatenate([p[i] for p in self.parts]) for i in range(4, 14)] if self.parts else None
-        joined = (st, sg_s, sg)
+        if not self.parts:
+            joined = None
+        elif len(self.parts) == 1:  # one run of the kernel (no later impact): its arrays as they are
+            joined = self.parts[0]
+        else:
+            offs = np.cumsum([0] + [len(p.st_t) for p in self.parts[:-1]])
+            joined = _Steps(**{f: np.concatenate([getattr(p, f) for p in self.parts]) for f in _Steps._fields
+                               if f != "sg_s"},
+                            sg_s=np.concatenate([p.sg_s + off for p, off in zip(self.parts, offs)]))
         self._cache = (len(self.parts), joined)
         return joined
 
     def segment_table(self):
-        st, sg_s, sg = self._joined()
-        if sg is None:
+        j = self._joined()
+        if j is None:
             return []
-        sg_t, _, phase, memb, nlk, lkj, lkth, pstate, pref, parked = sg
-        return [(float(sg_t[i, 0]), float(sg_t[i, 1]),
-                 (int(phase[i]), memb[i], int(nlk[i]), lkj[i], lkth[i], pstate[i], pref[i], parked[i]))
-                for i in range(len(sg_t))]
+        return [(float(j.sg_t[i, 0]), float(j.sg_t[i, 1]),
+                 (int(j.sg_phase[i]), j.sg_memb[i], int(j.sg_nlk[i]), j.sg_lkj[i], j.sg_lkth[i], j.sg_pstate[i],
+                  j.sg_pref[i], j.sg_parked[i]))
+                for i in range(len(j.sg_t))]
 
     def segment_data(self, mode):
         """As :meth:`_Integrator.segment_data`, from the joined segment arrays (the same arrays as
         stacking :meth:`segment_table`'s modes, without the per-segment tuples)."""
-        _, _, sg = self._joined()
-        if sg is None or not len(sg[0]):  # no segment (at rest from the start): the mode's arrays
+        j = self._joined()
+        if j is None or not len(j.sg_t):  # no segment (at rest from the start): the mode's arrays
             return super().segment_data(mode)
-        sg_t, _, phase, memb, nlk, lkj, lkth, pstate, pref, parked = sg
-        bounds = list(zip(sg_t[:, 0].tolist(), sg_t[:, 1].tolist(), [None] * len(sg_t)))
+        bounds = list(zip(j.sg_t[:, 0].tolist(), j.sg_t[:, 1].tolist(), [None] * len(j.sg_t)))
         i64 = np.int64
-        return bounds, kernels().Segments(phase.astype(i64), memb.copy(), nlk.astype(i64), lkj.copy(), lkth.copy(),
-                                          pstate.astype(i64), pref.copy(), parked.astype(i64))
+        return bounds, kernels().Segments(j.sg_phase.astype(i64), j.sg_memb.copy(), j.sg_nlk.astype(i64),
+                                          j.sg_lkj.copy(), j.sg_lkth.copy(), j.sg_pstate.astype(i64),
+                                          j.sg_pref.copy(), j.sg_parked.astype(i64))
 
     def sample(self, T, seg_of, y_end):
-        st, sg_s, _ = self._joined()
-        if st is None or not len(T):
+        j = self._joined()
+        if j is None or not len(T):
             return np.repeat(y_end[:, None], len(T), axis=1)
-        return kernels().interpolate_samples(T, seg_of, sg_s, st[0], st[1], st[2], st[3], y_end, len(T))
+        return kernels().interpolate_samples(T, seg_of, j.sg_s, j.st_t, j.st_h, j.st_y, j.st_q, y_end, len(T))
 
     def step_edges(self) -> np.ndarray:
         """Start and end times of every step taken (sorted)."""
-        st, _, _ = self._joined()
-        return np.zeros(0) if st is None else np.unique(np.concatenate([st[0], st[0] + st[1]]))
+        j = self._joined()
+        return np.zeros(0) if j is None else np.unique(np.concatenate([j.st_t, j.st_t + j.st_h]))
 
     def solution(self, y_end, t_end):
-        st, _, _ = self._joined()
-        if st is None:
+        j = self._joined()
+        if j is None:
             n = y_end.size
             return CompiledSolution(np.zeros(0), np.zeros(0), np.zeros((0, n)), np.zeros((0, n, 1)), y_end, t_end)
-        return CompiledSolution(st[0], st[1], st[2], st[3], y_end, t_end)
+        return CompiledSolution(j.st_t, j.st_h, j.st_y, j.st_q, y_end, t_end)
 
     @property
     def method(self):

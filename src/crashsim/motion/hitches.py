@@ -41,7 +41,7 @@ import numpy as np
 from ..errors import ScenarioError, SolverError
 from ..vehicles import BodyState, Vehicle
 from .contact import ContactModel
-from .layout import StateLayout
+from .layout import SV_HEADING, SV_VX, SV_VY, SV_X, SV_Y, SV_YAW_RATE, StateLayout
 from .loads import StaticLoads, load_transfer_matrix, static_loads
 from .scene_model import SceneModel, kernels, reference_lengths
 from .options import RunoutOptions
@@ -72,16 +72,17 @@ def _hitch_pattern(nb: int, nh: int, lock_hitches: tuple[int, ...]) -> tuple[np.
     m = 2 * nh + len(lock_hitches)
     G = np.zeros((m, 3 * nb))
     j = np.arange(nh)
-    G[2 * j, j] = 1.0
-    G[2 * j, j + 1] = -1.0
-    G[2 * j + 1, nb + j] = 1.0
-    G[2 * j + 1, nb + j + 1] = -1.0
+    G[2 * j, SV_X * nb + j] = 1.0
+    G[2 * j, SV_X * nb + j + 1] = -1.0
+    G[2 * j + 1, SV_Y * nb + j] = 1.0
+    G[2 * j + 1, SV_Y * nb + j + 1] = -1.0
     for n, jl in enumerate(lock_hitches):
-        G[2 * nh + n, 2 * nb + jl] = 1.0
-        G[2 * nh + n, 2 * nb + jl + 1] = -1.0
+        G[2 * nh + n, SV_HEADING * nb + jl] = 1.0
+        G[2 * nh + n, SV_HEADING * nb + jl + 1] = -1.0
     flat = lambda rows, cols: rows * 3 * nb + cols  # noqa: E731
     variable = np.concatenate(
-        [flat(2 * j, 2 * nb + j), flat(2 * j, 2 * nb + j + 1), flat(2 * j + 1, 2 * nb + j), flat(2 * j + 1, 2 * nb + j + 1)]
+        [flat(2 * j, SV_HEADING * nb + j), flat(2 * j, SV_HEADING * nb + j + 1), flat(2 * j + 1, SV_HEADING * nb + j),
+         flat(2 * j + 1, SV_HEADING * nb + j + 1)]
     )
     G.setflags(write=False)
     return G.ravel(), variable
@@ -446,7 +447,7 @@ class RunoutModel:
         nb = L.n_bodies
         psi = Y[L.psi]
         c, s = np.cos(psi), np.sin(psi)
-        acc_x, acc_y = ydot[3 * nb: 4 * nb], ydot[4 * nb: 5 * nb]
+        acc_x, acc_y = ydot[SV_VX * nb: SV_VY * nb], ydot[SV_VY * nb: SV_YAW_RATE * nb]
         pos = np.stack([self.wheel_positions(Y[:, j]) for j in range(Y.shape[1])], axis=-1)  # (nw, 2, K)
         u, v = wk[:, :, k.W_U].T, wk[:, :, k.W_V].T
         fx, fy = wk[:, :, k.W_FX].T, wk[:, :, k.W_FY].T

@@ -37,6 +37,7 @@ import numpy as np
 
 from ..impact.multicontact import constrained_inverse, solve_contacts
 from ..impact.result import BodyImpact, pdof_from_force
+from .layout import SV_X, SV_Y, SV_HEADING, SV_VX, SV_VY, SV_YAW_RATE
 from .result import PairImpulse, RunoutEvent, SecondaryImpact
 from .scene_model import SceneModel, kernels
 
@@ -98,7 +99,7 @@ def impact_instant(model: SceneModel, t: float, y: np.ndarray, trigger: np.ndarr
     nd = len(bodies)
     dof = np.concatenate([np.array(bodies) + c * nb for c in range(3)])  # z order: vx.., vy.., w..
     minv = M.inv_mass[dof]
-    u = y[3 * nb:6 * nb][dof].copy()
+    u = y[SV_VX * nb:(SV_YAW_RATE + 1) * nb][dof].copy()
     G_all = k.hitch_jacobian(np.ascontiguousarray(y), M)
     keep = np.any(G_all[:, dof] != 0.0, axis=1)
     G = G_all[keep][:, dof]
@@ -113,7 +114,7 @@ def impact_instant(model: SceneModel, t: float, y: np.ndarray, trigger: np.ndarr
             if b < 0:
                 continue
             j = col[int(b)]
-            rx, ry = px - y[b], py - y[nb + b]
+            rx, ry = px - y[SV_X * nb + b], py - y[SV_Y * nb + b]
             Jn[r, j], Jn[r, nd + j], Jn[r, 2 * nd + j] = sign * nx, sign * ny, sign * (rx * ny - ry * nx)
             Jt[r, j], Jt[r, nd + j], Jt[r, 2 * nd + j] = sign * tx, sign * ty, sign * (rx * ty - ry * tx)
         c = model.pairs[p].contact
@@ -138,8 +139,8 @@ def impact_instant(model: SceneModel, t: float, y: np.ndarray, trigger: np.ndarr
         if D.pref[p, k.A_CRUSH] == k.PRESSED:
             D.pref[p, k.A_CRUSH] = 1.0
     ke_before = model.kinetic_energy(y)
-    v_before = {names[b]: (float(y[3 * nb + b]), float(y[4 * nb + b]), float(y[5 * nb + b])) for b in bodies}
-    y[3 * nb:6 * nb][dof] = sol.velocity
+    v_before = {names[b]: (float(y[SV_VX * nb + b]), float(y[SV_VY * nb + b]), float(y[SV_YAW_RATE * nb + b])) for b in bodies}
+    y[SV_VX * nb:(SV_YAW_RATE + 1) * nb][dof] = sol.velocity
     loss_total = ke_before - model.kinetic_energy(y)
     # closed stops the impact turns away from open (from the last, so the indices hold)
     opened = []
@@ -194,15 +195,15 @@ def impact_instant(model: SceneModel, t: float, y: np.ndarray, trigger: np.ndarr
             delta_v[names[b]] = dv
             vb = v_before[names[b]]
             crush = force if b == ia else (-force if b == ib else None)
-            heading = float(y[2 * nb + b])
+            heading = float(y[SV_HEADING * nb + b])
             mass = float(model.mass[b])
-            va, vz = np.array(vb[:2]), np.array([y[3 * nb + b], y[4 * nb + b]])
+            va, vz = np.array(vb[:2]), np.array([y[SV_VX * nb + b], y[SV_VY * nb + b]])
             impacts[names[b]] = BodyImpact(
                 name=names[b], vehicle=model.vehicle_of_body(b).name, heading=heading, velocity_before=va,
-                velocity=vz, yaw_rate_before=vb[2], yaw_rate=float(y[5 * nb + b]), delta_v=np.array(dv),
+                velocity=vz, yaw_rate_before=vb[2], yaw_rate=float(y[SV_YAW_RATE * nb + b]), delta_v=np.array(dv),
                 crush_impulse=crush, pdof=None if crush is None else pdof_from_force(crush, heading),
                 ke_before=0.5 * mass * float(va @ va) + 0.5 * float(model.inertia[b]) * vb[2] ** 2,
-                ke_after=0.5 * mass * float(vz @ vz) + 0.5 * float(model.inertia[b]) * float(y[5 * nb + b]) ** 2,
+                ke_after=0.5 * mass * float(vz @ vz) + 0.5 * float(model.inertia[b]) * float(y[SV_YAW_RATE * nb + b]) ** 2,
                 mass=mass)
         if pair.obstacle:
             impacts[pair.b] = BodyImpact(name=pair.b, vehicle=pair.b, heading=0.0, velocity_before=np.zeros(2),

@@ -22,7 +22,14 @@ import numpy as np
 from ..errors import ScenarioError
 from ..vehicles import BodyState
 
-__all__ = ["StateLayout"]
+__all__ = ["StateLayout", "SV_X", "SV_Y", "SV_HEADING", "SV_VX", "SV_VY", "SV_YAW_RATE", "SV_AX_F", "SV_AY_F"]
+
+#: Field offsets of the state vector, in units of the number of bodies ``nb``: field ``F`` of body
+#: ``i`` is ``y[F * nb + i]`` (the order of :attr:`StateLayout.FIELDS`, then the filtered
+#: accelerations).  The kernels compile them in as constants (:func:`crashsim._jit.kernel_sources`
+#: lists this module).  The first three also address the generalised coordinates
+#: z = (X..., Y..., psi...) (the columns of a hitch Jacobian).
+SV_X, SV_Y, SV_HEADING, SV_VX, SV_VY, SV_YAW_RATE, SV_AX_F, SV_AY_F = range(8)
 
 
 @dataclass(frozen=True)

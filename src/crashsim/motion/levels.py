@@ -1,15 +1,16 @@
 """Fidelity levels of the post-impact run-out: from impact only to articulated run-out with load transfer.
 
-A scenario chooses how much of the run-out to model.  Every level is a documented model;
-:func:`simulate_level` runs one of them and returns the same result type as
-:func:`~crashsim.motion.simulate_runout` (a :class:`~crashsim.motion.RunoutResult`: rest
-positions and headings, times to rest, histories, wheel tracks), so evidence checks, reports
-and plots work unchanged.
+A scenario chooses how much of the run-out to model.  Every level is a documented model, run
+through :func:`~crashsim.motion.run_runout` (``level=``); this module registers the runners of
+``impact``, ``energy`` and ``rigid`` (:mod:`crashsim.motion.runners`).  Every level gives the same
+result type as :func:`~crashsim.motion.simulate_runout` per vehicle (a
+:class:`~crashsim.motion.RunoutResult`: rest positions and headings, times to rest, histories,
+wheel tracks), so evidence checks, reports and plots work unchanged.
 
 =================  ===========================================================================
 level              model
 =================  ===========================================================================
-``impact``         Impact only: no run-out is computed (:func:`simulate_level` returns None;
+``impact``         Impact only: no run-out is computed (``run_runout`` returns no results;
                    equivalent to a scenario without a ``[runout]`` section).
 ``energy``         Hand calculation by work and energy (below).  Closed form, no integration.
 ``rigid``          Every body of the vehicle runs out alone, the hitch ignored (below).
@@ -132,12 +133,12 @@ from .options import RunoutOptions
 from .postprocess import ResultInputs, build_result
 from .result import BodyRunout, HitchHistory, RunoutEvent, RunoutResult
 from .road import Road, slope_gravity
+from .runners import Runout, RunoutCall, register_runner
 from .simulate import simulate_runout
 from .tyres import tyre_forces
 from .wheels import WheelSettings
 
-__all__ = ["LEVELS", "LEVEL_DESCRIPTIONS", "check_level", "simulate_level", "energy_runout",
-           "rigid_runout"]
+__all__ = ["LEVELS", "LEVEL_DESCRIPTIONS", "check_level"]
 
 _log = logging.getLogger("crashsim")
 
@@ -235,16 +236,31 @@ def simulate_level(
     """
     check_level(level)
     settings = _check_inputs(vehicle, road, options, wheels)
-    if level == "impact":
-        return None
-    if level == "energy":
-        return energy_runout(vehicle, initial, settings, road, options)
-    if level == "rigid":
-        return rigid_runout(vehicle, initial, settings, road, options)
+    return _ALONE[level](level, vehicle, initial, settings, road, options)
 
+
+def _articulated_alone(level, vehicle, initial, settings, road, options) -> RunoutResult:
+    """Levels ``articulated`` and ``load_transfer`` of one vehicle alone: :func:`~crashsim.motion.simulate_runout`."""
     opts = dataclasses.replace(options, load_transfer=(level == "load_transfer"))
     res = simulate_runout(vehicle, initial, settings, road, opts)
     return dataclasses.replace(res, options={**res.options, "level": level})
+
+
+@register_runner("impact")
+@register_runner("impact", accuracy=True)
+def _no_runout(call: RunoutCall) -> Runout:
+    """Level ``impact``'s runner: no run-out (whatever the accuracy target)."""
+    return Runout(None, None, None)
+
+
+@register_runner("energy", "rigid")
+def _each_alone(call: RunoutCall) -> Runout:
+    """The runner of the levels without contact (``energy``, ``rigid``): each movable vehicle alone."""
+    runout = {}
+    for veh in call.movable:
+        init = {b.name: call.initial[b.name] for b in veh.bodies}
+        runout[veh.name] = simulate_level(call.level, veh, init, call.wheels.get(veh.name), call.road, call.options)
+    return Runout(runout, None, None)
 
 
 # ---------------------------------------------------------------------------------------------- energy
@@ -348,7 +364,7 @@ def _drag_factors(settings, mu_road: float, beta: np.ndarray, air=None, load=Non
     return out
 
 
-def energy_runout(
+def _energy_runout(
     vehicle: Vehicle,
     initial: Mapping[str, BodyState],
     wheels: WheelSettings | None,
@@ -586,7 +602,7 @@ def _own_rest_time(body: BodyRunout, l_ref: float, v_stop: float, t_end: float) 
     return b
 
 
-def rigid_runout(
+def _rigid_runout(
     vehicle: Vehicle,
     initial: Mapping[str, BodyState],
     wheels: WheelSettings | None,
@@ -631,3 +647,13 @@ def rigid_runout(
                                     articulation=hf.heading - hr.heading, stop_moment=np.zeros(hf.t.size)))
     return dataclasses.replace(res, bodies=bodies, hitches=tuple(hitches), max_hitch_gap=gap,
                                method=f"rigid/{res.method}", options={**res.options, "level": "rigid"})
+
+
+#: One vehicle alone at each level: ``fn(level, vehicle, initial, settings, road, options)`` (:func:`simulate_level`).
+_ALONE = {
+    "impact": lambda level, *inputs: None,
+    "energy": lambda level, *inputs: _energy_runout(*inputs),
+    "rigid": lambda level, *inputs: _rigid_runout(*inputs),
+    "articulated": _articulated_alone,
+    "load_transfer": _articulated_alone,
+}

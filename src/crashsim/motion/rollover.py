@@ -63,6 +63,7 @@ from scipy.optimize import brentq
 from ..errors import ScenarioError
 from ..units import G0 as STANDARD_GRAVITY
 from ..vehicles import MAX_ROLLOVER_THRESHOLD, Body
+from .layout import SV_AX_F, SV_AY_F
 from .scene_model import kernels
 from .result import RunoutEvent
 
@@ -184,7 +185,7 @@ class RollMonitor:
 
     def loads(self, Y: np.ndarray, gn: np.ndarray) -> np.ndarray:
         """Unclamped contact loads (nw, K) [N] of states ``Y`` (n, K)."""
-        acc = Y[6 * self.nb: 8 * self.nb]
+        acc = Y[SV_AX_F * self.nb: (SV_AY_F + 1) * self.nb]
         return (self.n0 * gn)[:, None] + self.transfer @ acc
 
     def values(self, Y: np.ndarray, gn: np.ndarray):
@@ -193,7 +194,7 @@ class RollMonitor:
         axle's lift indicator (n_axles, K) (None without axles)."""
         nb = self.nb
         n0, static, g_body = self._statics(gn)
-        N = n0[:, None] + self.transfer @ Y[6 * nb: 8 * nb]  # the loads (as loads())
+        N = n0[:, None] + self.transfer @ Y[SV_AX_F * nb: (SV_AY_F + 1) * nb]  # the loads (as loads())
         K = N.shape[1]
         lift = np.full((nb, K), -np.inf)
         g = None
@@ -202,7 +203,7 @@ class RollMonitor:
             lift[self.ax_bodies] = np.maximum.reduceat(g, self.ax_first, axis=0)  # each body's largest
         tot = self.member @ N
         ltr = np.divide(self.signed @ N, tot, out=np.zeros((nb, K)), where=tot > 0)
-        ay = Y[7 * nb: 8 * nb] / g_body
+        ay = Y[SV_AY_F * nb: (SV_AY_F + 1) * nb] / g_body
         ind = {"wheel_lift": lift, "unit_lift": np.abs(ltr) - 1.0,
                "rollover_threshold": np.abs(ay) - self.thresholds[:, None]}
         return ind, ltr, ay, N, g
@@ -243,8 +244,8 @@ class RollMonitor:
             on = self.member[i] > 0
             w = float(self.n0[on].sum())
             gn_i = float(np.dot(self.n0[on], gn[on]) / w) if w > 0 else 1.0
-            return abs(float(y[7 * nb + i])) / (STANDARD_GRAVITY * gn_i) - float(self.thresholds[i])
-        acc = y[6 * nb: 8 * nb]
+            return abs(float(y[SV_AY_F * nb + i])) / (STANDARD_GRAVITY * gn_i) - float(self.thresholds[i])
+        acc = y[SV_AX_F * nb: (SV_AY_F + 1) * nb]
         if kind == "wheel_lift":
             rows = np.flatnonzero(self.ax_body == i)
             if not rows.size:

@@ -4,33 +4,36 @@
 separation to rest.  The fidelity level (:mod:`crashsim.motion.levels`), the engine
 (``RunoutOptions.engine``, or ``engine=``) and an accuracy target (:mod:`crashsim.motion.accuracy`)
 are its options; the scene run (:func:`crashsim.scene.run_scene`), the approach, the warm-up and
-the API all come through it.
+the API all come through it.  :func:`~crashsim.motion.simulate_runout` (one vehicle) and
+:func:`~crashsim.motion.simulate_scene` (a scene, with contact) are the documented shortcuts of
+its contact levels.
 
-What it calls, one model each (public, and documented where they are):
+It checks the inputs and hands them, as a :class:`~crashsim.motion.runners.RunoutCall`, to the
+runner registered for the level (:mod:`crashsim.motion.runners`; with an accuracy target, the
+level's accuracy runner):
 
 * ``articulated`` / ``load_transfer``: every vehicle together with contact, the scene packed once
-  (:class:`~crashsim.motion.scene_model.SceneModel`) and integrated by
-  :func:`~crashsim.motion.engine.run_model` (the same as :func:`~crashsim.motion.simulate_scene`);
-  with an accuracy target, :func:`~crashsim.motion.accuracy.scene_to_accuracy`;
-* ``energy`` / ``rigid``: each vehicle alone, without contact (:func:`~crashsim.motion.levels.simulate_level`;
-  with an accuracy target, :func:`~crashsim.motion.accuracy.simulate_to_accuracy`);
+  (:class:`~crashsim.motion.scene_model.SceneModel`) and integrated by the engine
+  (:mod:`crashsim.motion.engine`), as :func:`~crashsim.motion.simulate_scene` (registered in
+  :mod:`crashsim.motion.simulate`; to an accuracy target in :mod:`crashsim.motion.accuracy`);
+* ``energy`` / ``rigid``: each vehicle alone, without contact (registered in
+  :mod:`crashsim.motion.levels`; to an accuracy target in :mod:`crashsim.motion.accuracy`);
 * ``impact``: no run-out.
 """
 
 from __future__ import annotations
 
 import dataclasses
-from typing import Iterable, Mapping, NamedTuple, Sequence
+from typing import Iterable, Mapping, Sequence
 
 from ..errors import ScenarioError
 from ..vehicles import BodyState, Vehicle
-from .accuracy import scene_to_accuracy, simulate_to_accuracy
+from . import accuracy as _accuracy  # noqa: F401  (registers the accuracy runners; levels and simulate: the others)
 from .contact import ContactModel, Obstacle
-from .engine import run_model
-from .levels import check_level, simulate_level
+from .levels import check_level
 from .options import ENGINES, RunoutOptions
-from .result import SceneRunout
 from .road import Road
+from .runners import ACCURACY_RUNNERS, RUNNERS, Runout, RunoutCall
 from .scene_model import SceneModel
 from .simulate import check_common
 from .wheels import WheelSettings
@@ -40,23 +43,6 @@ __all__ = ["CONTACT_LEVELS", "Runout", "run_runout"]
 #: Fidelity levels whose run-out models contact between vehicles and with obstacles (every vehicle
 #: runs together); the others run each vehicle alone.
 CONTACT_LEVELS = ("articulated", "load_transfer")
-
-
-class Runout(NamedTuple):
-    """What :func:`run_runout` returns.
-
-    vehicles : dict of str to RunoutResult, or None
-        Per movable vehicle (None at the ``impact`` level).
-    joint : SceneRunout or None
-        The joint run of the contact levels (secondary impacts, pairs, events, energy ledger);
-        None at the other levels.
-    accuracy : dict of str to AccuracyReport, or None
-        Per vehicle, when an accuracy target was given (the contact levels share one report).
-    """
-
-    vehicles: dict | None
-    joint: SceneRunout | None
-    accuracy: dict | None
 
 
 def run_runout(
@@ -131,29 +117,9 @@ def run_runout(
     for v in vehicles:
         if not isinstance(v, Vehicle):
             raise ScenarioError(f"must be a Vehicle, got {type(v).__name__}", field="vehicles")
-    wheels_by_vehicle = dict(wheels_by_vehicle or {})
-    movable = [v for v in vehicles if not v.is_barrier]
-    if level == "impact":
-        return Runout(None, None, None)
-    if level in CONTACT_LEVELS:
-        if accuracy is None:
-            if model is None:
-                model = SceneModel(movable, wheels_by_vehicle, road, options, contact=contact,
-                                   pair_contact=pair_contact, obstacles=obstacles)
-            joint = run_model(model, initial, lean=lean)
-            return Runout(dict(joint.vehicles), joint, None)
-        joint, report = scene_to_accuracy(movable, initial, wheels_by_vehicle, road, accuracy, accuracy_heading,
-                                          options, level=level, contact=contact, pair_contact=pair_contact,
-                                          obstacles=obstacles)
-        return Runout(dict(joint.vehicles), joint, {v.name: report for v in movable})
-    runout, reports = {}, ({} if accuracy is not None else None)
-    for veh in movable:
-        init = {b.name: initial[b.name] for b in veh.bodies}
-        wheels = wheels_by_vehicle.get(veh.name)
-        if accuracy is not None:
-            runout[veh.name], reports[veh.name] = simulate_to_accuracy(
-                veh, init, wheels, road, accuracy, accuracy_heading, options, level=level)
-        else:
-            runout[veh.name] = simulate_level(level, veh, init, wheels, road, options)
-    return Runout(runout, None, reports)
+    call = RunoutCall(movable=[v for v in vehicles if not v.is_barrier], initial=initial,
+                      wheels=dict(wheels_by_vehicle or {}), road=road, options=options, level=level, contact=contact,
+                      pair_contact=pair_contact, obstacles=obstacles, accuracy=accuracy,
+                      accuracy_heading=accuracy_heading, model=model, lean=lean)
+    return (RUNNERS if accuracy is None else ACCURACY_RUNNERS)[level](call)
 

@@ -1,4 +1,8 @@
-"""Run-out to rest: the public entry points (one vehicle, or a whole scene with contact).
+"""Run-out to rest: the conveniences for one vehicle and for a whole scene with contact.
+
+:func:`simulate_runout` and :func:`simulate_scene` are the documented shortcuts; the one door
+of the run-out is :func:`~crashsim.motion.run_runout`, and this module registers its runner of
+the contact levels (``articulated``, ``load_transfer``: every vehicle together, with contact).
 
 The run-out of a scene integrates every movable vehicle together, from the first separation
 until every vehicle is at rest, with contact between bodies of different vehicles and with
@@ -37,6 +41,7 @@ from .scene_model import SceneModel
 from .options import RunoutOptions
 from .result import RunoutResult, SceneRunout
 from .road import Road
+from .runners import Runout, RunoutCall, register_runner
 from .wheels import WheelSettings
 
 __all__ = ["simulate_runout", "simulate_scene", "zone_membership"]
@@ -113,6 +118,18 @@ def simulate_scene(
     model = SceneModel(vehicles, wheels_by_vehicle, road, options, contact=contact, pair_contact=pair_contact,
                        obstacles=obstacles)
     return run_model(model, initial)
+
+
+@register_runner("articulated", "load_transfer")
+def _run_joint(call: RunoutCall) -> Runout:
+    """The contact levels' runner: every movable vehicle together, with contact (the scene packed
+    once, or ``call.model`` reused), as :func:`simulate_scene`."""
+    model = call.model
+    if model is None:
+        model = SceneModel(call.movable, call.wheels, call.road, call.options, contact=call.contact,
+                           pair_contact=call.pair_contact, obstacles=call.obstacles)
+    joint = run_model(model, call.initial, lean=call.lean)
+    return Runout(dict(joint.vehicles), joint, None)
 
 
 def simulate_runout(

@@ -12,6 +12,7 @@ import math
 
 from numba import njit
 
+from ..layout import SV_X, SV_Y, SV_HEADING
 from .jit import HOT, INLINE, JIT
 from .arrays import (A_CRUSH, A_PA, A_PB, A_XA, A_XB, A_YA, A_YB, C_EPS, CRUSH_REACH, DAMPER_DEPTH, N_A, N_Q,
     PS_ARMED, PS_CONTACT, PS_DISARMED, Q_ALLOW, Q_CRUSH, Q_DEPTH, Q_NX, Q_NY, Q_X, Q_Y, R_ARM, R_C, R_K, R_MU,
@@ -27,7 +28,7 @@ def body_pose(y, M, cs, i):
     if i < 0:
         return 0.0, 0.0, 1.0, 0.0
     nb = M.body.shape[0]
-    return y[i], y[nb + i], cs[0, i], cs[1, i]
+    return y[SV_X * nb + i], y[SV_Y * nb + i], cs[0, i], cs[1, i]
 
 
 @njit(**INLINE)
@@ -172,13 +173,13 @@ def pair_forces(y, M, D, cs, p, f, pts, fc):
             power += fx * rvx + fy * rvy
             f[ia] += fx
             f[nb + ia] += fy
-            f[2 * nb + ia] += (px - y[ia]) * fy - (py - y[nb + ia]) * fx
+            f[2 * nb + ia] += (px - y[SV_X * nb + ia]) * fy - (py - y[SV_Y * nb + ia]) * fx
             fc[ia] += fx
             fc[nb + ia] += fy
             if ib >= 0:
                 f[ib] -= fx
                 f[nb + ib] -= fy
-                f[2 * nb + ib] -= (px - y[ib]) * fy - (py - y[nb + ib]) * fx
+                f[2 * nb + ib] -= (px - y[SV_X * nb + ib]) * fy - (py - y[SV_Y * nb + ib]) * fx
                 fc[ib] -= fx
                 fc[nb + ib] -= fy
     return power
@@ -404,13 +405,13 @@ def set_reference(y, M, D, p):
     ib = M.pair_body[p, 1]
     pref = D.pref
     pref[p, A_CRUSH] = 1.0
-    pref[p, A_XA] = y[ia]
-    pref[p, A_YA] = y[nb + ia]
-    pref[p, A_PA] = y[2 * nb + ia]
+    pref[p, A_XA] = y[SV_X * nb + ia]
+    pref[p, A_YA] = y[SV_Y * nb + ia]
+    pref[p, A_PA] = y[SV_HEADING * nb + ia]
     if ib >= 0:
-        pref[p, A_XB] = y[ib]
-        pref[p, A_YB] = y[nb + ib]
-        pref[p, A_PB] = y[2 * nb + ib]
+        pref[p, A_XB] = y[SV_X * nb + ib]
+        pref[p, A_YB] = y[SV_Y * nb + ib]
+        pref[p, A_PB] = y[SV_HEADING * nb + ib]
 
 
 @njit(**JIT)

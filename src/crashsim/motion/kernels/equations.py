@@ -12,6 +12,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ..layout import SV_VX, SV_VY, SV_YAW_RATE, SV_AX_F, SV_AY_F
 from .jit import HOT, INLINE, JIT
 from .arrays import (I_YAWLOCK, B_HAS, C_GN, C_GX, C_GY, C_ROADMU, C_TAU, I_BRAKE, I_CLOCK, I_LT, I_SLOPE, S_AIR, S_GX, S_GY, S_N0, PS_CONTACT, P_BRAKE, P_CCOEF, P_CD, P_CFIX, P_FROLL, P_LOCKED, P_MUF, P_CASTOR, S_CASTOR,
     P_SD, S_CALPHA, S_CCOEF, S_CD, S_CFIX, S_DCOEF, S_DEMAND, S_LOCKED, S_MU, S_MULOAD, S_SD, W_FX, W_FY, W_SLIDE,
@@ -94,8 +95,8 @@ def specific_force(dydt, M, sw, fc, i, c, s):
     at CG height moves no load; 0 would be a push at ground level).
     """
     nb = M.body.shape[0]
-    accx = dydt[3 * nb + i]
-    accy = dydt[4 * nb + i]
+    accx = dydt[SV_VX * nb + i]
+    accy = dydt[SV_VY * nb + i]
     if M.icfg[I_SLOPE] != 0:
         gx = 0.0
         gy = 0.0
@@ -184,8 +185,8 @@ def evaluate(y, M, sw, D, dydt, W):
         tau = cfg[C_TAU]
         for i in range(nb):
             ax, ay = specific_force(dydt, M, sw, W.contact_force, i, cs[0, i], cs[1, i])
-            dydt[6 * nb + i] = (ax - y[6 * nb + i]) / tau
-            dydt[7 * nb + i] = (ay - y[7 * nb + i]) / tau
+            dydt[SV_AX_F * nb + i] = (ax - y[SV_AX_F * nb + i]) / tau
+            dydt[SV_AY_F * nb + i] = (ay - y[SV_AY_F * nb + i]) / tau
     for i in range(nb):
         if parked[bveh[i]] != 0:
             for fld in range(8 if lt else 6):
@@ -204,8 +205,8 @@ def rest_measure(y, M, v):
     for i in range(nb):
         if v >= 0 and bveh[i] != v:
             continue
-        sp = math.sqrt(y[3 * nb + i] ** 2 + y[4 * nb + i] ** 2)
-        rot = abs(y[5 * nb + i]) * body[i, 2]
+        sp = math.sqrt(y[SV_VX * nb + i] ** 2 + y[SV_VY * nb + i] ** 2)
+        rot = abs(y[SV_YAW_RATE * nb + i]) * body[i, 2]
         out = max(out, max(sp, rot))
     return out
 
@@ -259,7 +260,7 @@ def kinetic_energy(y, M):
     nb = body.shape[0]
     e = 0.0
     for i in range(nb):
-        e += body[i, 0] * (y[3 * nb + i] ** 2 + y[4 * nb + i] ** 2) + body[i, 1] * y[5 * nb + i] ** 2
+        e += body[i, 0] * (y[SV_VX * nb + i] ** 2 + y[SV_VY * nb + i] ** 2) + body[i, 1] * y[SV_YAW_RATE * nb + i] ** 2
     return 0.5 * e
 
 
@@ -279,7 +280,7 @@ def quad_integrand(y, M, D, W, out):
     pf = W.pair_power
     bveh, parked = M.body_vehicle, D.parked
     for i in range(nb):
-        out[i] = 0.0 if parked[bveh[i]] != 0 else math.sqrt(y[3 * nb + i] ** 2 + y[4 * nb + i] ** 2)
+        out[i] = 0.0 if parked[bveh[i]] != 0 else math.sqrt(y[SV_VX * nb + i] ** 2 + y[SV_VY * nb + i] ** 2)
     for k in range(nw):
         sp = math.sqrt(wk[k, W_U] ** 2 + wk[k, W_V] ** 2)
         out[nb + k] = sp
@@ -340,8 +341,8 @@ def consistent_accelerations(y, M, sw, D, dydt, W):
         change = 0.0
         for i in range(nb):
             new_x, new_y = specific_force(dydt, M, sw, W.contact_force, i, cs[0, i], cs[1, i])
-            change = max(change, abs(new_x - y[6 * nb + i]), abs(new_y - y[7 * nb + i]))
-            y[6 * nb + i] = new_x
-            y[7 * nb + i] = new_y
+            change = max(change, abs(new_x - y[SV_AX_F * nb + i]), abs(new_y - y[SV_AY_F * nb + i]))
+            y[SV_AX_F * nb + i] = new_x
+            y[SV_AY_F * nb + i] = new_y
         if change < 1e-10:
             break

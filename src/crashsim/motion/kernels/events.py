@@ -12,6 +12,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ..layout import SV_HEADING, SV_VX, SV_VY, SV_YAW_RATE
 from ..options import STOP_HYSTERESIS
 from .jit import HOT, INLINE, JIT
 from .arrays import (A_CRUSH, PRESSED, C_VSTOP, C_ZRES, EPS, EV_ARM, EV_GAP, EV_PRESS, EV_RELEASE, EV_REST, EV_STOP,
@@ -48,7 +49,7 @@ def event_value(e, y, M, ev, D, sw, dydt, W):
         j = ev_idx[e]
         hbody = M.hitch_body
         # ev_val = offset + limit + shift (upper stop) or offset - limit - shift (lower stop)
-        return y[2 * nb + hbody[j, 0]] - y[2 * nb + hbody[j, 1]] - ev_val[e]
+        return y[SV_HEADING * nb + hbody[j, 0]] - y[SV_HEADING * nb + hbody[j, 1]] - ev_val[e]
     if kind == EV_RELEASE:
         # multiplier of closed stop n times its side, > 0 when the stop would have to pull
         n = ev_idx[e]
@@ -98,13 +99,13 @@ def event_rate(e, y, M, ev, W):
             if ib >= 0:
                 b = pp[q, 1]
                 rb = max(rb, math.sqrt(pc_info[b, 0] ** 2 + pc_info[b, 1] ** 2) + pc_info[b, 2])
-        dvx = y[3 * nb + ia]
-        dvy = y[4 * nb + ia]
-        rot = abs(y[5 * nb + ia]) * ra
+        dvx = y[SV_VX * nb + ia]
+        dvy = y[SV_VY * nb + ia]
+        rot = abs(y[SV_YAW_RATE * nb + ia]) * ra
         if ib >= 0:
-            dvx -= y[3 * nb + ib]
-            dvy -= y[4 * nb + ib]
-            rot += abs(y[5 * nb + ib]) * rb
+            dvx -= y[SV_VX * nb + ib]
+            dvy -= y[SV_VY * nb + ib]
+            rot += abs(y[SV_YAW_RATE * nb + ib]) * rb
         return math.sqrt(dvx * dvx + dvy * dvy) + rot
     return 0.0
 
@@ -363,7 +364,7 @@ def left_stop_shift(y, M, j, offset, lim, shift):
     """Raised threshold of the stop of hitch ``j`` when it is left: past where it was left, plus STOP_HYSTERESIS."""
     nb = M.body.shape[0]
     hbody = M.hitch_body
-    excess = abs(y[2 * nb + hbody[j, 0]] - y[2 * nb + hbody[j, 1]] - offset) - lim
+    excess = abs(y[SV_HEADING * nb + hbody[j, 0]] - y[SV_HEADING * nb + hbody[j, 1]] - offset) - lim
     return max(shift, excess) + STOP_HYSTERESIS
 
 

@@ -13,6 +13,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ..layout import SV_X, SV_Y, SV_HEADING, SV_VX, SV_VY, SV_YAW_RATE
 from .jit import HOT, INLINE
 from .arrays import C_ALPHA2, C_BETA2, I_YAWLOCK, ZONE_TOL
 
@@ -37,7 +38,7 @@ def wrap_angle(a):
 def body_trig(y, nb, cs):
     """``cs[0, i] = cos(psi_i)``, ``cs[1, i] = sin(psi_i)``."""
     for i in range(nb):
-        psi = y[2 * nb + i]
+        psi = y[SV_HEADING * nb + i]
         cs[0, i] = math.cos(psi)
         cs[1, i] = math.sin(psi)
 
@@ -60,8 +61,8 @@ def pin_gap(y, cs, hitch, hbody, j, nb):
     f = hbody[j, 0]
     q = hbody[j, 1]
     ax, ay, bx, by = hitch_arms(cs, hitch, j, f, q)
-    gx = y[f] + ax - y[q] - bx
-    gy = y[nb + f] + ay - y[nb + q] - by
+    gx = y[SV_X * nb + f] + ax - y[SV_X * nb + q] - bx
+    gy = y[SV_Y * nb + f] + ay - y[SV_Y * nb + q] - by
     return math.sqrt(gx * gx + gy * gy)
 
 
@@ -87,21 +88,21 @@ def constraint_rows(y, cs, M, lk_j, lk_th, nlk, G, r, with_rates):
         f = hbody[j, 0]
         q = hbody[j, 1]
         ax, ay, bx, by = hitch_arms(cs, hitch, j, f, q)
-        G[2 * j, f] = 1.0
-        G[2 * j, q] = -1.0
-        G[2 * j, 2 * nb + f] = -ay
-        G[2 * j, 2 * nb + q] = by
-        G[2 * j + 1, nb + f] = 1.0
-        G[2 * j + 1, nb + q] = -1.0
-        G[2 * j + 1, 2 * nb + f] = ax
-        G[2 * j + 1, 2 * nb + q] = -bx
+        G[2 * j, SV_X * nb + f] = 1.0
+        G[2 * j, SV_X * nb + q] = -1.0
+        G[2 * j, SV_HEADING * nb + f] = -ay
+        G[2 * j, SV_HEADING * nb + q] = by
+        G[2 * j + 1, SV_Y * nb + f] = 1.0
+        G[2 * j + 1, SV_Y * nb + q] = -1.0
+        G[2 * j + 1, SV_HEADING * nb + f] = ax
+        G[2 * j + 1, SV_HEADING * nb + q] = -bx
         if with_rates:
-            wf = y[5 * nb + f]
-            wr = y[5 * nb + q]
-            gx = y[f] + ax - y[q] - bx
-            gy = y[nb + f] + ay - y[nb + q] - by
-            gdx = y[3 * nb + f] - wf * ay - y[3 * nb + q] + wr * by
-            gdy = y[4 * nb + f] + wf * ax - y[4 * nb + q] - wr * bx
+            wf = y[SV_YAW_RATE * nb + f]
+            wr = y[SV_YAW_RATE * nb + q]
+            gx = y[SV_X * nb + f] + ax - y[SV_X * nb + q] - bx
+            gy = y[SV_Y * nb + f] + ay - y[SV_Y * nb + q] - by
+            gdx = y[SV_VX * nb + f] - wf * ay - y[SV_VX * nb + q] + wr * by
+            gdy = y[SV_VY * nb + f] + wf * ax - y[SV_VY * nb + q] - wr * bx
             r[2 * j] = (wr * wr * bx - wf * wf * ax) + a2 * gdx + b2 * gx
             r[2 * j + 1] = (wr * wr * by - wf * wf * ay) + a2 * gdy + b2 * gy
     for n in range(nlk):
@@ -109,12 +110,12 @@ def constraint_rows(y, cs, M, lk_j, lk_th, nlk, G, r, with_rates):
         f = hbody[jl, 0]
         q = hbody[jl, 1]
         row = 2 * nh + n
-        G[row, 2 * nb + f] = 1.0
-        G[row, 2 * nb + q] = -1.0
+        G[row, SV_HEADING * nb + f] = 1.0
+        G[row, SV_HEADING * nb + q] = -1.0
         if with_rates:
             theta = math.atan2(cs[1, f] * cs[0, q] - cs[0, f] * cs[1, q], cs[0, f] * cs[0, q] + cs[1, f] * cs[1, q])
             g = wrap_angle(theta - lk_th[n])
-            gd = y[5 * nb + f] - y[5 * nb + q]
+            gd = y[SV_YAW_RATE * nb + f] - y[SV_YAW_RATE * nb + q]
             r[row] = a2 * gd + b2 * g
     if nyaw > 0:
         row = 2 * nh + nlk
@@ -123,11 +124,11 @@ def constraint_rows(y, cs, M, lk_j, lk_th, nlk, G, r, with_rates):
                 continue
             f = hbody[j, 0]
             q = hbody[j, 1]
-            G[row, 2 * nb + f] = 1.0
-            G[row, 2 * nb + q] = -1.0
+            G[row, SV_HEADING * nb + f] = 1.0
+            G[row, SV_HEADING * nb + q] = -1.0
             if with_rates:
                 theta = math.atan2(cs[1, f] * cs[0, q] - cs[0, f] * cs[1, q], cs[0, f] * cs[0, q] + cs[1, f] * cs[1, q])
-                r[row] = a2 * (y[5 * nb + f] - y[5 * nb + q]) + b2 * theta
+                r[row] = a2 * (y[SV_YAW_RATE * nb + f] - y[SV_YAW_RATE * nb + q]) + b2 * theta
             row += 1
     return m
 
@@ -184,7 +185,7 @@ def piece_vertex(y, M, cs, i, v):
     nb = M.body.shape[0]
     c = cs[0, b]
     s = cs[1, b]
-    return y[b] + c * x - s * yy, y[nb + b] + s * x + c * yy
+    return y[SV_X * nb + b] + c * x - s * yy, y[SV_Y * nb + b] + s * x + c * yy
 
 
 @njit(**INLINE)
@@ -241,7 +242,7 @@ def bounding_circle(y, M, cs, i):
         nb = M.body.shape[0]
         c = cs[0, b]
         s = cs[1, b]
-        cx, cy = y[b] + c * cx - s * cy, y[nb + b] + s * cx + c * cy
+        cx, cy = y[SV_X * nb + b] + c * cx - s * cy, y[SV_Y * nb + b] + s * cx + c * cy
     return cx, cy, pc_info[i, 2]
 
 
@@ -376,8 +377,8 @@ def point_velocity(y, M, i, px, py):
     if i < 0:
         return 0.0, 0.0
     nb = M.body.shape[0]
-    w = y[5 * nb + i]
-    return y[3 * nb + i] - w * (py - y[nb + i]), y[4 * nb + i] + w * (px - y[i])
+    w = y[SV_YAW_RATE * nb + i]
+    return y[SV_VX * nb + i] - w * (py - y[SV_Y * nb + i]), y[SV_VY * nb + i] + w * (px - y[SV_X * nb + i])
 
 
 @njit(**INLINE)
@@ -398,7 +399,7 @@ def wheel_xy(y, M, k, cs):
     """World position [m] of contact ``k``."""
     nb = M.body.shape[0]
     i, dx, dy = wheel_arm(M, k, cs)
-    return y[i] + dx, y[nb + i] + dy
+    return y[SV_X * nb + i] + dx, y[SV_Y * nb + i] + dy
 
 
 @njit(**HOT)
@@ -406,8 +407,8 @@ def wheel_velocity(y, M, k, cs):
     """World velocity [m/s] of contact ``k``."""
     nb = M.body.shape[0]
     i, dx, dy = wheel_arm(M, k, cs)
-    w = y[5 * nb + i]
-    return y[3 * nb + i] - w * dy, y[4 * nb + i] + w * dx
+    w = y[SV_YAW_RATE * nb + i]
+    return y[SV_VX * nb + i] - w * dy, y[SV_VY * nb + i] + w * dx
 
 
 @njit(**HOT)

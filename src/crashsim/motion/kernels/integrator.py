@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 import time
 from collections import namedtuple
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, objmode
@@ -181,6 +182,40 @@ SegmentStore = namedtuple("SegmentStore", ["t", "s", "phase", "memb", "nlk", "lk
 STORE_FULL = 2
 #: The event log (growable): time [s] and record row (kind, i, j, x, energy) of each record.
 LogStore = namedtuple("LogStore", ["t", "rec"])
+
+
+class RunOutput(NamedTuple):
+    """What :func:`run` returns (numba builds and boxes it): how the call ended, its steps, its
+    segments and its event log.
+
+    ``status`` (an ``ST_*`` code), ``t_end`` [s] and ``y_end`` (n,) where the call stopped;
+    the steps (``st_*``): start time [s], size [s], start state (n,) and dense-output matrix
+    (n, degree) of each; the segments (``sg_*``): start and end time (2,) [s], first and end
+    step (2,) and the segment's mode (the fields of :class:`Segments`); the event log
+    (``lg_*``): time [s] and record row of :func:`handle_event`; and with status
+    ``ST_IMPACT`` the touch ``geo`` = (pair, x, y, nx, ny, u_n).
+    """
+
+    status: int
+    t_end: float
+    y_end: np.ndarray
+    st_t: np.ndarray
+    st_h: np.ndarray
+    st_y: np.ndarray
+    st_q: np.ndarray
+    sg_t: np.ndarray
+    sg_s: np.ndarray
+    sg_phase: np.ndarray
+    sg_memb: np.ndarray
+    sg_nlk: np.ndarray
+    sg_lkj: np.ndarray
+    sg_lkth: np.ndarray
+    sg_pstate: np.ndarray
+    sg_pref: np.ndarray
+    sg_parked: np.ndarray
+    lg_t: np.ndarray
+    lg_rec: np.ndarray
+    geo: np.ndarray
 
 
 @njit(**STAGE)
@@ -606,12 +641,11 @@ def run(t0, y0, M, D, offsets, stops, gl_x, gl_w, budget, counters, quad):
 
     Returns
     -------
-    tuple
-        ``(status, t_end, y_end, st_t, st_h, st_y, st_q, sg_t, sg_s, sg_phase, sg_memb, sg_nlk,
-        sg_lkj, sg_lkth, sg_pstate, sg_pref, sg_parked, lg_t, lg_rec, geo)``: steps (start time,
-        size, start state, dense-output matrix), segments (start/end time, first/end step, the
-        mode), the event log (time, record rows of :func:`handle_event`) and, with status
-        ``ST_IMPACT``, the touch ``geo`` = (pair, x, y, nx, ny, u_n).
+    RunOutput
+        Status, end time and state; steps (start time, size, start state, dense-output matrix),
+        segments (start/end time, first/end step, the mode), the event log (time, record rows of
+        :func:`handle_event`) and, with status ``ST_IMPACT``, the touch ``geo`` = (pair, x, y, nx,
+        ny, u_n).
     """
     n = y0.shape[0]
     t_max = M.cfg[C_TMAX]
@@ -663,7 +697,7 @@ def run(t0, y0, M, D, offsets, stops, gl_x, gl_w, budget, counters, quad):
             status = ST_IMPACT
             break
     counters[2] = nfev
-    return (status, t, y, steps.t[:n_steps], steps.h[:n_steps], steps.y[:n_steps], steps.q[:n_steps],
-            segs.t[:n_seg], segs.s[:n_seg], segs.phase[:n_seg], segs.memb[:n_seg], segs.nlk[:n_seg],
-            segs.lk_j[:n_seg], segs.lk_th[:n_seg], segs.pstate[:n_seg], segs.pref[:n_seg], segs.parked[:n_seg],
-            logs.t[:lg_n], logs.rec[:lg_n], X.geo)
+    return RunOutput(status, t, y, steps.t[:n_steps], steps.h[:n_steps], steps.y[:n_steps], steps.q[:n_steps],
+                     segs.t[:n_seg], segs.s[:n_seg], segs.phase[:n_seg], segs.memb[:n_seg], segs.nlk[:n_seg],
+                     segs.lk_j[:n_seg], segs.lk_th[:n_seg], segs.pstate[:n_seg], segs.pref[:n_seg],
+                     segs.parked[:n_seg], logs.t[:lg_n], logs.rec[:lg_n], X.geo)

@@ -13,6 +13,7 @@ import math
 from numba import njit, types
 from numba.extending import overload
 
+from ..layout import SV_VX, SV_VY, SV_YAW_RATE, SV_AX_F
 from .. import tyres as law
 from .jit import INLINE, JIT
 from .arrays import (B_ABS, B_FALL, B_FORCE, B_OFF, B_ON, B_RISE, C_EPS, I_CASTOR, I_CLOCK, I_FIALA, I_LT, I_SLOPE, S_AIR, S_CASTOR, S_GX, S_GY, S_N0, S_CALPHA, S_CCOEF, S_CD, S_CFIX, S_DCOEF, S_DEMAND, S_LOCKED, S_MU,
@@ -230,7 +231,7 @@ def tyre_eval(y, M, sw, D, W, margins=False):
         for k in range(nw):
             n = sw[k, S_N0]
             for j in range(2 * nb):
-                n += transfer[k, j] * y[6 * nb + j]
+                n += transfer[k, j] * y[SV_AX_F * nb + j]
             wk[k, W_MLIFT] = -n
             wk[k, W_LOAD] = n
         redistribute_loads(M, wk)
@@ -249,9 +250,9 @@ def tyre_eval(y, M, sw, D, W, margins=False):
             continue
         c = cs[0, i]
         s = cs[1, i]
-        vx = y[3 * nb + i]
-        vy = y[4 * nb + i]
-        w = y[5 * nb + i]
+        vx = y[SV_VX * nb + i]
+        vy = y[SV_VY * nb + i]
+        w = y[SV_YAW_RATE * nb + i]
         rx = wheel[k, 0]
         ry = wheel[k, 1]
         cvx = (c * vx + s * vy) - ry * w

@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import copy
 import difflib
-import importlib.util
 import math
 import re
 from collections import OrderedDict
@@ -42,7 +41,6 @@ from dataclasses import dataclass, replace
 from typing import Any, Mapping, Sequence
 
 from ..errors import ScenarioError
-from ..motion import RunoutOptions
 from ..scenario import SCHEMA, apply_presets, scenario_from_dict
 from ..schema import ArrayOf, Field, Section, Table
 from ..survey.mapping import expand_survey
@@ -307,15 +305,8 @@ def forward_data(data: dict, *, file: str | None = None) -> dict:
 
 
 def _engine_options(options, engine: str | None):
-    """RunoutOptions with ``engine`` set, if the installed RunoutOptions has that field."""
-    if engine is None:
-        return options
-    if "engine" in type(options).__dataclass_fields__:
-        return replace(options, engine=engine)
-    if engine != "scipy":
-        raise ScenarioError(f"run-out engine {engine!r} is not available in this crashsim "
-                            "(RunoutOptions has no engine field); use engine='scipy'", field="engine")
-    return options
+    """RunoutOptions with ``engine`` set (None: as they are)."""
+    return options if engine is None else replace(options, engine=engine)
 
 
 def file_contents(source, file: str | None = None) -> tuple[dict, str | None]:
@@ -336,14 +327,9 @@ def file_contents(source, file: str | None = None) -> tuple[dict, str | None]:
 
 
 def default_engine() -> str:
-    """``"compiled"`` when the run-out has the compiled engine, else ``"scipy"``."""
-    if "engine" not in RunoutOptions.__dataclass_fields__:
-        return "scipy"
-    try:
-        present = importlib.util.find_spec("crashsim.motion.compiled_solution") is not None
-    except (ImportError, ValueError):  # pragma: no cover
-        present = False
-    return "compiled" if present else "scipy"
+    """The run-out engine of fit, Monte Carlo, posterior and live view samples: the compiled one (numba is
+    a dependency, its kernels part of the package)."""
+    return "compiled"
 
 
 class ScenarioOverrides:

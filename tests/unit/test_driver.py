@@ -190,6 +190,17 @@ def test_a_path_that_cannot_be_followed_is_refused_in_one_line(edit, key, words)
     assert "\n" not in msg
 
 
+def test_a_wheel_the_driver_steers_may_not_be_steered_by_the_file_too():
+    d = copy.deepcopy(_scene())
+    d["vehicles"]["truck"]["approach"]["wheels"] = [{"select": "tractor/0", "steer": "2 deg"}]
+    with pytest.raises(ScenarioError) as err:
+        run_scene(scenario_from_dict(d, file=str(SCENE)))
+    msg = str(err.value)
+    assert "the driver steers wheel 'tractor/steer/left' along the path; its approach settings steer it too " \
+           "(from 0 s): remove steer / self_steer_limit there" in msg
+    assert "vehicles.truck.approach.wheels" in msg
+
+
 def _car_caravan():
     car = Body("car", 1600.0, 2900.0, 4.8, 1.8, (0.15, 0.0), (Axle(1.2, 1.55), Axle(-1.5, 1.55)), 0.55)
     caravan = Body("caravan", 1300.0, 2600.0, 6.0, 2.2, (-0.5, 0.0), (Axle(-0.3, 1.9),), 1.0)

@@ -175,6 +175,18 @@ def test_a_table_that_cannot_drive_is_refused_naming_its_key():
     _refused(with_path, "approach.path", "not both")
 
 
+def test_a_wheel_the_table_steers_may_not_be_steered_by_the_file_too():
+    from crashsim.scene.run import run_scene
+
+    d = _scene()
+    d["vehicles"]["pickup"]["approach"]["wheels"] = [{"select": "pickup/0", "steer": "2 deg"}]
+    with pytest.raises(ScenarioError) as e:
+        run_scene(scenario_from_dict(d, file=str(SCENE)))
+    assert "the recorded steering steers wheel 'pickup/front/left'; the approach settings steer it too (from 0 s): " \
+           "remove steer / self_steer_limit there" in str(e.value)
+    assert "vehicles.pickup.approach.wheels" in str(e.value)
+
+
 def test_a_table_with_a_time_after_the_impact_is_refused_by_the_schema():
     d = _scene()
     _samples(d["vehicles"]["pickup"])[-1]["time"] = "0.5 s"

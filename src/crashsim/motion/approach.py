@@ -488,6 +488,19 @@ def _segment_wheels(resolved, wheels: WheelSettings, t0: float, t1: float, steer
     return WheelSettings(wheels=base, schedule=sched, brakes=brakes)
 
 
+def _steered_wheels(resolved, geom, first: str, claim: str, key: str) -> list:
+    """The wheels of the first unit's steered axle, which the driver or a recorder's table steers: refused
+    where the approach's own settings steer one of them too (``claim``, the message's start, takes the
+    wheel's label)."""
+    steered = [s for s in resolved.specs if s.body == first and s.axle_index == geom.axle]
+    for t_ph, settings in resolved.phases:
+        for s, w in zip(resolved.specs, settings):
+            if s in steered and (w.steer != 0.0 or w.self_steer_limit is not None):
+                raise ScenarioError(f"{claim.format(repr(s.label))} too (from {t_ph:g} s): remove steer / "
+                                    "self_steer_limit there", field=f"{key}.wheels")
+    return steered
+
+
 def _driven_run(vehicle: Vehicle, spec: ApproachSpec, speed: float, target, road: Road, options: RunoutOptions,
                 articulation=None) -> tuple[RunoutResult, dict]:
     """The approach steered by the driver (:mod:`crashsim.motion.driver`), and its steering record.
@@ -502,13 +515,8 @@ def _driven_run(vehicle: Vehicle, spec: ApproachSpec, speed: float, target, road
     geom = steer_geometry(vehicle, driver.key)
     first = vehicle.bodies[0].name
     resolved = spec.wheels.resolve(vehicle)
-    steered = [s for s in resolved.specs if s.body == first and s.axle_index == geom.axle]
-    for t_ph, settings in resolved.phases:
-        for s, w in zip(resolved.specs, settings):
-            if s in steered and (w.steer != 0.0 or w.self_steer_limit is not None):
-                raise ScenarioError(f"the driver steers wheel {s.label!r} along the path; its approach settings steer it "
-                                    f"too (from {t_ph:g} s): remove steer / self_steer_limit there",
-                                    field=f"{spec.key}.wheels")
+    steered = _steered_wheels(resolved, geom, first, "the driver steers wheel {} along the path; its approach "
+                              "settings steer it", spec.key)
     p0, h0, s_ref = path_start(vehicle, driver, target, spec.distance, spec.tolerance)
     vel = speed * np.array([math.cos(h0), math.sin(h0)])
     yaw_rates = spec.yaw_rates
@@ -580,13 +588,8 @@ def _recorded_run(vehicle: Vehicle, spec: ApproachSpec, speed: float, position, 
     steering = None
     if drive.steer is not None:
         geom = steer_geometry(vehicle, f"{spec.key}.recorded")
-        steered = [s for s in resolved.specs if s.body == first and s.axle_index == geom.axle]
-        for t_ph, settings in resolved.phases:
-            for s, w in zip(resolved.specs, settings):
-                if s in steered and (w.steer != 0.0 or w.self_steer_limit is not None):
-                    raise ScenarioError(f"the recorded steering steers wheel {s.label!r}; the approach settings steer "
-                                        f"it too (from {t_ph:g} s): remove steer / self_steer_limit there",
-                                        field=f"{spec.key}.wheels")
+        steered = _steered_wheels(resolved, geom, first, "the recorded steering steers wheel {}; the approach "
+                                  "settings steer it", spec.key)
         delta = drive.steer_at(times)
         lr = [ackermann(geom, float(d)) for d in delta]
         angles = [{s.key: (left if s.side == "left" else right) for s in steered} for left, right in lr]

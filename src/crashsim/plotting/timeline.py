@@ -34,34 +34,29 @@ __all__ = ["STATE_COLORS", "wheel_rows", "plot_wheel_timeline"]
 STATE_COLORS = {"rolling": "#d9d9d9", "braked": "#6baed6", "locked": "#de2d26", "jammed": "#636363"}
 
 
-def _stretches(times, settings, t_end: float):
-    """``[(t0, t1, setting)]`` of one wheel's step function, neighbours of one setting merged."""
-    out = []
-    for k, (t0, w) in enumerate(zip(times, settings)):
-        t1 = times[k + 1] if k + 1 < len(times) else t_end
-        if t1 <= t0:
-            continue
-        if out and out[-1][2] == w and math.isclose(out[-1][1], t0):
-            out[-1] = (out[-1][0], t1, w)
-        else:
-            out.append((t0, t1, w))
-    return out
+def _stretches(times, values, t_end: float):
+    """``[(t0, t1, value)]`` of a step function: each value held from its time to the next (the last to
+    ``t_end``), empty stretches left out."""
+    ends = list(times[1:]) + [t_end]
+    return [(t0, t1, v) for t0, t1, v in zip(times, ends, values) if t1 > t0]
 
 
 def _bars(stretches, shift: float) -> list:
-    """``[(t0, t1, state, text)]``: neighbouring stretches of one state merged into one bar (a speed
-    controller changes the brake fraction at every update), a braked bar's text its fraction or the
-    range of its fractions."""
-    out = []
+    """``[(t0, t1, state, text)]``, times moved by ``-shift``: neighbouring stretches of one state merged
+    into one bar (a speed controller changes the brake fraction at every update), a braked bar's text its
+    fraction or the range of its fractions."""
+    merged = []  # [t0, t1, state, lowest brake, highest brake]
     for t0, t1, w in stretches:
         b = w.brake if w.state == "braked" else None
-        if out and out[-1][2] == w.state and math.isclose(out[-1][1], t0 - shift):
-            lo, hi = out[-1][4]
-            out[-1] = (out[-1][0], t1 - shift, w.state, None, (min(lo, b), max(hi, b)) if b is not None else (lo, hi))
+        if merged and merged[-1][2] == w.state and math.isclose(merged[-1][1], t0 - shift):
+            last = merged[-1]
+            last[1] = t1 - shift
+            if b is not None:
+                last[3], last[4] = min(last[3], b), max(last[4], b)
         else:
-            out.append((t0 - shift, t1 - shift, w.state, None, (b, b)))
+            merged.append([t0 - shift, t1 - shift, w.state, b, b])
     bars = []
-    for t0, t1, state, _, (lo, hi) in out:
+    for t0, t1, state, lo, hi in merged:
         if state != "braked":
             text = state
         elif round(lo * 100) == round(hi * 100):
@@ -72,32 +67,36 @@ def _bars(stretches, shift: float) -> list:
     return bars
 
 
-def _controlled(a, inp, times, sets, t_pre: float):
+def _controller_friction(a, inp) -> np.ndarray:
+    """The road friction at the first body's CG at each of the speed controller's updates (what it divided
+    its demand by)."""
+    first = next(iter(a.bodies))
+    return np.array([float(inp.road.mu_at(np.asarray([a.pose(first, float(t))[0]]))[0])
+                     for t in a.speed_control["t"]])
+
+
+def _controlled(a, mus, times, sets, t_pre: float):
     """The approach's set states with the speed controller's decisions of a recorder's table applied,
-    as the controller made them (:func:`crashsim.motion.recorded.wheel_setting_for`, the friction at the
-    first body's CG)."""
+    as the controller made them (:func:`crashsim.motion.recorded.wheel_setting_for`, with the friction
+    ``mus`` at each update)."""
     ctl = a.speed_control
     t_ctl = ctl["t"] + t_pre  # from the start of the approach
     grid = sorted(set(times) | {float(t) for t in t_ctl if t < t_pre})
-    first = next(iter(a.bodies))
     out = []
     for t in grid:
         w = sets[int(np.searchsorted(times, t, side="right")) - 1]
         k = int(np.searchsorted(t_ctl, t + 1e-12, side="right")) - 1
         if w.state in ("rolling", "braked") and k >= 0:
-            (x, y), _ = a.pose(first, float(t_ctl[k] - t_pre))
-            mu = float(inp.road.mu_at(np.asarray([[x, y]]))[0])
             w = replace(w, **wheel_setting_for(float(ctl["demand"][k]), w.rolling_resistance or 0.0,
-                                                mu * w.mu_factor))
+                                                float(mus[k]) * w.mu_factor))
         out.append(w)
     return grid, out
 
 
 def _steps(t, values, t_end: float):
-    """A step function's line: each value held from its time to the next (the last to ``t_end``)."""
+    """A step function's line ``(xs, ys)``: each value held from its time to the next (the last to ``t_end``)."""
     xs, ys = [], []
-    for k, (t0, v) in enumerate(zip(t, values)):
-        t1 = t[k + 1] if k + 1 < len(t) else t_end
+    for t0, t1, v in _stretches(list(t), list(values), t_end):
         xs += [t0, t1]
         ys += [v, v]
     return xs, ys
@@ -124,13 +123,14 @@ def wheel_rows(scene) -> list[dict]:
         t_pre = a.time_to_impact if pre is not None else 0.0
         t_end = run.t_end if post is not None else 0.0
         steering = dict(a.steering.get("keys", ())) if (pre is not None and a.steering is not None) else {}
+        mus = _controller_friction(a, inp) if (pre is not None and a.speed_control is not None) else None
         for i, spec in enumerate((pre or post).specs):
             bars, brake, steer = [], [], ([], [])
             if pre is not None:
                 times = [t for t, _ in pre.phases]
                 sets = [ws[i] for _, ws in pre.phases]
                 if a.speed_control is not None:
-                    times, sets = _controlled(a, inp, times, sets, t_pre)
+                    times, sets = _controlled(a, mus, times, sets, t_pre)
                 bars += _bars(_stretches(times, sets, t_pre), t_pre)
                 if spec.key in steering:  # the driver's or the table's angle, held between its updates
                     st = a.steering

@@ -501,6 +501,19 @@ def _steered_wheels(resolved, geom, first: str, claim: str, key: str) -> list:
     return steered
 
 
+def _decided_run(vehicle: Vehicle, start, resolved, spec: ApproachSpec, road: Road, options: RunoutOptions,
+                 dt: float, decisions, t_max: float) -> RunoutResult:
+    """The whole approach as one run from ``start``, the run a driven approach's result is read from:
+    the file's settings with the first update's ``decisions`` (per update ``{wheel key: changes}``: steer
+    angles, a speed controller's states), the later updates' as scheduled changes at ``k * dt``."""
+    sched = [ScheduledChange(k * dt, key, changes) for k in range(1, len(decisions))
+             for key, changes in decisions[k].items()]
+    whole = _segment_wheels(resolved, spec.wheels, 0.0, math.inf, {}, decisions[0])
+    whole = replace(whole, schedule=tuple(whole.schedule) + tuple(sched))
+    return run_runout([vehicle], start, {vehicle.name: whole}, road, replace(options, t_max=t_max)).vehicles[
+        vehicle.name]
+
+
 def _driven_run(vehicle: Vehicle, spec: ApproachSpec, speed: float, target, road: Road, options: RunoutOptions,
                 articulation=None) -> tuple[RunoutResult, dict]:
     """The approach steered by the driver (:mod:`crashsim.motion.driver`), and its steering record.
@@ -558,12 +571,8 @@ def _driven_run(vehicle: Vehicle, spec: ApproachSpec, speed: float, target, road
             if run.status != "time_limit" or k * dt >= options.t_max or s_ref > s_impact + 2.0:
                 break  # at rest, a solver failure, the time limit, or past the impact
         # the whole approach: the file's settings with the first steer angles, the driver's later ones scheduled
-        sched = [ScheduledChange(i * dt, key, {"steer": a}) for i in range(1, len(wheel_angles))
-                 for key, a in wheel_angles[i].items()]
-        whole = _segment_wheels(resolved, spec.wheels, 0.0, math.inf, wheel_angles[0])
-        whole = replace(whole, schedule=tuple(whole.schedule) + tuple(sched))
-        run = run_runout([vehicle], start, {vehicle.name: whole}, road,
-                         replace(options, t_max=k * dt)).vehicles[vehicle.name]
+        run = _decided_run(vehicle, start, resolved, spec, road, options, dt,
+                           [{key: {"steer": a} for key, a in angles.items()} for angles in wheel_angles], k * dt)
     out = {key: np.asarray(v, dtype=float) for key, v in rec.items()}
     out["keys"] = tuple((s.key, s.side) for s in steered)
     return run, out
@@ -621,15 +630,11 @@ def _recorded_run(vehicle: Vehicle, spec: ApproachSpec, speed: float, position, 
                     n = k + 1  # at rest, or a solver failure: the whole run shows it
                     break
         speed_control = {key: np.asarray(v, dtype=float) for key, v in rec.items()}
-    sched = [ScheduledChange(float(times[k]), key, {**({"steer": angles[k][key]} if key in angles[k] else {}),
-                                                    **controls[k].get(key, {})})
-             for k in range(1, n) for key in dict.fromkeys([*angles[k], *controls[k]])]
-    whole = _segment_wheels(resolved, spec.wheels, 0.0, math.inf, angles[0], controls[0])
-    whole = replace(whole, schedule=tuple(whole.schedule) + tuple(sched))
+    decisions = [{key: {**({"steer": angles[k][key]} if key in angles[k] else {}), **controls[k].get(key, {})}
+                  for key in dict.fromkeys([*angles[k], *controls[k]])} for k in range(n)]
     with _expected_time_limits():
-        run = run_runout([vehicle], start, {vehicle.name: whole}, road,
-                         replace(options, t_max=min(max(n * dt, drive.duration + dt), options.t_max))
-                         ).vehicles[vehicle.name]
+        run = _decided_run(vehicle, start, resolved, spec, road, options, dt, decisions,
+                           min(max(n * dt, drive.duration + dt), options.t_max))
     if steering is not None:
         steering = {k: (v[:n] if isinstance(v, np.ndarray) else v) for k, v in steering.items()}
     return run, steering, speed_control

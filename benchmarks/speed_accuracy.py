@@ -68,7 +68,8 @@ import scipy
 from crashsim.impact import ExternalImpulse, solve_impact, tyre_friction_impulse
 from crashsim.motion import RunoutOptions, make_hitch_consistent, static_loads
 from crashsim.motion.accuracy import _simulate_to_accuracy
-from crashsim.motion.levels import LEVELS, simulate_level
+from crashsim.motion.levels import simulate_level
+from crashsim.motion.runners import LEVELS
 from crashsim.scene.run import separation_states
 from crashsim.scenario import load_scenario
 

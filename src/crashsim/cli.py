@@ -90,10 +90,7 @@ def _load(path: str):
         sys.stderr.write(f"crashsim: interpreted run: the run-out's wall-time limit (runout.max_wall_time = "
                          f"{ro.options.max_wall_time:g} s) is lifted, so that it ends as the compiled run would\n")
         opts = dataclasses.replace(ro.options, max_wall_time=first_run.INTERPRETED_WALL_TIME)
-        data = scenario.file_data
         scenario = dataclasses.replace(scenario, runout=dataclasses.replace(ro, options=opts))
-        if data is not None:
-            object.__setattr__(scenario, "_file_data", data)
     return scenario
 
 
@@ -106,11 +103,11 @@ def _figure_inputs(scenario) -> None:
 
 
 def _cmd_run(args) -> int:
-    from .motion.result import jsonable
-    from .reconstruct import run_scene
-
-    scenario = _load(args.file)
+    scenario = _load(args.file)  # a refused file before the engines are imported
     dt = _dt(args.dt)  # checked before any work (_check_options)
+    from .motion.result import jsonable
+    from .scene import run_scene
+
     result = run_scene(scenario)
     if args.csv:
         result.write_csv(Path(args.csv), system=args.units, dt=dt)
@@ -130,18 +127,17 @@ def _cmd_run(args) -> int:
 
 
 def _cmd_fit(args) -> int:
-    from .reconstruct.fit import fit_scene, same_file
+    from .outputs import same_file
     from .scenario import load_scenario
-    from .survey.mapping import load_scene_data
 
-    if args.write_best is not None:  # before the fit, not after it
-
-        if same_file(Path(args.write_best), Path(args.file)):
-            raise ScenarioError(f"{args.write_best!r} is the input file; write the best fit to another file",
-                                field="--write-best", file=args.file)
+    if args.write_best is not None and same_file(Path(args.write_best), Path(args.file)):  # before the fit
+        raise ScenarioError(f"{args.write_best!r} is the input file; write the best fit to another file",
+                            field="--write-best", file=args.file)
     scenario = load_scenario(args.file)  # the whole file validated first ([fit] and evidence sigmas included)
+    from .reconstruct.fit import fit_scene
+
     system = resolve_system(args.units, scenario.units)  # the file's speed_unit kept
-    result = fit_scene(load_scene_data(args.file), None, engine=args.engine, workers=args.workers,
+    result = fit_scene(scenario, None, engine=args.engine, workers=args.workers,
                        progress=args.progress, file=args.file, sample_time_limit=args.sample_time_limit)
     if args.json:
         _dump_result(result, "fit", args.file)
@@ -166,18 +162,18 @@ def _dump_result(result, command: str, file: str) -> None:
 
 
 def _cmd_mc(args) -> int:
+    from .scenario import load_scenario
+
+    scenario = load_scenario(args.file)  # a refused file before the engines are imported
     from .reconstruct.mc_plots import save_mc_figures
     from .reconstruct.montecarlo import monte_carlo
-    from .scenario import load_scenario
-    from .survey.mapping import load_scene_data
 
-    scenario = load_scenario(args.file)
     system = resolve_system(args.units, scenario.units)  # the file's speed_unit kept
     if args.accept and scenario.evidence.empty:
         raise ScenarioError("--accept keeps the samples that meet all the evidence, but the scenario has no "
                             "[evidence] items", field="--accept", file=args.file)
     try:
-        result = monte_carlo(load_scene_data(args.file), None, args.samples, seed=args.seed, engine=args.engine,
+        result = monte_carlo(scenario, None, args.samples, seed=args.seed, engine=args.engine,
                              workers=args.workers, dask_address=args.dask, out_path=args.out,
                              progress=not args.quiet, file=args.file, sample_time_limit=args.sample_time_limit,
                              accept=args.accept)
@@ -216,15 +212,15 @@ def _stopped(what: str, kept_in) -> int:
 
 
 def _cmd_posterior(args) -> int:
-    from .reconstruct.posterior import run_posterior
-    from .reconstruct.posterior_plots import save_posterior_figures
     from .scenario import load_scenario
-    from .survey.mapping import load_scene_data
 
     scenario = load_scenario(args.file)  # the whole file validated first ([fit], [posterior], evidence sigmas)
+    from .reconstruct.posterior import run_posterior
+    from .reconstruct.posterior_plots import save_posterior_figures
+
     system = resolve_system(args.units, scenario.units)  # the file's speed_unit kept
     try:
-        result = run_posterior(load_scene_data(args.file), None, steps=args.steps, seed=args.seed,
+        result = run_posterior(scenario, None, steps=args.steps, seed=args.seed,
                                start="fit" if args.from_fit else None, engine=args.engine, workers=args.workers,
                                dask_address=args.dask, chain_path=args.chain, progress=not args.quiet,
                                file=args.file, sample_time_limit=args.sample_time_limit)
@@ -292,11 +288,11 @@ def _add_inverse_commands(sub):
 
 
 def _cmd_plot(args) -> int:
-    from .plotting import check_sheet
-    from .reconstruct import run_scene
-
     interval = None if args.interval is None else parse(args.interval, Kind.TIME, field="--interval")
-    scenario = _load(args.file)
+    scenario = _load(args.file)  # a refused file before the engines are imported
+    from .plotting import check_sheet
+    from .scene import run_scene
+
     args.view_si = None
     if args.view is not None:  # the file's length unit -> m
         per_m, unit = to_unit(1.0, Kind.LENGTH, resolve_system(None, scenario.units))
@@ -330,13 +326,13 @@ def _save_figures(args, scene, interval) -> list:
 def _cmd_animate(args) -> int:
     from tqdm import tqdm
 
+    scenario = _load(args.file)  # a refused file before the engines are imported
     from .animation import animate_scene, check_animation_path, frame_times
-    from .reconstruct import run_scene
+    from .scene import run_scene
 
     out = check_animation_path(args.output, field="-o")  # before anything long
     dt = parse(args.dt, Kind.TIME, field="--dt")
     frame_times(0.0, dt, field="--dt")  # dt > 0; the frame count is checked once the run-out's end is known
-    scenario = _load(args.file)
     _figure_inputs(scenario)
     scene = run_scene(scenario)
     if scene.runout:
@@ -365,11 +361,11 @@ def _cmd_survey(args) -> int:
 
 
 def _cmd_export(args) -> int:
-    from .reconstruct import run_scene
+    times = args.times_s  # checked before any work (_check_options), as the output paths
+    scenario = _load(args.file)  # a refused file before the engines are imported
+    from .scene import run_scene
     from .survey.export import export_frame, export_items, write_dxf, write_geojson
 
-    times = args.times_s  # checked before any work (_check_options), as the output paths
-    scenario = _load(args.file)
     frame, unit = export_frame(scenario)
     items = export_items(run_scene(scenario), times)
     if args.dxf:
@@ -382,14 +378,14 @@ def _cmd_export(args) -> int:
 
 
 def _cmd_report(args) -> int:
+    extra = args.results  # read and checked before any work (_check_outputs)
+    scenario = _load(args.file)  # a refused file before the engines are imported
     from .casereport import survey_files, write_case_report
-    from .reconstruct import run_scene
     from .reconstruct.montecarlo import OUTPUT_KINDS
     from .scenario import presets
+    from .scene import run_scene
     from .validation import class_errors
 
-    extra = args.results  # read and checked before any work (_check_outputs)
-    scenario = _load(args.file)
     _figure_inputs(scenario)
     scene = run_scene(scenario)
     inputs = [args.file] + survey_files(args.file) + [getattr(args, k) for k in ("fit", "mc", "posterior")
@@ -774,7 +770,7 @@ def _check_scene_file(path: str) -> None:
     from .scenario import scenario_from_dict
     from .schema import load_toml
 
-    scenario_from_dict(load_toml(path), file=path, approaches=False)
+    scenario_from_dict(load_toml(path), file=path)
 
 
 def _first_run(args, argv: list[str]) -> int | None:

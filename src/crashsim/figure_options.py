@@ -14,7 +14,7 @@ import re
 
 from .errors import ScenarioError
 
-__all__ = ["LEGEND_MODES", "PAPER_SIZES", "LABEL_KINDS", "VIEWS", "ANIMATION_LEGENDS", "ZOOMS", "check_hide", "check_view",
+__all__ = ["is_color", "LEGEND_MODES", "PAPER_SIZES", "LABEL_KINDS", "VIEWS", "ANIMATION_LEGENDS", "ZOOMS", "check_hide", "check_view",
            "parse_scale", "NARROW_FIGURE", "title_chars"]
 
 #: A figure narrower than this [in] gets its legends under its panels, not beside them (the
@@ -143,3 +143,11 @@ def check_view(values, *, field: str = "view", unit: str = "m") -> tuple[float, 
             raise ScenarioError(f"view {shown!r}: {hi_name} = {b:g}{u} is not above {lo_name} = {a:g}{u}; "
                                 f"allowed: {hi_name} > {lo_name}", field=field)
     return x0, y0, x1, y1
+
+
+def is_color(value) -> bool:
+    """Whether ``value`` is a colour matplotlib understands (a name such as ``"white"`` or
+    ``"tab:orange"``, a hex code, a grey level string ``"0.5"``); used to check scenario files."""
+    from matplotlib.colors import is_color_like
+
+    return bool(is_color_like(value))

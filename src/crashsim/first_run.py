@@ -31,7 +31,6 @@ from pathlib import Path
 
 from ._jit import cache_dir, ready
 from .errors import ScenarioError
-from .warmup import compile_kernels
 
 __all__ = ["POLICIES", "SINGLE_SCENE", "ENV", "policy", "interpreted", "run_interpreted", "start_background_compile",
            "compile_in_progress", "wait_for_background_compile", "background_main", "dead_compile",
@@ -132,7 +131,7 @@ def start_background_compile() -> Path | None:
         env = {k: v for k, v in os.environ.items() if k != "NUMBA_DISABLE_JIT"}
         kwargs = {"start_new_session": True} if os.name == "posix" else \
             {"creationflags": getattr(subprocess, "DETACHED_PROCESS", 0)}  # pragma: no cover - Windows
-        subprocess.Popen([sys.executable, "-m", "crashsim.first_run"], stdin=subprocess.DEVNULL, stdout=out,
+        subprocess.Popen([sys.executable, "-m", "crashsim.warmup"], stdin=subprocess.DEVNULL, stdout=out,
                          stderr=subprocess.STDOUT, env=env, close_fds=True, **kwargs)
     return log
 
@@ -196,8 +195,10 @@ def _take(lock: Path) -> bool:
     return False
 
 
-def background_main() -> int:
-    """The detached compile: take the lock, compile every kernel (marking the cache ready), drop the lock."""
+def background_main(compile_kernels) -> int:
+    """The detached compile (``python -m crashsim.warmup``): take the lock, compile every kernel with
+    ``compile_kernels`` (:func:`crashsim.warmup.compile_kernels`, which marks the cache ready; passed in so
+    that this module, which every command reads, does not load the kernels), drop the lock."""
     lock = _lock()
     if not _take(lock):
         return 0  # another compile is under way
@@ -216,7 +217,3 @@ def background_main() -> int:
         except OSError:  # pragma: no cover
             pass
     return 0
-
-
-if __name__ == "__main__":  # pragma: no cover - the detached process (its output goes to compile.log)
-    raise SystemExit(background_main())

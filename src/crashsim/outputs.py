@@ -15,7 +15,7 @@ from pathlib import Path
 
 from .errors import ScenarioError
 
-__all__ = ["check_output_file", "check_output_dir", "check_workers"]
+__all__ = ["check_output_file", "check_output_dir", "check_workers", "same_file"]
 
 
 def _cause(exc: OSError) -> str:
@@ -107,3 +107,13 @@ def check_workers(workers, *, field: str = "workers") -> int | None:
         raise ScenarioError(f"{field} = {workers!r}; allowed a whole number >= 1, or \"auto\" (all "
                             f"{os.cpu_count() or 1} cores)", field=field)
     return n
+
+
+def same_file(a, b) -> bool:
+    """Whether two paths name the same file (existing or not)."""
+    try:
+        if a.exists() and b.exists():
+            return a.samefile(b)
+    except OSError:  # pragma: no cover - unreadable paths
+        pass
+    return a.resolve() == b.resolve()

@@ -10,6 +10,9 @@ compile_kernels(progress)
 compile_runout(), compile_report()
     The run-out kernels alone through :func:`crashsim.motion.run_runout`, timed (the
     compile-time benchmark).
+
+``python -m crashsim.warmup`` is the detached compile of a first run
+(:func:`crashsim.first_run.background_main`; its output goes to ``compile.log``).
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ from pathlib import Path
 from typing import Callable
 
 from ._jit import marker
+from .first_run import background_main
 from .motion import RunoutOptions, Road, run_runout
 from .motion.scene_model import kernels
 from .scenario import scenario_from_dict
@@ -128,3 +132,7 @@ def compile_runout() -> float:
 def compile_report() -> dict:
     """``{"seconds": first-call time [s] or None, "from_cache": bool or None}`` of :func:`compile_runout` in this process."""
     return dict(_COMPILE)
+
+
+if __name__ == "__main__":  # pragma: no cover - the detached process of a first run (tests/unit/test_first_run.py)
+    raise SystemExit(background_main(compile_kernels))

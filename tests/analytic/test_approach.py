@@ -21,7 +21,8 @@ import pytest
 
 from crashsim.errors import ScenarioError
 from crashsim.motion import FrictionZone, Road, RunoutOptions
-from crashsim.motion.approach import ApproachSpec, simulate_approach
+from crashsim.motion.approach import simulate_approach
+from crashsim.motion.approach_spec import ApproachSpec
 from crashsim.motion.loads import STANDARD_GRAVITY as G
 from crashsim.motion.wheels import WheelSetting, WheelSettings
 from crashsim.vehicles import Axle, Body, Hitch, Vehicle, chain_states

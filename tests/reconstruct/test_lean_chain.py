@@ -163,8 +163,9 @@ def test_the_inverse_api_takes_a_scenario(raw, monkeypatch):
     assert file_contents(sc) == (raw, None)
     import dataclasses
 
-    with pytest.raises(crashsim.errors.ScenarioError):
-        file_contents(dataclasses.replace(sc))  # made another way: no file contents to vary
+    assert file_contents(dataclasses.replace(sc, title="t")) == (raw, None)  # replace keeps the file's contents
+    with pytest.raises(crashsim.errors.ScenarioError, match="cannot vary"):
+        file_contents(dataclasses.replace(sc, file_data=None))  # made another way: no file contents to vary
     a = crashsim.monte_carlo(sc, samples=3, workers=1, engine=ENGINE)
     b = crashsim.monte_carlo(crashsim.load(FILE), samples=3, workers=1, engine=ENGINE)
     assert np.array_equal(a.inputs, b.inputs) and a.outputs.keys() == b.outputs.keys()

@@ -12,7 +12,7 @@ from crashsim.cli import main
 from crashsim.errors import ScenarioError
 from crashsim.reconstruct.fit import EvidenceModel, fit_scene
 from crashsim.reconstruct.overrides import resolve_path, set_value
-from crashsim.scene.run import run_scene
+from crashsim.scene.run import run_scene, simulate_approaches
 from crashsim.scenario import load_scenario
 from crashsim.schema import load_toml
 from crashsim.units import parse
@@ -167,7 +167,7 @@ def test_best_fit_is_the_users_file_with_its_values_replaced(tmp_path):
     assert all(any(ln == w for w in it) for ln in kept), "a line of the input lost or moved"
     assert len(lines) < len(src.splitlines()) + 10  # no inlined survey (it was 2,137 lines)
     # it runs from its own folder, with the fitted values
-    sc = load_scenario(out)
+    sc = simulate_approaches(load_scenario(out))
     (rec,) = sc.evidence.recorder
     assert rec.time_offset == pytest.approx(-0.3, abs=1e-12)
     assert sc.approaches["truck"].speed_at_braking == pytest.approx(24.6, rel=1e-12)

@@ -11,7 +11,7 @@ import tomli_w
 
 from crashsim.cli import main
 from crashsim.errors import ScenarioError
-from crashsim.scene.run import run_scene
+from crashsim.scene.run import run_scene, simulate_approaches
 from crashsim.scenario import scenario_from_dict
 
 
@@ -40,7 +40,7 @@ def _write(tmp_path, data, name="s.toml"):
 
 
 def test_impact_velocity_comes_from_the_approach():
-    sc = scenario_from_dict(scene())
+    sc = simulate_approaches(scenario_from_dict(scene()))
     a = sc.approaches["A"]
     vb = 50 * 0.44704
     vi = math.sqrt(vb**2 - 2 * 0.75 * 9.80665 * 18.0)
@@ -86,8 +86,8 @@ def test_report_json_and_units(tmp_path, capsys):
 def test_bad_input_names_the_key(tmp_path, capsys, edit, key, words):
     data = scene()
     edit(data)
-    with pytest.raises(ScenarioError) as exc:
-        scenario_from_dict(data, file="x.toml")
+    with pytest.raises(ScenarioError) as exc:  # at load, or (a vehicle that stops short) when its approach runs
+        simulate_approaches(scenario_from_dict(data, file="x.toml"))
     assert key in str(exc.value) and words in str(exc.value)
     p = _write(tmp_path, data)
     assert main(["run", str(p)]) == 2
@@ -95,12 +95,23 @@ def test_bad_input_names_the_key(tmp_path, capsys, edit, key, words):
     assert str(p) in err[0] and key in err[0]
 
 
+def test_the_loader_does_not_simulate():
+    """A file whose vehicle stops before the impact loads (the loader reads and checks the file, nothing
+    runs); the refusal comes when its approach is simulated, and names the key."""
+    data = scene()
+    data["vehicles"]["A"]["approach"].update(speed="20 mph")
+    sc = scenario_from_dict(data, file="x.toml")
+    assert sc.approaches == {}
+    with pytest.raises(ScenarioError, match="vehicles.A.approach.distance"):
+        run_scene(sc)
+
+
 def test_solved_speed_and_pre_impact_evidence():
     data = scene()
     a = data["vehicles"]["A"]
     a["speed"] = "15 m/s"
     del a["approach"]["speed"]
-    sc = scenario_from_dict(data)
+    sc = simulate_approaches(scenario_from_dict(data))
     ap = sc.approaches["A"]
     assert ap.speed_solved
     assert ap.speed_at_braking == pytest.approx(math.sqrt(15.0**2 + 2 * 0.75 * 9.80665 * 18.0), rel=1e-6)
@@ -149,7 +160,7 @@ def test_articulated_approach_jackknife_warns():
                    "contact_tolerance": "3 m"},
         "runout": {"road_friction": 0.75},
     }
-    sc = scenario_from_dict(data)
+    sc = simulate_approaches(scenario_from_dict(data))
     a = sc.approaches["truck"]
     art = math.degrees(a.articulation_at_impact[0])
     assert abs(art) > 2.0  # locked drive axles with a steer input: the tractor yaws against the trailer

@@ -18,12 +18,13 @@ import pytest
 
 from crashsim.errors import ScenarioError
 from crashsim.motion import Road, RunoutOptions, simulate_runout
-from crashsim.motion.approach import ApproachSpec, simulate_approach
+from crashsim.motion.approach import simulate_approach
+from crashsim.motion.approach_spec import ApproachSpec
 from crashsim.motion.driver import DriverSpec, Path, ackermann, pursuit_steer, steer_geometry
 from crashsim.motion.wheels import WheelSetting, WheelSettings
 from crashsim.scenario import scenario_from_dict
 from crashsim.validation.offtracking import _axle_path, closed_form, combination, fit_circle
-from crashsim.scene.run import run_scene
+from crashsim.scene.run import run_scene, simulate_approaches
 from crashsim.vehicles import Axle, Body, BodyState, Hitch, Vehicle, chain_states
 
 SCENE = FilePath(__file__).parents[1] / "data" / "driven_curve.toml"
@@ -149,7 +150,7 @@ def _scene():
 
 
 def test_driven_scene_runs_and_reports_the_driver():
-    sc = scenario_from_dict(_scene(), file=str(SCENE))
+    sc = simulate_approaches(scenario_from_dict(_scene(), file=str(SCENE)))
     a = sc.approaches["truck"]
     assert a.mode == "path"
     assert a.steering is not None and len(a.steering["t"]) > 10
@@ -184,7 +185,7 @@ def test_a_path_that_cannot_be_followed_is_refused_in_one_line(edit, key, words)
     d = copy.deepcopy(_scene())
     edit(d)
     with pytest.raises(ScenarioError) as err:
-        scenario_from_dict(d, file=str(SCENE), approaches=False)
+        scenario_from_dict(d, file=str(SCENE))
     msg = str(err.value)
     assert key in msg and words in msg and str(SCENE) in msg
     assert "\n" not in msg
@@ -257,7 +258,7 @@ def test_one_time_line_carries_the_approach_braking_through_the_impact():
                             {"at": "1.5 s", "select": "trailer", "state": "locked"}])
     car = d["vehicles"]["car"]
     car["bodies"][0].update(mass="2 kg", yaw_inertia="1 kg m^2")
-    sc = scenario_from_dict(d)
+    sc = simulate_approaches(scenario_from_dict(d))
     res = run_scene(sc)
     ap = sc.approaches["truck"]
     assert 0.3 < ap.time_to_impact < 1.5  # the trailer locks after the impact
@@ -276,7 +277,7 @@ def test_one_time_line_carries_the_approach_braking_through_the_impact():
     a["through_impact"] = False
     apart = scenario_from_dict(d)
     res_apart = run_scene(apart)
-    total_apart = apart.approaches["truck"].distance + res_apart.runout["truck"].bodies["tractor"].distance
+    total_apart = res_apart.scenario.approaches["truck"].distance + res_apart.runout["truck"].bodies["tractor"].distance
     assert abs(total_apart - one.bodies["tractor"].distance) > 1.0
     # and the trailer's wheels locked 1.5 s after the start of braking, on the run-out's time line
     wheels = sc.runout.wheels["truck"]

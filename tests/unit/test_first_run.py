@@ -78,7 +78,7 @@ def test_the_background_compile_is_launched_detached_without_the_interpreter_swi
     monkeypatch.setattr(first_run.subprocess, "Popen", Popen)
     log = first_run.start_background_compile()
     assert log == tmp_path / "compile.log" and log.exists()
-    assert seen["cmd"][1:] == ["-m", "crashsim.first_run"]
+    assert seen["cmd"][1:] == ["-m", "crashsim.warmup"]
     assert "NUMBA_DISABLE_JIT" not in seen["kw"]["env"]
     assert seen["kw"].get("start_new_session") or os.name != "posix"
 
@@ -90,7 +90,9 @@ def test_one_compile_at_a_time(monkeypatch, tmp_path):
     lock.write_text(str(os.getpid()))  # a live process holds it
     assert first_run.compile_in_progress()
     assert first_run.start_background_compile() is None
-    assert first_run.background_main() == 0 and lock.read_text() == str(os.getpid())  # left alone
+    compiled = []
+    assert first_run.background_main(lambda say: compiled.append(1)) == 0 and not compiled  # left alone
+    assert lock.read_text() == str(os.getpid())
     dead = subprocess.Popen([sys.executable, "-c", "pass"])
     dead.wait()
     lock.write_text(str(dead.pid))  # a compile that died

@@ -26,7 +26,8 @@ from crashsim.motion import (
     simulate_runout,
     static_loads,
 )
-from crashsim.motion.levels import LEVEL_DESCRIPTIONS, LEVELS, simulate_level
+from crashsim.motion.levels import simulate_level
+from crashsim.motion.runners import LEVEL_DESCRIPTIONS, LEVELS
 from crashsim.motion.loads import STANDARD_GRAVITY as G
 from crashsim.vehicles import Axle, Body, BodyState, Hitch, Vehicle, chain_states
 

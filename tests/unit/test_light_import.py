@@ -111,3 +111,29 @@ def test_a_refused_scene_file_on_a_first_run_starts_no_compile(monkeypatch, tmp_
         err = capsys.readouterr().err
         assert err.startswith("crashsim: input error: ") and str(path) in err and words in err, err
     assert calls == []
+
+
+@pytest.mark.parametrize("command, extra", [("run", []), ("fit", []), ("mc", []), ("posterior", []),
+                                            ("plot", ["-o", "x.png"]), ("animate", ["-o", "x.gif"]),
+                                            ("export", ["--dxf", "x.dxf"]), ("report", ["-o", "x.html"])])
+def test_a_refused_scene_file_loads_no_engine(tmp_path, command, extra):
+    """Every scene command reads and checks the file before it imports an engine: a file with an
+    unknown key is refused (exit code 2, the file and the key named) having loaded no numba and no
+    more of SciPy than pint itself loads (pint's compat module imports the bare ``scipy`` package to
+    learn whether it is there), and writes no output. The figure commands (plot, animate) may load
+    matplotlib first: their output paths are checked before any work, and which figure formats can
+    be written is matplotlib's to say."""
+    scene = (ROOT / "scenarios" / "scenes" / "intersection_car_trailer_wheels.toml").read_text()
+    bad = tmp_path / "bad_key.toml"
+    bad.write_text(scene.replace("[scenario]\n", '[scenario]\ntitel = "typo"\n', 1))
+    argv = [command, str(bad)] + [str(tmp_path / a) if a.startswith("x.") else a for a in extra]
+    out = _fresh("import sys\nfrom crashsim.cli import main\nrc = main(%r)\nassert rc == 2, rc\n%s" % (argv, REPORT))
+    assert out.returncode == 0, out.stderr
+    assert "scenario.titel" in out.stderr and str(bad) in out.stderr
+    loaded = ast.literal_eval(out.stdout.strip().splitlines()[-1])
+    pint_scipy = set(_loaded(f"import pint, sys; {REPORT}"))
+    assert {m for m in loaded if m.split(".")[0] == "scipy"} <= pint_scipy
+    assert not any(m.split(".")[0] in ("numba", "llvmlite") for m in loaded)
+    if command not in ("plot", "animate"):
+        assert not any(m.split(".")[0] == "matplotlib" for m in loaded)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad_key.toml"]

@@ -17,13 +17,15 @@ import pytest
 
 from crashsim.errors import ScenarioError
 from crashsim.motion import Road, RunoutOptions
-from crashsim.motion.approach import ApproachSpec, simulate_approach
+from crashsim.motion.approach import simulate_approach
+from crashsim.motion.approach_spec import ApproachSpec
 from crashsim.motion.loads import STANDARD_GRAVITY
 from crashsim.motion.recorded import RecordedDrive, rising_speed, wheel_setting_for
 from crashsim.motion.wheels import WheelSetting, WheelSettings
 from crashsim.report import format_approach
 from crashsim.scenario import scenario_from_dict
 from crashsim.units import Kind, parse
+from crashsim.scene.run import simulate_approaches
 from crashsim.vehicles import Axle, Body, BodyState, Vehicle
 
 SCENE = Path(__file__).parents[1] / "data" / "recorded_approach.toml"
@@ -95,7 +97,7 @@ def _scene():
 def test_a_scene_driven_by_its_table():
     from crashsim.scene.run import run_scene
 
-    sc = scenario_from_dict(_scene(), file=str(SCENE))
+    sc = simulate_approaches(scenario_from_dict(_scene(), file=str(SCENE)))
     res = run_scene(sc)
     a = sc.approaches["pickup"]
     table = _scene()["vehicles"]["pickup"]["approach"]["recorded"]["samples"]
@@ -128,7 +130,7 @@ def _refused(edit, field, *words):
     d = _scene()
     edit(d["vehicles"]["pickup"])
     with pytest.raises(ScenarioError) as e:
-        scenario_from_dict(d, file=str(SCENE), approaches=False)
+        scenario_from_dict(d, file=str(SCENE))
     msg = str(e.value)
     assert field in msg and str(SCENE) in msg, msg
     for w in words:
@@ -191,5 +193,5 @@ def test_a_table_with_a_time_after_the_impact_is_refused_by_the_schema():
     d = _scene()
     _samples(d["vehicles"]["pickup"])[-1]["time"] = "0.5 s"
     with pytest.raises(ScenarioError) as e:
-        scenario_from_dict(copy.deepcopy(d), file=str(SCENE), approaches=False)
+        scenario_from_dict(copy.deepcopy(d), file=str(SCENE))
     assert "samples[10].time" in str(e.value)

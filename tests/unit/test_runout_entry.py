@@ -3,7 +3,6 @@ options, and each option gives, bit for bit, the model it names."""
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -122,8 +121,7 @@ def _same_report(a, b):
 
 def test_every_level_has_one_runner_of_each_kind_registered_where_it_is_defined():
     """run_runout dispatches through the registry (crashsim.motion.runners), which holds every level."""
-    from crashsim.motion.levels import LEVELS
-    from crashsim.motion.runners import ACCURACY_RUNNERS, RUNNERS, register_runner
+    from crashsim.motion.runners import ACCURACY_RUNNERS, LEVELS, RUNNERS, register_runner
 
     assert sorted(RUNNERS) == sorted(LEVELS) and sorted(ACCURACY_RUNNERS) == sorted(LEVELS)
     where = {level: fn.__module__.rsplit(".", 1)[1] for level, fn in RUNNERS.items()}

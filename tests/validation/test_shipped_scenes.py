@@ -19,6 +19,7 @@ import pytest
 from crashsim import run as crashsim_run
 from crashsim.cli import main
 from crashsim.scenario import load_scenario
+from crashsim.scene.run import simulate_approaches
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENES = sorted((ROOT / "scenarios" / "scenes").glob("*.toml"))
@@ -200,7 +201,7 @@ def test_truck_brakes_before_the_impact(capsys):
     assert set(out["crush"]) == {"car", "tractor"}
     assert out["impacts"][0]["energy_loss_normal"] > out["impacts"][0]["energy_loss_tangential"] > 0
     assert out["evidence"]["all_passed"]
-    sc = load_scenario(path)
+    sc = simulate_approaches(load_scenario(path))
     ap = sc.approaches["truck"]
     run = ap.runout
     m = sum(b.mass for v in sc.vehicles if v.name == "truck" for b in v.bodies)
@@ -222,7 +223,7 @@ def test_truck_downgrade_abs(capsys):
     assert main(["run", str(path), "--json", "--strict"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["evidence"]["all_passed"]
-    sc = load_scenario(path)
+    sc = simulate_approaches(load_scenario(path))
     ap = sc.approaches["truck"]
     tracks = ap.tracks
     assert not any(t.sliding.any() for k, t in tracks.items() if k.startswith("tractor/"))

@@ -114,7 +114,6 @@ when every body has).  For a single-body vehicle ``rigid`` equals ``articulated`
 from __future__ import annotations
 
 import dataclasses
-import difflib
 import logging
 import math
 from typing import Mapping
@@ -133,38 +132,17 @@ from .options import RunoutOptions
 from .postprocess import ResultInputs, build_result
 from .result import BodyRunout, HitchHistory, RunoutEvent, RunoutResult
 from .road import Road, slope_gravity
-from .runners import Runout, RunoutCall, register_runner
+from .runners import Runout, RunoutCall, check_level, register_runner
 from .simulate import simulate_runout
 from .tyres import tyre_forces
 from .wheels import WheelSettings
 
-__all__ = ["LEVELS", "LEVEL_DESCRIPTIONS", "check_level"]
+__all__: list[str] = []  # the levels register their runners (run them through run_runout)
 
 _log = logging.getLogger("crashsim")
 
-#: Fidelity levels, cheapest first.
-LEVELS = ("impact", "energy", "rigid", "articulated", "load_transfer")
-
-#: One line per level, for schema descriptions and reports.
-LEVEL_DESCRIPTIONS = {
-    "impact": "impact only, no run-out",
-    "energy": "hand calculation: sliding point mass d = v^2/(2 f g) plus rotating-skid work, closed form",
-    "rigid": "each body runs out alone on its tyres, hitch ignored (kingpin load stays on the towing body)",
-    "articulated": "full articulated run-out with per-wheel tyre forces (simulate_runout)",
-    "load_transfer": "articulated run-out with quasi-static load transfer (needs cg_height)",
-}
-
 # Points per radian (at least 16) for the mean drag factor over the swept headings.
 _SWEEP_POINTS_PER_RAD = 32
-
-
-def check_level(level: str) -> str:
-    """``level`` if it is one of :data:`LEVELS`, else a ScenarioError naming the nearest (field ``runout.level``)."""
-    if level not in LEVELS:
-        close = difflib.get_close_matches(str(level), LEVELS, n=3)
-        hint = f"; best matches are {close}" if close else ""
-        raise ScenarioError(f"must be one of {LEVELS}, got {level!r}{hint}", field="runout.level")
-    return level
 
 
 def _check_inputs(vehicle, road, options, wheels) -> WheelSettings:

@@ -18,6 +18,8 @@ from ..vehicles import BodyState
 
 __all__ = [
     "time_grid",
+    "path_length",
+    "PATH_SAMPLES_PER_S",
     "jsonable",
     "BodyHistory",
     "BodyRunout",
@@ -860,3 +862,20 @@ class SceneRunout:
                         "vehicles": list(e.vehicles), **e.data} for e in self.events],
             "vehicles": {name: r.to_dict(history=history) for name, r in self.vehicles.items()},
         })
+
+
+#: Samples per second of the dense solution used to measure the CG path length.
+PATH_SAMPLES_PER_S = 4000
+
+
+def path_length(sol, t: np.ndarray) -> np.ndarray:
+    """Cumulative CG path length at sorted times ``t`` from ``t[0]`` (trapezoid on a fine grid of the dense output)."""
+    t = np.asarray(t, dtype=float)
+    if len(t) == 0:
+        return t
+    n = max(int((t[-1] - t[0]) * PATH_SAMPLES_PER_S), 16)
+    grid = np.union1d(np.linspace(t[0], t[-1], n + 1), t)
+    sv = np.asarray(sol(grid))
+    v = np.hypot(sv[3], sv[4])
+    s = np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(grid))])
+    return np.interp(t, grid, s)

@@ -16,14 +16,16 @@ level                              runner (no accuracy target)                 w
 =================================  ==========================================  ======================================
 
 Every runner returns a :class:`Runout`.  The registry holds every level of
-:data:`crashsim.motion.levels.LEVELS` once :mod:`crashsim.motion.runout` is imported (it imports
+:data:`LEVELS` once :mod:`crashsim.motion.runout` is imported (it imports
 the modules that register).
 """
 
 from __future__ import annotations
 
+import difflib
 from typing import Callable, Mapping, NamedTuple, Sequence
 
+from ..errors import ScenarioError
 from ..vehicles import BodyState, Vehicle
 from .contact import ContactModel, Obstacle
 from .options import RunoutOptions
@@ -31,7 +33,29 @@ from .result import SceneRunout
 from .road import Road
 from .wheels import WheelSettings
 
-__all__ = ["Runout", "RunoutCall", "RUNNERS", "ACCURACY_RUNNERS", "register_runner"]
+__all__ = ["LEVELS", "LEVEL_DESCRIPTIONS", "check_level", "Runout", "RunoutCall", "RUNNERS", "ACCURACY_RUNNERS",
+           "register_runner"]
+
+#: Fidelity levels, cheapest first.
+LEVELS = ("impact", "energy", "rigid", "articulated", "load_transfer")
+
+#: One line per level, for schema descriptions and reports.
+LEVEL_DESCRIPTIONS = {
+    "impact": "impact only, no run-out",
+    "energy": "hand calculation: sliding point mass d = v^2/(2 f g) plus rotating-skid work, closed form",
+    "rigid": "each body runs out alone on its tyres, hitch ignored (kingpin load stays on the towing body)",
+    "articulated": "full articulated run-out with per-wheel tyre forces (simulate_runout)",
+    "load_transfer": "articulated run-out with quasi-static load transfer (needs cg_height)",
+}
+
+
+def check_level(level: str) -> str:
+    """``level`` if it is one of :data:`LEVELS`, else a ScenarioError naming the nearest (field ``runout.level``)."""
+    if level not in LEVELS:
+        close = difflib.get_close_matches(str(level), LEVELS, n=3)
+        hint = f"; best matches are {close}" if close else ""
+        raise ScenarioError(f"must be one of {LEVELS}, got {level!r}{hint}", field="runout.level")
+    return level
 
 
 class Runout(NamedTuple):

@@ -26,7 +26,7 @@ The names below are importable from :mod:`crashsim.plotting` itself.
 
 from __future__ import annotations
 
-from ..figure_options import LABEL_KINDS, LEGEND_MODES, PAPER_SIZES, check_hide, parse_scale
+from ..figure_options import LABEL_KINDS, LEGEND_MODES, PAPER_SIZES, check_hide, is_color, parse_scale
 from .barrier import BarrierAxes, plot_barrier_figures, plot_barrier_sweep
 from .drawing import SceneDrawing, scene_drawing
 from .histories import IMPACT_LABEL_GAP, LIMIT_SHOWN_FROM, history_panels, plot_histories
@@ -37,7 +37,7 @@ from .save import SCENE_FIGURE_SUFFIXES, save_scene_figures
 from .scene import plot_scene
 from .sheet import (ENGINEER_SCALES_FT, PrintSheet, check_sheet, engineer_scale_text, layout_print, north_direction,
                     print_sheet, replace_scale_bar)
-from .style import MAX_WIDTH, MIN_WIDTH, Z_REST, Z_TEXT, figure_system, is_color
+from .style import MAX_WIDTH, MIN_WIDTH, Z_REST, Z_TEXT, figure_system
 from .time_distance import plot_time_distance
 from .timeline import plot_wheel_timeline
 

@@ -13,7 +13,7 @@ import numpy as np
 from ..units import resolve_system
 
 __all__ = ["pyplot", "FAMILIES", "EVIDENCE_COLOR", "PASS_COLOR", "FAIL_COLOR", "Z_ZONE", "Z_MAP", "Z_BARRIER", "Z_TRACK",
-           "Z_GHOST", "Z_IMPACT", "Z_REST", "Z_EVIDENCE", "Z_ARROW", "Z_TEXT", "ZONE_COLORS", "MAP_STYLES", "is_color",
+           "Z_GHOST", "Z_IMPACT", "Z_REST", "Z_EVIDENCE", "Z_ARROW", "Z_TEXT", "ZONE_COLORS", "MAP_STYLES",
            "figure_system", "nice_steps", "nice_at_most", "halo", "wrap", "darker", "FIGURE_WIDTH", "MIN_WIDTH",
            "MAX_WIDTH"]
 
@@ -61,14 +61,6 @@ MAP_STYLES = {
     "stop": ("stop line", "0.1", 5.0, None, False),
     "other": ("other line", "0.6", 0.8, None, False),
 }
-
-
-def is_color(value) -> bool:
-    """Whether ``value`` is a colour matplotlib understands (a name such as ``"white"`` or
-    ``"tab:orange"``, a hex code, a grey level string ``"0.5"``); used to check scenario files."""
-    from matplotlib.colors import is_color_like
-
-    return bool(is_color_like(value))
 
 
 def figure_system(scene, system):

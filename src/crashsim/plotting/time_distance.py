@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..figure_options import NARROW_FIGURE, title_chars
-from ..motion.approach import path_length
+from ..motion.result import path_length
 from ..report import fmt
 from ..units import Kind, to_unit
 from .events import mark_impacts

@@ -68,8 +68,9 @@ from ..evidence.checks import (approach_of_body, approach_tracks, recorder_resid
 from ..evidence.crush import GROUP_TITLES, crush_groups
 from ..geometry import wrap_angle
 from ..inverse_schema import CORRELATION_WARNING, validate_fit
-from ..outputs import check_workers
+from ..outputs import check_workers, same_file
 from ..report import fmt, table
+from ..scenario import Scenario
 from ..schema import in_range, interval_text
 from ..units import resolve_system, system_label
 from .montecarlo import DEFAULT_SAMPLE_TIME_LIMIT
@@ -902,16 +903,6 @@ class FitResult:
         return "\n".join(lines)
 
 
-def same_file(a, b) -> bool:
-    """Whether two paths name the same file (existing or not)."""
-    try:
-        if a.exists() and b.exists():
-            return a.samefile(b)
-    except OSError:  # pragma: no cover - unreadable paths
-        pass
-    return a.resolve() == b.resolve()
-
-
 def _best_header(res: FitResult, data: dict) -> str:
     """The comment block at the top of a best-fit scenario file (display units of the scenario)."""
     system = resolve_system((data.get("scenario") or {}).get("units"), "SI")
@@ -985,15 +976,16 @@ def _start_points(spec: FitSpec, ex: Executor) -> list[np.ndarray]:
     return [first] + rest
 
 
-def fit_scene(scenario_data: dict, fit_spec: FitSpec | dict | None = None, *, engine: str | None = None,
+def fit_scene(scenario_data: dict | Scenario, fit_spec: FitSpec | dict | None = None, *, engine: str | None = None,
               workers: int | None = None, progress: bool | Callable | None = None,
               file: str | None = None, sample_time_limit: float | None = None) -> FitResult:
     """Fit the unknowns of a scenario to its evidence (impact + run-out, weighted least squares).
 
     Parameters
     ----------
-    scenario_data : dict
-        The raw scenario (as from TOML, e.g. :func:`crashsim.schema.load_toml`), with
+    scenario_data : dict or Scenario
+        The raw scenario (as from TOML, e.g. :func:`crashsim.schema.load_toml`), or a Scenario
+        loaded from one (its ``file_data``, not read again), with
         evidence items carrying ``sigma`` (or ``fit.sigma_from_tolerance``).
     fit_spec : FitSpec or dict, optional
         The unknowns and options: a :class:`FitSpec`, a raw [fit] table, or None for the

@@ -58,6 +58,7 @@ from ..geometry import circular_mean, unwrap_about_mean
 from ..impact import solve_impact
 from ..inverse_schema import DISTRIBUTIONS, validate_uncertainty
 from ..report import fmt
+from ..scenario import Scenario
 from ..scene.run import simulate_approaches
 from ..schema import interval_text
 from .overrides import INVERSE_SECTIONS, default_engine, file_contents, parse_value, resolve_path
@@ -900,7 +901,7 @@ def _swings(data, spec: UncertaintySpec, engine, file, q=(0.05, 0.95)) -> tuple[
 # monte_carlo
 # ---------------------------------------------------------------------------------------------
 
-def monte_carlo(scenario_data: dict, spec: UncertaintySpec | dict | None = None, n: int | None = None, *,
+def monte_carlo(scenario_data: dict | Scenario, spec: UncertaintySpec | dict | None = None, n: int | None = None, *,
                 seed: int | None = None, engine: str | None = None, workers: int | None = None,
                 dask_address: Any = None, out_path: str | Path | None = None,
                 progress: bool | Callable[[int, int], None] = True, chunk_size: int | None = None,
@@ -910,8 +911,9 @@ def monte_carlo(scenario_data: dict, spec: UncertaintySpec | dict | None = None,
 
     Parameters
     ----------
-    scenario_data : dict
-        The raw scenario (as from TOML).
+    scenario_data : dict or Scenario
+        The raw scenario (as from TOML), or a Scenario loaded from one (its ``file_data``, not read
+        again).
     spec : UncertaintySpec or dict, optional
         The uncertain inputs: an :class:`UncertaintySpec`, a raw [uncertainty] table, or None
         for the scenario's own ``[uncertainty]`` table.

@@ -427,7 +427,7 @@ class ScenarioOverrides:
         if self._variant is not None:
             sc = self._variant.scenario(key)
         if sc is None:
-            sc = scenario_from_dict(self.data(key), file=self.file, approaches=False)  # approaches: in the run
+            sc = scenario_from_dict(self.data(key), file=self.file)  # approaches: in the run
             if sc.runout is not None and (self.engine is not None or self.max_wall_time is not None):
                 options = _engine_options(sc.runout.options, self.engine)
                 if self.max_wall_time is not None:

@@ -85,6 +85,7 @@ _log = logging.getLogger("crashsim")
 PERCENTILES = (2.5, 16.0, 50.0, 84.0, 97.5)
 from ..inverse_schema import MIN_KEPT_STEPS, validate_posterior  # noqa: E402 - fewest steps kept after burn-in and thinning
 from ..report import fmt, table
+from ..scenario import Scenario
 from ..units import resolve_system, system_label
 from .fit import FitProblem, FitSpec, NotAtRest, fit_scene
 from .montecarlo import DEFAULT_SAMPLE_TIME_LIMIT, MCResult, UncertaintySpec, scene_outputs
@@ -764,7 +765,7 @@ def _check_start(problem: PosteriorProblem, x0: np.ndarray, where: str, file: st
                                 f"a start inside the support", field=key, file=file)
 
 
-def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None, *, steps: int | None = None,
+def run_posterior(scenario_data: dict | Scenario, spec: PosteriorSpec | dict | None = None, *, steps: int | None = None,
                   seed: int | None = None, start: str | None = None, engine: str | None = None,
                   workers: int | None = None, dask_address: Any = None, chain_path: str | Path | None = None,
                   progress: bool | Callable[[int, int], None] = True, file: str | None = None,
@@ -773,8 +774,8 @@ def run_posterior(scenario_data: dict, spec: PosteriorSpec | dict | None = None,
 
     Parameters
     ----------
-    scenario_data : dict
-        The raw scenario (as from TOML) with a ``[fit]`` table (the unknowns and bounds) and
+    scenario_data : dict or Scenario
+        The raw scenario (as from TOML), or a Scenario loaded from one (its ``file_data``), with a ``[fit]`` table (the unknowns and bounds) and
         evidence sigmas; ``[uncertainty]`` too for ``prior = "uncertainty"``.
     spec : PosteriorSpec or dict, optional
         The sampler's settings; default the scenario's ``[posterior]`` table (or its defaults).

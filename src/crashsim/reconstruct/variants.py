@@ -15,8 +15,7 @@ compares them for every path kind).  The values are used as given: the file-text
 the full build sees (``"13.41 m/s"`` written with ``repr`` and read back) is the identity for
 the SI units (a factor of exactly 1; tested for every kind), so dropping it changes no digit.
 
-A vehicle's approach is simulated in the scene run (the scenarios here are built with
-``approaches=False``): a sample that changes an approach's speed, or the road friction it runs
+A vehicle's approach is simulated in the scene run (the loader does not simulate it): a sample that changes an approach's speed, or the road friction it runs
 on, changes its inputs (``Scenario.approach_inputs``) and the run re-runs only that approach.
 
 What it cannot vouch for it leaves to the full build (``scenario`` returns None): a path it
@@ -84,7 +83,7 @@ class ScenarioVariant:
         self.kinds = tuple(patch_kind(t, d) for t in self.targets)
         if base.approaches and any((k or "").startswith("approach_") or
                                    (k == "road_friction" and base.approach_inputs) for k in self.kinds):
-            self.kinds = (None,)  # approaches already simulated (a loaded scenario): the full build
+            self.kinds = (None,)  # approaches already simulated (simulate_approaches was called): the full build
         self.patchable = None not in self.kinds
         if not self.patchable:
             return
@@ -173,7 +172,9 @@ class ScenarioVariant:
                         inputs[n] = replace(a, spec=replace(a.spec, **{key: d["vehicles"][n]["approach"][key]}))
         except ScenarioError:
             return None
-        return replace(base, states=states, impact=problem, runout=runout, data=d, approach_inputs=inputs)
+        # not built from file contents (those are the base's, without the sample's values): no file_data
+        return replace(base, states=states, impact=problem, runout=runout, data=d, approach_inputs=inputs,
+                       file_data=None)
 
 
 def patch_scenario(base, targets: Sequence, values: Sequence[float], file: str | None = None):

@@ -11,7 +11,7 @@ import numpy as np
 
 from ..errors import ScenarioError, with_file
 from ..motion import Road, RunoutOptions
-from ..motion.approach import ApproachSpec, check_path, path_start
+from ..motion.approach_spec import ApproachSpec, check_path, path_start
 from ..motion.driver import DriverSpec, Path as DrivePath, steer_geometry
 from ..motion.recorded import RecordedDrive, rising_speed
 from ..vehicles import Vehicle

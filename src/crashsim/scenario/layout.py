@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from ..plotting import is_color
+from ..figure_options import is_color
 from ..survey.mapping import is_placed
 from .problems import error_at
 from .types import MapLine

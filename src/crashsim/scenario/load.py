@@ -11,7 +11,6 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import ScenarioError
-from ..scene.run import simulate_approaches
 from ..schema import ScenarioValidationError, load_toml, validate_collect
 from ..survey.mapping import as_written, expand_survey, is_placed, survey_frame
 from ..units import DisplaySystem
@@ -36,22 +35,22 @@ def _units_any_case(data: dict) -> dict:
     return data
 
 
-def scenario_from_dict(data: dict[str, Any], *, file: str | None = None, approaches: bool = True) -> Scenario:
+def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scenario:
     """Validate a parsed scenario (as from TOML) and build the typed SI objects.
 
     A ``[survey]`` section not yet read is read here (:func:`crashsim.survey.expand_survey`): its
     items join the file's own tables before validation.
 
-    ``approaches``: simulate the vehicles' approaches (:func:`crashsim.scene.run.simulate_approaches`,
-    the default);
-    False leaves them to the scene run (:func:`crashsim.reconstruct.run_scene` simulates them
-    before the impact): the scenario then carries their inputs (``approach_inputs``), and the
-    states at impact of a vehicle with an approach are those of its file speed (0 if none) until
-    then.  Fit, Monte Carlo and posterior samples build their scenarios so, and a sample that
-    changes an approach re-runs only that approach."""
-    source = data
+    The loader simulates nothing: a vehicle's approach (``[vehicles.<name>.approach]``) is built and
+    checked here (``approach_inputs``), and run by the scene run (:func:`crashsim.reconstruct.run_scene`,
+    before the impact; :func:`crashsim.scene.run.simulate_approaches` for the scenario alone). Until
+    then the states at impact of a vehicle with an approach are those of its file speed (0 if none)
+    and ``approaches`` is empty. So reading a file costs no run-out (a refused file is refused
+    before anything is computed), and a fit, Monte Carlo or posterior sample that changes an
+    approach re-runs only that approach."""
     if isinstance(data, dict) and "survey" in data:
         data = expand_survey(data, file)
+    source = data  # the file's contents with its survey read: Scenario.file_data, what samples vary
     data = _units_any_case(data)
     try:
         merged = apply_presets(data, file)
@@ -59,7 +58,7 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None, approac
         if schema_problems:  # the checks after the schema too, on the parts it found valid: every error in one run
             raise ScenarioValidationError(schema_problems + _later_problems(d, data, merged, source, file,
                                                                             schema_problems), file=file)
-        return _from_validated(d, data, merged, source, file, approaches)
+        return _from_validated(d, data, merged, source, file)
     except ScenarioError as exc:  # an item the survey made: named by the key the user wrote
         raise as_written(exc, data) from None
 
@@ -78,7 +77,7 @@ def _later_problems(d, data, merged, source, file, schema_problems) -> list[tupl
     skipped), and an error at or inside a key the schema refused is left out (it repeats it)."""
     found: list[tuple[str, str]] = []
     try:
-        _from_validated(d, data, merged, source, file, False, lenient=True)
+        _from_validated(d, data, merged, source, file, lenient=True)
     except ScenarioValidationError as exc:
         found = list(exc.problems)
     except ScenarioError as exc:
@@ -100,7 +99,7 @@ def _about_sibling(path: str, message: str, refused: str) -> bool:
     return re.search(rf"(?<![\w.]){re.escape(key)}(?!\w)", message) is not None
 
 
-def _from_validated(d: dict, data: dict, merged: dict, source, file: str | None, approaches: bool,
+def _from_validated(d: dict, data: dict, merged: dict, source, file: str | None,
                     lenient: bool = False) -> Scenario:
     """The typed scenario of a validated document ``d`` (see :func:`scenario_from_dict`); ``lenient``:
     ``d`` has values the schema refused (None), and a part that fails on one is skipped."""
@@ -195,11 +194,8 @@ def _from_validated(d: dict, data: dict, merged: dict, source, file: str | None,
                    descriptions={n: v.get("description") or "" for n, v in d["vehicles"].items()},
                    survey_frame=survey_frame(survey) if placed else None,
                    north=(d.get("map") or {}).get("north"), barrier_extent=barrier_extent(d.get("barrier")),
-                   load_warnings=tuple(_angle_warnings(data)))
-    object.__setattr__(out, "_file_data", source)  # the file contents it was built from (Scenario.file_data)
-    if not approaches:
-        return out
-    return simulate_approaches(out)
+                   load_warnings=tuple(_angle_warnings(data)), file_data=source)
+    return out
 
 
 _ANGLE = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(rad|radians?|deg|degrees?)\s*$",

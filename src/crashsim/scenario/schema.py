@@ -10,7 +10,7 @@ import math
 from ..inverse_schema import with_inverse_sections
 from ..motion import ContactModel, LATERAL_MODELS, METHODS, RunoutOptions, WHEEL_STATES
 from ..motion.brakes import MAX_BRAKE_TIME, MAX_CAPACITY, UNIT_TYPES
-from ..motion.levels import LEVELS
+from ..motion.runners import LEVELS
 from ..motion.road import MAX_SLOPE
 from ..schema import ArrayOf, Field, Section, Table, document
 from ..survey.schema import MAP_LINE_STYLES, SURVEY

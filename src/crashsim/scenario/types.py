@@ -95,8 +95,8 @@ class Scenario:
     approaches : dict of ApproachResult
         By vehicle name: the simulated approach of each vehicle with ``[vehicles.<name>.approach]``
         (its velocity and yaw rates at impact are in ``states``); empty until the approaches are
-        simulated (:func:`crashsim.scene.run.simulate_approaches`: by :func:`scenario_from_dict` unless asked not to,
-        else by the scene run).
+        simulated (by the scene run, or :func:`crashsim.scene.run.simulate_approaches`; the loader does
+        not simulate).
     approach_inputs : dict of ApproachInput
         By vehicle name: what each vehicle's approach needs (its spec, road and options, the
         speed at impact if the file gives it), built and checked at load.
@@ -111,6 +111,10 @@ class Scenario:
     barrier_extent : (float, float) or None
         (from, to) along the crush tangent [m] of the ``[barrier]`` face, from the contact point;
         (-inf, inf) for an endless one; None without a barrier.
+    load_warnings : tuple of str
+        Doubtful values the loader accepted; the run's warnings carry them.
+    file_data : dict or None
+        The raw file contents the loader built this scenario from (see the field's comment).
     """
 
     path: str | None
@@ -133,18 +137,15 @@ class Scenario:
     #: Doubtful values the loader accepted (an angle of more than a turn: "192 rad" meant as
     #: degrees?); the run's warnings carry them
     load_warnings: tuple[str, ...] = ()
+    #: The file contents (raw, as from TOML) the loader built this scenario from (None for one built
+    #: another way): what fit, Monte Carlo and posterior samples vary. :func:`dataclasses.replace`
+    #: keeps them, so a scenario changed by ``replace`` is still varied as its file gives it.
+    file_data: dict | None = field(default=None, repr=False, compare=False)
 
     @property
     def approaches_simulated(self) -> bool:
         """True when every vehicle's approach has been simulated (its states at impact are final)."""
         return len(self.approaches) == len(self.approach_inputs)
-
-    @property
-    def file_data(self) -> dict | None:
-        """The file contents (raw, as from TOML) this scenario was built from by
-        :func:`scenario_from_dict`, or None (a scenario made another way, e.g. by
-        :func:`dataclasses.replace`): what fit, Monte Carlo and posterior samples vary."""
-        return self.__dict__.get("_file_data")
 
 
 @dataclass(frozen=True)

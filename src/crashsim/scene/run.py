@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import csv
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -512,10 +512,7 @@ def simulate_approaches(scenario):
                                 p.body2, p.surface, p.constraints, p.external)
     except ScenarioError as exc:
         raise ScenarioError(str(exc), field=exc.field, file=scenario.path) from None
-    out = replace(scenario, states=states, impact=problem, approaches=approaches, runout=runout)
-    if scenario.file_data is not None:
-        object.__setattr__(out, "_file_data", scenario.file_data)
-    return out
+    return replace(scenario, states=states, impact=problem, approaches=approaches, runout=runout)
 
 
 def run_scene(scenario, *, lean: bool = False, separation: dict | None = None,

@@ -56,6 +56,11 @@ def main(argv=None) -> int:
             ("`python -c \"import crashsim.units\"`", [py, "-c", "import crashsim.units"], None, 0),
             ("`crashsim --version`", [py, "-m", "crashsim", "--version"], 0.5, 0),
             ("`crashsim --help`", [py, "-m", "crashsim", "--help"], None, 0),
+            ("`python -c \"import crashsim.scenario\"` (the loader)", [py, "-c", "import crashsim.scenario"],
+             None, 0),
+            ("`python -c \"import crashsim.scenario, pint; pint.UnitRegistry()\"`",
+             [py, "-c", "import crashsim.scenario, pint; pint.UnitRegistry()"], None, 0),
+            ("`python -c \"import dask.base\"`", [py, "-c", "import dask.base"], None, 0),
             ("`crashsim run missing.toml` (refused: no such file)", [py, "-m", "crashsim", "run", str(missing)],
              1.0, 2),
             ("`crashsim run bad_key.toml` (refused: unknown key `scenario.titel`)",
@@ -71,7 +76,12 @@ def main(argv=None) -> int:
                 times.append(t)
             rows.append((label, statistics.median(times), min(times), max(times), goal))
             print(f"{label}: median {rows[-1][1]:.3f} s CPU", file=sys.stderr)
+    probe = ("import sys, crashsim.scenario; print(' '.join(sorted({m.split('.')[0] for m in sys.modules} & "
+             "{'numba', 'llvmlite', 'scipy', 'matplotlib', 'pint', 'pymunk', 'numpy'})))")
+    heavy = subprocess.run([py, "-c", probe], cwd=ROOT, env=env, capture_output=True, text=True,
+                           check=True).stdout.split()
     base = rows[0][1]
+    cost = {label: med for label, med, *_ in rows}
     md = ["# Startup: CPU time before any work", "",
           f"`python benchmarks/startup.py --repeats {args.repeats}` on {platform.machine()} "
           f"({os.cpu_count()} cores, shared), Python {platform.python_version()}. CPU time (user + system) "
@@ -83,13 +93,21 @@ def main(argv=None) -> int:
         verdict = "" if goal is None else ("met" if med <= goal else "**missed**")
         md.append(f"| {label} | {med:.3f} | {lo:.3f}-{hi:.3f} | {med / base:.1f} | "
                   f"{'' if goal is None else f'<= {goal:g} s'} | {verdict} |")
-    md += ["", "What the refusal of an unknown key costs is the scenario loader: the schema's values are "
-           "parsed with pint, whose unit registry alone takes about 1.2 s of CPU to build here "
-           "(`python -c \"import pint; pint.UnitRegistry()\"`), and `crashsim.scenario` still imports the "
-           "run-out modules it takes constants and types from (numpy, SciPy, the kernels' module: "
-           "numba, not compiled in this process). A missing file is refused by the same loader, so it "
-           "pays for the loader's imports but not for pint. Making `crashsim.scenario` import light (its "
-           "constants and types apart from the engines) is what is left to meet that goal.", "",
+    loader = cost["`python -c \"import crashsim.scenario\"` (the loader)"]
+    registry = cost["`python -c \"import crashsim.scenario, pint; pint.UnitRegistry()\"`"] - loader
+    dask = cost['`python -c "import dask.base"`']
+    gap = rows[-1][1] - rows[-2][1]  # the unknown key's refusal less the missing file's
+    md += ["", f"The refusals are the scenario loader at work: `import crashsim.scenario` costs {loader:.2f} s and "
+           f"loads, of the heavy libraries, only {', '.join(heavy) or 'none'} (no engine: the loader reads and "
+           "checks a file, it simulates nothing; the CLI validates the file before it imports any engine). "
+           f"A missing file is refused by the loader before any value is parsed; an unknown key is refused "
+           f"after the file's values are parsed with pint: {gap:.2f} s more, of which pint's import and unit "
+           f"registry (built when the first value is parsed) are {registry:.2f} s (the two loader rows' "
+           f"difference). Pint's import loads `dask.base` where dask is installed (a dependency here, for "
+           f"the clusters): {dask - base:.2f} s over the interpreter's start. "
+           "Pint's registry cache "
+           "(`cache_folder`) would save part of it, but its files are written without an atomic rename, "
+           "which parallel workers starting together could read half-written: left alone.", "",
            "Before the light face (main at 10c4382, measured once each on the same machine): "
            "`import crashsim` 1.33 s CPU (it loaded numba, llvmlite, scipy.integrate and scipy.optimize), "
            "`crashsim --version` 2.7 s CPU.", ""]

@@ -147,14 +147,6 @@ class Body:
         """True for a rigid barrier (infinite mass: its velocity cannot change)."""
         return math.isinf(self.mass)
 
-    @property
-    def inverse_mass(self) -> float:
-        return 0.0 if self.is_fixed else 1.0 / self.mass
-
-    @property
-    def inverse_inertia(self) -> float:
-        return 0.0 if self.is_fixed else 1.0 / self.yaw_inertia
-
     def outline(self) -> np.ndarray | None:
         """Outline rectangle corners in body axes, shape (4, 2), or None if no size given."""
         if self.length is None or self.width is None:

@@ -409,14 +409,6 @@ class ImpactResult:
         """Crush impulse on body 1, world frame [N s]."""
         return self.normal_impulse * self.normal + self.tangential_impulse * self.tangent
 
-    def vehicle_delta_v(self, vehicle: str) -> np.ndarray:
-        """Delta-v of a vehicle's mass centre (mass-weighted over its bodies) [m/s]."""
-        members = [b for b in self.bodies.values() if b.vehicle == vehicle and not b.fixed]
-        if not members:
-            raise KeyError(f"no movable vehicle {vehicle!r}")
-        total = sum(b.mass for b in members)
-        return sum(b.mass * b.delta_v for b in members) / total
-
     @property
     def mu_fraction(self) -> float | None:
         """The impulse ratio as a share of the critical one, mu / mu_max (PIM's "85 % of mu_0");

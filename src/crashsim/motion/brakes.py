@@ -207,11 +207,6 @@ class AirBrakes:
         t_off = math.inf if self.release is None else self.release + u.release_delay
         return self.apply + u.delay, u.rise, t_off, u.fall
 
-    def active_from(self) -> float:
-        """The earliest time any unit's brake force is above zero [s] (infinite without units)."""
-        return min((self.apply + u.delay for u in self.units.values()), default=math.inf)
-
-
 def ramp_level(t, t_on, rise, t_off, fall):
     """Application level ``r(t)`` in [0, 1] of a brake (module docstring); NumPy arrays or floats."""
     t = np.asarray(t, dtype=float)

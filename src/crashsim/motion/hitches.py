@@ -42,11 +42,10 @@ from ..errors import ScenarioError, SolverError
 from ..vehicles import BodyState, Vehicle
 from .contact import ContactModel
 from .layout import SV_HEADING, SV_VX, SV_VY, SV_X, SV_Y, SV_YAW_RATE, StateLayout
-from .loads import StaticLoads, load_transfer_matrix, static_loads
+from .loads import StaticLoads
 from .scene_model import SceneModel, kernels, reference_lengths
 from .options import RunoutOptions
 from .road import Road
-from .wheels import ResolvedWheels, WheelSetting
 
 __all__ = [
     "RunoutModel",
@@ -166,18 +165,6 @@ def project_velocities(minv: np.ndarray, G: np.ndarray, z_dot: np.ndarray) -> np
     gm = G * minv
     impulse = np.linalg.solve(gm @ G.T, G @ z_dot)
     return z_dot - minv * (G.T @ impulse)
-
-
-def _solve_small(A: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Solve the batch of symmetric systems ``A[k] x[k] = b[k]``; closed form for 2x2 (one hitch)."""
-    if A.shape[1] == 2:
-        a00, a01, a11 = A[:, 0, 0], A[:, 0, 1], A[:, 1, 1]
-        b0, b1 = b[:, 0], b[:, 1]
-        x = np.empty_like(b)
-        x[:, 0] = a11 * b0 - a01 * b1
-        x[:, 1] = a00 * b1 - a01 * b0
-        return x / (a00 * a11 - a01 * a01)[:, None]
-    return np.linalg.solve(A, b[..., None])[..., 0]
 
 
 def yaw_locks(vehicle: Vehicle) -> tuple[tuple[int, float], ...]:

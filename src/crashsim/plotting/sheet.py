@@ -116,8 +116,10 @@ def check_sheet(scenario, paper: str, scale: float | None, *, approach: bool = T
     """Refuse a paper and scale before the run when what is known before it already does not fit.
 
     The extent of the scene figure is known only after the run-out (rest positions, tracks); the
-    vehicles at impact, the evidence (rest positions, marks, the point of impact) and the
-    approaches' paths are known at load, and a figure always holds them. Their extent, padded as
+    vehicles at impact and the evidence (rest positions, marks, the point of impact) are known at
+    load, the approaches' paths once they are simulated (not by the loader: a loaded scenario has
+    none yet, and a scale that only an approach's path outgrows is refused by the figure, after the
+    run), and a figure always holds them. Their extent, padded as
     :func:`plot_scene` pads (without the room of the legend), is a lower bound of the figure's: a
     scale refused here is refused by the figure too, a second and not minutes later.
 

@@ -421,12 +421,6 @@ def _run_sample(state: tuple, i: int) -> dict:
     return runner.run(seed, i)
 
 
-def _run_chunk(payload: dict, indices: Sequence[int]) -> list[dict]:
-    """Run samples ``indices`` in this process."""
-    state = _sampler_for(payload)
-    return [_run_sample(state, i) for i in indices]
-
-
 # ---------------------------------------------------------------------------------------------
 # Result
 # ---------------------------------------------------------------------------------------------

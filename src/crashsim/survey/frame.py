@@ -71,7 +71,3 @@ class SceneFrame:
             c, s = math.cos(self.rotation), math.sin(self.rotation)
             p = np.column_stack([c * p[:, 0] - s * p[:, 1], s * p[:, 0] + c * p[:, 1]])
         return p + np.asarray(self.origin, dtype=float)
-
-    def heading_to_survey(self, heading: float) -> float:
-        """A scene direction [rad] as a direction in the survey's axes."""
-        return heading + self.rotation

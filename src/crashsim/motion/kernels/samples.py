@@ -71,7 +71,7 @@ def evaluate_columns(Y, M, phase, D, road_mu):
     W = make_work(M)
     sw = np.zeros((nw, N_S))
     segment_params(phase, D.memb, M, sw)
-    phase_w, cfg = M.phase_wheels, M.cfg
+    phase_w = M.phase_wheels
     for k in range(nw):
         if not math.isnan(road_mu[k]):
             pw = phase_w[phase, k]
@@ -274,17 +274,6 @@ def missed_zone(M, T, P, seg_of, memb):
                 if abs(d) > 1e-6 and (d > 0.0) != memb[g, k, z]:
                     return T[p], k
     return 0.0, -1
-
-
-@njit(**JIT)
-def evaluate_state(y, M, phase, D):
-    """Right-hand side, per-wheel outputs (``W_*`` columns), multipliers and body forces of one state."""
-    W = make_work(M)
-    sw = np.zeros((M.wheel.shape[0], N_S))
-    segment_params(phase, D.memb, M, sw)
-    dydt = np.zeros(y.shape[0])
-    m = evaluate(y, M, sw, D, dydt, W)
-    return dydt, W.wheel_out.copy(), W.multipliers[:m].copy(), W.body_force.copy()
 
 
 @njit(**JIT)

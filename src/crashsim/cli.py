@@ -291,13 +291,15 @@ def _cmd_plot(args) -> int:
     interval = None if args.interval is None else parse(args.interval, Kind.TIME, field="--interval")
     scenario = _load(args.file)  # a refused file before the engines are imported
     from .plotting import check_sheet
-    from .scene import run_scene
+    from .scene import run_scene, simulate_approaches
 
     args.view_si = None
     if args.view is not None:  # the file's length unit -> m
         per_m, unit = to_unit(1.0, Kind.LENGTH, resolve_system(None, scenario.units))
         args.view_si = tuple(v / per_m for v in check_view(args.view, field="--view", unit=unit))
-    if args.paper is not None or args.scale is not None:  # the sheet against what is known before the run
+    if args.paper is not None or args.scale is not None:  # the sheet against what is known before the run-out
+        if not args.no_approach:  # the approaches' paths first (the scene run then uses them, not run twice)
+            scenario = simulate_approaches(scenario)
         check_sheet(scenario, args.paper or "A4", args.scale, approach=not args.no_approach, field="--scale")
     _figure_inputs(scenario)
     scene = run_scene(scenario)

@@ -438,12 +438,12 @@ def test_cli_writes_the_gif(tmp_path, capsys):
 @pytest.fixture
 def no_run(monkeypatch):
     """Fail if the scene is run: format errors must come before anything long."""
-    import crashsim.reconstruct
+    import crashsim.scene
 
     def refuse(*args, **kwargs):
         raise AssertionError("the scene was run before the output format was checked")
 
-    monkeypatch.setattr(crashsim.reconstruct, "run_scene", refuse)
+    monkeypatch.setattr(crashsim.scene, "run_scene", refuse)
 
 
 def test_cli_bad_suffix_exits_2_before_running(tmp_path, capsys, no_run):

@@ -19,7 +19,7 @@ matplotlib.use("Agg")
 from matplotlib.transforms import Bbox  # noqa: E402
 
 import crashsim.plotting  # noqa: E402
-import crashsim.reconstruct  # noqa: E402
+import crashsim.scene  # noqa: E402
 from crashsim.cli import main  # noqa: E402
 from crashsim.errors import ScenarioError  # noqa: E402
 from crashsim.plotting.detail import INSET_BELOW, INSET_MARGIN, impact_window  # noqa: E402
@@ -191,7 +191,7 @@ def test_cli_view_is_in_the_file_s_length_unit(tmp_path, capsys, monkeypatch):
         seen.update(kw)
         return [path]
 
-    monkeypatch.setattr(crashsim.reconstruct, "run_scene", lambda scenario: _scene(TRUCK))
+    monkeypatch.setattr(crashsim.scene, "run_scene", lambda scenario: _scene(TRUCK))
     monkeypatch.setattr(crashsim.plotting, "save_scene_figures", fake_save)
     assert main(["plot", str(TRUCK), "-o", str(tmp_path / "s.png"), "--view", "-40", "-20", "60", "30"]) == 0
     assert seen["view"] == pytest.approx((-40 * FT, -20 * FT, 60 * FT, 30 * FT))  # a US file: ft

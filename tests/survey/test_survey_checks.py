@@ -223,7 +223,7 @@ def test_recorder_tables_that_misled(tmp_path):
 
 def test_a_damaged_underlay_is_refused_before_the_run(tmp_path, monkeypatch, capsys):
     import crashsim.cli as cli
-    import crashsim.reconstruct as reconstruct
+    import crashsim.scene
 
     f = _shipped(tmp_path)
     (tmp_path / "files" / "ortho.png").write_text("not an image\n")
@@ -231,7 +231,7 @@ def test_a_damaged_underlay_is_refused_before_the_run(tmp_path, monkeypatch, cap
     def refuse(*a, **k):
         raise AssertionError("the run started before the underlay was read")
 
-    monkeypatch.setattr(reconstruct, "run_scene", refuse)  # where the plot command takes it from
+    monkeypatch.setattr(crashsim.scene, "run_scene", refuse)  # where the plot command takes it from
     assert cli.main(["plot", str(f), "-o", str(tmp_path / "p.png")]) == 2
     err = capsys.readouterr().err
     assert "survey.underlay.image" in err and "cannot read the underlay image" in err and "files/ortho.png" in err

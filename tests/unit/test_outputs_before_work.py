@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 import crashsim.cli as cli
-import crashsim.reconstruct as reconstruct
+import crashsim.scene as scene
 import crashsim.scenario as scenario
 from crashsim.cli import main
 from crashsim.errors import ScenarioError
@@ -30,7 +30,7 @@ def no_work(monkeypatch):
 
     monkeypatch.setattr(cli, "_first_compile", refuse)
     monkeypatch.setattr(scenario, "load_scenario", refuse)
-    monkeypatch.setattr(reconstruct, "run_scene", refuse)
+    monkeypatch.setattr(scene, "run_scene", refuse)
 
 
 @pytest.fixture

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-import crashsim.reconstruct as reconstruct
+import crashsim.scene as scene
 import crashsim.scenario as scenario
 from crashsim import cli
 from crashsim.cli import main
@@ -30,7 +30,7 @@ def no_work(monkeypatch):
     # where the command line takes them from when a command runs (it imports them inside the command)
     monkeypatch.setattr(cli, "_first_compile", _fail)
     monkeypatch.setattr(scenario, "load_scenario", _fail)
-    monkeypatch.setattr(reconstruct, "run_scene", _fail)
+    monkeypatch.setattr(scene, "run_scene", _fail)
 
 
 def _cases(tmp: Path) -> dict:
@@ -62,10 +62,26 @@ def test_refused_before_loading(no_work, tmp_path, capsys, name):
 
 
 def test_paper_and_scale_refused_before_the_run(monkeypatch, tmp_path, capsys):
-    monkeypatch.setattr(reconstruct, "run_scene", _fail)
+    monkeypatch.setattr(scene, "run_scene", _fail)
     assert main(["plot", SCENE, "-o", str(tmp_path / "p.png"), "--paper", "A4", "--scale", "1:10"]) == 2
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and "--scale" in err and "1:10 is too large" in err, err
+    assert not (tmp_path / "p.png").exists()
+
+
+def test_an_approach_path_too_large_for_the_sheet_is_refused_before_the_run(monkeypatch, tmp_path, capsys):
+    """The loader does not simulate, so the plot command runs the approaches before the sheet check
+    (the scene run then uses them): at 1:225 on A4 the truck's braking approach leaves the sheet,
+    though the vehicles at impact and the evidence alone would fit (checked here too)."""
+    from crashsim.plotting import check_sheet
+    from crashsim.scenario import load_scenario
+
+    truck = str(ROOT / "scenarios" / "scenes" / "truck_brakes_into_car.toml")
+    check_sheet(load_scenario(truck), "A4", 225.0)  # without the approach's path: fits
+    monkeypatch.setattr(scene, "run_scene", _fail)
+    assert main(["plot", truck, "-o", str(tmp_path / "p.png"), "--paper", "A4", "--scale", "1:225"]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "--scale" in err and "1:225 is too large" in err, err
     assert not (tmp_path / "p.png").exists()
 
 

@@ -1,0 +1,100 @@
+"""What the test suite costs: CPU minutes of the developer's fast tier and of the full suite (issue
+"Compile once, vary by name", item 8 and its goal: the fast tier <= 3 CPU-minutes, the full suite
+<= 12, CI's generic-CPU rerun of tests/validation included).
+
+    python benchmarks/test_tiers.py            # both tiers and the generic-CPU rerun, one after the other
+    python benchmarks/test_tiers.py --fast     # the fast tier only
+
+Each tier runs as a child ``python -m pytest -q -p no:cacheprovider`` with the kernels already
+compiled (the first compile, 4-5 minutes of one core, is a machine's once, not a test run's: run a
+command first); the generic-CPU rerun compiles its own kernels into an empty cache, as CI does, and
+that compile is counted in it. CPU time (user + system of the child and everything it started:
+``RUSAGE_CHILDREN`` around it) is what the goal counts; wall time is given beside it and waits for
+the cores of a shared machine. Each tier's count of tests and its exit code come from pytest's last
+line. Writes plots/test_tiers.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import re
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from _machine import cpu_name
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: (label, pytest arguments, environment changes, goal [CPU minutes] or None)
+TIERS = [
+    ("fast tier: `python -m pytest -m \"not slow\" -q`", ["-m", "not slow"], {}, 3.0),
+    ("full suite: `python -m pytest -q` (the README's test command)", [], {}, None),
+    ("CI's rerun of tests/validation compiled for a generic CPU (its own compile included)",
+     ["tests/validation"], {"NUMBA_CPU_NAME": "generic"}, None),
+]
+
+
+def _run(args: list[str], env_extra: dict) -> dict:
+    env = dict(os.environ, MPLBACKEND="Agg", **env_extra)
+    with tempfile.TemporaryDirectory() as cache:
+        if env_extra:  # the generic rerun: a cache of its own, compiled again
+            env.pop("NUMBA_CACHE_DIR", None)
+            env["CRASHSIM_CACHE_DIR"] = cache
+        r0, w0 = resource.getrusage(resource.RUSAGE_CHILDREN), time.perf_counter()
+        out = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", *args], cwd=ROOT,
+                             env=env, capture_output=True, text=True)
+        r1, w1 = resource.getrusage(resource.RUSAGE_CHILDREN), time.perf_counter()
+    last = [line for line in out.stdout.strip().splitlines() if line.strip()][-1:] or [""]
+    counts = dict((k, int(n)) for n, k in re.findall(r"(\d+) (passed|failed|skipped|deselected|error)", last[0]))
+    failed = [line.split(" - ")[0].removeprefix("FAILED ").removeprefix("ERROR ")
+              for line in out.stdout.splitlines() if line.startswith(("FAILED ", "ERROR "))]
+    return {"cpu_min": ((r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)) / 60.0,
+            "wall_min": (w1 - w0) / 60.0, "code": out.returncode, "counts": counts, "summary": last[0].strip("= "),
+            "failed": failed}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--fast", action="store_true", help="the fast tier only")
+    args = ap.parse_args(argv)
+    tiers = TIERS[:1] if args.fast else TIERS
+    rows = []
+    for label, pytest_args, env_extra, goal in tiers:
+        print(f"running {label} ...", file=sys.stderr)
+        rows.append((label, goal, _run(pytest_args, env_extra)))
+        print(f"  {rows[-1][2]['summary']}: {rows[-1][2]['cpu_min']:.2f} CPU-min", file=sys.stderr)
+    md = ["# Test suite: CPU minutes per tier", "",
+          f"`python benchmarks/test_tiers.py{' --fast' if args.fast else ''}` on {cpu_name()} "
+          f"({os.cpu_count()} cores, shared), Python {platform.python_version()}, the kernels compiled before "
+          "the run (the generic-CPU rerun compiles its own). CPU time is user + system of pytest and all it "
+          "started; wall time waits for the cores of a shared machine besides.", "",
+          "| tier | tests | exit code | CPU [min] | wall [min] | goal [CPU min] | met? |",
+          "|---|---|---:|---:|---:|---:|---|"]
+    for label, goal, r in rows:
+        c = r["counts"]
+        tests = f"{c.get('passed', 0)} passed, {c.get('failed', 0)} failed, {c.get('skipped', 0)} skipped"
+        verdict = "" if goal is None else ("met" if r["cpu_min"] <= goal else "**missed**")
+        md.append(f"| {label} | {tests} | {r['code']} | {r['cpu_min']:.2f} | {r['wall_min']:.2f} | "
+                  f"{'' if goal is None else f'<= {goal:g}'} | {verdict} |")
+    for label, _, r in rows:
+        if r["failed"]:
+            md += ["", f"Failed in {label.split(':')[0]}: " + ", ".join(f"`{t}`" for t in r["failed"])]
+    if not args.fast:
+        full = rows[1][2]["cpu_min"] + rows[2][2]["cpu_min"]
+        verdict = "met" if full <= 12.0 else "**missed**"
+        md += ["", f"The full suite with CI's generic-CPU rerun: {full:.2f} CPU-minutes (goal <= 12: {verdict}). "
+               "CI also installs the package and builds the documentation site; neither is counted here."]
+    md.append("")
+    (ROOT / "plots" / "test_tiers.md").write_text("\n".join(md))
+    print("wrote plots/test_tiers.md", file=sys.stderr)
+    return 0 if all(r["code"] == 0 for _, _, r in rows) else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

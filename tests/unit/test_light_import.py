@@ -9,6 +9,7 @@ here: which modules are loaded is what a test can assert; the CPU time is benchm
 from __future__ import annotations
 
 import ast
+import functools
 import importlib
 import os
 import subprocess
@@ -113,6 +114,12 @@ def test_a_refused_scene_file_on_a_first_run_starts_no_compile(monkeypatch, tmp_
     assert calls == []
 
 
+@functools.cache
+def _pint_loads() -> frozenset[str]:
+    """The heavy modules ``import pint`` loads by itself (once for every command below)."""
+    return frozenset(_loaded(f"import pint, sys; {REPORT}"))
+
+
 @pytest.mark.parametrize("command, extra", [("run", []), ("fit", []), ("mc", []), ("posterior", []),
                                             ("plot", ["-o", "x.png"]), ("animate", ["-o", "x.gif"]),
                                             ("export", ["--dxf", "x.dxf"]), ("report", ["-o", "x.html"])])
@@ -131,8 +138,7 @@ def test_a_refused_scene_file_loads_no_engine(tmp_path, command, extra):
     assert out.returncode == 0, out.stderr
     assert "scenario.titel" in out.stderr and str(bad) in out.stderr
     loaded = ast.literal_eval(out.stdout.strip().splitlines()[-1])
-    pint_scipy = set(_loaded(f"import pint, sys; {REPORT}"))
-    assert {m for m in loaded if m.split(".")[0] == "scipy"} <= pint_scipy
+    assert {m for m in loaded if m.split(".")[0] == "scipy"} <= _pint_loads()
     assert not any(m.split(".")[0] in ("numba", "llvmlite") for m in loaded)
     if command not in ("plot", "animate"):
         assert not any(m.split(".")[0] == "matplotlib" for m in loaded)

@@ -207,6 +207,7 @@ class AirBrakes:
         t_off = math.inf if self.release is None else self.release + u.release_delay
         return self.apply + u.delay, u.rise, t_off, u.fall
 
+
 def ramp_level(t, t_on, rise, t_off, fall):
     """Application level ``r(t)`` in [0, 1] of a brake (module docstring); NumPy arrays or floats."""
     t = np.asarray(t, dtype=float)

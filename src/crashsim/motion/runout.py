@@ -30,10 +30,9 @@ from ..errors import ScenarioError
 from ..vehicles import BodyState, Vehicle
 from . import accuracy as _accuracy  # noqa: F401  (registers the accuracy runners; levels and simulate: the others)
 from .contact import ContactModel, Obstacle
-from .runners import check_level
 from .options import ENGINES, RunoutOptions
 from .road import Road
-from .runners import ACCURACY_RUNNERS, RUNNERS, Runout, RunoutCall
+from .runners import ACCURACY_RUNNERS, RUNNERS, Runout, RunoutCall, check_level
 from .scene_model import SceneModel
 from .simulate import check_common
 from .wheels import WheelSettings

@@ -775,8 +775,8 @@ def run_posterior(scenario_data: dict | Scenario, spec: PosteriorSpec | dict | N
     Parameters
     ----------
     scenario_data : dict or Scenario
-        The raw scenario (as from TOML), or a Scenario loaded from one (its ``file_data``), with a ``[fit]`` table (the unknowns and bounds) and
-        evidence sigmas; ``[uncertainty]`` too for ``prior = "uncertainty"``.
+        The raw scenario (as from TOML), or a Scenario loaded from one (its ``file_data``), with a
+        ``[fit]`` table (the unknowns and bounds) and evidence sigmas; ``[uncertainty]`` too for ``prior = "uncertainty"``.
     spec : PosteriorSpec or dict, optional
         The sampler's settings; default the scenario's ``[posterior]`` table (or its defaults).
     steps, seed, start : optional

@@ -15,8 +15,9 @@ compares them for every path kind).  The values are used as given: the file-text
 the full build sees (``"13.41 m/s"`` written with ``repr`` and read back) is the identity for
 the SI units (a factor of exactly 1; tested for every kind), so dropping it changes no digit.
 
-A vehicle's approach is simulated in the scene run (the loader does not simulate it): a sample that changes an approach's speed, or the road friction it runs
-on, changes its inputs (``Scenario.approach_inputs``) and the run re-runs only that approach.
+A vehicle's approach is simulated in the scene run (the loader does not simulate it): a sample
+that changes an approach's speed, or the road friction it runs on, changes its inputs
+(``Scenario.approach_inputs``) and the run re-runs only that approach.
 
 What it cannot vouch for it leaves to the full build (``scenario`` returns None): a path it
 cannot patch (see :mod:`crashsim.reconstruct.patch`), a value out of its field's range, a

@@ -42,8 +42,8 @@ def scenario_from_dict(data: dict[str, Any], *, file: str | None = None) -> Scen
     items join the file's own tables before validation.
 
     The loader simulates nothing: a vehicle's approach (``[vehicles.<name>.approach]``) is built and
-    checked here (``approach_inputs``), and run by the scene run (:func:`crashsim.reconstruct.run_scene`,
-    before the impact; :func:`crashsim.scene.run.simulate_approaches` for the scenario alone). Until
+    checked here (``approach_inputs``), and run by the scene run (:func:`crashsim.scene.run_scene`,
+    before the impact; :func:`crashsim.scene.simulate_approaches` for the scenario alone). Until
     then the states at impact of a vehicle with an approach are those of its file speed (0 if none)
     and ``approaches`` is empty. So reading a file costs no run-out (a refused file is refused
     before anything is computed), and a fit, Monte Carlo or posterior sample that changes an

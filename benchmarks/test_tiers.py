@@ -4,6 +4,7 @@
 
     python benchmarks/test_tiers.py            # both tiers and the generic-CPU rerun, one after the other
     python benchmarks/test_tiers.py --fast     # the fast tier only
+    python benchmarks/test_tiers.py --write-slow-list   # tests/slow_tests.txt from a fast-tier run's durations
 
 Each tier runs as a child ``python -m pytest -q -p no:cacheprovider`` with the kernels already
 compiled (the first compile, 4-5 minutes of one core, is a machine's once, not a test run's: run a
@@ -59,10 +60,44 @@ def _run(args: list[str], env_extra: dict) -> dict:
             "failed": failed}
 
 
+#: A test function whose call or set-up took at least this long in a fast-tier run goes to the slow list.
+SLOW_SECONDS = 1.4
+
+
+def slow_functions(pytest_output: str, seconds: float = SLOW_SECONDS) -> list[str]:
+    """The test functions (all parameters together) of pytest's ``--durations`` lines at or over
+    ``seconds``."""
+    found = set()
+    for m in re.finditer(r"^\s*([\d.]+)s (?:call|setup|teardown)\s+(\S+)", pytest_output, re.M):
+        if float(m.group(1)) >= seconds:
+            found.add(m.group(2).split("[")[0])
+    return sorted(found)
+
+
+def write_slow_list() -> int:
+    """Run the fast tier with durations and add its slow test functions to tests/slow_tests.txt."""
+    out = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-m", "not slow",
+                          "--durations=0", f"--durations-min={SLOW_SECONDS}"], cwd=ROOT,
+                         env=dict(os.environ, MPLBACKEND="Agg"), capture_output=True, text=True)
+    path = ROOT / "tests" / "slow_tests.txt"
+    old = [ln for ln in path.read_text().splitlines() if ln and not ln.startswith("#")] if path.exists() else []
+    names = sorted(set(old) | set(slow_functions(out.stdout)))
+    path.write_text("\n".join([f"# Test functions the fast tier leaves to the full suite (a call or set-up of at least "
+                               f"{SLOW_SECONDS:g} s in a fast-tier run).",
+                               "# Written by `python benchmarks/test_tiers.py --write-slow-list`; read by tests/conftest.py.",
+                               *names, ""]))
+    print(f"wrote {path.relative_to(ROOT)}: {len(names)} test functions", file=sys.stderr)
+    return out.returncode
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--fast", action="store_true", help="the fast tier only")
+    ap.add_argument("--write-slow-list", action="store_true",
+                    help="add the fast tier's slow test functions to tests/slow_tests.txt (no table)")
     args = ap.parse_args(argv)
+    if args.write_slow_list:
+        return write_slow_list()
     tiers = TIERS[:1] if args.fast else TIERS
     rows = []
     for label, pytest_args, env_extra, goal in tiers:

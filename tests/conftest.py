@@ -29,3 +29,33 @@ def refused_line(tmp_path, capsys):
         return lines[0]
 
     return run
+
+
+#: The tests the developer's fast tier (``pytest -m "not slow"``) leaves to the full suite besides
+#: those marked ``slow`` in their own file: one test function per line (all its parameters), written by
+#: ``python benchmarks/test_tiers.py --write-slow-list`` from the durations of a fast-tier run.
+SLOW_LIST = os.path.join(os.path.dirname(__file__), "slow_tests.txt")
+
+
+def _slow_list() -> set[str]:
+    with open(SLOW_LIST, encoding="utf-8") as fh:
+        return {ln.strip() for ln in fh if ln.strip() and not ln.startswith("#")}
+
+
+@pytest.hookimpl(tryfirst=True)  # before -m and -k deselect: every collected test is seen
+def pytest_collection_modifyitems(config, items):
+    """Mark the listed test functions ``slow``; a listed function of a collected file that no longer
+    exists is an error, so the list cannot name tests that were renamed away."""
+    listed = _slow_list()
+    seen, files = set(), set()
+    for item in items:
+        file, _, rest = item.nodeid.partition("::")
+        files.add(file)
+        function = f"{file}::{rest.split('[')[0]}"
+        if function in listed:
+            seen.add(function)
+            item.add_marker(pytest.mark.slow)
+    missing = sorted(f for f in listed - seen if f.partition("::")[0] in files)
+    whole_files = not any("::" in str(a) for a in config.args)
+    if missing and whole_files:
+        raise pytest.UsageError(f"{SLOW_LIST} names test functions that were not collected: {', '.join(missing)}")

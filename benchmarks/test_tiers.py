@@ -57,7 +57,7 @@ def _run(args: list[str], env_extra: dict) -> dict:
               for line in out.stdout.splitlines() if line.startswith(("FAILED ", "ERROR "))]
     return {"cpu_min": ((r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)) / 60.0,
             "wall_min": (w1 - w0) / 60.0, "code": out.returncode, "counts": counts, "summary": last[0].strip("= "),
-            "failed": failed}
+            "failed": failed, "stdout": out.stdout}
 
 
 #: A test function whose call or set-up took at least this long in a fast-tier run goes to the slow list.
@@ -76,18 +76,16 @@ def slow_functions(pytest_output: str, seconds: float = SLOW_SECONDS) -> list[st
 
 def write_slow_list() -> int:
     """Run the fast tier with durations and add its slow test functions to tests/slow_tests.txt."""
-    out = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-m", "not slow",
-                          "--durations=0", f"--durations-min={SLOW_SECONDS}"], cwd=ROOT,
-                         env=dict(os.environ, MPLBACKEND="Agg"), capture_output=True, text=True)
+    out = _run(["-m", "not slow", "--durations=0", f"--durations-min={SLOW_SECONDS}"], {})
     path = ROOT / "tests" / "slow_tests.txt"
     old = [ln for ln in path.read_text().splitlines() if ln and not ln.startswith("#")] if path.exists() else []
-    names = sorted(set(old) | set(slow_functions(out.stdout)))
+    names = sorted(set(old) | set(slow_functions(out["stdout"])))
     path.write_text("\n".join([f"# Test functions the fast tier leaves to the full suite (a call or set-up of at least "
                                f"{SLOW_SECONDS:g} s in a fast-tier run).",
                                "# Written by `python benchmarks/test_tiers.py --write-slow-list`; read by tests/conftest.py.",
                                *names, ""]))
     print(f"wrote {path.relative_to(ROOT)}: {len(names)} test functions", file=sys.stderr)
-    return out.returncode
+    return out["code"]
 
 
 def main(argv=None) -> int:

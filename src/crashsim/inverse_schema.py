@@ -153,7 +153,8 @@ POSTERIOR = Section("posterior", [
     Field("sampler", choices=("emcee", "imh"), default="emcee",
           description="emcee: the ensemble sampler (walkers, move, chain files); imh: independence "
                       "Metropolis-Hastings with a Student-t proposal built from the fit's best values and "
-                      "covariance, refitted to the chain during the burn-in (one chain, each step one scene; "
+                      "covariance, refitted during the burn-in to the importance-weighted moments of the scenes it evaluated "
+                      "(one chain, each step one scene; "
                       "the fit is run first; steps and burn count scene evaluations; no chain file)"),
     Field("walkers", "int", default=32, minimum=2, maximum=100000,
           description="Walkers of the ensemble sampler (emcee); at least twice the number of [fit] unknowns"),

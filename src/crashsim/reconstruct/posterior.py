@@ -34,7 +34,8 @@ support, and move by emcee's stretch move (or differential evolution). Derived q
 with every sample (emcee blobs).
 
 With ``sampler = "imh"`` the fit runs first and one chain proposes from a Student-t built from its
-best values and covariance, refitted to the chain in the burn-in and then fixed
+best values and covariance, refitted in the burn-in to the importance-weighted moments of every scene
+it evaluated, and then fixed
 (:mod:`crashsim.reconstruct.samplers`); each step is one scene, a batch of proposals runs in
 parallel, and ``walkers``, ``move``, ``init_scale`` and chain files do not apply.
 
@@ -91,7 +92,7 @@ from .fit import FitProblem, FitSpec, NotAtRest, fit_scene
 from .montecarlo import DEFAULT_SAMPLE_TIME_LIMIT, MCResult, UncertaintySpec, scene_outputs
 from .overrides import INVERSE_SECTIONS, default_engine, file_contents
 from .parallel import Executor, Progress, child_seed, choose_backend
-from .samplers import IMH_NU, IMH_SCALE, StudentT, box_covariance, chain_moments, independence_chain
+from .samplers import IMH_DEFENSIVE, IMH_NU, IMH_SCALE, Mixture, StudentT, box_covariance, independence_chain, refit_proposal
 from .tolerance import SampleTolerance, evidence_tolerance, with_tolerance
 #: The kept chain should be this many autocorrelation times long (emcee's documentation: "you
 #: should not trust an estimate of tau unless the chain is longer than about 50 tau").
@@ -490,8 +491,8 @@ class PosteriorResult:
                      f"{self.backend}, {self.workers} worker(s); "
                      f"{self.evaluations} scene evaluations in {self.elapsed:.1f} s")
         if sp.sampler == "imh":
-            lines.append(f"independence Metropolis-Hastings (Student-t proposal, nu = {IMH_NU:g}, from the fit, refitted "
-                         f"in the burn-in): one chain of {self.steps} steps, one scene each; burn-in {sp.burn_steps}, "
+            lines.append(f"independence Metropolis-Hastings (Student-t proposals, nu = {IMH_NU:g}: "
+                         f"{1 - IMH_DEFENSIVE:.0%} refitted in the burn-in, {IMH_DEFENSIVE:.0%} the fit's): one chain of {self.steps} steps, one scene each; burn-in {sp.burn_steps}, "
                          f"thin {sp.thin}: {self.samples.shape[0]} samples kept; seed {sp.seed}")
         else:
             lines.append(f"emcee {sp.move} move: {sp.walkers} walkers x {self.steps} steps{resumed}; burn-in "
@@ -965,7 +966,8 @@ def run_posterior(scenario_data: dict | Scenario, spec: PosteriorSpec | dict | N
 
 #: The independence sampler's settle check (:func:`settle_step`) takes the median of blocks of this many steps.
 IMH_SETTLE_BLOCK = 100
-#: Rounds of the independence sampler's burn-in, each refitting the proposal to the chain of the round before.
+#: Rounds of the independence sampler's burn-in, each refitting the proposal to the weighted moments of the
+#: evaluations of the rounds before.
 IMH_ROUNDS = 2
 
 
@@ -976,7 +978,9 @@ def _run_imh(problem, spec, z0, cov_z, derived, run_hash, backend, nw, workers, 
     The burn-in (``spec.burn_steps`` steps) runs in :data:`IMH_ROUNDS` rounds: the first proposes from
     the fit's Gaussian (best values and linearised covariance in the scaled unknowns, each sd capped at
     its bound range) as a Student-t with scale :data:`~crashsim.reconstruct.samplers.IMH_SCALE`; each
-    round after it from the mean and covariance of the chain of the round before. The proposal is then
+    round after it from :func:`~crashsim.reconstruct.samplers.refit_proposal`: that t for a share
+    :data:`~crashsim.reconstruct.samplers.IMH_DEFENSIVE` of the draws, the rest a t about the
+    importance-weighted mean and covariance of every proposal the rounds before evaluated. The proposal is then
     fixed for the kept chain (an adaptation that stops: the kept chain is a plain Metropolis-Hastings
     chain of that proposal). With ``ess`` the kept chain runs in blocks of ``check_every`` steps until
     the target is met.
@@ -987,20 +991,30 @@ def _run_imh(problem, spec, z0, cov_z, derived, run_hash, backend, nw, workers, 
                "time_limit": float(limit), "derived": derived, "hash": run_hash}
     rng_prop = np.random.default_rng(child_seed(spec.seed, 1))
     rng_acc = np.random.default_rng(child_seed(spec.seed, 2))
+    rng_mass = np.random.default_rng(child_seed(spec.seed, 3))
     z_all, lp_all, bl_all, acc_all = [], [], [], []
+    burn_points, burn_lp, burn_proposals, burn_counts = [], [], [], []  # every evaluation of the burn-in
     bar = Progress(progress, spec.steps, initial=0, desc="posterior (MCMC)", unit="step", show=True)
     pool = _EmceePool(Executor(_problem_for, payload, backend, nw, dask_address=dask_address, local=problem))
     nw = pool.workers if backend == "dask" else nw
     batch = max(10, min(spec.check_every, 50 * max(1, pool.workers)))
-    proposal = StudentT.from_cov(z0, box_covariance(cov_z), scale=IMH_SCALE)
+    fit_t = StudentT.from_cov(z0, box_covariance(cov_z), scale=IMH_SCALE)
+    proposal = Mixture.of([fit_t], [1.0], rng_mass)
     accepted = 0
     try:
         lp0, blob0 = pool.map(None, [z0])[0]
         state = (np.asarray(z0, float), lp0, blob0)
 
-        def run(n, proposal):
+        def evaluate(ys, keep):
+            results = pool.map(None, ys)
+            if keep:
+                burn_points.extend(ys)
+                burn_lp.extend(r[0] for r in results)
+            return results
+
+        def run(n, proposal, keep=False):
             nonlocal state, accepted
-            for z, lp, blob, acc in independence_chain(lambda ys: pool.map(None, ys), proposal, state, n, rng_prop,
+            for z, lp, blob, acc in independence_chain(lambda ys: evaluate(ys, keep), proposal, state, n, rng_prop,
                                                        rng_acc, batch):
                 accepted += acc
                 z_all.append(np.array(z, float)[None, :])
@@ -1014,11 +1028,11 @@ def _run_imh(problem, spec, z0, cov_z, derived, run_hash, backend, nw, workers, 
         for n in rounds:
             if n == 0:
                 continue
-            start = len(z_all)
-            run(n, proposal)
-            moments = chain_moments(np.concatenate(z_all[start:]))
-            if moments is not None:
-                proposal = StudentT.from_cov(moments[0], moments[1], scale=IMH_SCALE)
+            run(n, proposal, keep=True)
+            burn_proposals.append(proposal)
+            burn_counts.append(n)
+            proposal = refit_proposal(fit_t, np.array(burn_points), np.array(burn_lp), burn_proposals, burn_counts,
+                                      rng_mass)
         block = spec.check_every if spec.ess is not None else spec.steps - burn
         while len(z_all) < spec.steps:
             run(min(block, spec.steps - len(z_all)), proposal)

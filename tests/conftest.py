@@ -3,8 +3,16 @@ compiled yet (``CRASHSIM_FIRST_RUN=wait``), so that commands called in-process r
 output captured); ``tests/unit/test_first_run.py`` tests the other policies in child processes."""
 
 import os
+import sys
 
 os.environ.setdefault("CRASHSIM_FIRST_RUN", "wait")
+# Bytecode caches on, for this process and the interpreters it starts (the command-line tests, the
+# worker processes of Monte Carlo and posterior runs): with PYTHONDONTWRITEBYTECODE set, as some CI
+# images do, each of them compiles crashsim's sources again (0.6-0.7 s of CPU per `crashsim run`,
+# measured), and pytest rewrites every test module's asserts again in every run. The caches go to
+# the __pycache__ directories .gitignore leaves out.
+os.environ.pop("PYTHONDONTWRITEBYTECODE", None)
+sys.dont_write_bytecode = False
 
 
 import pytest  # noqa: E402

@@ -232,7 +232,8 @@ def main(argv=None) -> int:
           f"{IMH_NU:g}): first the fit's (its best values, its covariance x {IMH_SCALE:g}^2), then in the burn-in's "
           f"second round and the kept chain a mixture, {1 - IMH_DEFENSIVE:.0%} of the draws from a t about the "
           f"importance-weighted moments of every scene the burn-in evaluated (covariance x {IMH_REFIT_SCALE:g}^2), "
-          f"{IMH_DEFENSIVE:.0%} from the fit's; one chain of {post.steps} steps (one scene each), burn-in {sp.burn_steps}, thin "
+          f"{IMH_DEFENSIVE:.0%} from the fit's; one chain of {post.steps} steps (one scene each), burn-in "
+          f"{sp.burn_steps}, thin "
           f"{sp.thin}, seed {sp.seed}; prior: {sp.prior} ({PRIOR_WORDS[sp.prior]}). {post.evaluations} scene "
           f"evaluations ({post.engine} engine, {post.backend}, {post.workers} workers) in {post.elapsed:.1f} s, "
           "the fit included.", "",

@@ -34,8 +34,8 @@ support, and move by emcee's stretch move (or differential evolution). Derived q
 with every sample (emcee blobs).
 
 With ``sampler = "imh"`` the fit runs first and one chain proposes from a Student-t built from its
-best values and covariance, refitted in the burn-in to the importance-weighted moments of every scene
-it evaluated, and then fixed
+best values and covariance, then from a mixture of that t and one refitted in the burn-in to the
+importance-weighted moments of every scene it evaluated, fixed after the burn-in
 (:mod:`crashsim.reconstruct.samplers`); each step is one scene, a batch of proposals runs in
 parallel, and ``walkers``, ``move``, ``init_scale`` and chain files do not apply.
 
@@ -92,7 +92,8 @@ from .fit import FitProblem, FitSpec, NotAtRest, fit_scene
 from .montecarlo import DEFAULT_SAMPLE_TIME_LIMIT, MCResult, UncertaintySpec, scene_outputs
 from .overrides import INVERSE_SECTIONS, default_engine, file_contents
 from .parallel import Executor, Progress, child_seed, choose_backend
-from .samplers import IMH_DEFENSIVE, IMH_NU, IMH_SCALE, Mixture, StudentT, box_covariance, independence_chain, refit_proposal
+from .samplers import (IMH_DEFENSIVE, IMH_NU, IMH_SCALE, Mixture, StudentT, box_covariance, independence_chain,
+                       refit_proposal)
 from .tolerance import SampleTolerance, evidence_tolerance, with_tolerance
 #: The kept chain should be this many autocorrelation times long (emcee's documentation: "you
 #: should not trust an estimate of tau unless the chain is longer than about 50 tau").
@@ -492,7 +493,8 @@ class PosteriorResult:
                      f"{self.evaluations} scene evaluations in {self.elapsed:.1f} s")
         if sp.sampler == "imh":
             lines.append(f"independence Metropolis-Hastings (Student-t proposals, nu = {IMH_NU:g}: "
-                         f"{1 - IMH_DEFENSIVE:.0%} refitted in the burn-in, {IMH_DEFENSIVE:.0%} the fit's): one chain of {self.steps} steps, one scene each; burn-in {sp.burn_steps}, "
+                         f"{1 - IMH_DEFENSIVE:.0%} refitted in the burn-in, {IMH_DEFENSIVE:.0%} the fit's): one chain "
+                         f"of {self.steps} steps, one scene each; burn-in {sp.burn_steps}, "
                          f"thin {sp.thin}: {self.samples.shape[0]} samples kept; seed {sp.seed}")
         else:
             lines.append(f"emcee {sp.move} move: {sp.walkers} walkers x {self.steps} steps{resumed}; burn-in "
@@ -980,8 +982,8 @@ def _run_imh(problem, spec, z0, cov_z, derived, run_hash, backend, nw, workers, 
     its bound range) as a Student-t with scale :data:`~crashsim.reconstruct.samplers.IMH_SCALE`; each
     round after it from :func:`~crashsim.reconstruct.samplers.refit_proposal`: that t for a share
     :data:`~crashsim.reconstruct.samplers.IMH_DEFENSIVE` of the draws, the rest a t about the
-    importance-weighted mean and covariance of every proposal the rounds before evaluated. The proposal is then
-    fixed for the kept chain (an adaptation that stops: the kept chain is a plain Metropolis-Hastings
+    importance-weighted mean and covariance of every proposal the rounds before evaluated. The proposal
+    is then fixed for the kept chain (an adaptation that stops: the kept chain is a plain Metropolis-Hastings
     chain of that proposal). With ``ess`` the kept chain runs in blocks of ``check_every`` steps until
     the target is met.
     """

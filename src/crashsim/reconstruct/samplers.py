@@ -39,7 +39,8 @@ from typing import Callable, Sequence
 import numpy as np
 
 __all__ = ["StudentT", "Mixture", "independence_chain", "adaptive_metropolis", "box_covariance", "weighted_moments",
-           "refit_proposal", "IMH_NU", "IMH_SCALE", "IMH_REFIT_SCALE", "IMH_DEFENSIVE", "MAX_BOX_TRIES", "BOX_MASS_DRAWS"]
+           "refit_proposal", "IMH_NU", "IMH_SCALE", "IMH_REFIT_SCALE", "IMH_DEFENSIVE", "MAX_BOX_TRIES",
+           "BOX_MASS_DRAWS"]
 
 #: Degrees of freedom of the Student-t proposal (heavier tails than a normal posterior).
 IMH_NU = 5.0

@@ -24,39 +24,28 @@ from __future__ import annotations
 import json
 import os
 import platform
-import resource
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
-from _machine import cpu_name
+from _machine import cpu_name, run_cpu
 
 ROOT = Path(__file__).resolve().parents[1]
 SHA = [sys.executable, str(ROOT / "benchmarks" / "results_sha.py"), "--quick"]
-
-
-def _cpu() -> float:
-    r = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return r.ru_utime + r.ru_stime
+COMPILE = [sys.executable, "-c", "from crashsim.warmup import compile_kernels; compile_kernels()"]
 
 
 def main() -> int:
     with tempfile.TemporaryDirectory() as tmp:
         host_json, generic_json = Path(tmp) / "host.json", Path(tmp) / "generic.json"
         env = dict(os.environ, MPLBACKEND="Agg")
-        subprocess.run([sys.executable, "-c", "from crashsim.warmup import compile_kernels; compile_kernels()"],
-                       env=env, check=True)
-        c0 = _cpu()
-        subprocess.run([*SHA, "--out", str(host_json)], env=env, check=True, capture_output=True)
-        c1 = _cpu()
+        subprocess.run(COMPILE, env=env, check=True)  # compiled before, as a user's machine has it: not counted
+        host_cpu = run_cpu([*SHA, "--out", str(host_json)], env=env, check=True, capture_output=True)[0]
         genv = dict(env, NUMBA_CPU_NAME="generic", CRASHSIM_CACHE_DIR=str(Path(tmp) / "cache"))
         genv.pop("NUMBA_CACHE_DIR", None)
-        subprocess.run([sys.executable, "-c", "from crashsim.warmup import compile_kernels; compile_kernels()"],
-                       env=genv, check=True)
-        c2 = _cpu()
-        subprocess.run([*SHA, "--out", str(generic_json)], env=genv, check=True, capture_output=True)
-        c3 = _cpu()
+        compile_cpu = run_cpu(COMPILE, env=genv, check=True)[0]
+        generic_cpu = run_cpu([*SHA, "--out", str(generic_json)], env=genv, check=True, capture_output=True)[0]
         host, generic = json.loads(host_json.read_text()), json.loads(generic_json.read_text())
     differ = sorted(k for k in host if generic.get(k) != host[k])
     same = len(host) - len(differ)
@@ -65,9 +54,9 @@ def main() -> int:
           f"{platform.python_version()}. `benchmarks/results_sha.py --quick` twice: the kernels compiled for this "
           "processor, then compiled afresh with `NUMBA_CPU_NAME=generic` into an empty cache.", "",
           "| | CPU [min] |", "|---|---:|",
-          f"| the results, host kernels | {(c1 - c0) / 60:.2f} |",
-          f"| the generic compile | {(c2 - c1) / 60:.2f} |",
-          f"| the results, generic kernels | {(c3 - c2) / 60:.2f} |", "",
+          f"| the results, host kernels | {host_cpu / 60:.2f} |",
+          f"| the generic compile | {compile_cpu / 60:.2f} |",
+          f"| the results, generic kernels | {generic_cpu / 60:.2f} |", "",
           f"{same} of {len(host)} results byte-identical"
           + (":" if differ else ": the processor's instruction set changes no bit of any result (the kernels use "
              "no fast-math and no fused multiply-add contraction), so a rerun of the tests compiled for another "

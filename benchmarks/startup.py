@@ -20,12 +20,13 @@ from __future__ import annotations
 import argparse
 import os
 import platform
-import resource
 import statistics
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
+
+from _machine import run_cpu
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = ROOT / "scenarios" / "scenes" / "intersection_car_trailer_wheels.toml"
@@ -33,10 +34,8 @@ SCENE = ROOT / "scenarios" / "scenes" / "intersection_car_trailer_wheels.toml"
 
 def _cpu(cmd: list[str], env: dict) -> tuple[float, int]:
     """CPU seconds (user + system) of one run of ``cmd``, and its exit code."""
-    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    out = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True)
-    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime), out.returncode
+    cpu, out = run_cpu(cmd, cwd=ROOT, env=env, capture_output=True, text=True)
+    return cpu, out.returncode
 
 
 def main(argv=None) -> int:

@@ -21,13 +21,11 @@ import argparse
 import os
 import platform
 import re
-import resource
-import subprocess
 import sys
 import time
 from pathlib import Path
 
-from _machine import cpu_name
+from _machine import cpu_name, run_cpu
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -40,15 +38,15 @@ TIERS = [
 
 def _run(args: list[str], env_extra: dict) -> dict:
     env = dict(os.environ, MPLBACKEND="Agg", **env_extra)
-    r0, w0 = resource.getrusage(resource.RUSAGE_CHILDREN), time.perf_counter()
-    out = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", *args], cwd=ROOT,
-                         env=env, capture_output=True, text=True)
-    r1, w1 = resource.getrusage(resource.RUSAGE_CHILDREN), time.perf_counter()
+    w0 = time.perf_counter()
+    cpu, out = run_cpu([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", *args], cwd=ROOT,
+                       env=env, capture_output=True, text=True)
+    w1 = time.perf_counter()
     last = [line for line in out.stdout.strip().splitlines() if line.strip()][-1:] or [""]
     counts = dict((k, int(n)) for n, k in re.findall(r"(\d+) (passed|failed|skipped|deselected|error)", last[0]))
     failed = [line.split(" - ")[0].removeprefix("FAILED ").removeprefix("ERROR ")
               for line in out.stdout.splitlines() if line.startswith(("FAILED ", "ERROR "))]
-    return {"cpu_min": ((r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)) / 60.0,
+    return {"cpu_min": cpu / 60.0,
             "wall_min": (w1 - w0) / 60.0, "code": out.returncode, "counts": counts, "summary": last[0].strip("= "),
             "failed": failed, "stdout": out.stdout}
 
@@ -83,13 +81,7 @@ def write_slow_list() -> int:
 
 def _python_pass_cpu(repeats: int = 10) -> float:
     """The least CPU time [s] of ``python -c pass`` over ``repeats`` runs: the machine's speed in this run."""
-    best = float("inf")
-    for _ in range(repeats):
-        r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
-        subprocess.run([sys.executable, "-c", "pass"], check=True)
-        r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-        best = min(best, (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime))
-    return best
+    return min(run_cpu([sys.executable, "-c", "pass"], check=True)[0] for _ in range(repeats))
 
 
 def main(argv=None) -> int:

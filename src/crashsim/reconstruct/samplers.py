@@ -94,12 +94,9 @@ class StudentT:
         return int(self.mean.size)
 
     def log_density(self, x) -> float:
-        """Log density at ``x`` up to a constant (the same constant for every ``x``)."""
-        u = np.linalg.solve(self.chol, np.asarray(x, float) - self.mean)
-        m = float(u @ u)
-        if math.isinf(self.nu):
-            return -0.5 * m
-        return -0.5 * (self.nu + self.dim) * math.log1p(m / self.nu)
+        """Log density at the point ``x`` (:meth:`log_pdf`; the box not cut, so up to the constant of
+        the truncation, the same for every ``x``)."""
+        return float(self.log_pdf(x)[0])
 
     def log_pdf(self, x) -> np.ndarray:
         """Normalised log density (every constant, the box not cut) at the rows of ``x`` (n, d)."""

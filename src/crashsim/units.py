@@ -32,7 +32,8 @@ Conventions (decided here, and only here)
   (``"5 %"`` -> 0.05).
 
 pint is imported on first use (:func:`registry`), so ``import crashsim.units`` is cheap;
-unit expressions are parsed once and cached.
+unit expressions are parsed once and cached, and the documented spellings are read from a shipped
+table of pint's factors (:func:`factor_table`) without importing pint at all.
 
 Examples
 --------
@@ -49,11 +50,13 @@ from __future__ import annotations
 import difflib
 import enum
 import functools
+import json
 import math
 import re
 import threading
 from collections.abc import Sequence
 from dataclasses import dataclass
+from importlib.resources import files
 from typing import TYPE_CHECKING, Literal
 
 from crashsim.errors import ScenarioError
@@ -357,9 +360,52 @@ def _dims_noun(unit: pint.Unit) -> str:
     return f"of dimension {dims}"
 
 
+#: Unit spellings read often enough that their SI factors ship with crashsim, beyond every kind's
+#: documented spellings and display labels (:func:`factor_table`): the US survey foot of state plane
+#: coordinates.
+_TABLE_EXTRAS: tuple[tuple[Kind, str], ...] = ((Kind.LENGTH, "survey_foot"),)
+
+#: The shipped table of SI factors (``data/unit_factors.json``), read on first use.
+_FACTORS: dict[str, float] | None = None
+
+
+def _shipped_factor(unit: str, kind: Kind) -> float | None:
+    """The shipped SI factor of ``unit`` read as ``kind`` (None if the table does not hold it)."""
+    global _FACTORS
+    if _FACTORS is None:
+        _FACTORS = json.loads(files("crashsim").joinpath("data/unit_factors.json").read_text(encoding="utf-8"))
+    return _FACTORS.get(f"{kind.value}|{unit}")
+
+
+def factor_table() -> dict[str, float]:
+    """Pint's SI factor of every documented spelling and display label of every kind (``"kind|unit"``).
+
+    crashsim ships this table (``data/unit_factors.json``, written by ``benchmarks/unit_factors.py``)
+    so that a file in the common units is read without importing pint (0.5 s of CPU); every other
+    unit is read by pint as before.  ``tests/unit/test_units.py`` checks the shipped table
+    against this function.
+    """
+    pairs = [(k, sp) for k, spec in _SPECS.items() if k not in _PLAIN for sp in spec.spellings]
+    pairs += [(k, label) for k, labels in DISPLAY_UNITS.items() if k not in _PLAIN for label in labels.values()]
+    pairs += [(Kind.SPEED, sp) for sp in SPEED_UNITS] + list(_TABLE_EXTRAS)
+    out: dict[str, float] = {}
+    for kind, unit in pairs:
+        try:
+            out[f"{kind.value}|{unit}"] = _pint_factor(unit, kind)
+        except _Invalid:  # a spelling offered as a suggestion that this kind does not read
+            pass
+    return dict(sorted(out.items()))
+
+
 @functools.lru_cache(maxsize=4096)
 def _si_factor(unit: str, kind: Kind) -> float:
     """SI value of one ``unit`` read as ``kind``; raise _Invalid with the reason if impossible."""
+    shipped = _shipped_factor(unit, kind)
+    return _pint_factor(unit, kind) if shipped is None else shipped
+
+
+def _pint_factor(unit: str, kind: Kind) -> float:
+    """:func:`_si_factor` computed by pint."""
     spec = _SPECS[kind]
     text = _HYPHEN.sub("*", unit.strip().replace("·", "*"))
     if kind is Kind.ACCELERATION and text in ("g", "G"):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import subprocess
@@ -508,6 +509,50 @@ def test_importing_units_does_not_import_pint():
     path = os.pathsep.join([str(src), os.environ.get("PYTHONPATH", "")])
     env = {**os.environ, "PYTHONPATH": path}
     code = "import sys, crashsim.units; assert 'pint' not in sys.modules, 'pint imported'"
+    subprocess.run([sys.executable, "-c", code], check=True, env=env)
+
+
+def test_the_shipped_unit_table_is_pint_s():
+    """data/unit_factors.json holds pint's factor of every documented spelling and display label: the
+    same keys as :func:`factor_table` computes now, each value within a few units in the last place
+    (a definition that changed, or a spelling added without running benchmarks/unit_factors.py, fails)."""
+    from importlib.resources import files
+
+    from crashsim.units import factor_table
+
+    shipped = json.loads(files("crashsim").joinpath("data/unit_factors.json").read_text(encoding="utf-8"))
+    computed = factor_table()
+    assert sorted(shipped) == sorted(computed), "run python benchmarks/unit_factors.py"
+    for key, value in computed.items():
+        assert math.isclose(shipped[key], value, rel_tol=4 * sys.float_info.epsilon), (key, shipped[key], value)
+    for key, exact in (("speed|mph", 0.44704), ("length|ft", 0.3048), ("mass|lb", 0.45359237)):  # by definition
+        assert shipped[key] == pytest.approx(exact, rel=4 * sys.float_info.epsilon), key
+    assert "length|survey_foot" in shipped and "mass|lbf" in shipped and "acceleration|g" in shipped
+
+
+def test_a_unit_outside_the_table_is_read_by_pint_as_before():
+    """Spellings the table does not hold (another case, a prefix, a compound) go to pint, with the
+    same answers and the same refusals."""
+    for text, kind in (("Mph", Kind.SPEED), ("nmi", Kind.LENGTH), ("kg*cm^2", Kind.YAW_INERTIA)):
+        assert units._shipped_factor(text, kind) is None
+    assert parse("30 Mph", Kind.SPEED, field="f") == parse("30 mph", Kind.SPEED, field="f")
+    assert parse("1 nmi", Kind.LENGTH, field="f") == pytest.approx(1852.0, rel=1e-12)
+    assert parse("1e4 kg*cm^2", Kind.YAW_INERTIA, field="f") == pytest.approx(1.0, rel=1e-12)
+    with pytest.raises(ScenarioError, match="did you mean 'mph'"):
+        parse("30 mhp", Kind.SPEED, field="f")
+
+
+def test_loading_the_shipped_scenarios_imports_no_pint():
+    """Every shipped scene writes its values in documented spellings: loading them all is done from
+    the shipped table, without pint's 0.5 s of import (a refused file included)."""
+    src = Path(units.__file__).resolve().parents[1]
+    root = src.parent
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(src), os.environ.get("PYTHONPATH", "")])}
+    code = ("import sys, pathlib, crashsim\n"
+            f"files = sorted(pathlib.Path({str(root / 'scenarios')!r}).rglob('*.toml'))\n"
+            "assert len(files) > 20, files\n"
+            "for p in files: crashsim.load(p)\n"
+            "assert 'pint' not in sys.modules, 'pint imported'\n")
     subprocess.run([sys.executable, "-c", code], check=True, env=env)
 
 

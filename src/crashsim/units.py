@@ -64,27 +64,9 @@ from crashsim.errors import ScenarioError
 if TYPE_CHECKING:  # pragma: no cover
     import pint
 
-__all__ = [
-    "G0",
-    "Kind",
-    "System",
-    "DisplaySystem",
-    "SPEED_UNITS",
-    "speed_unit_of",
-    "system_label",
-    "DISPLAY_UNITS",
-    "registry",
-    "parse",
-    "parse_vector",
-    "to_unit",
-    "write_like",
-    "convert",
-    "describe",
-    "example",
-    "si_unit",
-    "resolve_system",
-    "toml_repr",
-]
+__all__ = ["G0", "Kind", "System", "DisplaySystem", "SPEED_UNITS", "speed_unit_of", "system_label", "DISPLAY_UNITS",
+           "registry", "parse", "parse_vector", "to_unit", "write_like", "convert", "describe", "example", "si_unit",
+           "resolve_system", "toml_repr", "factor_table"]
 
 G0: float = 9.80665
 """Standard acceleration of gravity [m/s^2], exact by definition (3rd CGPM, 1901)."""
@@ -287,9 +269,7 @@ def _kind(kind: Kind | str) -> Kind:
     try:
         return Kind(kind)
     except ValueError:
-        raise ValueError(
-            f"unknown quantity kind {kind!r}; use one of {', '.join(k.value for k in Kind)}"
-        ) from None
+        raise ValueError(f"unknown quantity kind {kind!r}; use one of {', '.join(k.value for k in Kind)}") from None
 
 
 def toml_repr(value: object) -> str:
@@ -356,45 +336,28 @@ def _dims_noun(unit: pint.Unit) -> str:
             if unit.dimensionality == registry().parse_units(si).dimensionality:
                 return noun
     angle = "" if not power else " * [angle]" if power == 1 else f" * [angle] ** {power:g}"
-    dims = str(unit.dimensionality) + angle
-    return f"of dimension {dims}"
+    return f"of dimension {unit.dimensionality}{angle}"
 
 
-#: Unit spellings read often enough that their SI factors ship with crashsim, beyond every kind's
-#: documented spellings and display labels (:func:`factor_table`): the US survey foot of state plane
-#: coordinates.
-_TABLE_EXTRAS: tuple[tuple[Kind, str], ...] = ((Kind.LENGTH, "survey_foot"),)
-
-#: The shipped table of SI factors (``data/unit_factors.json``), read on first use.
+#: The shipped table of SI factors (``data/unit_factors.json``, :func:`factor_table`), read on first use.
 _FACTORS: dict[str, float] | None = None
 
 
 def _shipped_factor(unit: str, kind: Kind) -> float | None:
     """The shipped SI factor of ``unit`` read as ``kind`` (None if the table does not hold it)."""
     global _FACTORS
-    if _FACTORS is None:
-        _FACTORS = json.loads(files("crashsim").joinpath("data/unit_factors.json").read_text(encoding="utf-8"))
+    _FACTORS = _FACTORS or json.loads(files("crashsim").joinpath("data/unit_factors.json").read_text(encoding="utf-8"))
     return _FACTORS.get(f"{kind.value}|{unit}")
 
 
 def factor_table() -> dict[str, float]:
-    """Pint's SI factor of every documented spelling and display label of every kind (``"kind|unit"``).
-
-    crashsim ships this table (``data/unit_factors.json``, written by ``benchmarks/unit_factors.py``)
-    so that a file in the common units is read without importing pint (0.5 s of CPU); every other
-    unit is read by pint as before.  ``tests/unit/test_units.py`` checks the shipped table
-    against this function.
-    """
+    """Pint's SI factor (``"kind|unit"``) of every documented spelling and display label of every kind,
+    and of the US survey foot: shipped as ``data/unit_factors.json`` (``benchmarks/unit_factors.py``),
+    so that a file in those units is read without importing pint (0.5 s of CPU)."""
     pairs = [(k, sp) for k, spec in _SPECS.items() if k not in _PLAIN for sp in spec.spellings]
     pairs += [(k, label) for k, labels in DISPLAY_UNITS.items() if k not in _PLAIN for label in labels.values()]
-    pairs += [(Kind.SPEED, sp) for sp in SPEED_UNITS] + list(_TABLE_EXTRAS)
-    out: dict[str, float] = {}
-    for kind, unit in pairs:
-        try:
-            out[f"{kind.value}|{unit}"] = _pint_factor(unit, kind)
-        except _Invalid:  # a spelling offered as a suggestion that this kind does not read
-            pass
-    return dict(sorted(out.items()))
+    pairs += [(Kind.SPEED, sp) for sp in SPEED_UNITS] + [(Kind.LENGTH, "survey_foot")]
+    return dict(sorted({f"{kind.value}|{unit}": _pint_factor(unit, kind) for kind, unit in pairs}.items()))
 
 
 @functools.lru_cache(maxsize=4096)

@@ -195,7 +195,7 @@ def check_contacts(run, label, contact=ContactModel()):
     """Penetration stays bounded and every re-strike is an impact: no point of a pair lies deeper
     beyond its allowance than the pair's peak force over the stiffness plus 1 mm, and no point in
     contact closes at the impulse threshold or faster outside the pair's impacts (both read off
-    the solution at every integrator step, :func:`crashsim.motion.postprocess.contact_summaries`)."""
+    the solution at every integrator step, :func:`crashsim.motion.summaries.contact_summaries`)."""
     for p in run.pairs:
         assert p.max_penetration <= p.peak_force / contact.stiffness + 1e-3, (label, p.name, p.max_penetration,
                                                                              p.peak_force)

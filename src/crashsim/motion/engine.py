@@ -57,8 +57,8 @@ from .impacts import impact_instant
 from .scene_model import SceneModel, kernels
 from .options import MAX_STILL_SEGMENTS
 from .postprocess import GL_NODES, GL_WEIGHTS, assemble_scene, mode_snapshot, segment_arrays, split_track
-from .result import (BodyHistory, BodyRunout, HitchHistory, PairSummary, RunoutEvent, RunoutResult, SceneRunout,
-                     SecondaryImpact, limit_message)
+from .result import BodyHistory, BodyRunout, HitchHistory, RunoutEvent, RunoutResult, limit_message
+from .scene_result import PairSummary, SceneRunout, SecondaryImpact
 
 __all__ = ["STATUS_OF_CODE"]
 

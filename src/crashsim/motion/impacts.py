@@ -38,7 +38,8 @@ import numpy as np
 from ..impact.multicontact import constrained_inverse, solve_contacts
 from ..impact.result import BodyImpact, pdof_from_force
 from .layout import SV_X, SV_Y, SV_HEADING, SV_VX, SV_VY, SV_YAW_RATE
-from .result import PairImpulse, RunoutEvent, SecondaryImpact
+from .result import RunoutEvent
+from .scene_result import PairImpulse, SecondaryImpact
 from .scene_model import SceneModel, kernels
 
 __all__ = ["IMPACT_EVENT_WINDOW", "impact_instant", "event_number"]

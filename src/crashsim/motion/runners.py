@@ -29,7 +29,7 @@ from ..errors import ScenarioError
 from ..vehicles import BodyState, Vehicle
 from .contact import ContactModel, Obstacle
 from .options import RunoutOptions
-from .result import SceneRunout
+from .scene_result import SceneRunout
 from .road import Road
 from .wheels import WheelSettings
 

@@ -39,7 +39,8 @@ from .contact import ContactModel, Obstacle
 from .engine import run_model
 from .scene_model import SceneModel
 from .options import RunoutOptions
-from .result import RunoutResult, SceneRunout
+from .result import RunoutResult
+from .scene_result import SceneRunout
 from .road import Road
 from .runners import Runout, RunoutCall, register_runner
 from .wheels import WheelSettings

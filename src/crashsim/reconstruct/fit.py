@@ -1193,7 +1193,23 @@ def _analyse(problem: FitProblem, spec: FitSpec, outcomes: list[dict], engine: s
     if scene.warnings:
         warnings += [f"at the best fit: {w_}" for w_ in scene.warnings]
 
-    # Starts: same cost, and same point (within a quarter standard error or 1e-3 of the range).
+    starts, n_agree, n_same = _compare_starts(problem, outcomes, best_k, zb, stderr, undetermined, warnings)
+
+    residuals = _residual_items(problem, scene)
+    return FitResult(
+        unknowns=spec.unknowns, x=xb, stderr=stderr, interval=interval, covariance=cov, correlation=corr,
+        residuals=residuals, chi2=chi2, dof=dof, p_value=p_value, confidence=spec.confidence,
+        covariance_mode=spec.covariance, singular_values=sv_rel, null_space=null_space, starts=tuple(starts),
+        n_agree=n_agree, n_same_cost=n_same, warnings=tuple(warnings), evaluations=0, failures=0, elapsed=0.0,
+        engine=engine, success=bool(success), message=message, scene=scene, failure_reasons=reasons)
+
+
+def _compare_starts(problem: FitProblem, outcomes: list[dict], best_k: int, zb, stderr, undetermined,
+                    warnings: list[str]):
+    """Each start against the best: the same cost, and the same point (within a quarter standard error or
+    1e-3 of the range); warnings appended for starts stuck where the scene cannot be evaluated, other
+    minima and a flat minimum. Returns ``(starts, n_agree, n_same)``."""
+    costs = np.array([o["cost"] for o in outcomes])
     tol_cost = 1e-3 * max(1.0, float(costs[best_k]))
     se_z = np.where(np.isfinite(stderr), stderr / problem.span, np.inf)
     tol_z = np.maximum(1e-3, 0.25 * np.where(np.isfinite(se_z), se_z, 0.0))
@@ -1223,14 +1239,7 @@ def _analyse(problem: FitProblem, spec: FitSpec, outcomes: list[dict], engine: s
         if n_same > n_agree:
             warnings.append(f"{n_same - n_agree} start(s) reached the best cost at a different point: the minimum "
                             "is flat or not unique")
-
-    residuals = _residual_items(problem, scene)
-    return FitResult(
-        unknowns=spec.unknowns, x=xb, stderr=stderr, interval=interval, covariance=cov, correlation=corr,
-        residuals=residuals, chi2=chi2, dof=dof, p_value=p_value, confidence=spec.confidence,
-        covariance_mode=spec.covariance, singular_values=sv_rel, null_space=null_space, starts=tuple(starts),
-        n_agree=n_agree, n_same_cost=n_same, warnings=tuple(warnings), evaluations=0, failures=0, elapsed=0.0,
-        engine=engine, success=bool(success), message=message, scene=scene, failure_reasons=reasons)
+    return starts, n_agree, n_same
 
 
 def _residual_items(problem: FitProblem, scene) -> tuple[EvidenceResidual, ...]:

@@ -204,6 +204,27 @@ def _map_file(out: _Out, sd, entry: dict, raw_entry: dict, frame: SceneFrame, ke
                                                     f"matches were not imported: {shown}")
 
 
+def _refuse_unmatched(m: dict, sd, layers: list, src: str, mkey: str, file: str | None):
+    """A map entry that matches no entity left: say why (faces only, taken by an earlier entry, or no such
+    layer, with the nearest and the file's layers) as a ScenarioError naming ``mkey``."""
+    matched = [lay for lay in layers if _match(m["match"], lay)]
+    if matched and not any(e.layer in matched for e in sd.entities):
+        raise ScenarioError(f"{src}: {', '.join(map(repr, matched))} holds TIN faces (3DFACE) only: map it "
+                            "as kind = \"surface\" (the road's grade and cross-slope)",
+                            field=f"{mkey}.kind", file=file)
+    if matched:  # its layers were taken by an earlier entry
+        raise ScenarioError(f"{src}: match = {m['match']!r}: every entity of {', '.join(map(repr, matched))} "
+                            "is taken by an earlier map entry", field=f"{mkey}.match", file=file)
+    near = difflib.get_close_matches(m["match"], layers, n=1, cutoff=0.3)
+    hint = f"; nearest: {near[0]!r}" if near else ""
+    shown = ", ".join(map(repr, layers[:40])) + (f" and {len(layers) - 40} more" if len(layers) > 40 else "")
+    if sd.empty_layers and layers == [""]:
+        raise ScenarioError(f"{src} has no layer or code matching {m['match']!r}: {sd.empty_layers}",
+                            field=f"{mkey}.match", file=file)
+    raise ScenarioError(f"{src} has no layer or code matching {m['match']!r}{hint}. It has: "
+                        f"{shown or 'none'}", field=f"{mkey}.match", file=file)
+
+
 def _map_entries(out: _Out, sd, entry: dict, raw_entry: dict, frame: SceneFrame, key: str, file: str | None,
                  have_runout: bool) -> np.ndarray:
     """Apply the file's map entries; returns which entities were taken."""
@@ -225,22 +246,7 @@ def _map_entries(out: _Out, sd, entry: dict, raw_entry: dict, frame: SceneFrame,
                                 f"{', '.join(MAP_LINE_STYLES)}", field=f"{mkey}.style", file=file)
         idx = [j for j, e in enumerate(sd.entities) if not taken[j] and _match(m["match"], e.layer)]
         if not idx:
-            matched = [lay for lay in layers if _match(m["match"], lay)]
-            if matched and not any(e.layer in matched for e in sd.entities):
-                raise ScenarioError(f"{src}: {', '.join(map(repr, matched))} holds TIN faces (3DFACE) only: map it "
-                                    "as kind = \"surface\" (the road's grade and cross-slope)",
-                                    field=f"{mkey}.kind", file=file)
-            if matched:  # its layers were taken by an earlier entry
-                raise ScenarioError(f"{src}: match = {m['match']!r}: every entity of {', '.join(map(repr, matched))} "
-                                    "is taken by an earlier map entry", field=f"{mkey}.match", file=file)
-            near = difflib.get_close_matches(m["match"], layers, n=1, cutoff=0.3)
-            hint = f"; nearest: {near[0]!r}" if near else ""
-            shown = ", ".join(map(repr, layers[:40])) + (f" and {len(layers) - 40} more" if len(layers) > 40 else "")
-            if sd.empty_layers and layers == [""]:
-                raise ScenarioError(f"{src} has no layer or code matching {m['match']!r}: {sd.empty_layers}",
-                                    field=f"{mkey}.match", file=file)
-            raise ScenarioError(f"{src} has no layer or code matching {m['match']!r}{hint}. It has: "
-                                f"{shown or 'none'}", field=f"{mkey}.match", file=file)
+            _refuse_unmatched(m, sd, layers, src, mkey, file)
         taken[idx] = True
         ents = [sd.entities[j] for j in idx]
         texts = [e for e in ents if e.geometry == "text"]

@@ -69,6 +69,22 @@ def _rows(text: str, path: str, file: str | None):
     return list(csv.reader(io.StringIO("\n".join(lines)), delimiter=delim))
 
 
+def _column_letters(columns: str, file: str | None) -> str:
+    """The column letters of ``columns`` (upper case, no blanks), checked: one pair N/E or X/Y, no letter twice."""
+    cols = columns.upper().replace(" ", "")
+    bad = set(cols) - set("PNEXYZD-")
+    both = bool(set(cols) & set("NE")) and bool(set(cols) & set("XY"))
+    twice = sorted({c for c in cols if c != "-" and cols.count(c) > 1})
+    if both or twice:
+        raise ScenarioError(f"columns = {columns!r}: " + (f"the letter {twice[0]!r} is given twice" if twice else
+                            "gives both N/E and X/Y; use one pair (P, N, E, Z, D: \"PNEZD\")"),
+                            field="survey.files.columns", file=file)
+    if bad or not (("N" in cols and "E" in cols) or ("X" in cols and "Y" in cols)):
+        raise ScenarioError(f"columns = {columns!r}: use the letters P, N, E (or X, Y), Z, D and - (skip), with N and "
+                            "E or X and Y, e.g. \"PNEZD\"", field="survey.files.columns", file=file)
+    return cols
+
+
 def read_points(path: str, units: str, columns: str = "PNEZD", *, join: str = "run",
                 breaklines: str | None = None, line_codes=None, file: str | None = None) -> SurveyData:
     """The points and strings of a total-station file, in metres.
@@ -95,17 +111,7 @@ def read_points(path: str, units: str, columns: str = "PNEZD", *, join: str = "r
         ``"line"`` entity per string (``ref`` its first and last point numbers).
     """
     scale = unit_scale(units, field="survey.files.units", file=file)
-    cols = columns.upper().replace(" ", "")
-    bad = set(cols) - set("PNEXYZD-")
-    both = bool(set(cols) & set("NE")) and bool(set(cols) & set("XY"))
-    twice = sorted({c for c in cols if c != "-" and cols.count(c) > 1})
-    if both or twice:
-        raise ScenarioError(f"columns = {columns!r}: " + (f"the letter {twice[0]!r} is given twice" if twice else
-                            "gives both N/E and X/Y; use one pair (P, N, E, Z, D: \"PNEZD\")"),
-                            field="survey.files.columns", file=file)
-    if bad or not (("N" in cols and "E" in cols) or ("X" in cols and "Y" in cols)):
-        raise ScenarioError(f"columns = {columns!r}: use the letters P, N, E (or X, Y), Z, D and - (skip), with N and "
-                            "E or X and Y, e.g. \"PNEZD\"", field="survey.files.columns", file=file)
+    cols = _column_letters(columns, file)
     try:
         with open(path, encoding="utf-8-sig", errors="replace", newline="") as fh:
             text = fh.read()

@@ -73,6 +73,72 @@ def _rows(model: SceneModel, y: np.ndarray, D) -> np.ndarray:
     return out[:n]
 
 
+def _body_impacts(model: SceneModel, y: np.ndarray, pair, bodies: list, cols: list, nd: int, dz: np.ndarray,
+                  v_before: dict, force: np.ndarray, ia: int, ib: int) -> tuple[dict, dict]:
+    """The velocity change and the :class:`~crashsim.impact.result.BodyImpact` of each body of a pair's
+    vehicles (``bodies``, their columns ``cols`` of the instant's ``nd`` bodies; ``dz`` the pair's share of
+    the velocity change, ``force`` its impulse on body ``ia``), and of the obstacle struck, if one is:
+    ``(delta_v, impacts)`` by body name."""
+    names = model.layout.bodies
+    nb = model.n_bodies
+    delta_v, impacts = {}, {}
+    for b, j in zip(bodies, cols):
+        dv = (float(dz[j]), float(dz[nd + j]))
+        delta_v[names[b]] = dv
+        vb = v_before[names[b]]
+        crush = force if b == ia else (-force if b == ib else None)
+        heading = float(y[SV_HEADING * nb + b])
+        mass = float(model.mass[b])
+        va, vz = np.array(vb[:2]), np.array([y[SV_VX * nb + b], y[SV_VY * nb + b]])
+        impacts[names[b]] = BodyImpact(
+            name=names[b], vehicle=model.vehicle_of_body(b).name, heading=heading, velocity_before=va,
+            velocity=vz, yaw_rate_before=vb[2], yaw_rate=float(y[SV_YAW_RATE * nb + b]), delta_v=np.array(dv),
+            crush_impulse=crush, pdof=None if crush is None else pdof_from_force(crush, heading),
+            ke_before=0.5 * mass * float(va @ va) + 0.5 * float(model.inertia[b]) * vb[2] ** 2,
+            ke_after=0.5 * mass * float(vz @ vz) + 0.5 * float(model.inertia[b]) * float(y[SV_YAW_RATE * nb + b]) ** 2,
+            mass=mass)
+    if pair.obstacle:
+        impacts[pair.b] = BodyImpact(name=pair.b, vehicle=pair.b, heading=0.0, velocity_before=np.zeros(2),
+                                     velocity=np.zeros(2), yaw_rate_before=0.0, yaw_rate=0.0,
+                                     delta_v=np.zeros(2), crush_impulse=-force,
+                                     pdof=pdof_from_force(-force, 0.0), ke_before=0.0, ke_after=0.0,
+                                     mass=math.inf, fixed=True)
+    return delta_v, impacts
+
+
+def _point_rows(model: SceneModel, rows: np.ndarray, pair_of: np.ndarray, y: np.ndarray, D, col: dict, nd: int):
+    """The complementarity problem's rows of an instant's touching points: the normal and tangential
+    Jacobians over the ``nd`` bodies' velocities (``col``: a body's column), and each point's restitution,
+    friction and strike threshold. Returns ``(Jn, Jt, e, f, strike)``."""
+    k = kernels()
+    M = model.M
+    nb = model.n_bodies
+    nc = rows.shape[0]
+    Jn, Jt = np.zeros((nc, 3 * nd)), np.zeros((nc, 3 * nd))
+    e, f, strike = np.zeros(nc), np.zeros(nc), np.zeros(nc)
+    for r in range(nc):
+        p = pair_of[r]
+        px, py, nx, ny = rows[r, 1:5]
+        tx, ty = -ny, nx
+        for b, sign in ((M.pair_body[p, 0], 1.0), (M.pair_body[p, 1], -1.0)):
+            if b < 0:
+                continue
+            j = col[int(b)]
+            rx, ry = px - y[SV_X * nb + b], py - y[SV_Y * nb + b]
+            Jn[r, j], Jn[r, nd + j], Jn[r, 2 * nd + j] = sign * nx, sign * ny, sign * (rx * ny - ry * nx)
+            Jt[r, j], Jt[r, nd + j], Jt[r, 2 * nd + j] = sign * tx, sign * ty, sign * (rx * ty - ry * tx)
+        c = model.pairs[p].contact
+        # the crush of the first impact going on is plastic: the points of its crush while the pair is
+        # disarmed, and those pressed in when it was pressed on beyond the crush at this instant
+        crush = ((D.pstate[p] == k.PS_DISARMED and rows[r, 1 + k.Q_CRUSH] != 0.0)
+                 or (D.pref[p, k.A_CRUSH] == k.PRESSED and rows[r, 1 + k.Q_ALLOW] > 0.0))
+        e[r] = 0.0 if crush else c.restitution
+        f[r] = c.friction
+        # a point pressed in strikes faster by the speed its depth holds (kernels' strike_scan)
+        strike[r] = c.velocity_threshold + M.pair_par[p, k.R_OMEGA] * max(rows[r, 1 + k.Q_DEPTH], 0.0)
+    return Jn, Jt, e, f, strike
+
+
 def impact_instant(model: SceneModel, t: float, y: np.ndarray, trigger: np.ndarray, D, offsets: np.ndarray,
                    log: list, previous=()) -> list[SecondaryImpact]:
     """Solve the impact of the instant ``t`` (module docstring); update ``y`` and the mode ``D`` in place.
@@ -104,29 +170,7 @@ def impact_instant(model: SceneModel, t: float, y: np.ndarray, trigger: np.ndarr
     G_all = k.hitch_jacobian(np.ascontiguousarray(y), M)
     keep = np.any(G_all[:, dof] != 0.0, axis=1)
     G = G_all[keep][:, dof]
-    nc = rows.shape[0]
-    Jn, Jt = np.zeros((nc, 3 * nd)), np.zeros((nc, 3 * nd))
-    e, f, strike = np.zeros(nc), np.zeros(nc), np.zeros(nc)
-    for r in range(nc):
-        p = pair_of[r]
-        px, py, nx, ny = rows[r, 1:5]
-        tx, ty = -ny, nx
-        for b, sign in ((M.pair_body[p, 0], 1.0), (M.pair_body[p, 1], -1.0)):
-            if b < 0:
-                continue
-            j = col[int(b)]
-            rx, ry = px - y[SV_X * nb + b], py - y[SV_Y * nb + b]
-            Jn[r, j], Jn[r, nd + j], Jn[r, 2 * nd + j] = sign * nx, sign * ny, sign * (rx * ny - ry * nx)
-            Jt[r, j], Jt[r, nd + j], Jt[r, 2 * nd + j] = sign * tx, sign * ty, sign * (rx * ty - ry * tx)
-        c = model.pairs[p].contact
-        # the crush of the first impact going on is plastic: the points of its crush while the pair is
-        # disarmed, and those pressed in when it was pressed on beyond the crush at this instant
-        crush = ((D.pstate[p] == k.PS_DISARMED and rows[r, 1 + k.Q_CRUSH] != 0.0)
-                 or (D.pref[p, k.A_CRUSH] == k.PRESSED and rows[r, 1 + k.Q_ALLOW] > 0.0))
-        e[r] = 0.0 if crush else c.restitution
-        f[r] = c.friction
-        # a point pressed in strikes faster by the speed its depth holds (kernels' strike_scan)
-        strike[r] = c.velocity_threshold + M.pair_par[p, k.R_OMEGA] * max(rows[r, 1 + k.Q_DEPTH], 0.0)
+    Jn, Jt, e, f, strike = _point_rows(model, rows, pair_of, y, D, col, nd)
     # closed stops of these vehicles: the relative yaw rate may not go further past them
     stops = [q for q in range(int(D.lk_n[0])) if int(M.body_vehicle[M.hitch_body[D.lk_j[q], 0]]) in veh]
     Js = np.zeros((len(stops), 3 * nd))
@@ -186,32 +230,10 @@ def impact_instant(model: SceneModel, t: float, y: np.ndarray, trigger: np.ndarr
         ia = int(M.pair_body[p, 0])
         ib = int(M.pair_body[p, 1])
         vehs = {int(M.body_vehicle[ia])} | ({int(M.body_vehicle[ib])} if ib >= 0 else set())
-        delta_v, impacts = {}, {}
         force = np.array([float(ln @ nrm[:, 0] + lt @ -nrm[:, 1]), float(ln @ nrm[:, 1] + lt @ nrm[:, 0])])
-        for b in bodies:
-            if int(M.body_vehicle[b]) not in vehs:
-                continue
-            j = col[b]
-            dv = (float(dz[j]), float(dz[nd + j]))
-            delta_v[names[b]] = dv
-            vb = v_before[names[b]]
-            crush = force if b == ia else (-force if b == ib else None)
-            heading = float(y[SV_HEADING * nb + b])
-            mass = float(model.mass[b])
-            va, vz = np.array(vb[:2]), np.array([y[SV_VX * nb + b], y[SV_VY * nb + b]])
-            impacts[names[b]] = BodyImpact(
-                name=names[b], vehicle=model.vehicle_of_body(b).name, heading=heading, velocity_before=va,
-                velocity=vz, yaw_rate_before=vb[2], yaw_rate=float(y[SV_YAW_RATE * nb + b]), delta_v=np.array(dv),
-                crush_impulse=crush, pdof=None if crush is None else pdof_from_force(crush, heading),
-                ke_before=0.5 * mass * float(va @ va) + 0.5 * float(model.inertia[b]) * vb[2] ** 2,
-                ke_after=0.5 * mass * float(vz @ vz) + 0.5 * float(model.inertia[b]) * float(y[SV_YAW_RATE * nb + b]) ** 2,
-                mass=mass)
-        if pair.obstacle:
-            impacts[pair.b] = BodyImpact(name=pair.b, vehicle=pair.b, heading=0.0, velocity_before=np.zeros(2),
-                                         velocity=np.zeros(2), yaw_rate_before=0.0, yaw_rate=0.0,
-                                         delta_v=np.zeros(2), crush_impulse=-force,
-                                         pdof=pdof_from_force(-force, 0.0), ke_before=0.0, ke_after=0.0,
-                                         mass=math.inf, fixed=True)
+        theirs = [b for b in bodies if int(M.body_vehicle[b]) in vehs]  # the bodies of the pair's vehicles
+        delta_v, impacts = _body_impacts(model, y, pair, theirs, [col[b] for b in theirs], nd, dz, v_before, force,
+                                         ia, ib)
         closing = float(np.max(-(Jn[mine] @ u)))
         loss = shares[p]
         slip = Jt[mine] @ sol.velocity

@@ -211,7 +211,6 @@ LONG_FUNCTIONS = {
     "impact/core.py:_solve_chunk": 152,
     "motion/levels.py:_energy_runout": 214,
     "motion/scene_model.py:SceneModel.__init__": 237,
-    "reconstruct/posterior.py:run_posterior": 196,
 }
 
 

@@ -768,6 +768,78 @@ def _check_start(problem: PosteriorProblem, x0: np.ndarray, where: str, file: st
                                 f"a start inside the support", field=key, file=file)
 
 
+def _specs(scenario_data: dict, spec, steps, seed, start, chain_path, file: str | None):
+    """The run's :class:`PosteriorSpec` (the file's, or ``spec``, with the overrides given) and the
+    file's :class:`FitSpec`, checked together."""
+    if "fit" not in scenario_data:
+        raise ScenarioError("the posterior is over the unknowns of the [fit] table (with their bounds), but the "
+                            "scenario has none", field="fit", file=file)
+    if not isinstance(spec, PosteriorSpec):
+        spec = PosteriorSpec.from_dict(spec if spec is not None else scenario_data.get("posterior"), file=file)
+    over = {k: v for k, v in (("steps", steps), ("seed", seed), ("start", start)) if v is not None}
+    spec = replace(spec, **over)  # --steps below the minimum: spec.check names the minimum for this burn-in
+    if spec.sampler == "imh":
+        if chain_path is not None:
+            raise ScenarioError("a chain file (--chain) resumes the emcee sampler; sampler = \"imh\" runs its chain "
+                                "in one go: drop the chain file or set sampler = \"emcee\"", field="posterior.sampler",
+                                file=file)
+        spec = replace(spec, start="fit")  # its proposal is built from the fit: it starts there
+    with in_file(file):
+        fit_spec = FitSpec.from_dict(scenario_data["fit"], scenario_data, file=file)
+    spec.check(len(fit_spec.unknowns), file=file)
+    return spec, fit_spec
+
+
+def _at_sample_tolerance(problem: PosteriorProblem, spec, scenario_data: dict, z0, fit_spec, priors, engine: str,
+                         file: str | None, limit: float):
+    """The problem the samples run, the scenario it runs and its tolerance: at the evidence's tolerance
+    (``spec.tolerance = "evidence"``, where it changes the file's and the run-out has no accuracy target),
+    else the file's (tolerance None)."""
+    raw_runout = scenario_data.get("runout")
+    if spec.tolerance == "evidence" and isinstance(raw_runout, dict) and "accuracy" not in raw_runout:
+        scene0 = problem.fit.evaluate(z0)[1]  # at the file's tolerance
+        if not isinstance(scene0, Exception) and scene0.scenario.runout is not None:
+            opts = scene0.scenario.runout.options
+            tolerance = evidence_tolerance(problem.fit.evidence.items, scene0, opts.rtol, opts.atol)
+            if tolerance.changed:
+                sampled_data = with_tolerance(scenario_data, tolerance)
+                return (PosteriorProblem(sampled_data, fit_spec, priors, engine=engine, file=file,
+                                         sample_time_limit=limit), sampled_data, tolerance)
+            return problem, scenario_data, tolerance
+    return problem, scenario_data, None
+
+
+def _resumed(saved: dict | None, steps: int):
+    """The chain so far of a chain file (its first ``steps`` steps), or an empty one: ``(z, log_prob, blobs,
+    accepted, failures, evaluations, steps resumed, elapsed)``."""
+    if saved is None:
+        return [], [], [], [], {}, 0, 0, 0.0
+    z_all = [saved["z"][i] for i in range(saved["z"].shape[0])][:steps]
+    lp_all = [saved["log_prob"][i] for i in range(len(z_all))]
+    bl_all = [saved["blobs"][i] for i in range(len(z_all))]
+    acc_all = [saved["accepted"][i] for i in range(len(z_all))]
+    return z_all, lp_all, bl_all, acc_all, dict(saved["failures"]), saved["evaluations"], len(z_all), saved["elapsed"]
+
+
+def _emcee_state(saved: dict | None, n_resumed: int, z_all: list, problem, z0, spec):
+    """Where emcee's walkers go on from: the chain file's last step, nothing to run (the file holds more
+    steps than asked for), or a ball around ``z0``: ``(state, accepted so far)``, state None for none."""
+    import emcee
+
+    if saved is not None and n_resumed > 0 and len(z_all) == saved["z"].shape[0]:
+        last_blobs = saved["blobs"][-1]
+        if last_blobs.ndim == 2 and last_blobs.shape[1] == 1:  # as emcee holds a single blob
+            last_blobs = last_blobs[:, 0]
+        state = emcee.State(saved["z"][-1], log_prob=saved["log_prob"][-1], blobs=last_blobs,
+                            random_state=saved["rstate"])
+        return state, saved["accepted"][-1].astype(float)
+    if saved is not None and n_resumed > 0:  # fewer steps asked for than the file holds: nothing to run
+        return None, None
+    state = emcee.State(_initial_ball(problem, z0, spec),
+                        random_state=np.random.RandomState(child_seed(spec.seed, 2).generate_state(4)).get_state())
+    return state, np.zeros(spec.walkers)
+
+
 def run_posterior(scenario_data: dict | Scenario, spec: PosteriorSpec | dict | None = None, *, steps: int | None = None,
                   seed: int | None = None, start: str | None = None, engine: str | None = None,
                   workers: int | None = None, dask_address: Any = None, chain_path: str | Path | None = None,
@@ -817,22 +889,7 @@ def run_posterior(scenario_data: dict | Scenario, spec: PosteriorSpec | dict | N
     scenario_data, file = file_contents(scenario_data, file)
 
     t0 = time.perf_counter()
-    if "fit" not in scenario_data:
-        raise ScenarioError("the posterior is over the unknowns of the [fit] table (with their bounds), but the "
-                            "scenario has none", field="fit", file=file)
-    if not isinstance(spec, PosteriorSpec):
-        spec = PosteriorSpec.from_dict(spec if spec is not None else scenario_data.get("posterior"), file=file)
-    over = {k: v for k, v in (("steps", steps), ("seed", seed), ("start", start)) if v is not None}
-    spec = replace(spec, **over)  # --steps below the minimum: spec.check names the minimum for this burn-in
-    if spec.sampler == "imh":
-        if chain_path is not None:
-            raise ScenarioError("a chain file (--chain) resumes the emcee sampler; sampler = \"imh\" runs its chain "
-                                "in one go: drop the chain file or set sampler = \"emcee\"", field="posterior.sampler",
-                                file=file)
-        spec = replace(spec, start="fit")  # its proposal is built from the fit: it starts there
-    with in_file(file):
-        fit_spec = FitSpec.from_dict(scenario_data["fit"], scenario_data, file=file)
-    spec.check(len(fit_spec.unknowns), file=file)
+    spec, fit_spec = _specs(scenario_data, spec, steps, seed, start, chain_path, file)
     engine = default_engine() if engine is None else engine
     limit = DEFAULT_SAMPLE_TIME_LIMIT if sample_time_limit is None else sample_time_limit
     if not (limit > 0):
@@ -855,18 +912,8 @@ def run_posterior(scenario_data: dict | Scenario, spec: PosteriorSpec | dict | N
     else:
         x0 = x_init
     z0 = problem.fit.z_of(x0)
-    tolerance = None
-    sampled_data = scenario_data  # the scenario the samples run: the file's, or at the evidence's tolerance
-    raw_runout = scenario_data.get("runout")
-    if spec.tolerance == "evidence" and isinstance(raw_runout, dict) and "accuracy" not in raw_runout:
-        scene0 = problem.fit.evaluate(z0)[1]  # at the file's tolerance
-        if not isinstance(scene0, Exception) and scene0.scenario.runout is not None:
-            opts = scene0.scenario.runout.options
-            tolerance = evidence_tolerance(problem.fit.evidence.items, scene0, opts.rtol, opts.atol)
-            if tolerance.changed:
-                sampled_data = with_tolerance(scenario_data, tolerance)
-                problem = PosteriorProblem(sampled_data, fit_spec, priors, engine=engine, file=file,
-                                           sample_time_limit=limit)
+    problem, sampled_data, tolerance = _at_sample_tolerance(problem, spec, scenario_data, z0, fit_spec, priors,
+                                                            engine, file, limit)
     derived = problem.derived_keys(z0)   # one scene here first: compiles the engine before any fork
     run_hash = _run_hash(scenario_data, fit_spec, spec, priors, x0, engine)
     ndim = len(fit_spec.unknowns)
@@ -875,18 +922,7 @@ def run_posterior(scenario_data: dict | Scenario, spec: PosteriorSpec | dict | N
     if chain_path is not None:
         chain_path = Path(chain_path)
         saved = _load(chain_path, run_hash)
-    if saved is not None:
-        z_all = [saved["z"][i] for i in range(saved["z"].shape[0])][:spec.steps]
-        lp_all = [saved["log_prob"][i] for i in range(len(z_all))]
-        bl_all = [saved["blobs"][i] for i in range(len(z_all))]
-        acc_all = [saved["accepted"][i] for i in range(len(z_all))]
-        failures = dict(saved["failures"])
-        evaluations = saved["evaluations"]
-        n_resumed = len(z_all)
-        elapsed0 = saved["elapsed"]
-    else:
-        z_all, lp_all, bl_all, acc_all, failures, evaluations, n_resumed = [], [], [], [], {}, 0, 0
-        elapsed0 = 0.0
+    z_all, lp_all, bl_all, acc_all, failures, evaluations, n_resumed, elapsed0 = _resumed(saved, spec.steps)
 
     backend, nw = choose_backend(workers, dask_address)
     if spec.sampler == "imh":
@@ -908,22 +944,7 @@ def run_posterior(scenario_data: dict | Scenario, spec: PosteriorSpec | dict | N
             nw = pool.workers if backend == "dask" else nw
             move = emcee.moves.StretchMove() if spec.move == "stretch" else emcee.moves.DEMove()
             sampler = emcee.EnsembleSampler(spec.walkers, ndim, problem.log_prob, pool=pool, moves=move)
-            if saved is not None and n_resumed > 0 and len(z_all) == saved["z"].shape[0]:
-                last_blobs = saved["blobs"][-1]
-                if last_blobs.ndim == 2 and last_blobs.shape[1] == 1:  # as emcee holds a single blob
-                    last_blobs = last_blobs[:, 0]
-                state = emcee.State(saved["z"][-1], log_prob=saved["log_prob"][-1], blobs=last_blobs,
-                                    random_state=saved["rstate"])
-                acc0 = saved["accepted"][-1].astype(float)
-            elif saved is not None and n_resumed > 0:  # fewer steps asked for than the file holds: nothing to run
-                state, acc0 = None, None
-            else:
-                start_coords = _initial_ball(problem, z0, spec)
-                state = emcee.State(start_coords,
-                                    random_state=np.random.RandomState(
-                                        child_seed(spec.seed, 2).generate_state(4)
-                                    ).get_state())
-                acc0 = np.zeros(spec.walkers)
+            state, acc0 = _emcee_state(saved, n_resumed, z_all, problem, z0, spec)
             if state is not None:
                 since = 0
                 for st in sampler.sample(state, iterations=todo, store=True, skip_initial_state_check=True):

@@ -356,6 +356,40 @@ def solve_arrays(S: ImpactStructure, A: ImpactArrays, *, condition: bool = False
     return {k: np.concatenate([p[k] for p in parts], axis=0) for k in parts[0]}
 
 
+def _tangential_solve(S: ImpactStructure, A: ImpactArrays, Mat, rhs, lam_ns, ok, Ms, cond1, mu_max, u0):
+    """The ``ratio``, ``fraction`` and ``friction`` laws of :func:`_solve_chunk`: the items whose answer is
+    not the no-slide one solved again with P_t = mu P_n. Returns ``(lam, ok, Ms, cond1, sliding)``."""
+    B = lam_ns.shape[0]
+    if S.tangential == "ratio":
+        mu_used = A.law_value.copy()
+        redo = np.ones(B, dtype=bool)
+    elif S.tangential == "fraction":  # mu follows this impact's mu_max (NaN where it is unknown)
+        mu_used = A.law_value * mu_max
+        redo = np.ones(B, dtype=bool)
+    else:  # friction: keep the no-slide answer where |mu_max| <= f (Eq. 8)
+        stoppable = ok & (lam_ns[:, 0] > 0) & (np.abs(mu_max) <= MU_MAX_LIMIT)
+        redo = ~(stoppable & (np.abs(mu_max) <= A.law_value))
+        mu_used = A.law_value * np.where(stoppable, np.sign(mu_max), -np.sign(u0[:, 1]))
+    lam = lam_ns.copy()
+    if np.any(redo):
+        idx = np.nonzero(redo)[0]
+        Mr = Mat[idx].copy()
+        rr = rhs[idx].copy()
+        Mr[:, 1, :] = 0.0
+        Mr[:, 1, 1] = 1.0
+        Mr[:, 1, 0] = -mu_used[idx]
+        rr[:, 1] = 0.0
+        lam_r, ok_r, Ms_r, cond_r = _solve(Mr, rr)
+        lam[idx] = lam_r
+        ok[idx] = ok_r  # the answer rests on this solve alone
+        Ms = Ms.copy()
+        Ms[idx] = Ms_r
+        cond1 = cond1.copy()
+        cond1[idx] = cond_r
+    sliding = redo.copy()
+    return lam, ok, Ms, cond1, sliding
+
+
 def _solve_chunk(S: ImpactStructure, A: ImpactArrays, condition: bool) -> dict[str, np.ndarray]:
     """Solve a batch of impacts.
 
@@ -432,33 +466,7 @@ def _solve_chunk(S: ImpactStructure, A: ImpactArrays, condition: bool) -> dict[s
         lam = lam_ns
         sliding = np.zeros(B, dtype=bool)
     else:
-        if S.tangential == "ratio":
-            mu_used = A.law_value.copy()
-            redo = np.ones(B, dtype=bool)
-        elif S.tangential == "fraction":  # mu follows this impact's mu_max (NaN where it is unknown)
-            mu_used = A.law_value * mu_max
-            redo = np.ones(B, dtype=bool)
-        else:  # friction: keep the no-slide answer where |mu_max| <= f (Eq. 8)
-            stoppable = ok & (lam_ns[:, 0] > 0) & (np.abs(mu_max) <= MU_MAX_LIMIT)
-            redo = ~(stoppable & (np.abs(mu_max) <= A.law_value))
-            mu_used = A.law_value * np.where(stoppable, np.sign(mu_max), -np.sign(u0[:, 1]))
-        lam = lam_ns.copy()
-        if np.any(redo):
-            idx = np.nonzero(redo)[0]
-            Mr = Mat[idx].copy()
-            rr = rhs[idx].copy()
-            Mr[:, 1, :] = 0.0
-            Mr[:, 1, 1] = 1.0
-            Mr[:, 1, 0] = -mu_used[idx]
-            rr[:, 1] = 0.0
-            lam_r, ok_r, Ms_r, cond_r = _solve(Mr, rr)
-            lam[idx] = lam_r
-            ok[idx] = ok_r  # the answer rests on this solve alone
-            Ms = Ms.copy()
-            Ms[idx] = Ms_r
-            cond1 = cond1.copy()
-            cond1[idx] = cond_r
-        sliding = redo.copy()
+        lam, ok, Ms, cond1, sliding = _tangential_solve(S, A, Mat, rhs, lam_ns, ok, Ms, cond1, mu_max, u0)
 
     lam = np.where(ok[:, None], lam, np.nan)  # an untrustworthy solve gives no numbers, not garbage
     dq = minv * (p_ext + np.einsum("bkni,bk->bni", J, lam))

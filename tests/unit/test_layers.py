@@ -209,7 +209,6 @@ LONG_MODULES: dict[str, int] = {}
 LONG_FUNCTIONS = {
     "crosscheck/pymunk_runout.py:simulate_runout_pymunk": 230,
     "motion/levels.py:_energy_runout": 214,
-    "motion/scene_model.py:SceneModel.__init__": 237,
 }
 
 

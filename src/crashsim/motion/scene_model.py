@@ -116,6 +116,38 @@ class Pair:
         return f"{self.a}|{self.b}"
 
 
+def _zone_arrays(road: Road):
+    """The friction zones as kernel arrays: ``(mu, edge pointer, edges (x0, y0, ex, ey, 1/len^2), boxes)``."""
+    zone_mu = np.array([z.mu for z in road.zones], dtype=float)
+    zone_ptr = np.zeros(len(road.zones) + 1, dtype=np.int64)
+    edges = []
+    for i, z in enumerate(road.zones):
+        x0, y0, ex, ey, inv = z._edge_arrays
+        edges.append(np.stack([x0, y0, ex, ey, inv], 1))
+        zone_ptr[i + 1] = zone_ptr[i] + len(x0)
+    edge_arr = np.ascontiguousarray(np.concatenate(edges, 0)) if edges else np.zeros((0, 5))
+    zone_box = np.array([[*np.min(z.vertices, 0), *np.max(z.vertices, 0)] for z in road.zones],
+                        dtype=float).reshape(-1, 4)
+    return zone_mu, zone_ptr, edge_arr, zone_box
+
+
+def _piece_arrays(pieces: list):
+    """The convex pieces as kernel arrays: ``(vertices, outward edge normals, pointer, (cx, cy, radius,
+    thickness) each)``."""
+    verts, normals, ptr, info = [], [], [0], []
+    for pc in pieces:
+        d = np.roll(pc, -1, axis=0) - pc
+        nrm = np.stack([d[:, 1], -d[:, 0]], 1) / np.hypot(d[:, 0], d[:, 1])[:, None]
+        verts.append(pc)
+        normals.append(nrm)
+        ptr.append(ptr[-1] + len(pc))
+        c = pc.mean(0)
+        info.append([c[0], c[1], float(np.max(np.hypot(*(pc - c).T))), piece_thickness(pc)])
+    pc_v = np.ascontiguousarray(np.concatenate(verts, 0)) if verts else np.zeros((0, 2))
+    pc_n = np.ascontiguousarray(np.concatenate(normals, 0)) if normals else np.zeros((0, 2))
+    return pc_v, pc_n, ptr, info
+
+
 class SceneModel:
     """The run-out of a scene as arrays (see the module docstring).
 
@@ -220,13 +252,7 @@ class SceneModel:
         #: Where the integration must stop and restart: the phase boundaries before t_max, then t_max.
         self.segment_stops = tuple(sorted({tc for tc in times[1:] if tc < options.t_max} | {options.t_max}))
 
-        phase_w = np.zeros((len(times), nw, k.N_P))
-        for v in self.vehicles:
-            lo, hi = self.wheel_range[v.name]
-            res = self.resolved[v.name]
-            # each phase takes the rows of the settings in force at its start (a kink's phase repeats them)
-            in_force = np.searchsorted([t for t, _ in res.phases], times, side="right") - 1
-            phase_w[:, lo:hi] = phase_rows(res)[in_force]
+        phase_w = self._phase_wheels(times, nw)
 
         # ---- bodies and hitches
         self.mass = np.array([b.mass for b in self.bodies], dtype=float)
@@ -236,45 +262,13 @@ class SceneModel:
         wheel = np.array([[s.position[0], s.position[1], n] for s, n in zip(self.specs, self.static_load)],
                          dtype=float).reshape(-1, 3)
         wbody = np.array([s.body_index for s in self.specs], dtype=np.int64)
-        hitch_rows, hbody = [], []
-        self.hitch_names = []
-        for v in (self.vehicles if hitches else ()):
-            lo, _ = self.body_range[v.name]
-            for j, h in enumerate(v.hitches):
-                hitch_rows.append([*h.front_point, *h.rear_point,
-                                   math.nan if h.articulation_limit is None else h.articulation_limit,
-                                   1.0 if h.yaw_locked else 0.0])
-                hbody.append([lo + j, lo + j + 1])
-                self.hitch_names.append((v.bodies[j].name, v.bodies[j + 1].name))
-        hitch = np.array(hitch_rows, dtype=float).reshape(-1, 6)
-        hbody = np.array(hbody, dtype=np.int64).reshape(-1, 2)
+        hitch, hbody, self.hitch_names = self._hitch_arrays(hitches)
         self.minv = np.concatenate([1 / self.mass, 1 / self.mass, 1 / self.inertia])
-        transfer = np.zeros((nw, 2 * nb))
-        if options.load_transfer:
-            for v in self.vehicles:
-                for i, b in enumerate(v.bodies):
-                    if b.cg_height is None:
-                        raise ScenarioError("load transfer needs the CG height of every body",
-                                            field=f"{b.name}.cg_height")
-                blo, bhi = self.body_range[v.name]
-                wlo, whi = self.wheel_range[v.name]
-                T = load_transfer_matrix(v, self.loads[v.name])  # (nw_v, 2 nb_v): (ax..., ay...)
-                nbv = bhi - blo
-                transfer[wlo:whi, blo:bhi] = T[:, :nbv]
-                transfer[wlo:whi, nb + blo:nb + bhi] = T[:, nbv:]
+        transfer = self._transfer_matrix(options, nb, nw)
         contact_lever = contact_levers(self.bodies, options.load_transfer)
 
         # ---- road and options
-        zone_mu = np.array([z.mu for z in road.zones], dtype=float)
-        zone_ptr = np.zeros(len(road.zones) + 1, dtype=np.int64)
-        edges = []
-        for i, z in enumerate(road.zones):
-            x0, y0, ex, ey, inv = z._edge_arrays
-            edges.append(np.stack([x0, y0, ex, ey, inv], 1))
-            zone_ptr[i + 1] = zone_ptr[i] + len(x0)
-        edge_arr = np.ascontiguousarray(np.concatenate(edges, 0)) if edges else np.zeros((0, 5))
-        zone_box = np.array([[*np.min(z.vertices, 0), *np.max(z.vertices, 0)] for z in road.zones],
-                            dtype=float).reshape(-1, 4)
+        zone_mu, zone_ptr, edge_arr, zone_box = _zone_arrays(road)
         cfg = np.zeros(k.N_CFG)
         cfg[k.C_EPS] = options.eps
         cfg[k.C_ALPHA2] = 2.0 * options.baumgarte_zeta * options.baumgarte_omega
@@ -304,9 +298,75 @@ class SceneModel:
         icfg[k.I_YAWLOCK] = int(np.count_nonzero(hitch[:, 5])) if nh else 0
         icfg[k.I_BRAKE] = 1 if self.air_brakes else 0
         icfg[k.I_CLOCK] = self.layout.clock_index if self.air_brakes else 0
-        tab = tuple(np.ascontiguousarray(a, dtype=float) for a in (scheme.A, scheme.B, scheme.C, scheme.E, scheme.P))
+        tab_a, tab_b, tab_c, tab_e, tab_p = (np.ascontiguousarray(a, dtype=float)
+                                             for a in (scheme.A, scheme.B, scheme.C, scheme.E, scheme.P))
 
         # ---- contact geometry
+        pieces, pc_body, pr_body, pr_ptr, pp, pr_par = self._contact_pairs(pair_contact)
+        pc_v, pc_n, ptr, info = _piece_arrays(pieces)
+        self.M = k.KernelModel(
+            body=body, wheel=wheel, wheel_body=wbody, hitch=np.ascontiguousarray(hitch), load_transfer=transfer,
+            inv_mass=self.minv, phase_times=self.phase_times, phase_wheels=phase_w,
+            zone_mu=zone_mu, zone_ptr=zone_ptr, zone_edges=edge_arr, cfg=cfg, icfg=icfg,
+            tab_a=tab_a, tab_b=tab_b, tab_c=tab_c, tab_e=tab_e, tab_p=tab_p, zone_box=zone_box,
+            body_vehicle=self.body_vehicle, hitch_body=hbody, piece_body=np.array(pc_body, dtype=np.int64),
+            piece_ptr=np.array(ptr, dtype=np.int64), piece_verts=pc_v, piece_normals=pc_n,
+            piece_info=np.array(info, dtype=float).reshape(-1, 4),
+            pair_body=np.array(pr_body, dtype=np.int64).reshape(-1, 2), pair_ptr=np.array(pr_ptr, dtype=np.int64),
+            piece_pairs=np.array(pp, dtype=np.int64).reshape(-1, 2),
+            pair_par=np.array(pr_par, dtype=float).reshape(-1, k.N_R), zone_slope=zone_slope, wheel_mass=wheel_mass,
+            wheel_brake=np.ascontiguousarray(wheel_brake), contact_lever=contact_lever)
+        self.n_bodies, self.n_wheels, self.n_hitches = nb, nw, nh
+
+    def _phase_wheels(self, times: list, nw: int) -> np.ndarray:
+        """Every wheel's kernel row in each phase (phases from ``times``, nw wheels): (n_phases, nw, N_P)."""
+        k = kernels()
+        phase_w = np.zeros((len(times), nw, k.N_P))
+        for v in self.vehicles:
+            lo, hi = self.wheel_range[v.name]
+            res = self.resolved[v.name]
+            # each phase takes the rows of the settings in force at its start (a kink's phase repeats them)
+            in_force = np.searchsorted([t for t, _ in res.phases], times, side="right") - 1
+            phase_w[:, lo:hi] = phase_rows(res)[in_force]
+        return phase_w
+
+    def _hitch_arrays(self, hitches: bool):
+        """The hitches' kernel rows (front point, rear point, articulation limit, yaw lock), their bodies'
+        indices and their (front, rear) body names; none without ``hitches``."""
+        hitch_rows, hbody, hitch_names = [], [], []
+        for v in (self.vehicles if hitches else ()):
+            lo, _ = self.body_range[v.name]
+            for j, h in enumerate(v.hitches):
+                hitch_rows.append([*h.front_point, *h.rear_point,
+                                   math.nan if h.articulation_limit is None else h.articulation_limit,
+                                   1.0 if h.yaw_locked else 0.0])
+                hbody.append([lo + j, lo + j + 1])
+                hitch_names.append((v.bodies[j].name, v.bodies[j + 1].name))
+        hitch = np.array(hitch_rows, dtype=float).reshape(-1, 6)
+        hbody = np.array(hbody, dtype=np.int64).reshape(-1, 2)
+        return hitch, hbody, hitch_names
+
+    def _transfer_matrix(self, options: RunoutOptions, nb: int, nw: int) -> np.ndarray:
+        """Each wheel's load change per body acceleration (nw, 2 nb): (ax..., ay...); zero without load transfer."""
+        transfer = np.zeros((nw, 2 * nb))
+        if options.load_transfer:
+            for v in self.vehicles:
+                for i, b in enumerate(v.bodies):
+                    if b.cg_height is None:
+                        raise ScenarioError("load transfer needs the CG height of every body",
+                                            field=f"{b.name}.cg_height")
+                blo, bhi = self.body_range[v.name]
+                wlo, whi = self.wheel_range[v.name]
+                T = load_transfer_matrix(v, self.loads[v.name])  # (nw_v, 2 nb_v): (ax..., ay...)
+                nbv = bhi - blo
+                transfer[wlo:whi, blo:bhi] = T[:, :nbv]
+                transfer[wlo:whi, nb + blo:nb + bhi] = T[:, nbv:]
+        return transfer
+
+    def _contact_pairs(self, pair_contact: Mapping | None):
+        """The convex pieces of every body's outline and of the obstacles, and the pairs that can touch
+        (bodies of different vehicles, a body and an obstacle; sets ``self.pairs``): ``(pieces, their bodies
+        (-1: an obstacle), the pairs' bodies, piece-pair pointer, piece pairs, the pairs' kernel rows)``."""
         pieces, pc_body = [], []
         body_pieces: dict[int, list[int]] = {}
         for i, b in enumerate(self.bodies):
@@ -352,31 +412,7 @@ class SceneModel:
                          self._pair_model(ia, ib, None, overrides))
             for ob in self.obstacles:
                 add_pair(ia, obstacle_pieces[ob.name], -1, ob.name, True, self._pair_model(ia, None, ob, overrides))
-        verts, normals, ptr, info = [], [], [0], []
-        for pc in pieces:
-            d = np.roll(pc, -1, axis=0) - pc
-            nrm = np.stack([d[:, 1], -d[:, 0]], 1) / np.hypot(d[:, 0], d[:, 1])[:, None]
-            verts.append(pc)
-            normals.append(nrm)
-            ptr.append(ptr[-1] + len(pc))
-            c = pc.mean(0)
-            info.append([c[0], c[1], float(np.max(np.hypot(*(pc - c).T))), piece_thickness(pc)])
-        pc_v = np.ascontiguousarray(np.concatenate(verts, 0)) if verts else np.zeros((0, 2))
-        pc_n = np.ascontiguousarray(np.concatenate(normals, 0)) if normals else np.zeros((0, 2))
-        tab_a, tab_b, tab_c, tab_e, tab_p = tab
-        self.M = k.KernelModel(
-            body=body, wheel=wheel, wheel_body=wbody, hitch=np.ascontiguousarray(hitch), load_transfer=transfer,
-            inv_mass=self.minv, phase_times=self.phase_times, phase_wheels=phase_w,
-            zone_mu=zone_mu, zone_ptr=zone_ptr, zone_edges=edge_arr, cfg=cfg, icfg=icfg,
-            tab_a=tab_a, tab_b=tab_b, tab_c=tab_c, tab_e=tab_e, tab_p=tab_p, zone_box=zone_box,
-            body_vehicle=self.body_vehicle, hitch_body=hbody, piece_body=np.array(pc_body, dtype=np.int64),
-            piece_ptr=np.array(ptr, dtype=np.int64), piece_verts=pc_v, piece_normals=pc_n,
-            piece_info=np.array(info, dtype=float).reshape(-1, 4),
-            pair_body=np.array(pr_body, dtype=np.int64).reshape(-1, 2), pair_ptr=np.array(pr_ptr, dtype=np.int64),
-            piece_pairs=np.array(pp, dtype=np.int64).reshape(-1, 2),
-            pair_par=np.array(pr_par, dtype=float).reshape(-1, k.N_R), zone_slope=zone_slope, wheel_mass=wheel_mass,
-            wheel_brake=np.ascontiguousarray(wheel_brake), contact_lever=contact_lever)
-        self.n_bodies, self.n_wheels, self.n_hitches = nb, nw, nh
+        return pieces, pc_body, pr_body, pr_ptr, pp, pr_par
 
     def with_road(self, road: Road) -> "SceneModel":
         """This model on another road with the same friction zones (objects): only its friction

@@ -208,7 +208,6 @@ VERBS = ("reconstruct/fit.py", "reconstruct/montecarlo.py", "reconstruct/posteri
 LONG_MODULES: dict[str, int] = {}
 LONG_FUNCTIONS = {
     "crosscheck/pymunk_runout.py:simulate_runout_pymunk": 230,
-    "motion/levels.py:_energy_runout": 214,
 }
 
 

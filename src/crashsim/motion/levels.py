@@ -342,13 +342,96 @@ def _drag_factors(settings, mu_road: float, beta: np.ndarray, air=None, load=Non
     return out
 
 
-def _energy_runout(
-    vehicle: Vehicle,
-    initial: Mapping[str, BodyState],
-    wheels: WheelSettings | None,
-    road: Road,
-    options: RunoutOptions = RunoutOptions(),
-) -> RunoutResult:
+def _wheel_tracks(model: RunoutModel, road: Road, settings, Y: np.ndarray, N: np.ndarray, times: np.ndarray,
+                  opts: RunoutOptions):
+    """The energy level's wheel tracks at its sampled kinematic states ``Y``: every wheel's contact point,
+    its sliding flag (the tyre model at those states), its path and sliding lengths:
+    ``(points (n_wheels, K, 2), sliding (n_wheels, K), path_length, sliding_length)``."""
+    L = model.layout
+    psi_b = Y[L.psi][model.wheel_body]  # (n_wheels, K)
+    c, sn = np.cos(psi_b), np.sin(psi_b)
+    rho = np.array([sp.position for sp in model.specs])
+    bx = Y[L.x][model.wheel_body]
+    by = Y[L.y][model.wheel_body]
+    wx = bx + c * rho[:, 0:1] - sn * rho[:, 1:2]
+    wy = by + sn * rho[:, 0:1] + c * rho[:, 1:2]
+    wz = Y[L.w][model.wheel_body]
+    cvx = Y[L.vx][model.wheel_body] - wz * (wy - by)
+    cvy = Y[L.vy][model.wheel_body] + wz * (wx - bx)
+    heading_k = psi_b + np.array([s.steer for s in settings])[:, None]
+    ch, sh = np.cos(heading_k), np.sin(heading_k)
+    u_k = ch * cvx + sh * cvy
+    w_k = -sh * cvx + ch * cvy
+    mu_k = road.mu_at(np.stack([wx.ravel(), wy.ravel()], 1)).reshape(wx.shape) * np.array(
+        [s.mu_factor for s in settings]
+    )[:, None]
+    c_alpha = np.array(
+        [(s.cornering_stiffness or 0.0) * sp.tyres + (s.cornering_coefficient or 0.0) * n
+         for s, sp, n in zip(settings, model.specs, N)]
+    )[:, None]
+    _, _, sliding = tyre_forces(
+        u_k, w_k, N[:, None], mu_k, np.array([s.is_sliding for s in settings])[:, None],
+        np.array([s.brake for s in settings])[:, None], c_alpha,
+        np.array([s.rolling_resistance or 0.0 for s in settings])[:, None], opts.eps, opts.lateral_model,
+    )
+    sliding = np.array(sliding, dtype=bool)
+    points = np.stack([wx, wy], axis=-1)  # (n_wheels, K, 2)
+    path_length, sliding_length = np.zeros(len(N)), np.zeros(len(N))
+    if times.size > 1:
+        seglen = np.hypot(*np.diff(points, axis=1).transpose(2, 0, 1))  # (n_wheels, K - 1)
+        for k in range(len(N)):
+            path_length[k] = float(seglen[k].sum())
+            sliding_length[k] = float(np.sum(seglen[k] * sliding[k, :-1]))
+    return points, sliding, path_length, sliding_length
+
+
+def _rigid_samples(motion, t_end: float, dt_s: float, nb: int, L):
+    """The energy level's states every ``dt_s`` to ``t_end`` and at it, the end state, and each body's CG
+    path length (its speed integrated by the trapezoid rule on a fine grid): ``(times, Y, y_end, distance)``."""
+    times = np.arange(0.0, t_end, dt_s) if t_end > 0 else np.zeros(0)
+    times = np.concatenate([times, [t_end]]) if (times.size == 0 or times[-1] < t_end) else times
+    Y = motion.state(times)
+    y_end = motion.state(t_end)
+    # CG path length of every body: integrate its speed (trapezoid on a fine grid)
+    distance = np.zeros(nb)
+    if t_end > 0:
+        fine = np.linspace(0.0, t_end, 2001)
+        yf = motion.state(fine)
+        for i in range(nb):
+            distance[i] = float(np.trapezoid(np.hypot(yf[L.vx][i], yf[L.vy][i]), fine))
+    return times, Y, y_end, distance
+
+
+def _energy_events(name: str, nb: int, status: str, t_max: float, t_end: float, slide: tuple, turn: tuple,
+                   scheduled: bool, air: bool, lock_loss: float):
+    """The energy level's message and events: the articulation frozen (with the energy that removes), then
+    rest or the time limit, with what the hand calculation ignores (``slide``: distance [m] and time [s];
+    ``turn``: rotation [rad] and time [s]). Returns ``(message, events)``."""
+    s, t_trans = slide
+    dpsi_total, t_rot = turn
+    notes = []
+    if scheduled:
+        notes.append("scheduled wheel changes ignored (wheel settings at separation used)")
+    if air:
+        notes.append("air brakes at full application from separation (their timing and release ignored)")
+    if status == "rest":
+        message = (f"energy model: slide {s:.4g} m in {t_trans:.4g} s, rotation {math.degrees(dpsi_total):.4g} deg in "
+                   f"{t_rot:.4g} s")
+    else:
+        message = f"energy model: no rest before t_max = {t_max} s (zero or too small drag)"
+    if notes:
+        message += "; " + "; ".join(notes)
+        _log.warning("energy run-out of %s: %s", name, "; ".join(notes))
+    events = []
+    if nb > 1:
+        events.append(RunoutEvent(0.0, "lock", "articulation frozen (rigid vehicle) by a plastic hitch impulse",
+                                  energy=lock_loss))
+    events.append(RunoutEvent(t_end, status, message))
+    return message, events
+
+
+def _energy_runout(vehicle: Vehicle, initial: Mapping[str, BodyState], wheels: WheelSettings | None, road: Road,
+                   options: RunoutOptions = RunoutOptions()) -> RunoutResult:
     """Level ``"energy"``: the work-energy hand calculation (see the module docstring).
 
     Returns
@@ -481,74 +564,12 @@ def _energy_runout(
     motion = _RigidMotion(L, pos, rel0, psi0, u, pieces, w_c, alpha, t_rot, t_end)
 
     # ---- samples, tracks and energies
-    dt_s = opts.sample_dt
-    times = np.arange(0.0, t_end, dt_s) if t_end > 0 else np.zeros(0)
-    times = np.concatenate([times, [t_end]]) if (times.size == 0 or times[-1] < t_end) else times
-    Y = motion.state(times)
-    y_end = motion.state(t_end)
-    # CG path length of every body: integrate its speed (trapezoid on a fine grid)
-    distance = np.zeros(nb)
-    if t_end > 0:
-        fine = np.linspace(0.0, t_end, 2001)
-        yf = motion.state(fine)
-        for i in range(nb):
-            distance[i] = float(np.trapezoid(np.hypot(yf[L.vx][i], yf[L.vy][i]), fine))
-
-    # wheel positions and sliding flags (tyre model at the kinematic states)
-    psi_b = Y[L.psi][model.wheel_body]  # (n_wheels, K)
-    c, sn = np.cos(psi_b), np.sin(psi_b)
-    rho = np.array([sp.position for sp in model.specs])
-    bx = Y[L.x][model.wheel_body]
-    by = Y[L.y][model.wheel_body]
-    wx = bx + c * rho[:, 0:1] - sn * rho[:, 1:2]
-    wy = by + sn * rho[:, 0:1] + c * rho[:, 1:2]
-    wz = Y[L.w][model.wheel_body]
-    cvx = Y[L.vx][model.wheel_body] - wz * (wy - by)
-    cvy = Y[L.vy][model.wheel_body] + wz * (wx - bx)
-    heading_k = psi_b + np.array([s.steer for s in settings])[:, None]
-    ch, sh = np.cos(heading_k), np.sin(heading_k)
-    u_k = ch * cvx + sh * cvy
-    w_k = -sh * cvx + ch * cvy
-    mu_k = road.mu_at(np.stack([wx.ravel(), wy.ravel()], 1)).reshape(wx.shape) * np.array(
-        [s.mu_factor for s in settings]
-    )[:, None]
-    c_alpha = np.array(
-        [(s.cornering_stiffness or 0.0) * sp.tyres + (s.cornering_coefficient or 0.0) * n
-         for s, sp, n in zip(settings, model.specs, N)]
-    )[:, None]
-    _, _, sliding = tyre_forces(
-        u_k, w_k, N[:, None], mu_k, np.array([s.is_sliding for s in settings])[:, None],
-        np.array([s.brake for s in settings])[:, None], c_alpha,
-        np.array([s.rolling_resistance or 0.0 for s in settings])[:, None], opts.eps, opts.lateral_model,
-    )
-    sliding = np.array(sliding, dtype=bool)
+    times, Y, y_end, distance = _rigid_samples(motion, t_end, opts.sample_dt, nb, L)
+    points, sliding, path_length, sliding_length = _wheel_tracks(model, road, settings, Y, N, times, opts)
     energy = wheel_trans_work + wheel_rot_work
-    points = np.stack([wx, wy], axis=-1)  # (n_wheels, K, 2)
-    path_length, sliding_length = np.zeros(len(N)), np.zeros(len(N))
-    if times.size > 1:
-        seglen = np.hypot(*np.diff(points, axis=1).transpose(2, 0, 1))  # (n_wheels, K - 1)
-        for k in range(len(N)):
-            path_length[k] = float(seglen[k].sum())
-            sliding_length[k] = float(np.sum(seglen[k] * sliding[k, :-1]))
 
-    notes = []
-    if scheduled:
-        notes.append("scheduled wheel changes ignored (wheel settings at separation used)")
-    if air is not None:
-        notes.append("air brakes at full application from separation (their timing and release ignored)")
-    if status == "rest":
-        message = (f"energy model: slide {s:.4g} m in {t_trans:.4g} s, rotation {math.degrees(dpsi_total):.4g} deg in "
-                   f"{t_rot:.4g} s")
-    else:
-        message = f"energy model: no rest before t_max = {opts.t_max} s (zero or too small drag)"
-    if notes:
-        message += "; " + "; ".join(notes)
-        _log.warning("energy run-out of %s: %s", vehicle.name, "; ".join(notes))
-    events = []
-    if nb > 1:
-        events.append(RunoutEvent(0.0, "lock", "articulation frozen (rigid vehicle) by a plastic hitch impulse",
-                                  energy=lock_loss))
-    events.append(RunoutEvent(t_end, status, message))
+    message, events = _energy_events(vehicle.name, nb, status, opts.t_max, t_end, (s, t_trans), (dpsi_total, t_rot),
+                                     scheduled, air is not None, lock_loss)
     return build_result(model, ResultInputs(
         t=times, Y=Y, points=points, sliding=sliding, load=np.repeat(N[:, None], times.size, axis=1),
         hitch_force=np.full((times.size, 2 * (nb - 1)), np.nan), stop_moment=np.zeros((times.size, nb - 1)),

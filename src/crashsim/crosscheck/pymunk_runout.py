@@ -62,43 +62,10 @@ class _LinearHistory:
         return out[:, 0] if tq_arr.ndim == 0 else out.reshape((self.Y.shape[0],) + tq_arr.shape)
 
 
-def simulate_runout_pymunk(
-    vehicle: Vehicle,
-    initial: Mapping[str, BodyState],
-    wheels: WheelSettings | None,
-    road: Road,
-    *,
-    dt: float = 1e-3,
-    t_max: float | None = None,
-    options: RunoutOptions = RunoutOptions(),
-    record_every: int = 1,
-) -> RunoutResult:
-    """Integrate the run-out with pymunk at a fixed step (cross-check of :func:`~crashsim.motion.simulate_runout`).
-
-    Parameters
-    ----------
-    vehicle, initial, wheels, road
-        As for :func:`~crashsim.motion.simulate_runout`.
-    dt : float
-        Fixed time step [s], in (0, 0.01].
-    t_max : float, optional
-        Time limit [s]; default ``options.t_max``.
-    options : RunoutOptions
-        Supplies ``eps``, ``v_stop`` (same rest criterion, checked after every step),
-        ``lateral_model`` and ``sample_dt``-independent settings; solver settings are unused.
-        ``load_transfer`` is not supported.
-    record_every : int
-        Record every n-th step in the history (all steps enter the path integrals).
-
-    Returns
-    -------
-    RunoutResult
-        Same structure as the SciPy result; ``method`` is ``"pymunk/dt=..."``, ``nfev`` the
-        number of steps, ``sol`` a linear interpolation of the recorded states, hitch forces
-        from the bodies' momentum change per step, stop moments not reported (zero).
-    """
-    import pymunk  # lazy: only the cross-check needs it
-
+def _checked(vehicle: Vehicle, wheels: WheelSettings | None, road: Road, dt: float, t_max: float | None,
+             options: RunoutOptions):
+    """The step and the time limit, checked (a step too coarse for ``eps`` and ``v_stop`` makes friction
+    chatter), and the vehicle's model: ``(dt, t_max, model)``."""
     dt = float(dt)
     if not (0 < dt <= 0.01):
         raise ScenarioError(f"must lie in (0, 0.01] s, got {dt!r}", field="dt")
@@ -117,10 +84,13 @@ def simulate_runout_pymunk(
             f"unless eps >= mu g dt = {chatter:.3g} m/s and v_stop >= 2 mu g dt = {2 * chatter:.3g} m/s",
             field="dt",
         )
-    L = model.layout
-    y = L.pack(initial)
-    check_scene_hitches(model.scene, y)
-    y_initial = y.copy()
+    return dt, t_max, model
+
+
+def _space(vehicle: Vehicle, y: np.ndarray, L):
+    """A pymunk space with the vehicle's bodies at the state ``y`` and its hitches as pivot joints (with
+    their articulation stops, and a gear joint at a yaw-locked hitch): ``(space, bodies)``."""
+    import pymunk  # lazy: only the cross-check needs it
 
     space = pymunk.Space()
     space.gravity = (0.0, 0.0)
@@ -148,6 +118,78 @@ def simulate_runout_pymunk(
             lock = pymunk.GearJoint(bodies[j], bodies[j + 1], 0.0, 1.0)
             lock.collide_bodies = False
             space.add(lock)
+    return space, bodies
+
+
+def _chunks(rec_seg: list, t_arr: np.ndarray, Y: np.ndarray, quad_y: list, quad_seg: list, dt: float):
+    """The recorded states and the steps' states cut where the segment changes: the sample and
+    quadrature chunks of :func:`crashsim.motion.postprocess.chunk_inputs` (each step weighs ``dt``)."""
+    samples = []
+    start = 0
+    for k in range(1, len(rec_seg) + 1):
+        if k == len(rec_seg) or rec_seg[k] is not rec_seg[start]:
+            samples.append((rec_seg[start], t_arr[start:k], Y[:, start:k]))
+            start = k
+    quadrature = []
+    if quad_y:
+        QY = np.array(quad_y).T
+        start = 0
+        for k in range(1, len(quad_seg) + 1):
+            if k == len(quad_seg) or quad_seg[k] is not quad_seg[start]:
+                quadrature.append((quad_seg[start], np.full(k - start, dt), QY[:, start:k]))
+                start = k
+    return samples, quadrature
+
+
+def _hitch_forces(f: np.ndarray, y_prev: np.ndarray, y_new: np.ndarray, masses: np.ndarray, nh: int, nb: int, L,
+                  dt: float) -> np.ndarray:
+    """Each hitch's force on its front body over a step, from the bodies' momentum change (front to rear:
+    m dv/dt = F_tyre + lam_rear - lam_front), (2 nh,)."""
+    hitch = np.zeros(2 * nh)
+    carried = np.zeros(2)
+    for j in range(nh):
+        dv = np.array([y_new[L.vx][j] - y_prev[L.vx][j], y_new[L.vy][j] - y_prev[L.vy][j]]) / dt
+        carried = masses[j] * dv - np.array([f[j], f[nb + j]]) + carried
+        hitch[2 * j : 2 * j + 2] = carried
+    return hitch
+
+
+def simulate_runout_pymunk(vehicle: Vehicle, initial: Mapping[str, BodyState], wheels: WheelSettings | None, road: Road,
+                           *, dt: float = 1e-3, t_max: float | None = None, options: RunoutOptions = RunoutOptions(),
+                           record_every: int = 1) -> RunoutResult:
+    """Integrate the run-out with pymunk at a fixed step (cross-check of :func:`~crashsim.motion.simulate_runout`).
+
+    Parameters
+    ----------
+    vehicle, initial, wheels, road
+        As for :func:`~crashsim.motion.simulate_runout`.
+    dt : float
+        Fixed time step [s], in (0, 0.01].
+    t_max : float, optional
+        Time limit [s]; default ``options.t_max``.
+    options : RunoutOptions
+        Supplies ``eps``, ``v_stop`` (same rest criterion, checked after every step),
+        ``lateral_model`` and ``sample_dt``-independent settings; solver settings are unused.
+        ``load_transfer`` is not supported.
+    record_every : int
+        Record every n-th step in the history (all steps enter the path integrals).
+
+    Returns
+    -------
+    RunoutResult
+        Same structure as the SciPy result; ``method`` is ``"pymunk/dt=..."``, ``nfev`` the
+        number of steps, ``sol`` a linear interpolation of the recorded states, hitch forces
+        from the bodies' momentum change per step, stop moments not reported (zero).
+    """
+    import pymunk  # lazy: only the cross-check needs it
+
+    dt, t_max, model = _checked(vehicle, wheels, road, dt, t_max, options)
+    L = model.layout
+    y = L.pack(initial)
+    check_scene_hitches(model.scene, y)
+    y_initial = y.copy()
+
+    space, bodies = _space(vehicle, y, L)
 
     def read_state() -> np.ndarray:
         out = np.empty(L.size)
@@ -241,13 +283,7 @@ def simulate_runout_pymunk(
             status, message = "solver_failure", f"pymunk state not finite at t = {t:.6g} s"
             break
         # hitch forces from each body's momentum change: m dv/dt = F_tyre + lam_rear - lam_front
-        f = state["forces"]
-        hitch = np.zeros(2 * model.n_hitches)
-        carried = np.zeros(2)
-        for j in range(model.n_hitches):
-            dv = np.array([y_new[L.vx][j] - y_prev[L.vx][j], y_new[L.vy][j] - y_prev[L.vy][j]]) / dt
-            carried = masses[j] * dv - np.array([f[j], f[nb + j]]) + carried
-            hitch[2 * j : 2 * j + 2] = carried
+        hitch = _hitch_forces(state["forces"], y_prev, y_new, masses, model.n_hitches, nb, L, dt)
         y_prev = y_new
         if step % record_every == 0 or model.rest_measure(y_new) <= options.v_stop:
             rec_t.append(t)
@@ -259,36 +295,9 @@ def simulate_runout_pymunk(
 
     t_arr = np.array(rec_t)
     Y = np.array(rec_y).T
-    samples = []
-    start = 0
-    for k in range(1, len(rec_seg) + 1):
-        if k == len(rec_seg) or rec_seg[k] is not rec_seg[start]:
-            samples.append((rec_seg[start], t_arr[start:k], Y[:, start:k]))
-            start = k
-    quadrature = []
-    if quad_y:
-        QY = np.array(quad_y).T
-        start = 0
-        for k in range(1, len(quad_seg) + 1):
-            if k == len(quad_seg) or quad_seg[k] is not quad_seg[start]:
-                quadrature.append((quad_seg[start], np.full(k - start, dt), QY[:, start:k]))
-                start = k
+    samples, quadrature = _chunks(rec_seg, t_arr, Y, quad_y, quad_seg, dt)
     events = [RunoutEvent(t, status, message)]
     return build_result(model, chunk_inputs(
-        model,
-        samples=samples,
-        quadrature=quadrature,
-        status=status,
-        message=message,
-        t_end=t,
-        y_initial=y_initial,
-        y_final=y_prev,
-        sol=_LinearHistory(t_arr, Y),
-        events=events,
-        nfev=step,
-        njev=0,
-        nlu=0,
-        n_segments=1,
-        method=f"pymunk/dt={dt:g}",
-        hitch_force=np.array(rec_hitch),
-    ))
+        model, samples=samples, quadrature=quadrature, status=status, message=message, t_end=t, y_initial=y_initial,
+        y_final=y_prev, sol=_LinearHistory(t_arr, Y), events=events, nfev=step, njev=0, nlu=0, n_segments=1,
+        method=f"pymunk/dt={dt:g}", hitch_force=np.array(rec_hitch)))

@@ -111,6 +111,8 @@ def _add_inverse_commands(sub):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``crashsim`` parser: ``--version`` and one subcommand per command (``args.command`` names it;
+    :data:`crashsim.cli.COMMANDS` holds the function that runs each)."""
     p = argparse.ArgumentParser(prog="crashsim", description="Reconstruct collisions of articulated vehicles.")
 
     p.add_argument("--version", action="version", version=f"crashsim {__version__}")

@@ -143,3 +143,16 @@ def test_a_refused_scene_file_loads_no_engine(tmp_path, command, extra):
     if command not in ("plot", "animate"):
         assert not any(m.split(".")[0] == "matplotlib" for m in loaded)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad_key.toml"]
+
+
+def test_every_command_of_the_parser_has_its_function():
+    """The parser (crashsim.cli_parser) names the commands; crashsim.cli.COMMANDS runs them: the two
+    lists are the same, so that no command parses and then has nothing to run."""
+    import argparse
+
+    from crashsim import cli
+    from crashsim.cli_parser import build_parser
+
+    sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
+    assert sorted(sub.choices) == sorted(cli.COMMANDS)
+    assert all(callable(f) for f in cli.COMMANDS.values())

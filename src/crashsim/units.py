@@ -52,11 +52,11 @@ import enum
 import functools
 import json
 import math
+import os
 import re
 import threading
 from collections.abc import Sequence
 from dataclasses import dataclass
-from importlib.resources import files
 from typing import TYPE_CHECKING, Literal
 
 from crashsim.errors import ScenarioError
@@ -339,15 +339,16 @@ def _dims_noun(unit: pint.Unit) -> str:
     return f"of dimension {unit.dimensionality}{angle}"
 
 
-#: The shipped table of SI factors (``data/unit_factors.json``, :func:`factor_table`), read on first use.
-_FACTORS: dict[str, float] | None = None
+@functools.cache
+def _factors() -> dict[str, float]:
+    """The shipped table (``data/unit_factors.json``, :func:`factor_table`), read once, found beside this module."""
+    with open(os.path.join(os.path.dirname(__file__), "data", "unit_factors.json"), encoding="utf-8") as fh:
+        return json.load(fh)
 
 
 def _shipped_factor(unit: str, kind: Kind) -> float | None:
     """The shipped SI factor of ``unit`` read as ``kind`` (None if the table does not hold it)."""
-    global _FACTORS
-    _FACTORS = _FACTORS or json.loads(files("crashsim").joinpath("data/unit_factors.json").read_text(encoding="utf-8"))
-    return _FACTORS.get(f"{kind.value}|{unit}")
+    return _factors().get(f"{kind.value}|{unit}")
 
 
 def factor_table() -> dict[str, float]:

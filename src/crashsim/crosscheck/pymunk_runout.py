@@ -141,10 +141,11 @@ def _chunks(rec_seg: list, t_arr: np.ndarray, Y: np.ndarray, quad_y: list, quad_
     return samples, quadrature
 
 
-def _hitch_forces(f: np.ndarray, y_prev: np.ndarray, y_new: np.ndarray, masses: np.ndarray, nh: int, nb: int, L,
+def _hitch_forces(f: np.ndarray, y_prev: np.ndarray, y_new: np.ndarray, masses: np.ndarray, nh: int, L,
                   dt: float) -> np.ndarray:
     """Each hitch's force on its front body over a step, from the bodies' momentum change (front to rear:
     m dv/dt = F_tyre + lam_rear - lam_front), (2 nh,)."""
+    nb = L.n_bodies
     hitch = np.zeros(2 * nh)
     carried = np.zeros(2)
     for j in range(nh):
@@ -283,7 +284,7 @@ def simulate_runout_pymunk(vehicle: Vehicle, initial: Mapping[str, BodyState], w
             status, message = "solver_failure", f"pymunk state not finite at t = {t:.6g} s"
             break
         # hitch forces from each body's momentum change: m dv/dt = F_tyre + lam_rear - lam_front
-        hitch = _hitch_forces(state["forces"], y_prev, y_new, masses, model.n_hitches, nb, L, dt)
+        hitch = _hitch_forces(state["forces"], y_prev, y_new, masses, model.n_hitches, L, dt)
         y_prev = y_new
         if step % record_every == 0 or model.rest_measure(y_new) <= options.v_stop:
             rec_t.append(t)

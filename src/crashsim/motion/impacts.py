@@ -106,13 +106,14 @@ def _body_impacts(model: SceneModel, y: np.ndarray, pair, bodies: list, cols: li
     return delta_v, impacts
 
 
-def _point_rows(model: SceneModel, rows: np.ndarray, pair_of: np.ndarray, y: np.ndarray, D, col: dict, nd: int):
+def _point_rows(model: SceneModel, rows: np.ndarray, pair_of: np.ndarray, y: np.ndarray, D, col: dict):
     """The complementarity problem's rows of an instant's touching points: the normal and tangential
-    Jacobians over the ``nd`` bodies' velocities (``col``: a body's column), and each point's restitution,
+    Jacobians over the velocities of the bodies in ``col`` (a body's column), and each point's restitution,
     friction and strike threshold. Returns ``(Jn, Jt, e, f, strike)``."""
     k = kernels()
     M = model.M
     nb = model.n_bodies
+    nd = len(col)
     nc = rows.shape[0]
     Jn, Jt = np.zeros((nc, 3 * nd)), np.zeros((nc, 3 * nd))
     e, f, strike = np.zeros(nc), np.zeros(nc), np.zeros(nc)
@@ -170,7 +171,7 @@ def impact_instant(model: SceneModel, t: float, y: np.ndarray, trigger: np.ndarr
     G_all = k.hitch_jacobian(np.ascontiguousarray(y), M)
     keep = np.any(G_all[:, dof] != 0.0, axis=1)
     G = G_all[keep][:, dof]
-    Jn, Jt, e, f, strike = _point_rows(model, rows, pair_of, y, D, col, nd)
+    Jn, Jt, e, f, strike = _point_rows(model, rows, pair_of, y, D, col)
     # closed stops of these vehicles: the relative yaw rate may not go further past them
     stops = [q for q in range(int(D.lk_n[0])) if int(M.body_vehicle[M.hitch_body[D.lk_j[q], 0]]) in veh]
     Js = np.zeros((len(stops), 3 * nd))

@@ -385,7 +385,7 @@ def _wheel_tracks(model: RunoutModel, road: Road, settings, Y: np.ndarray, N: np
     return points, sliding, path_length, sliding_length
 
 
-def _rigid_samples(motion, t_end: float, dt_s: float, nb: int, L):
+def _rigid_samples(motion, t_end: float, dt_s: float, L):
     """The energy level's states every ``dt_s`` to ``t_end`` and at it, the end state, and each body's CG
     path length (its speed integrated by the trapezoid rule on a fine grid): ``(times, Y, y_end, distance)``."""
     times = np.arange(0.0, t_end, dt_s) if t_end > 0 else np.zeros(0)
@@ -393,11 +393,11 @@ def _rigid_samples(motion, t_end: float, dt_s: float, nb: int, L):
     Y = motion.state(times)
     y_end = motion.state(t_end)
     # CG path length of every body: integrate its speed (trapezoid on a fine grid)
-    distance = np.zeros(nb)
+    distance = np.zeros(L.n_bodies)
     if t_end > 0:
         fine = np.linspace(0.0, t_end, 2001)
         yf = motion.state(fine)
-        for i in range(nb):
+        for i in range(L.n_bodies):
             distance[i] = float(np.trapezoid(np.hypot(yf[L.vx][i], yf[L.vy][i]), fine))
     return times, Y, y_end, distance
 
@@ -564,7 +564,7 @@ def _energy_runout(vehicle: Vehicle, initial: Mapping[str, BodyState], wheels: W
     motion = _RigidMotion(L, pos, rel0, psi0, u, pieces, w_c, alpha, t_rot, t_end)
 
     # ---- samples, tracks and energies
-    times, Y, y_end, distance = _rigid_samples(motion, t_end, opts.sample_dt, nb, L)
+    times, Y, y_end, distance = _rigid_samples(motion, t_end, opts.sample_dt, L)
     points, sliding, path_length, sliding_length = _wheel_tracks(model, road, settings, Y, N, times, opts)
     energy = wheel_trans_work + wheel_rot_work
 

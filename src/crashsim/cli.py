@@ -277,7 +277,9 @@ def _cmd_export(args) -> int:
     if args.geojson:
         crs = (scenario.data.get("survey") or {}).get("crs")
         sys.stdout.write(f"wrote {write_geojson(items, args.geojson, frame, unit, crs)} ({len(items)} features, "
-                         + (f"WGS 84 longitude/latitude from {crs})\n" if crs else f"{unit})\n"))
+                         + (f"WGS 84 longitude/latitude from {crs})\n" if crs else
+                            f"{unit} in the scene's own axes: not on a map, a GIS reads them as degrees near 0 N 0 E; "
+                            "give survey.crs for WGS 84)\n"))
     return 0
 
 

@@ -39,6 +39,15 @@ def test_export_writes_dxf_and_geojson(capsys, tmp_path):
     assert code == 0 and "CRASHSIM-T0.5-car" in listing and "CRASHSIM-EVIDENCE-PASS" in listing
 
 
+def test_export_says_a_geojson_without_crs_is_not_on_a_map(capsys, tmp_path):
+    """Without survey.crs the GeoJSON holds the scene's own axes (RFC 7946 wants WGS 84): the line says so."""
+    scene = ROOT / "scenarios" / "scenes" / "intersection_car_trailer_wheels.toml"
+    code = main(["export", str(scene), "--geojson", str(tmp_path / "r.geojson")])
+    out = capsys.readouterr().out.splitlines()
+    assert code == 0 and len(out) == 1
+    assert "m in the scene's own axes: not on a map" in out[0] and "give survey.crs for WGS 84" in out[0]
+
+
 def _error(capsys) -> str:
     """stderr without the one-time kernel compile messages (a first run in a fresh installation)."""
     lines = capsys.readouterr().err.strip().splitlines()

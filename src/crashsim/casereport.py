@@ -552,6 +552,11 @@ def _fit(d: dict, system: str) -> dict:
     summary = [("success", d.get("success")), ("message", d.get("message")), ("chi^2", d.get("chi2")),
                ("degrees of freedom", d.get("dof")), ("p-value", d.get("p_value")),
                ("confidence", d.get("confidence")), ("starts agreeing", f"{d.get('n_agree')} of {d.get('n_starts')}")]
+    probes = d.get("linearity") or []
+    if probes:  # the fit's check of its linearised intervals (fit.LinearityProbe)
+        summary.append(("linearity of the intervals", f"{sum(bool(p.get('linear')) for p in probes)} of {len(probes)} "
+                        "points one standard error from the best pass (chi^2 within "
+                        f"{d.get('linearity_factor', 2.0):g}x of the linearised rise)"))
     return {"unknowns": rows, "summary": [(k, _num(v, None, system) if isinstance(v, float) else v)
                                           for k, v in summary], "warnings": d.get("warnings", [])}
 

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from crashsim.errors import ScenarioError
-from crashsim.reconstruct.fit import FitSpec, fit_scene
+from crashsim.reconstruct.fit import LINEARITY_FACTOR, FitSpec, LinearityProbe, fit_scene
 
 from scenes import ENGINE, car_car, car_trailer, semi_semi, with_evidence
 
@@ -57,6 +57,16 @@ def test_round_trip_car_car():
     assert np.allclose(np.diag(res.correlation), 1.0)
     text = res.report("US")
     assert "mph" in text and "Starts: 2 of 2 agreed" in text
+    # the linearity check: both ways along each of the 3 axes; from an interior minimum a full step
+    # predicts a rise of 1; this scene is close to linear over its intervals, so all pass
+    assert len(res.linearity) == 6 and len(d["linearity"]) == 6
+    # (the gradient the optimiser's stop rule leaves adds +-2 r.J dz, equal and opposite on the two sides)
+    pred = [p.predicted for p in res.linearity]
+    assert all(abs(v - 1.0) < 0.05 for v in pred), pred
+    assert all(abs((pred[k] + pred[k + 1]) / 2 - 1.0) < 1e-6 for k in (0, 2, 4)), pred
+    assert all(p.linear for p in res.linearity), [(p.predicted, p.actual) for p in res.linearity]
+    assert text.count("\n  PASS  vehicles.A.speed ") == 6
+    assert not [w for w in res.warnings if "not linear" in w]
 
 
 def test_round_trip_car_trailer():
@@ -112,6 +122,22 @@ def test_bound_hit_warns():
     res = fit_scene(data, spec, workers=1, engine=ENGINE)
     assert res.x[0] == pytest.approx(11.0, abs=1e-3)
     assert any("vehicles.A.speed ended at its upper bound" in w for w in res.warnings)
+    # the linearity check steps only inward from the bound (the outward steps would be of length 0),
+    # and predicts with the gradient the bound leaves: a rise well above 1, which the scene matches
+    assert len(res.linearity) == 2
+    for p in res.linearity:
+        assert p.step["vehicles.A.speed"] < 0 and p.predicted > 2 and p.linear
+    assert not [w for w in res.warnings if "not linear" in w]
+
+
+def test_linearity_probe_passes_within_the_factor_either_way():
+    f = LINEARITY_FACTOR
+    assert LinearityProbe({}, 1.0, f).linear and LinearityProbe({}, 1.0, 1 / f).linear
+    assert not LinearityProbe({}, 1.0, 1.01 * f).linear and not LinearityProbe({}, 1.0, 0.99 / f).linear
+    assert LinearityProbe({}, 0.5, 2.0).ratio == 4.0
+    failed = LinearityProbe({"a": 1.0}, 1.0, None)  # the scene cannot be evaluated there
+    assert not failed.linear and math.isnan(failed.ratio)
+    assert failed.to_dict() == {"step": {"a": 1.0}, "predicted": 1.0, "actual": None, "linear": False}
 
 
 def test_interval_coverage_impact_only():

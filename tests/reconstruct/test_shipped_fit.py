@@ -51,6 +51,14 @@ def test_shipped_scene_speeds_come_back_from_its_evidence(caplog):
     assert strong and named == strong
     logged = [r.getMessage() for r in caplog.records if r.name == "crashsim" and "are correlated at" in r.getMessage()]
     assert len(logged) == len(strong)
+    # the linearity check: along the ridge (the covariance's longest axis, probed first) toward low
+    # speeds and low friction chi^2 rises several times what the linearised model gives (rest
+    # distance ~ v^2 / mu is curved there); across the ridge the scene is linear over the intervals.
+    # (The other way along the ridge, near the factor's edge, is not asserted either way.)
+    probes = res.linearity
+    assert len(probes) == 8 and probes[0].step["runout.road_friction"] < 0 and probes[0].ratio > 4
+    assert all(p.linear for p in probes[2:]), [p.ratio for p in probes]
+    assert any(w.startswith("the model is not linear over the intervals") for w in res.warnings)
 
 
 def test_the_second_basin_is_a_worse_local_minimum():

@@ -31,6 +31,11 @@ uncertainty of the unknowns when the sigmas are the measurement uncertainties
 (``covariance = "absolute"``, normal quantiles). With ``"scaled"`` C is multiplied by
 chi^2/dof and Student's t quantiles are used (sigmas known only up to a common factor).
 The intervals are linearised: they are good while the model is close to linear over them.
+The report checks that (``LinearityProbe``): at one standard error from the best along each
+axis of the covariance (both signs; shortened where a bound comes first, not probed where the
+bound leaves less than ``LINEARITY_MIN_STEP`` of the step) it evaluates the scene and compares
+the rise of chi^2 with the linearised model's rise ``|r + J dz|^2 - |r|^2`` (1 on a full-length
+step from an interior minimum); a rise off by more than ``LINEARITY_FACTOR`` either way fails.
 
 Warnings
 --------
@@ -43,6 +48,9 @@ Warnings
 * chi^2 improbably large for its degrees of freedom (p < 0.01): the sigmas are too small or
   the model misses something; the absolute intervals are then too narrow.
 * Starts that ended in different minima (the report says how many agreed with the best).
+* A failed linearity probe: chi^2 one standard error away rises more than ``LINEARITY_FACTOR``
+  times, or less than 1/``LINEARITY_FACTOR`` of, what the linearised model gives; the intervals
+  are then too wide or too narrow there, and ``crashsim posterior`` is the answer to quote.
 """
 
 from __future__ import annotations
@@ -81,7 +89,7 @@ from .parallel import Executor, Progress
 from .write_best import edit_best
 
 __all__ = ["FitSpec", "Unknown", "FitProblem", "FitResult", "EvidenceResidual", "StartResult", "fit_scene",
-           "RANK_TOL", "PENALTY"]
+           "RANK_TOL", "PENALTY", "LINEARITY_FACTOR", "LINEARITY_MIN_STEP", "LinearityProbe"]
 
 _log = logging.getLogger("crashsim")
 
@@ -94,6 +102,15 @@ RANK_TOL = 1e-4
 #: Residual (in sigmas) given to every component when a scene cannot be evaluated (a value
 #: the scenario rejects in combination, a failed solver): keeps the optimiser away from it.
 PENALTY = 1e3
+
+#: The linearity check of the intervals: one standard error either side of the best point along
+#: each principal axis of the covariance, chi^2 rises by what the linearised model predicts there
+#: (1 for an interval inside the bounds, absolute covariance) if the model is linear over the
+#: interval. A rise below 1/LINEARITY_FACTOR or above LINEARITY_FACTOR times the prediction is
+#: warned about: the intervals are then about sqrt(LINEARITY_FACTOR) or more too narrow or too wide.
+LINEARITY_FACTOR = 2.0
+#: ... and a direction is probed only if the bounds leave at least this fraction of the step.
+LINEARITY_MIN_STEP = 0.1
 
 
 def _bare(exc: ScenarioError) -> str:
@@ -651,6 +668,41 @@ class StartResult:
 
 
 @dataclass(frozen=True)
+class LinearityProbe:
+    """chi^2 one standard error from the best fit along a principal axis of the covariance.
+
+    Attributes
+    ----------
+    step : dict of str to float
+        The step from the best point, by the unknowns' paths [SI].
+    predicted : float
+        Rise of chi^2 the linearised model gives there, ``|r + J dz|^2 - |r|^2`` (1 for a full
+        step from an interior minimum with ``covariance = "absolute"``; a step shortened by a
+        bound predicts less, a best point at a bound more).
+    actual : float or None
+        Rise of chi^2 the scene gives there (None: the scene cannot be evaluated there).
+    """
+
+    step: dict
+    predicted: float
+    actual: float | None
+
+    @property
+    def ratio(self) -> float:
+        """actual / predicted (NaN where the scene cannot be evaluated)."""
+        return math.nan if self.actual is None else self.actual / max(self.predicted, 1e-300)
+
+    @property
+    def linear(self) -> bool:
+        """Whether the rise is within LINEARITY_FACTOR of the prediction."""
+        return self.actual is not None and 1.0 / LINEARITY_FACTOR <= self.ratio <= LINEARITY_FACTOR
+
+    def to_dict(self) -> dict:
+        return {"step": dict(self.step), "predicted": self.predicted, "actual": self.actual,
+                "linear": self.linear}
+
+
+@dataclass(frozen=True)
 class FitResult:
     """Outcome of :func:`fit_scene` (SI; ``report`` for display units).
 
@@ -714,6 +766,7 @@ class FitResult:
     file: str | None = None
     rolled_evaluations: int | None = None  # the wheel-lift and rollover check on: evaluations in which a unit rolls
     rolled_of: int = 0  # ... of this many (the local fits' and the analysis's; not the screening's)
+    linearity: tuple = ()  # LinearityProbe: chi^2 one standard error from the best, both ways along each axis
 
     @property
     def values(self) -> dict:
@@ -737,6 +790,7 @@ class FitResult:
             "starts": [s.to_dict() for s in self.starts], "n_starts": len(self.starts), "n_agree": self.n_agree,
             "n_same_cost": self.n_same_cost, "warnings": list(self.warnings), "evaluations": self.evaluations,
             "failures": self.failures, "failure_reasons": dict(self.failure_reasons), "elapsed": self.elapsed,
+            "linearity": [p.to_dict() for p in self.linearity], "linearity_factor": LINEARITY_FACTOR,
             **({"rolled_evaluations": self.rolled_evaluations, "rolled_of": self.rolled_of,
                 "rollover": self._best_rollover()}
                if self.rolled_evaluations is not None else {}),
@@ -893,6 +947,16 @@ class FitResult:
             mark = "*" if s.agrees else ("=" if s.same_cost else " ")
             lines.append(f"  {mark} start {k + 1}: chi^2 = {2 * s.cost:.4g}, {s.evaluations} evaluations, "
                          + ", ".join(f"{u.name} {fmt(v, u.kind, system)}" for u, v in zip(self.unknowns, s.x)))
+        if self.linearity:
+            lines.append("")
+            lines.append("Linearity of the intervals: chi^2 one standard error from the best, along each axis of the "
+                         "covariance")
+            by_path = {u.path: u for u in self.unknowns}
+            for p in self.linearity:
+                step = ", ".join(f"{by_path[k].name} {'+' if v >= 0 else '-'}{fmt(abs(v), by_path[k].kind, system)}"
+                                 for k, v in p.step.items())
+                rise = "scene not evaluable" if p.actual is None else f"rises by {p.actual:.3g}"
+                lines.append(f"  {'PASS' if p.linear else 'FAIL'}  {step}: {rise} (linearised {p.predicted:.3g})")
         roll = self.rollover_lines(system)
         if roll:
             lines += [""] + roll
@@ -1156,11 +1220,11 @@ def _analyse(problem: FitProblem, spec: FitSpec, outcomes: list[dict], engine: s
 
     for i in range(n):  # pairs the evidence fixes only together ([fit] correlation_warning)
         for j in range(i + 1, n):
-            r = corr[i, j]
-            if np.isfinite(r) and abs(r) >= spec.correlation_warning:
+            rho = corr[i, j]
+            if np.isfinite(rho) and abs(rho) >= spec.correlation_warning:
                 _log.warning("fit: %s and %s are correlated at %.4f (correlation_warning %g)", spec.unknowns[i].name,
-                             spec.unknowns[j].name, r, spec.correlation_warning)
-                warnings.append(f"{spec.unknowns[i].name} and {spec.unknowns[j].name} are correlated at {r:.4f} "
+                             spec.unknowns[j].name, rho, spec.correlation_warning)
+                warnings.append(f"{spec.unknowns[i].name} and {spec.unknowns[j].name} are correlated at {rho:.4f} "
                                 f"(|r| >= correlation_warning = {spec.correlation_warning:g}): the evidence fixes only a "
                                 "combination of them, and each one's interval rests on the other's bounds")
     for j, u in enumerate(spec.unknowns):
@@ -1192,6 +1256,7 @@ def _analyse(problem: FitProblem, spec: FitSpec, outcomes: list[dict], engine: s
                         "stayed where the scene can be evaluated")
     if scene.warnings:
         warnings += [f"at the best fit: {w_}" for w_ in scene.warnings]
+    linearity = _linearity(problem, zb, r, Jz, cov, undetermined, warnings)
 
     starts, n_agree, n_same = _compare_starts(problem, outcomes, best_k, zb, stderr, undetermined, warnings)
 
@@ -1201,7 +1266,55 @@ def _analyse(problem: FitProblem, spec: FitSpec, outcomes: list[dict], engine: s
         residuals=residuals, chi2=chi2, dof=dof, p_value=p_value, confidence=spec.confidence,
         covariance_mode=spec.covariance, singular_values=sv_rel, null_space=null_space, starts=tuple(starts),
         n_agree=n_agree, n_same_cost=n_same, warnings=tuple(warnings), evaluations=0, failures=0, elapsed=0.0,
-        engine=engine, success=bool(success), message=message, scene=scene, failure_reasons=reasons)
+        engine=engine, success=bool(success), message=message, scene=scene, failure_reasons=reasons,
+        linearity=linearity)
+
+
+def _linearity(problem: FitProblem, zb, rb, Jz, cov, undetermined, warnings: list[str]) -> tuple:
+    """The linearity check (:data:`LINEARITY_FACTOR`): chi^2 at one standard error either side of the
+    best point ``zb`` along each principal axis of the determined unknowns' covariance ``cov`` [SI],
+    shortened at a bound, against the rise ``|rb + Jz dz|^2 - |rb|^2`` that the weighted residuals
+    ``rb`` and Jacobian ``Jz`` predict there (``|Jz dz|^2`` at an interior minimum, where
+    ``Jz^T rb = 0``); a warning appended if any is off by more than the factor. A direction in which
+    a bound lies within :data:`LINEARITY_MIN_STEP` of the step is not probed (the bound's own warning
+    says the interval is not valid there). Returns the LinearityProbe tuple."""
+    chi2 = float(rb @ rb)
+    idx = np.nonzero(~undetermined)[0]
+    if not idx.size or not np.all(np.isfinite(cov[np.ix_(idx, idx)])):
+        return ()
+    vals, vecs = np.linalg.eigh(cov[np.ix_(idx, idx)])
+    paths = [problem.spec.unknowns[j].path for j in idx]
+    probes = []
+    for k in np.argsort(vals)[::-1]:
+        if not vals[k] > 0.0:
+            continue
+        for sign in (1.0, -1.0):
+            dz = np.zeros_like(zb)
+            dz[idx] = sign * math.sqrt(vals[k]) * vecs[:, k] / problem.span[idx]
+            room = np.where(dz > 0, 1.0 - zb, zb)  # to the bound each unknown moves toward
+            moving = dz != 0
+            scale = min(1.0, float(np.min(room[moving] / np.abs(dz[moving]))))  # shortened at a bound
+            if scale < LINEARITY_MIN_STEP:
+                continue
+            z = zb + dz * scale
+            r, sc = problem.evaluate(z)
+            step = problem.x_of(z) - problem.x_of(zb)
+            lin = rb + Jz @ (z - zb)
+            probes.append(LinearityProbe({p: float(step[j]) for p, j in zip(paths, idx)}, float(lin @ lin) - chi2,
+                                         None if isinstance(sc, Exception) else float(r @ r) - chi2))
+    off = [p for p in probes if not p.linear]
+    if off:
+        worst = max(off, key=lambda p: abs(math.log(p.ratio)) if p.actual is not None and p.ratio > 0 else math.inf)
+        if worst.actual is None:
+            how = "the scene cannot be evaluated there: the intervals reach where it fails"
+        else:
+            how = (f"chi^2 rises by {worst.actual:.3g} where the linearised model gives {worst.predicted:.3g}: the "
+                   + ("intervals are too narrow there (the evidence changes less than the Jacobian says)"
+                      if worst.actual < worst.predicted else "intervals are too wide there"))
+        warnings.append(f"the model is not linear over the intervals (linearised): at one standard error from the best "
+                        f"fit ({len(off)} of {len(probes)} points) {how}; crashsim posterior gives intervals that do "
+                        "not rest on the linearisation")
+    return tuple(probes)
 
 
 def _compare_starts(problem: FitProblem, outcomes: list[dict], best_k: int, zb, stderr, undetermined,

@@ -16,11 +16,11 @@ Writes
     plots/mc_*.png          histograms, rest-position clouds over the scene (accepted samples dark),
                             tornado charts
 
-Goals (issue 13; issue 5 asked for 10 s and 5 minutes): a four-unknown fit of the shipped scene
-in at most 1 s warm; 10,000 Monte Carlo samples in at most 15 s of the run's own elapsed time on
-this 2-core machine. Each figure stands beside what the physics alone (the impact's equations
-and the run-out's integration) would take, so the overhead left is visible; a missed goal says
-by how much and why. If the compiled run-out engine is not available, the Monte Carlo run uses
+Goals (issue 32; earlier issues set absolute times, which a shared machine whose speed drifts
+2-3x between days cannot check): a Monte Carlo sample's CPU at most 1.3x its physics (the
+impact's equations and the run-out's integration); 10,000 samples' own elapsed time on 2 workers
+at most 0.65x their physics on one core; at most 25 % of the fit's CPU outside its physics. Each
+is a ratio of two costs measured in the same run; a missed goal says by how much and why. If the compiled run-out engine is not available, the Monte Carlo run uses
 fewer samples with the SciPy engine and the 10,000-sample time is extrapolated (and said to be).
 """
 
@@ -410,25 +410,30 @@ def main(argv=None) -> int:
                "check's tolerance can fall either side): "
                + "; ".join(f"{k}: {v}" for k, v in flips.items()) + ".", ""]
 
-    # -- the goals (issue 13) -------------------------------------------------------------------
+    # -- the goals (issue 32) -------------------------------------------------------------------
     load_end = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     overhead = split["total"] - phys
     parts = sorted(((split[k], lbl) for lbl, k in SPLIT_ROWS if k not in ("impact_eq", "kernel", "later_lcp", "physics", "total")),
                    reverse=True)
     top = "; ".join(f"{lbl.split(' (')[0]} {1e3 * v:.2f} ms" for v, lbl in parts[:3])
 
-    def verdict(measured, goal):
-        if measured <= goal:
-            return f"PASSED ({measured / goal:.0%} of the goal)"
-        return f"MISSED by {measured - goal:.2f} s ({measured / goal - 1:.0%} over)"
+    def verdict(measured, goal, unit="x"):
+        shown = (lambda v: f"{v:.0%}") if unit == "%" else (lambda v: f"{v:.2f}x")
+        return (f"met ({shown(measured)} <= {shown(goal)})" if measured <= goal
+                else f"**missed** ({shown(measured)} > {shown(goal)})")
 
-    mc_goal = 15.0 * n / 10_000
-    md += ["## Goals (issues 13 and 20): fit and Monte Carlo at the speed of their physics", "",
-           "| goal | measured | physics alone | goal | verdict |", "| --- | --- | --- | --- | --- |",
-           f"| {n:,} Monte Carlo samples of the shipped fit scene, {mc.workers} workers, own elapsed time | "
-           f"{own:.1f} s | {n * phys / mc.workers:.1f} s | <= {mc_goal:g} s | {verdict(own, mc_goal)} |",
-           f"| 4-unknown fit, warm, {workers} workers | {warm.elapsed:.2f} s | {fit_alone:.2f} s | "
-           f"<= 1 s | {verdict(warm.elapsed, 1.0)} |", "",
+    one_core = n * phys  # the physics of the samples on one core
+    fit_share = (fphys["total"] - fphys["physics"]) / fphys["total"]
+    md += ["## Goals (issue 32): fit and Monte Carlo at the speed of their physics, as ratios in this run", "",
+           "Ratios, not times: the machines here are shared and their speed drifts 2-3x between days, so each "
+           "goal compares two costs measured in the same run.", "",
+           "| goal | measured | goal | verdict |", "| --- | --- | --- | --- |",
+           f"| Monte Carlo: CPU per sample against the physics of that sample | {split['total'] / phys:.2f}x "
+           f"({1e3 * split['total']:.2f} ms / {1e3 * phys:.2f} ms) | <= 1.3x | {verdict(split['total'] / phys, 1.3)} |",
+           f"| Monte Carlo: {n:,} samples' own elapsed time on {mc.workers} workers against their physics on one core "
+           f"| {own / one_core:.2f}x ({own:.1f} s / {one_core:.1f} s) | <= 0.65x | {verdict(own / one_core, 0.65)} |",
+           f"| 4-unknown fit: its CPU outside the physics | {fit_share:.0%} ({fphys['total'] - fphys['physics']:.2f} s "
+           f"of {fphys['total']:.2f} s) | <= 25% | {verdict(fit_share, 0.25, '%')} |", "",
            f"Why, Monte Carlo: one sample costs {1e3 * split['total']:.2f} ms of CPU here, of which "
            f"{1e3 * phys:.2f} ms is physics (the run-out kernel alone {1e3 * split['kernel']:.2f} ms, the later "
            f"impacts' complementarity problem {1e3 * split['later_lcp']:.2f} ms, solved in interpreted Python) and "
@@ -439,7 +444,7 @@ def main(argv=None) -> int:
            "cores: the machine is shared (load average "
            f"{_load_start:.2f} at the start, {load_end:.2f} at the end, on 2 cores), which slows the kernel too.", "",
            f"Why, fit: its {fphys['evaluations']} scene evaluations need {fphys['physics']:.2f} s of physics "
-           f"({fit_alone:.2f} s on {workers} workers{', beyond the goal by itself' if fit_alone > 1.0 else ''}) and "
+           f"({fit_alone:.2f} s on {workers} workers; the warm fit took {warm.elapsed:.2f} s of wall time) and "
            f"{fphys['total'] - fphys['physics']:.2f} s of everything else (overhead, the optimiser, the analysis at "
            f"the best point): {(fphys['total'] - fphys['physics']) / fphys['total']:.0%} of its CPU time. The number "
            f"of evaluations ({spec.starts} starts, forward-difference Jacobians) follows from the local fits' stop rule (ftol "

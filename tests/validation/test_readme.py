@@ -237,6 +237,30 @@ def test_fit_paragraph_numbers_come_from_the_fit_report():
     agreed = re.search(r"Only (\d+) of the (\d+) starts", " ".join(para.split()))
     assert agreed, para
     assert f"{agreed.group(1)} of {agreed.group(2)} agreed" in text
+    # the linearity check: its counts are the report's PASS/FAIL lines, its numbers a FAIL line's
+    flat = " ".join(para.split())
+    probes = re.search(r"(\d+) of the (\d+) probes fails: .*? chi\^2 rises by ([\d.]+) where the linearised model gives ([\d.]+)", flat)
+    assert probes, flat
+    fails, total, actual, predicted = probes.groups()
+    heading = "Linearity of the intervals:"
+    split = text.index("With the friction known")
+
+    def probe_lines(block):
+        """The PASS/FAIL lines under the linearity heading of one fit's report (not the evidence's)."""
+        block = block[block.index(heading):]
+        out = []
+        for ln in block.splitlines()[1:]:
+            if not ln.strip().startswith(("PASS  ", "FAIL  ")):
+                break
+            out.append(ln.strip())
+        return out
+
+    lines = probe_lines(text[:split])
+    assert len(lines) == int(total) and sum(ln.startswith("FAIL") for ln in lines) == int(fails)
+    assert any(ln.startswith("FAIL") and f"rises by {actual} (linearised {predicted})" in ln for ln in lines)
+    known = re.search(r"With the friction known all (\d+) probes pass", flat).group(1)
+    second = probe_lines(text[split:])
+    assert len(second) == int(known) and all(ln.startswith("PASS") for ln in second)
 
 
 def test_python_example_runs_as_a_doctest(monkeypatch, tmp_path):

@@ -556,7 +556,10 @@ def _fit(d: dict, system: str) -> dict:
     if probes:  # the fit's check of its linearised intervals (fit.LinearityProbe)
         summary.append(("linearity of the intervals", f"{sum(bool(p.get('linear')) for p in probes)} of {len(probes)} "
                         "points one standard error from the best pass (chi^2 within "
-                        f"{d.get('linearity_factor', 2.0):g}x of the linearised rise)"))
+                        f"{d.get('linearity_factor', 2.0):g}x of the linearised rise)"
+                        + (f"; {d['linearity_skipped']} direction{'s' if d['linearity_skipped'] != 1 else ''} at a bound "
+                           "not probed" if d.get("linearity_skipped")
+                           else "")))
     return {"unknowns": rows, "summary": [(k, _num(v, None, system) if isinstance(v, float) else v)
                                           for k, v in summary], "warnings": d.get("warnings", [])}
 

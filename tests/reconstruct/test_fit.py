@@ -124,7 +124,8 @@ def test_bound_hit_warns():
     assert any("vehicles.A.speed ended at its upper bound" in w for w in res.warnings)
     # the linearity check steps only inward from the bound (the outward steps would be of length 0),
     # and predicts with the gradient the bound leaves: a rise well above 1, which the scene matches
-    assert len(res.linearity) == 2
+    assert len(res.linearity) == 2 and res.linearity_skipped == 2
+    assert "(2 directions not probed: a bound leaves less than 0.1 of the step)" in res.report()
     for p in res.linearity:
         assert p.step["vehicles.A.speed"] < 0 and p.predicted > 2 and p.linear
     assert not [w for w in res.warnings if "not linear" in w]

@@ -155,7 +155,7 @@ def report(tmp_path_factory):
                                              "value": 13.41, "stderr": 0.2, "interval": [13.0, 13.8]}],
                                "linearity": [{"step": {"vehicles.car.speed": s}, "predicted": 1.0, "actual": a,
                                               "linear": 0.5 <= a <= 2.0} for s, a in ((0.2, 1.1), (-0.2, 3.0))],
-                               "linearity_factor": 2.0, "made_from": made_from("fit", SCENE)}))
+                               "linearity_factor": 2.0, "linearity_skipped": 1, "made_from": made_from("fit", SCENE)}))
     assert main(["report", str(SCENE), "-o", str(out), "--fit", str(fit), "--units", "US"]) == 0
     return out, fit
 
@@ -181,7 +181,7 @@ def test_the_report_is_well_formed_and_self_contained(report):
     assert '"13.41 m/s"' in body and "30 mph" in body  # as written, and in the report's units
     assert "PASS" in body and "Evidence" in body
     assert "car speed" in body and "29.08 mph to 30.87 mph" in body  # the fit interval (13.0, 13.8 m/s) in mph
-    assert "1 of 2 points one standard error from the best pass (chi^2 within 2x of the linearised rise)" in body
+    assert "1 of 2 points one standard error from the best pass (chi^2 within 2x of the linearised rise); 1 direction at a bound not probed" in body
     assert "instantaneous and planar" in body
 
 

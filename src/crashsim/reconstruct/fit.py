@@ -767,6 +767,7 @@ class FitResult:
     rolled_evaluations: int | None = None  # the wheel-lift and rollover check on: evaluations in which a unit rolls
     rolled_of: int = 0  # ... of this many (the local fits' and the analysis's; not the screening's)
     linearity: tuple = ()  # LinearityProbe: chi^2 one standard error from the best, both ways along each axis
+    linearity_skipped: int = 0  # ... directions not probed: a bound within LINEARITY_MIN_STEP of the step
 
     @property
     def values(self) -> dict:
@@ -791,6 +792,7 @@ class FitResult:
             "n_same_cost": self.n_same_cost, "warnings": list(self.warnings), "evaluations": self.evaluations,
             "failures": self.failures, "failure_reasons": dict(self.failure_reasons), "elapsed": self.elapsed,
             "linearity": [p.to_dict() for p in self.linearity], "linearity_factor": LINEARITY_FACTOR,
+            "linearity_skipped": self.linearity_skipped,
             **({"rolled_evaluations": self.rolled_evaluations, "rolled_of": self.rolled_of,
                 "rollover": self._best_rollover()}
                if self.rolled_evaluations is not None else {}),
@@ -950,7 +952,9 @@ class FitResult:
         if self.linearity:
             lines.append("")
             lines.append("Linearity of the intervals: chi^2 one standard error from the best, along each axis of the "
-                         "covariance")
+                         "covariance" + (f" ({self.linearity_skipped} direction{'s' if self.linearity_skipped != 1 else ''} not "
+                                         "probed: a bound leaves less than "
+                                         f"{LINEARITY_MIN_STEP:g} of the step)" if self.linearity_skipped else ""))
             by_path = {u.path: u for u in self.unknowns}
             for p in self.linearity:
                 step = ", ".join(f"{by_path[k].name} {'+' if v >= 0 else '-'}{fmt(abs(v), by_path[k].kind, system)}"
@@ -1256,7 +1260,7 @@ def _analyse(problem: FitProblem, spec: FitSpec, outcomes: list[dict], engine: s
                         "stayed where the scene can be evaluated")
     if scene.warnings:
         warnings += [f"at the best fit: {w_}" for w_ in scene.warnings]
-    linearity = _linearity(problem, zb, r, Jz, cov, undetermined, warnings)
+    linearity, skipped = _linearity(problem, zb, r, Jz, cov, undetermined, warnings)
 
     starts, n_agree, n_same = _compare_starts(problem, outcomes, best_k, zb, stderr, undetermined, warnings)
 
@@ -1267,7 +1271,7 @@ def _analyse(problem: FitProblem, spec: FitSpec, outcomes: list[dict], engine: s
         covariance_mode=spec.covariance, singular_values=sv_rel, null_space=null_space, starts=tuple(starts),
         n_agree=n_agree, n_same_cost=n_same, warnings=tuple(warnings), evaluations=0, failures=0, elapsed=0.0,
         engine=engine, success=bool(success), message=message, scene=scene, failure_reasons=reasons,
-        linearity=linearity)
+        linearity=linearity, linearity_skipped=skipped)
 
 
 def _linearity(problem: FitProblem, zb, rb, Jz, cov, undetermined, warnings: list[str]) -> tuple:
@@ -1277,14 +1281,15 @@ def _linearity(problem: FitProblem, zb, rb, Jz, cov, undetermined, warnings: lis
     ``rb`` and Jacobian ``Jz`` predict there (``|Jz dz|^2`` at an interior minimum, where
     ``Jz^T rb = 0``); a warning appended if any is off by more than the factor. A direction in which
     a bound lies within :data:`LINEARITY_MIN_STEP` of the step is not probed (the bound's own warning
-    says the interval is not valid there). Returns the LinearityProbe tuple."""
+    says the interval is not valid there). Returns the LinearityProbe tuple and the number of such
+    directions."""
     chi2 = float(rb @ rb)
     idx = np.nonzero(~undetermined)[0]
     if not idx.size or not np.all(np.isfinite(cov[np.ix_(idx, idx)])):
-        return ()
+        return (), 0
     vals, vecs = np.linalg.eigh(cov[np.ix_(idx, idx)])
     paths = [problem.spec.unknowns[j].path for j in idx]
-    probes = []
+    probes, skipped = [], 0
     for k in np.argsort(vals)[::-1]:
         if not vals[k] > 0.0:
             continue
@@ -1295,6 +1300,7 @@ def _linearity(problem: FitProblem, zb, rb, Jz, cov, undetermined, warnings: lis
             moving = dz != 0
             scale = min(1.0, float(np.min(room[moving] / np.abs(dz[moving]))))  # shortened at a bound
             if scale < LINEARITY_MIN_STEP:
+                skipped += 1
                 continue
             z = zb + dz * scale
             r, sc = problem.evaluate(z)
@@ -1314,7 +1320,7 @@ def _linearity(problem: FitProblem, zb, rb, Jz, cov, undetermined, warnings: lis
         warnings.append(f"the model is not linear over the intervals (linearised): at one standard error from the best "
                         f"fit ({len(off)} of {len(probes)} points) {how}; crashsim posterior gives intervals that do "
                         "not rest on the linearisation")
-    return tuple(probes)
+    return tuple(probes), skipped
 
 
 def _compare_starts(problem: FitProblem, outcomes: list[dict], best_k: int, zb, stderr, undetermined,

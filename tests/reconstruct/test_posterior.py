@@ -29,7 +29,7 @@ import pytest
 
 from crashsim.errors import ScenarioError
 from crashsim.motion.loads import STANDARD_GRAVITY as G
-from crashsim.reconstruct.posterior import MIN_KEPT_STEPS, PosteriorSpec, load_chain, run_posterior
+from crashsim.reconstruct.posterior import MIN_KEPT_STEPS, TAU_FACTOR, PosteriorSpec, _too_short, load_chain, run_posterior
 
 from scenes import ENGINE
 
@@ -435,3 +435,15 @@ def test_samples_integrate_at_the_tolerance_their_evidence_needs():
     # evidence the run-out does not reach sets no bound; a looser file tolerance is kept
     assert not evidence_tolerance([Item("delta-v", "speed", 0.1)], scene, 1e-8, 1e-10).changed
     assert evidence_tolerance([Item("rest", "length", 1.0)], scene, 1e-3, 1e-5).rtol == 1e-3
+
+
+def test_a_short_chain_s_advice_fits_its_sampler():
+    """An ensemble's chain file continues a run; the independence sampler keeps none (one chain, run
+    again): the warning of a chain shorter than TAU_FACTOR autocorrelation times says which."""
+    ens = _too_short(1500, 38.0, 2399, "emcee")
+    one = _too_short(15000, 1407.4, 75370, "imh")
+    assert f"1500 kept steps per walker are {1500 / 38.0:.1f} autocorrelation times" in ens
+    assert "run about 2399 steps (a chain file continues where it stopped)" in ens
+    assert "15000 kept steps are 10.7" in one and "per walker" not in one and "continues" not in one
+    assert "run about 75370 steps (posterior.steps or --steps; the independence sampler keeps no chain file" in one
+    assert f"at least {TAU_FACTOR} are needed" in one and "run about" not in _too_short(10, math.inf, None, "imh")

@@ -767,7 +767,7 @@ class FitResult:
     rolled_evaluations: int | None = None  # the wheel-lift and rollover check on: evaluations in which a unit rolls
     rolled_of: int = 0  # ... of this many (the local fits' and the analysis's; not the screening's)
     linearity: tuple = ()  # LinearityProbe: chi^2 one standard error from the best, both ways along each axis
-    linearity_skipped: int = 0  # ... directions not probed: a bound within LINEARITY_MIN_STEP of the step
+    linearity_skipped: int = 0  # ... directions not probed: a bound leaves less than LINEARITY_MIN_STEP of the step
 
     @property
     def values(self) -> dict:
@@ -1280,8 +1280,8 @@ def _linearity(problem: FitProblem, zb, rb, Jz, cov, undetermined, warnings: lis
     shortened at a bound, against the rise ``|rb + Jz dz|^2 - |rb|^2`` that the weighted residuals
     ``rb`` and Jacobian ``Jz`` predict there (``|Jz dz|^2`` at an interior minimum, where
     ``Jz^T rb = 0``); a warning appended if any is off by more than the factor. A direction in which
-    a bound lies within :data:`LINEARITY_MIN_STEP` of the step is not probed (the bound's own warning
-    says the interval is not valid there). Returns the LinearityProbe tuple and the number of such
+    a bound leaves less than :data:`LINEARITY_MIN_STEP` of the step is not probed (the bound's own
+    warning says the interval is not valid there). Returns the LinearityProbe tuple and the number of such
     directions."""
     chi2 = float(rb @ rb)
     idx = np.nonzero(~undetermined)[0]

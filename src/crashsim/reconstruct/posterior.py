@@ -660,6 +660,19 @@ def _correlation(m: np.ndarray) -> np.ndarray:
     return out
 
 
+
+def _too_short(kept_steps: int, tmax: float, need: int | None, sampler: str) -> str:
+    """The warning of a chain shorter than TAU_FACTOR autocorrelation times ``tmax``, with the number
+    of steps ``need`` to run (None: tau not finite) and how: an ensemble's chain file continues where
+    it stopped; the independence sampler (one chain) keeps no chain file and starts again."""
+    imh = sampler == "imh"
+    advice = ("" if need is None else
+              f": run about {need} steps (posterior.steps or --steps; the independence sampler keeps no chain file, "
+              "so the run starts again)" if imh else f": run about {need} steps (a chain file continues where it stopped)")
+    return (f"the chain is too short: {kept_steps} kept steps{'' if imh else ' per walker'} are "
+            f"{kept_steps / tmax:.1f} autocorrelation times (largest tau {tmax:.1f} steps); at least {TAU_FACTOR} are "
+            "needed to trust tau, and with it the effective sample sizes and the tails of the intervals" + advice)
+
 def _diagnostics(chain_kept: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Integrated autocorrelation time of each unknown (emcee, quiet) and effective sample size."""
     from emcee.autocorr import integrated_time
@@ -1123,10 +1136,7 @@ def _assemble(problem, spec, z, lp, blobs, acc, derived, x0, failures, evaluatio
     tmax = float(np.nanmax(tau)) if np.isfinite(tau).any() else math.inf
     if not kept_steps >= TAU_FACTOR * tmax:
         need = math.ceil(TAU_FACTOR * tmax * spec.thin + burn) if np.isfinite(tmax) else None
-        warnings.append(f"the chain is too short: {kept_steps} kept steps per walker are {kept_steps / tmax:.1f} "
-                        f"autocorrelation times (largest tau {tmax:.1f} steps); at least {TAU_FACTOR} are needed to "
-                        "trust tau, and with it the effective sample sizes and the tails of the intervals"
-                        + (f": run about {need} steps (the chain file continues where it stopped)" if need else ""))
+        warnings.append(_too_short(kept_steps, tmax, need, spec.sampler))
     if np.isfinite(tmax) and burn < 2 * tmax:
         warnings.append(f"the burn-in ({burn} steps) is shorter than two autocorrelation times ({2 * tmax:.0f} steps): "
                         "the start may still show in the summaries")

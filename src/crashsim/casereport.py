@@ -553,13 +553,12 @@ def _fit(d: dict, system: str) -> dict:
                ("degrees of freedom", d.get("dof")), ("p-value", d.get("p_value")),
                ("confidence", d.get("confidence")), ("starts agreeing", f"{d.get('n_agree')} of {d.get('n_starts')}")]
     probes = d.get("linearity") or []
-    if probes:  # the fit's check of its linearised intervals (fit.LinearityProbe)
-        summary.append(("linearity of the intervals", f"{sum(bool(p.get('linear')) for p in probes)} of {len(probes)} "
-                        "points one standard error from the best pass (chi^2 within "
-                        f"{d.get('linearity_factor', 2.0):g}x of the linearised rise)"
-                        + (f"; {d['linearity_skipped']} direction{'s' if d['linearity_skipped'] != 1 else ''} at a bound "
-                           "not probed" if d.get("linearity_skipped")
-                           else "")))
+    if probes:  # the fit's check of its linearised intervals (fit.LinearityProbe; the factor comes with them)
+        skipped = d.get("linearity_skipped", 0)
+        summary.append(("linearity of the intervals",
+                        f"{sum(bool(p['linear']) for p in probes)} of {len(probes)} points one standard error from the "
+                        f"best pass (chi^2 within {d['linearity_factor']:g}x of the linearised rise)"
+                        + (f"; {skipped} direction{'s' if skipped != 1 else ''} at a bound not probed" if skipped else "")))
     return {"unknowns": rows, "summary": [(k, _num(v, None, system) if isinstance(v, float) else v)
                                           for k, v in summary], "warnings": d.get("warnings", [])}
 

@@ -1289,6 +1289,7 @@ def _linearity(problem: FitProblem, zb, rb, Jz, cov, undetermined, warnings: lis
         return (), 0
     vals, vecs = np.linalg.eigh(cov[np.ix_(idx, idx)])
     paths = [problem.spec.unknowns[j].path for j in idx]
+    xb = problem.x_of(zb)
     probes, skipped = [], 0
     for k in np.argsort(vals)[::-1]:
         if not vals[k] > 0.0:
@@ -1304,7 +1305,7 @@ def _linearity(problem: FitProblem, zb, rb, Jz, cov, undetermined, warnings: lis
                 continue
             z = zb + dz * scale
             r, sc = problem.evaluate(z)
-            step = problem.x_of(z) - problem.x_of(zb)
+            step = problem.x_of(z) - xb
             lin = rb + Jz @ (z - zb)
             probes.append(LinearityProbe({p: float(step[j]) for p, j in zip(paths, idx)}, float(lin @ lin) - chi2,
                                          None if isinstance(sc, Exception) else float(r @ r) - chi2))

@@ -660,18 +660,18 @@ def _correlation(m: np.ndarray) -> np.ndarray:
     return out
 
 
-
 def _too_short(kept_steps: int, tmax: float, need: int | None, sampler: str) -> str:
     """The warning of a chain shorter than TAU_FACTOR autocorrelation times ``tmax``, with the number
     of steps ``need`` to run (None: tau not finite) and how: an ensemble's chain file continues where
     it stopped; the independence sampler (one chain) keeps no chain file and starts again."""
     imh = sampler == "imh"
-    advice = ("" if need is None else
-              f": run about {need} steps (posterior.steps or --steps; the independence sampler keeps no chain file, "
-              "so the run starts again)" if imh else f": run about {need} steps (a chain file continues where it stopped)")
+    how = ("posterior.steps or --steps; the independence sampler keeps no chain file, so the run starts again"
+           if imh else "a chain file continues where it stopped")
     return (f"the chain is too short: {kept_steps} kept steps{'' if imh else ' per walker'} are "
             f"{kept_steps / tmax:.1f} autocorrelation times (largest tau {tmax:.1f} steps); at least {TAU_FACTOR} are "
-            "needed to trust tau, and with it the effective sample sizes and the tails of the intervals" + advice)
+            "needed to trust tau, and with it the effective sample sizes and the tails of the intervals"
+            + ("" if need is None else f": run about {need} steps ({how})"))
+
 
 def _diagnostics(chain_kept: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Integrated autocorrelation time of each unknown (emcee, quiet) and effective sample size."""

@@ -375,17 +375,19 @@ _COMPILED_FROM = 256
 _DENSE: dict[int, tuple] = {}
 
 
-def _densified(ev: MarkEvidence) -> np.ndarray:
-    """``_densify(ev.points, MARK_SPACING)``, kept for the evidence object (read-only)."""
+def _densified(ev: MarkEvidence) -> tuple[np.ndarray, float]:
+    """``_densify(ev.points, MARK_SPACING)`` (read-only) and the mark's length along its points [m],
+    kept for the evidence object."""
     hit = _DENSE.get(id(ev))
     if hit is not None and hit[0] is ev:
-        return hit[1]
+        return hit[1], hit[2]
     pts = _densify(ev.points, MARK_SPACING)
     pts.flags.writeable = False
+    length = float(np.sum(np.hypot(*np.diff(np.asarray(ev.points, float), axis=0).T)))
     if len(_DENSE) >= 64:
         _DENSE.clear()
-    _DENSE[id(ev)] = (ev, pts)  # holds ev: its id is not reused while it is cached
-    return pts
+    _DENSE[id(ev)] = (ev, pts, length)  # holds ev: its id is not reused while it is cached
+    return pts, length
 
 
 def _nearest_on_polyline(points, polyline) -> tuple[np.ndarray, np.ndarray]:
@@ -453,7 +455,7 @@ def _bbox_lower_bound(pts: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> float:
 
 def _check_mark(ev: MarkEvidence, tracks: dict, index: int) -> Check:
     name = ev.name or f"mark {index + 1}"
-    pts = _densified(ev)
+    pts, mark_length = _densified(ev)
     candidates = []
     for key, tr in tracks.items():
         if not wheel_matches(tr, ev.wheel):
@@ -461,7 +463,7 @@ def _check_mark(ev: MarkEvidence, tracks: dict, index: int) -> Check:
         pieces = [seg.points for seg in tr.segments if (seg.kind == "sliding" or not ev.sliding_only) and len(seg.points)]
         if not pieces:
             continue
-        allp = np.vstack(pieces)
+        allp = pieces[0] if len(pieces) == 1 else np.vstack(pieces)
         candidates.append((_bbox_lower_bound(pts, allp.min(0), allp.max(0)), key, pieces))
     best = None
     for bound, key, pieces in sorted(candidates, key=lambda c: c[0]):
@@ -477,7 +479,7 @@ def _check_mark(ev: MarkEvidence, tracks: dict, index: int) -> Check:
                      {"wheel": ev.wheel, "reason": f"no computed {what} of a wheel matching {ev.wheel or '*'}"})
     return Check("mark", name, best[0], ev.tolerance, best[0] <= ev.tolerance, "length",
                  {"matched_wheel": best[2], "mean_distance": best[1], "selector": ev.wheel or "*",
-                  "mark_length": float(np.sum(np.hypot(*np.diff(np.asarray(ev.points, float), axis=0).T)))})
+                  "mark_length": mark_length})
 
 
 def body_impacts(body: str, impact, secondary=()) -> list:

@@ -155,6 +155,11 @@ class ContactSolution:
     work_normal, work_tangential : ndarray (nc,)
         The normal and tangential parts of ``work``.
     stop_work : ndarray (ns,)
+    attempts : tuple
+        The laws tried and refused before the accepted one, with why (``(law, reason)``).
+    inverse_mass : ndarray (n3, n3)
+        The constrained inverse mass ``P`` the impulses act through (:func:`constrained_inverse`), for
+        a caller that splits the velocity change by point or pair.
     """
 
     velocity: np.ndarray
@@ -169,6 +174,7 @@ class ContactSolution:
     work_tangential: np.ndarray
     stop_work: np.ndarray
     attempts: tuple = ()
+    inverse_mass: np.ndarray | None = None
 
     @property
     def energy_loss(self) -> float:
@@ -347,4 +353,4 @@ def solve_contacts(minv, G, Jn, Jt, Js, u, restitution, friction, strike=None, r
         uc = up
     ke_after = 0.5 * float(np.sum(mass * uc * uc))
     law = max(laws, key=("friction", "plastic", "frictionless").index) if laws else "friction"
-    return ContactSolution(uc, ln, lt, ls, law, ke_before, ke_after, wn + wt, wn, wt, wsum, tuple(attempts))
+    return ContactSolution(uc, ln, lt, ls, law, ke_before, ke_after, wn + wt, wn, wt, wsum, tuple(attempts), P)

@@ -519,6 +519,8 @@ def _add_quadrature(k, M, seg, quad, work=None):
 # ============================================================================= events and their words
 def _log_records(model: SceneModel, t: float, recs, log: list) -> None:
     """Run-out events (:class:`RunoutEvent`) from the kernels' log records (rows: kind, i, j, x, energy)."""
+    if not len(recs):  # most calls: nothing happened
+        return
     k = kernels()
     for row in np.atleast_2d(recs):
         kind, i, j, x, e = int(row[0]), int(row[1]), int(row[2]), float(row[3]), float(row[4])

@@ -208,6 +208,12 @@ def check_pin_gaps(vehicle: Vehicle, gaps: np.ndarray, tol: float) -> None:
             )
 
 
+@functools.lru_cache(maxsize=64)
+def _chain_layout(names: tuple) -> StateLayout:
+    """The state layout of a chain of bodies (immutable: one per chain, not one per call)."""
+    return StateLayout(names)
+
+
 def make_hitch_consistent(
     vehicle: Vehicle, states: Mapping[str, BodyState], *, position_tol: float = 1e-3
 ) -> dict[str, BodyState]:
@@ -241,7 +247,7 @@ def make_hitch_consistent(
     out = dict(states)
     if len(vehicle.bodies) < 2:
         return out
-    layout = StateLayout(tuple(b.name for b in vehicle.bodies))
+    layout = _chain_layout(tuple(b.name for b in vehicle.bodies))
     y = layout.pack(states)
     nb = layout.n_bodies
     G, gaps, _ = hitch_state(vehicle, layout, y)

@@ -35,7 +35,7 @@ import math
 
 import numpy as np
 
-from ..impact.multicontact import constrained_inverse, solve_contacts
+from ..impact.multicontact import solve_contacts
 from ..impact.result import BodyImpact, pdof_from_force
 from .layout import SV_X, SV_Y, SV_HEADING, SV_VX, SV_VY, SV_YAW_RATE
 from .result import RunoutEvent
@@ -195,7 +195,7 @@ def impact_instant(model: SceneModel, t: float, y: np.ndarray, trigger: np.ndarr
         if sol.stop[r] <= _NO_IMPULSE and ws[r] > 0.0:
             opened.append(int(k.release_stop(y, M, D, offsets, stops[r])))
     # the pairs: contact from now on; their records
-    P, _ = constrained_inverse(minv, G)
+    P = sol.inverse_mass  # the constrained inverse the impulses acted through
     records = []
     warning = ""
     if sol.law != "friction":

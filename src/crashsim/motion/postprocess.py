@@ -499,6 +499,21 @@ def _vehicle_statics(model) -> dict:
     return static
 
 
+def _lean_views(model, lean, static: dict) -> dict:
+    """Per vehicle, the :class:`_VehicleView` of the wheels the predicate ``lean`` keeps and their
+    indices in the model's wheels; kept for the last ``lean`` given (equal predicates reuse them)."""
+    held = model.__dict__.get("_lean_views")
+    if held is None or held[0] != lean:
+        views = {}
+        for v in model.vehicles:
+            w0, w1 = model.wheel_range[v.name]
+            keep = [w for w in range(w0, w1) if lean(model.specs[w])]
+            views[v.name] = (_lean_view(static[v.name][1], [w - w0 for w in keep]), np.asarray(keep, dtype=np.int64))
+        held = (lean, views)
+        model.__dict__["_lean_views"] = held
+    return held[1]
+
+
 def mode_snapshot(phase, D):
     """A copy of the mode arrays ``D`` of one segment with its phase: a row of the segment table."""
     memb, lk_j, lk_th, lk_n, _, pstate, pref, parked = D
@@ -596,6 +611,7 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
             missed = (float(miss_t), int(miss_k))
     nb, nw = model.n_bodies, model.n_wheels
     static = _vehicle_statics(model)
+    lean_views = None if lean is None else _lean_views(model, lean, static)
     w_grav = gravity_work(model, Y, seg_of, arrays.memb)
 
     # ---- per vehicle
@@ -632,9 +648,7 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
             v_missed = (missed[0], model.specs[missed[1]].key)
         quad_b = quad[b0:b1]
         if lean is not None:  # the kept wheels' tracks only, no hitch histories (see the docstring)
-            keep = [w for w in range(w0, w1) if lean(model.specs[w])]
-            view = _lean_view(view, [w - w0 for w in keep])
-            idx = np.asarray(keep, dtype=np.int64)
+            view, idx = lean_views[v.name]
             quad_w = lambda c: quad[nb + c * nw + idx]  # noqa: E731
             P_v, SL_v, LD_v = P[idx][:, cols], SL[idx][:, cols], LD[idx][:, cols]
             h1 = h0

@@ -614,10 +614,21 @@ def rolling_downhill(road, r) -> str:
             f"locked wheels (tyres, wheels[] or wheel_changes[]) or air brakes")
 
 
-def _track_filter(scenario):
-    """The wheels whose tracks a lean run keeps: those a run-out tyre mark of the evidence can match."""
-    selectors = tuple(m.wheel for m in scenario.evidence.marks if m.phase == "runout")
-    return lambda spec: any(wheel_matches(spec, s) for s in selectors)
+@dataclass(frozen=True)
+class _TrackFilter:
+    """The wheels whose tracks a lean run keeps: those a run-out tyre mark's ``wheel`` selector can
+    match. A predicate on wheel specs; two filters of the same selectors are equal, so that the
+    wheels it keeps are found once per run-out model, not once per sample."""
+
+    selectors: tuple
+
+    def __call__(self, spec) -> bool:
+        return any(wheel_matches(spec, s) for s in self.selectors)
+
+
+def _track_filter(scenario) -> _TrackFilter:
+    """The :class:`_TrackFilter` of a scenario's run-out tyre marks."""
+    return _TrackFilter(tuple(m.wheel for m in scenario.evidence.marks if m.phase == "runout"))
 
 
 #: Growth of a body's overlap with the barrier after separation [m] that is reported: the

@@ -149,6 +149,21 @@ def test_lean_scene_gives_the_full_numbers(raw):
         assert sum(len(r.wheels) for r in lean.runout.values()) < sum(len(r.wheels) for r in full.runout.values())
 
 
+def test_fit_evaluations_measure_the_marks_once(raw):
+    """The fit's lean evaluations leave the tyre-mark checks out (its residuals measure each mark
+    themselves) and keep every other check; their residuals are the full scene's, whose report still
+    checks the marks."""
+    fspec = FitSpec.from_dict(raw["fit"], raw, file=str(FILE))
+    fit = FitProblem(raw, fspec, engine=ENGINE, file=str(FILE))
+    for z in (np.full(len(fspec.unknowns), 0.5), np.array([0.3, 0.6, 0.4, 0.7])[: len(fspec.unknowns)]):
+        x = fit.x_of(z)
+        lean, full = fit.scene(x), fit.scene(x, lean=False)
+        kinds = lambda s: [c.kind for c in s.evidence.checks]  # noqa: E731
+        assert "mark" in kinds(full) and "mark" not in kinds(lean)
+        assert kinds(lean) == [k for k in kinds(full) if k != "mark"]
+        assert np.array_equal(fit.evidence.weighted(lean), fit.evidence.weighted(full))
+
+
 def test_the_inverse_api_takes_a_scenario(raw, monkeypatch):
     """crashsim.fit / monte_carlo accept a Scenario (its file_data varied, not its file read again), also
     one built in memory with no file; the same numbers as from the file's path."""

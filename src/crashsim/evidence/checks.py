@@ -512,7 +512,7 @@ def approach_of_body(approaches: dict | None, body: str):
 
 
 def evaluate_evidence(evidence: Evidence, impact, runout: dict | None, contact_point, secondary=(),
-                      approaches: dict | None = None) -> EvidenceReport:
+                      approaches: dict | None = None, *, marks: bool = True) -> EvidenceReport:
     """Residual and verdict of every evidence item.
 
     Parameters
@@ -526,6 +526,10 @@ def evaluate_evidence(evidence: Evidence, impact, runout: dict | None, contact_p
         an infinite residual: nothing was computed to compare).
     contact_point : (float, float)
         The scenario's contact point, world [m].
+    marks : bool
+        False leaves the tyre-mark items out of the report: a fit measures its own distances along
+        each mark (:class:`~crashsim.reconstruct.fit.EvidenceModel`), and its lean evaluations do not
+        check the marks a second time (its report's scene, run in full, does).
     """
     checks: list[Check] = []
     bodies = {}
@@ -563,8 +567,9 @@ def evaluate_evidence(evidence: Evidence, impact, runout: dict | None, contact_p
                                 abs(err) <= ev.heading_tolerance and at_rest, "angle",
                                 {"computed": float(wrap_angle(b.rest_heading)), "measured": ev.heading,
                                  "at_rest": at_rest, **extra}))
-    pre = approach_tracks(approaches) if any(m.phase == "approach" for m in evidence.marks) else {}
-    for i, ev in enumerate(evidence.marks):
+    checked = evidence.marks if marks else ()
+    pre = approach_tracks(approaches) if any(m.phase == "approach" for m in checked) else {}
+    for i, ev in enumerate(checked):
         checks.append(_check_mark(ev, pre if ev.phase == "approach" else tracks, i))
     for i, ev in enumerate(evidence.delta_v):
         name = ev.name or f"delta-v of {ev.body} ({ev.component})"

@@ -531,12 +531,14 @@ class FitProblem:
         return (np.asarray(x, float) - self.lower) / self.span
 
     #: Evaluations run the lean scene (:func:`~crashsim.scene.run.run_scene` ``lean=True``:
-    #: the same residuals, without what no evidence reads); the best point's scene is run in full.
+    #: the same residuals, without what no evidence reads, and without the tyre-mark checks,
+    #: whose distances :class:`EvidenceModel` measures itself); the best point's scene is run in full.
     lean = True
 
     def scene(self, x, *, lean: bool | None = None):
         """Run the scene at unknowns ``x`` (SI); ``lean`` default :attr:`lean`."""
-        return self.inputs.run(x, lean=self.lean if lean is None else lean)
+        lean = self.lean if lean is None else lean
+        return self.inputs.run(x, lean=lean, mark_checks=not lean)
 
     def full_scene(self, z):
         """The full SceneResult at scaled point ``z`` (for reports and figures), or the error that stops it."""

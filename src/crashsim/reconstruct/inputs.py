@@ -112,7 +112,7 @@ class SceneInputs:
         return self._overrides._variant is not None
 
     def run(self, values: Sequence[float] = (), *, record: Callable[[SceneResult], Any] | None = None,
-            lean: bool | None = None):
+            lean: bool | None = None, mark_checks: bool = True):
         """Run the scene with ``values`` (SI) at the paths.
 
         Parameters
@@ -123,6 +123,9 @@ class SceneInputs:
             the rest), its return value is returned; None: the full :class:`SceneResult`.
         lean : bool, optional
             Override of the result's kind (default: lean with a record, full without).
+        mark_checks : bool
+            False: no tyre-mark checks in the evidence report (a caller that measures the marks
+            itself, as the fit does).
 
         Raises
         ------
@@ -130,5 +133,5 @@ class SceneInputs:
             As :func:`~crashsim.scene.run.run_scene` and :meth:`scenario` raise them.
         """
         lean = (record is not None) if lean is None else bool(lean)
-        result = run_scene(self.scenario(values), lean=lean, models=self._models)
+        result = run_scene(self.scenario(values), lean=lean, models=self._models, mark_checks=mark_checks)
         return result if record is None else record(result)

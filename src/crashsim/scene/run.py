@@ -516,7 +516,7 @@ def simulate_approaches(scenario):
 
 
 def run_scene(scenario, *, lean: bool = False, separation: dict | None = None,
-              models: ModelReuse | None = None) -> SceneResult:
+              models: ModelReuse | None = None, mark_checks: bool = True) -> SceneResult:
     """Solve a loaded scenario: the impact, then the run-out of the whole scene if asked for.
 
     At the ``articulated`` and ``load_transfer`` levels every vehicle runs out together, with
@@ -539,6 +539,9 @@ def run_scene(scenario, *, lean: bool = False, separation: dict | None = None,
     ``models``: the run-out scene model kept across the samples of one scene
     (:class:`~crashsim.scene.models.ModelReuse`, owned by a
     :class:`~crashsim.reconstruct.inputs.SceneInputs`); None builds it for this run.
+
+    ``mark_checks``: False leaves the tyre-mark checks out of the evidence report (a fit's lean
+    evaluations, which measure their own distances along each mark: ``evaluate_evidence(marks=)``).
 
     Raises
     ------
@@ -579,7 +582,7 @@ def run_scene(scenario, *, lean: bool = False, separation: dict | None = None,
     if not scenario.evidence.empty:
         evidence = evaluate_evidence(scenario.evidence, impact, runout, scenario.impact.surface.point,
                                      secondary=joint.impacts if joint is not None else (),
-                                     approaches=scenario.approaches)
+                                     approaches=scenario.approaches, marks=mark_checks)
     warnings = [f"approach of {name}: {w}" for name, a in scenario.approaches.items() for w in a.warnings]
     warnings += [f"impact: {w}" for w in impact.warnings]
     warnings += rest_misfit_warnings(scenario.evidence)

@@ -251,7 +251,7 @@ class _ScipyIntegrator(_Integrator):
 class WallClock(numba_event.Listener):
     """The wall-clock budget of a run (``RunoutOptions.max_wall_time``), without the time numba spends
     compiling the kernels on a first call: a listener of numba's ``"numba:compile"`` events (installed
-    around each integration) adds it back, so a first run on a busy machine is not stopped for the
+    once around a run's integrations and later impacts) adds it back, so a first run on a busy machine is not stopped for the
     compiler's time."""
 
     def __init__(self, budget: float):
@@ -678,21 +678,21 @@ def run_model(model: SceneModel, initial: Mapping[str, BodyState], *, lean=None)
     events_done = 0  # instants solved after the first impact
     t = 0.0
     names = _status_names()
-    while True:
-        with numba_event.install_listener("numba:compile", clock):
+    with numba_event.install_listener("numba:compile", clock):  # once per run: compiling is not counted
+        while True:
             code, t, y, geo = integrator.integrate(t, y, D, offsets, clock, counters, quad, log)
-        if code != k.ST_IMPACT:
-            break
-        if events_done >= o.max_impacts:
-            status = "event_limit"
-            message = (f"stopped at t = {t:.4g} s (simulated) before rest: more than max_impacts = {o.max_impacts} "
-                       f"later impacts; the last between {model.pairs[int(geo[0])].name}")
-            code = None
-            break
-        # every point touching at this instant, solved at once (one impact event)
-        events_done += 1
-        impacts += impact_instant(model, t, y, geo, D, offsets, log, impacts)
-        _log_records(model, t, k.settle_at(y, M, D), log)
+            if code != k.ST_IMPACT:
+                break
+            if events_done >= o.max_impacts:
+                status = "event_limit"
+                message = (f"stopped at t = {t:.4g} s (simulated) before rest: more than max_impacts = "
+                           f"{o.max_impacts} later impacts; the last between {model.pairs[int(geo[0])].name}")
+                code = None
+                break
+            # every point touching at this instant, solved at once (one impact event)
+            events_done += 1
+            impacts += impact_instant(model, t, y, geo, D, offsets, log, impacts)
+            _log_records(model, t, k.settle_at(y, M, D), log)
     if code is not None:
         status = names[code]
         message = _message(code, o, t, y, k, M, log, integrator)

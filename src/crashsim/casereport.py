@@ -46,7 +46,8 @@ FIGURE_WIDTH_IN = 6.2
 #: Smallest type of a figure as the report shows it [pt] (tests/report/test_case_report.py measures it).
 MIN_TEXT_PT = 7.0
 
-#: The model's assumptions and limits that every case report carries (README "Limits you should know").
+#: The model's assumptions and limits that every case report carries: the short form of the user guide's
+#: "Limits you should know" (docs/guide.md).
 VALIDITY_NOTES = (
     "Every impact, first or later, is instantaneous and planar (impulse-momentum, Brach's assumptions); "
     "external impulses during the first impact are inputs.",
@@ -55,8 +56,9 @@ VALIDITY_NOTES = (
     "unknowns or uncertain inputs).",
     "Outlines are rectangles; a body's crush does not change its outline. Sustained contact is a penalty "
     "force whose stiffness is numerical, not a crush stiffness.",
-    "Bodies pressed together at one instant are solved one impulse after another, not as one simultaneous "
-    "impact.",
+    "Bodies touching at one instant are one impact event: every touching point solved together (Newton's "
+    "restitution, Coulomb friction, the hitches), in at most 8 rounds; where points jam, the velocities after "
+    "it are unique but the impulses reported are one solution of several.",
     "The reaction time before the approach is at constant speed along a straight line. Steering in the approach "
     "is a fixed angle per wheel changed at scheduled times, a pure-pursuit driver along a path, or a recorder's "
     "steering table; there is no drive force, so a recorded speed can be held but not gained.",

@@ -284,7 +284,7 @@ def test_tensile_without_friction_names_the_constraints():
 
 @pytest.mark.xfail(strict=True, reason="known defect: at zero initial slip with a tensile no-slide solution the "
                                        "friction direction is taken from the round-off sign of the slip (0 here: no "
-                                       "friction); it should come from the slip the impact creates (README, Limits)")
+                                       "friction); it should come from the slip the impact creates (user guide, Limits you should know)")
 def test_friction_slides_with_full_friction_from_zero_slip():
     """Sliding throughout means Coulomb friction at full strength, |P_t| = f |P_n|, whichever way;
     today the solver applies mu = -f sign(u_t) with u_t = 0 exactly, i.e. no friction. (With the

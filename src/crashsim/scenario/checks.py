@@ -198,3 +198,33 @@ def check_contact_point(problem: ImpactProblem, tolerance: float, system: str, f
                        + f" at impact (allowed: within impact.contact_tolerance = {format_value(tolerance, Kind.LENGTH, system)} "
                        "of both outlines); check impact.point and its point_frame, and the vehicles' positions and headings",
                        "impact.point", file)
+
+
+#: The smallest radius of gyration about the vertical axis, as a share of the outline's length, that a
+#: vehicle body's ``yaw_inertia`` is taken for without a warning. The shipped scenes and presets lie
+#: between 0.17 and 0.35 (a uniform box: 0.29 of its diagonal); a value in pound-mass ft^2 meant as
+#: slug ft^2 is 32.2 times too small, its radius of gyration 5.7 times, about 0.05 of the length.
+GYRATION_LOW = 0.1
+
+
+def inertia_warnings(veh: Vehicle, raw: dict) -> list[str]:
+    """A warning for every ``yaw_inertia`` the file writes (``raw``: the vehicle's table as written)
+    whose radius of gyration ``sqrt(I / m)`` is below ``GYRATION_LOW`` of the body's length or beyond
+    half its outline's diagonal (no rigid body whose mass lies within its outline, CG at its centre,
+    has more): most likely a value in the wrong unit."""
+    out: list[str] = []
+    bodies = raw.get("bodies") if isinstance(raw, dict) else None
+    for i, body in enumerate(veh.bodies):
+        rb = bodies[i] if isinstance(bodies, list) and i < len(bodies) and isinstance(bodies[i], dict) else {}
+        written = rb.get("yaw_inertia")
+        if written is None or not body.length or not body.width or not body.mass > 0 or not body.yaw_inertia > 0:
+            continue
+        k = math.sqrt(body.yaw_inertia / body.mass)
+        high = 0.5 * math.hypot(body.length, body.width)
+        if GYRATION_LOW * body.length <= k <= high:
+            continue
+        out.append(f"vehicles.{veh.name}.bodies[{i}].yaw_inertia = {as_in_file(written)}: with the body's mass its "
+                   f"radius of gyration is {k / body.length:.3g} x its length (vehicle bodies lie near 0.17-0.35; "
+                   f"expected {GYRATION_LOW:g} to {high / body.length:.3g}, half the outline's diagonal); check the "
+                   "unit: 1 slug ft^2 = 1 lbf ft s^2 = 32.17 lb ft^2 (lb ft^2 is pound-mass)")
+    return out

@@ -15,7 +15,7 @@ from ..schema import ScenarioValidationError, load_toml, validate_collect
 from ..survey.mapping import as_written, expand_survey, is_placed, survey_frame
 from ..units import DisplaySystem
 from .approach import approach_input, recorded_speeds
-from .checks import check_contact_point, check_impact_law, check_overlap, check_vehicle_geometry
+from .checks import check_contact_point, check_impact_law, check_overlap, check_vehicle_geometry, inertia_warnings
 from .evidence import build_crush, build_evidence
 from .impact import barrier_extent, impact_problem
 from .layout import build_map_lines, check_north
@@ -103,7 +103,7 @@ def _from_validated(d: dict, data: dict, merged: dict, source, file: str | None,
                     lenient: bool = False) -> Scenario:
     """The typed scenario of a validated document ``d`` (see :func:`scenario_from_dict`); ``lenient``:
     ``d`` has values the schema refused (None), and a part that fails on one is skipped."""
-    vehicles, states = [], {}
+    vehicles, states, notes = [], {}, []
     problems = Problems(file, lenient)  # the independent parts of the file first: every error of them at once
     for name, v in d["vehicles"].items():
         with problems.each():
@@ -119,6 +119,7 @@ def _from_validated(d: dict, data: dict, merged: dict, source, file: str | None,
         with problems.each():
             veh, st = build_vehicle(name, v, file)
             check_vehicle_geometry(veh, v, merged["vehicles"][name], d["scenario"]["units"], file)
+            notes += inertia_warnings(veh, (data.get("vehicles") or {}).get(name) or {})
             for bn in st:
                 if bn in states:
                     raise error_at(f"body name {bn!r} is used twice; body names must be unique in the scene",
@@ -194,7 +195,7 @@ def _from_validated(d: dict, data: dict, merged: dict, source, file: str | None,
                    descriptions={n: v.get("description") or "" for n, v in d["vehicles"].items()},
                    survey_frame=survey_frame(survey) if placed else None,
                    north=(d.get("map") or {}).get("north"), barrier_extent=barrier_extent(d.get("barrier")),
-                   load_warnings=tuple(_angle_warnings(data)), file_data=source)
+                   load_warnings=tuple(_angle_warnings(data) + notes), file_data=source)
     return out
 
 

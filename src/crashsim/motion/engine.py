@@ -251,8 +251,8 @@ class _ScipyIntegrator(_Integrator):
 class WallClock(numba_event.Listener):
     """The wall-clock budget of a run (``RunoutOptions.max_wall_time``), without the time numba spends
     compiling the kernels on a first call: a listener of numba's ``"numba:compile"`` events (installed
-    once around a run's integrations and later impacts) adds it back, so a first run on a busy machine is not stopped for the
-    compiler's time."""
+    once around a run's integrations and later impacts) adds it back, so a first run on a busy machine
+    is not stopped for the compiler's time."""
 
     def __init__(self, budget: float):
         self.start = time.perf_counter()

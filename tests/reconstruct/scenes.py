@@ -109,7 +109,8 @@ def with_evidence(data: dict, paths, truth, *, rest=None, heading=True, delta_v=
                     -s * b.delta_v[0] + c * b.delta_v[1])
             v = float(v + (rng.normal(0.0, sigma_dv) if noise else 0.0))
             ev["delta_v"].append({"body": name, "component": component, "value": f"{v!r} m/s",
-                                  "tolerance": f"{3 * sigma_dv} m/s", "sigma": f"{sigma_dv} m/s"})
+                                  "tolerance": f"{3 * sigma_dv} m/s", "sigma": f"{sigma_dv} m/s",
+                                  **({"lateral_positive": "left"} if component == "lateral" else {})})
     out = copy.deepcopy(data)
     out["evidence"] = ev
     return out

@@ -136,7 +136,8 @@ def test_fit_recovers_the_fraction_from_recorded_delta_v():
     data = _data(tangential="fraction", mu_fraction=0.95)
     data["evidence"] = {"delta_v": [
         {"name": f"car {k}", "body": "car", "component": k, "value": f"{float(v)!r} m/s", "tolerance": "0.5 m/s",
-         "sigma": "0.1 m/s"} for k, v in comps.items()]}
+         "sigma": "0.1 m/s", **({"lateral_positive": "left"} if k == "lateral" else {})}
+        for k, v in comps.items()]}
     data["fit"] = {"starts": 1, "unknowns": [{"path": "impact.mu_fraction", "lower": "0", "upper": "1",
                                              "initial": "0.95"}]}
     fit = crashsim.fit(data, workers=1)

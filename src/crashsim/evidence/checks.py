@@ -19,7 +19,8 @@ tyre mark       one-sided Hausdorff distance from the measured mark (a polyline,
 point of impact distance between the scenario's contact point and the measured one [m].
 delta-v         computed minus recorded delta-v of a body [m/s]: its magnitude, or its
                 component along the body's x (longitudinal, as event data recorders report)
-                or y axis (lateral), in the body axes at impact.  Of the first impact (default:
+                or across it (lateral: positive to the left, the body's y axis, or to the right,
+                SAE J670, as the item's ``lateral_positive`` says), in the body axes at impact.  Of the first impact (default:
                 a recorder records one event, normally the first), or summed over all the
                 body's impacts (``impacts = "all"``: a recorder that accumulates a whole event
                 which includes a later impact).
@@ -244,6 +245,13 @@ class DeltaVEvidence:
     name: str = ""
     impacts: str = "first"  # "first": the first impact only (one recorded event); "all": the sum over the body's impacts
     sigma: float | None = None  # measurement uncertainty [m/s] (fit, posterior)
+    lateral_positive: str = "left"  # lateral component: "left" (body y axis, ISO 8855) or "right" (SAE J670)
+
+    @property
+    def label(self) -> str:
+        """The item's name, or one made of its body and component (with the lateral sign convention)."""
+        comp = self.component if self.component != "lateral" else f"lateral, + {self.lateral_positive}"
+        return self.name or f"delta-v of {self.body} ({comp})"
 
 
 @dataclass(frozen=True)
@@ -572,7 +580,7 @@ def evaluate_evidence(evidence: Evidence, impact, runout: dict | None, contact_p
     for i, ev in enumerate(checked):
         checks.append(_check_mark(ev, pre if ev.phase == "approach" else tracks, i))
     for i, ev in enumerate(evidence.delta_v):
-        name = ev.name or f"delta-v of {ev.body} ({ev.component})"
+        name = ev.label
         own = body_impacts(ev.body, impact, secondary)
         if not own:
             checks.append(Check("delta-v", name, math.inf, ev.tolerance, False, "speed",
@@ -586,10 +594,12 @@ def evaluate_evidence(evidence: Evidence, impact, runout: dict | None, contact_p
             computed = float(np.hypot(*dv))
         else:
             local = rotate(dv, -heading)
-            computed = float(local[0] if ev.component == "longitudinal" else local[1])
+            computed = float(local[0] if ev.component == "longitudinal"
+                             else local[1] if ev.lateral_positive == "left" else -local[1])
         res = computed - ev.value
         checks.append(Check("delta-v", name, res, ev.tolerance, abs(res) <= ev.tolerance, "speed",
                             {"computed": computed, "measured": ev.value, "component": ev.component,
+                             **({"lateral_positive": ev.lateral_positive} if ev.component == "lateral" else {}),
                              "impacts": ev.impacts, "impacts_counted": n_imp}))
     for i, ev in enumerate(evidence.recorder):
         checks.append(_check_recorder(ev, approach_of_body(approaches, ev.body), i))

@@ -141,7 +141,7 @@ def check_map(scene) -> dict:
     for i, m in enumerate(ev.marks):
         take("mark", i, m.name or f"mark {i + 1}")
     for i, x in enumerate(ev.delta_v):
-        take("delta-v", i, x.name or f"delta-v of {x.body} ({x.component})")
+        take("delta-v", i, x.label)
     for i, x in enumerate(getattr(ev, "recorder", ())):
         take("recorder", i, x.name or f"recorder in {x.body}")
     return out
@@ -220,7 +220,7 @@ def draw_evidence(S: SceneDrawing, checks: dict) -> None:
     for i, x in enumerate(ev.delta_v):
         c = checks.get(("delta-v", i))
         verdict, color = _verdict([c])
-        name = x.name or f"delta-v of {x.body} ({x.component})"
+        name = x.label
         detail = _residual_text(c, system)
         S.legend_entry(wrap(f"recorded \u0394v \u201c{name}\u201d: {verdict}", 52)
                        + (f"\n  {detail}" if detail else ""),

@@ -324,7 +324,7 @@ class EvidenceModel:
                                mark=m))
         for i, x in enumerate(ev.delta_v):
             s, src = sig(x.sigma, "sigma", x.tolerance, f"evidence.delta_v[{i}]")
-            items.append(_Item("delta-v", x.name or f"delta-v of {x.body} ({x.component})", "speed", s, src, 1, 1.0,
+            items.append(_Item("delta-v", x.label, "speed", s, src, 1, 1.0,
                                i, body=x.body, measured=float(x.value)))
         for i, x in enumerate(ev.recorder):
             s, src = sig(x.sigma, "sigma", x.tolerance, f"evidence.recorder[{i}]")

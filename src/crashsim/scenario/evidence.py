@@ -96,8 +96,18 @@ def build_evidence(e: dict | None, states: dict, file: str | None, vehicles=(), 
     dv = []
     for i, x in enumerate(e["delta_v"]):
         with problems.each():
+            side = x.get("lateral_positive")
+            if x["component"] == "lateral" and side is None:
+                raise error_at('a lateral delta-v needs the side it is positive to: lateral_positive = "left" '
+                               "(crashsim's body y axis, ISO 8855) or \"right\" (SAE J670 vehicle axes, y to the "
+                               "right, as many recorder reports; check the report's sign statement)",
+                               f"evidence.delta_v[{i}].lateral_positive", file)
+            if x["component"] != "lateral" and side is not None:
+                raise error_at(f"lateral_positive = {side!r} applies only to component = \"lateral\" (this item's "
+                               f"component is {x['component']!r})", f"evidence.delta_v[{i}].lateral_positive", file)
             dv.append(DeltaVEvidence(body(x["body"], f"evidence.delta_v[{i}].body"), x["value"], x["tolerance"],
-                                     x["component"], x["name"], x["impacts"], sigma=x.get("sigma")))
+                                     x["component"], x["name"], x["impacts"], sigma=x.get("sigma"),
+                                     lateral_positive=side or "left"))
     recorder = []
     for i, x in enumerate(e["recorder"]):
         with problems.each():

@@ -509,7 +509,14 @@ EV_DV = Section("delta_v", [
     Field("body", "str", example="tractor", description="Body carrying the recorder"),
     Field("value", Kind.SPEED, example="2.5 mph", description="Recorded delta-v"),
     Field("component", choices=("magnitude", "longitudinal", "lateral"), default="magnitude",
-          description="What was recorded: the magnitude, or the component along the body's x or y axis"),
+          description="What was recorded: the magnitude, or the component along the body's x axis (longitudinal, "
+                      "positive forward) or across it (lateral: its sign convention is lateral_positive)"),
+    Field("lateral_positive", choices=("left", "right"), required=False, example="right",
+          description="For component = \"lateral\" (required there, refused elsewhere): the side toward which the "
+                      "recorded lateral delta-v is positive. \"left\": crashsim's body y axis (x forward, y left, "
+                      "z up: ISO 8855); \"right\": SAE J670 vehicle axes (x forward, y right, z down), the axes of "
+                      "many recorder reports (check the report's own sign statement). The check compares, and "
+                      "reports, the computed component in the convention given"),
     Field("tolerance", Kind.SPEED, minimum=0, example="1 mph", description="Largest acceptable difference"),
     Field("impacts", choices=("first", "all"), default="first",
           description="Which impacts the recorder saw: the first (default: a recorder records one event, normally the "

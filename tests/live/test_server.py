@@ -132,6 +132,25 @@ def test_export_gives_the_figure_and_the_report_only_of_a_saved_state(live_serve
                      lambda got: any(m.get("seq") == 302 for m in got)))
 
 
+def test_saved_says_what_it_wrote_and_what_still_differs(live_server):
+    """A save as a new file: its reply names the values written (the one changed input) and what still
+    differs from the open file (the same: the open file is not the one written)."""
+    origin = f"http://127.0.0.1:{live_server.port}"
+    _run(_ws_session(live_server, origin, ['{"type": "set", "seq": 400, "values": {"vehicles.B.speed": "31 mph"}}'],
+                     lambda got: any(m.get("seq") == 400 for m in got)))
+    got = _run(_ws_session(live_server, origin, ['{"type": "save_as", "name": "saved-copy.toml"}'],
+                           lambda got: any(m["type"] in ("saved", "save_refused") for m in got)))
+    (saved,) = [m for m in got if m["type"] == "saved"]
+    assert saved["path"].endswith("saved-copy.toml")
+    assert saved["values"] == {"vehicles.B.speed": "13.8582 m/s"} == saved["changed"]
+    copy = (live_server.session.path.parent / "saved-copy.toml").read_text(encoding="utf-8").splitlines()
+    opened = live_server.session.path.read_text(encoding="utf-8").splitlines()
+    assert len(copy) == len(opened)  # nothing added: no default the file leaves out
+    assert [b for a, b in zip(opened, copy) if a != b] == ['speed = "13.8582 m/s"']
+    _run(_ws_session(live_server, origin, ['{"type": "set", "seq": 401, "values": {"vehicles.B.speed": "13.41 m/s"}}'],
+                     lambda got: any(m.get("seq") == 401 for m in got)))
+
+
 @pytest.mark.slow
 def test_fit_from_here_answers_with_the_fit(live_server):
     origin = f"http://127.0.0.1:{live_server.port}"

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -144,3 +145,22 @@ def test_a_notebook_shows_the_view_inline(scene_copy):
         assert view.url.startswith("http://127.0.0.1:")
     finally:
         view.stop()
+
+
+def test_save_writes_only_what_changed_not_the_defaults_the_file_leaves_out(tmp_path):
+    """A scene without moment_restitution (its default -1, no moment impulse): saving a changed
+    restitution writes that one line, not the default the view's slider holds."""
+    src = Path(__file__).parents[2] / "scenarios" / "scenes" / "truck_brakes_into_car.toml"
+    f = tmp_path / "scene.toml"
+    before = src.read_text(encoding="utf-8")
+    assert "moment_restitution" not in before
+    f.write_text(before, encoding="utf-8")
+    s = LiveSession(f)
+    assert s.controls["impact.moment_restitution"].written == -1.0
+    assert s.apply({"impact.restitution": 0.2})["ok"]
+    assert s.changed() == {"impact.restitution": 0.2}
+    s.save()
+    after = f.read_text(encoding="utf-8")
+    diff = [(a, b) for a, b in zip(before.splitlines(), after.splitlines()) if a != b]
+    assert "moment_restitution" not in after and len(after.splitlines()) == len(before.splitlines())
+    assert diff == [("restitution = 0.1", "restitution = 0.2")]

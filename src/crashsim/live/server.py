@@ -342,7 +342,10 @@ class LiveServer:
             raise ValueError('a "save_as" message is {"type": "save_as", "name": "new-file.toml"}')
         loop = asyncio.get_running_loop()
         try:
-            written = await loop.run_in_executor(self._compute, lambda: self.session.save(name))
+            # "values": what the save wrote, taken before it; "changed": what still differs from the file
+            # the view has open (nothing after saving into it; a save as a new file leaves it as it was)
+            wrote, written = await loop.run_in_executor(
+                self._compute, lambda: (self.session.changed(), self.session.save(name)))
         except ScenarioError as exc:
             return await self._send(ws, {"type": "save_refused", "error": str(exc),
                                          "changed_on_disk": self.session.changed_on_disk()})
@@ -350,7 +353,7 @@ class LiveServer:
             where = f" {exc.filename!r}" if exc.filename else ""
             return await self._send(ws, {"type": "save_refused", "error": f"could not write{where}: "
                                          f"{exc.strerror or exc}", "changed_on_disk": False})
-        await self._broadcast({"type": "saved", "path": written, "changed": self.session.changed()})
+        await self._broadcast({"type": "saved", "path": written, "values": wrote, "changed": self.session.changed()})
 
     async def _on_reload(self, ws, msg):
         loop = asyncio.get_running_loop()

@@ -390,7 +390,9 @@ class LiveSession:
             out = self.path
         else:
             out = self.sibling(target)
-        text = save_values(self.path.read_text(encoding="utf-8"), self.values(), self.controls, file=self.file)
+        # only the inputs the view changed: a default the file does not write (moment_restitution = -1,
+        # say) stays unwritten
+        text = save_values(self.path.read_text(encoding="utf-8"), self.changed(), self.controls, file=self.file)
         out.write_text(text, encoding="utf-8")
         if out == self.path:  # the file's values are the view's now
             self.file_hash = hashlib.sha256(out.read_bytes()).hexdigest()

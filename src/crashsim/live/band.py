@@ -7,6 +7,9 @@ reads), returning its CG paths, rest poses and whether it meets all the evidence
 
 from __future__ import annotations
 
+import os
+import signal
+import threading
 import time
 
 import numpy as np
@@ -14,12 +17,30 @@ import numpy as np
 from ..errors import CrashsimError
 from ..reconstruct.inputs import Scene
 
-__all__ = ["BandRunner", "run_band_chunk", "PATH_POINTS"]
+__all__ = ["BandRunner", "run_band_chunk", "band_worker_init", "PATH_POINTS"]
 
 #: Points per CG path of a band sample.
 PATH_POINTS = 60
 
 _RUNNERS: dict = {}
+
+#: Seconds between a band worker's looks at whether the server that started it still runs.
+PARENT_POLL = 0.5
+
+
+def band_worker_init(parent: int) -> None:
+    """Start of a band worker process: Ctrl+C is the server's to handle (it stops the workers; a
+    worker's own KeyboardInterrupt would only print its traceback), and the worker ends itself once
+    the server process ``parent`` is gone (killed, or stopped by a signal that left no time to stop
+    the workers), instead of running on as an orphan."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+    def watch():
+        while os.getppid() == parent:
+            time.sleep(PARENT_POLL)
+        os._exit(0)
+
+    threading.Thread(target=watch, name="crashsim-band-parent-watch", daemon=True).start()
 
 
 class BandRunner:

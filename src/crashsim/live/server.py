@@ -27,7 +27,9 @@ import concurrent.futures
 import hmac
 import json
 import multiprocessing
+import os
 import secrets
+import signal
 import tempfile
 import threading
 import time
@@ -40,7 +42,7 @@ from ..plotting import save_scene_figures
 from ..reconstruct.fit import fit_scene
 from ..scenario import presets
 from ..units import format_value
-from .band import run_band_chunk
+from .band import band_worker_init, run_band_chunk
 from .session import LiveSession
 from .view import band_payload
 
@@ -326,7 +328,8 @@ class LiveServer:
 
     def _start_band_pool(self) -> None:
         ctx = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
-        self._pool = concurrent.futures.ProcessPoolExecutor(self.workers, mp_context=ctx)
+        self._pool = concurrent.futures.ProcessPoolExecutor(self.workers, mp_context=ctx, initializer=band_worker_init,
+                                                            initargs=(os.getpid(),))
         payload, rows = self.session.band_task(1)
         for f in [self._pool.submit(run_band_chunk, payload, rows) for _ in range(self.workers)]:
             f.result()  # every worker started, its runner built
@@ -436,6 +439,10 @@ class LiveServer:
 
         async def main():
             task = asyncio.ensure_future(self._serve(started))
+            try:  # SIGTERM (a service manager, kill) stops the server as Ctrl+C does: its workers with it
+                asyncio.get_running_loop().add_signal_handler(signal.SIGTERM, task.cancel)
+            except (NotImplementedError, RuntimeError):  # no signals here (Windows, not the main thread)
+                pass
             while not started.is_set() and not task.done():
                 await asyncio.sleep(0.05)
             if on_ready is not None and started.is_set():
@@ -444,7 +451,7 @@ class LiveServer:
 
         try:
             asyncio.run(main())
-        except KeyboardInterrupt:
+        except (KeyboardInterrupt, asyncio.CancelledError):
             pass
         finally:
             self.close()

@@ -46,6 +46,7 @@ def _load(path: str):
     from .scenario import load_scenario
 
     scenario = load_scenario(path)
+    _check_sections(scenario)
     ro = scenario.runout
     if first_run.interpreted() and ro is not None and ro.options.max_wall_time < first_run.INTERPRETED_WALL_TIME:
         sys.stderr.write(f"crashsim: interpreted run: the run-out's wall-time limit (runout.max_wall_time = "
@@ -53,6 +54,13 @@ def _load(path: str):
         opts = dataclasses.replace(ro.options, max_wall_time=first_run.INTERPRETED_WALL_TIME)
         scenario = dataclasses.replace(scenario, runout=dataclasses.replace(ro, options=opts))
     return scenario
+
+
+def _check_sections(scenario) -> None:
+    """The file's [fit] and [uncertainty] checked at load, whatever the command (their paths, bounds)."""
+    from .reconstruct.sections import check_sections
+
+    check_sections(scenario.file_data, scenario.path)
 
 
 def _figure_inputs(scenario) -> None:
@@ -95,6 +103,7 @@ def _cmd_fit(args) -> int:
         raise ScenarioError(f"{args.write_best!r} is the input file; write the best fit to another file",
                             field="--write-best", file=args.file)
     scenario = load_scenario(args.file)  # the whole file validated first ([fit] and evidence sigmas included)
+    _check_sections(scenario)
     from .reconstruct.fit import fit_scene
 
     system = resolve_system(args.units, scenario.units)  # the file's speed_unit kept
@@ -126,6 +135,7 @@ def _cmd_mc(args) -> int:
     from .scenario import load_scenario
 
     scenario = load_scenario(args.file)  # a refused file before the engines are imported
+    _check_sections(scenario)
     from .reconstruct.mc_plots import save_mc_figures
     from .reconstruct.montecarlo import monte_carlo
 
@@ -164,6 +174,7 @@ def _cmd_posterior(args) -> int:
     from .scenario import load_scenario
 
     scenario = load_scenario(args.file)  # the whole file validated first ([fit], [posterior], evidence sigmas)
+    _check_sections(scenario)
     from .reconstruct.posterior import run_posterior
     from .reconstruct.posterior_plots import save_posterior_figures
 

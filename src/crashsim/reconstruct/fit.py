@@ -169,6 +169,8 @@ class FitSpec:
     sigma_from_tolerance: float | None = None
     mark_points: int = 10
     correlation_warning: float = CORRELATION_WARNING
+    #: What :meth:`from_dict` found worth a warning in the table (the fit's report lists them).
+    notes: tuple[str, ...] = ()
 
     @property
     def paths(self) -> tuple[str, ...]:
@@ -182,7 +184,7 @@ class FitSpec:
         """
         d = validate_fit(raw, file=file)
         base = forward_data(data, file=file) if data is not None else None
-        unknowns = []
+        unknowns, notes = [], []
         for i, u in enumerate(d["unknowns"]):
             key = f"fit.unknowns[{i}]"
             t = resolve_path(u["path"], field=f"{key}.path")
@@ -197,19 +199,19 @@ class FitSpec:
                 if not lo <= x0 <= hi:
                     raise ScenarioError(f"initial {u['initial']!r} lies outside [{u['lower']}, {u['upper']}]",
                                         field=f"{key}.initial", file=file)
-            else:
-                x0 = None
-                if base is not None:
-                    raw_v = get_value(base, t)
-                    if raw_v is not None:
-                        x0 = parse_value(raw_v, t, field=t.path)
-                if x0 is None or not lo <= x0 <= hi:
-                    x0 = 0.5 * (lo + hi)
+            raw_v = get_value(base, t) if base is not None else None
+            in_file = parse_value(raw_v, t, field=t.path) if raw_v is not None else None
+            if in_file is not None and not lo <= in_file <= hi:
+                notes.append(f"{key}: the file's {t.path} = {raw_v!r} lies outside the bounds [{u['lower']}, "
+                             f"{u['upper']}]: the fit does not consider it, and the file's own value is what "
+                             "`crashsim run` of the file computes")
+            if u["initial"] is None:
+                x0 = in_file if in_file is not None and lo <= in_file <= hi else 0.5 * (lo + hi)
             unknowns.append(Unknown(t.path, u["name"] or t.path, lo, hi, x0, t.kind))
         return cls(tuple(unknowns), starts=d["starts"], screen=d["screen"], seed=d["seed"], method=d["method"],
                    max_evaluations=d["max_evaluations"], diff_step=d["diff_step"], confidence=d["confidence"],
                    covariance=d["covariance"], sigma_from_tolerance=d["sigma_from_tolerance"],
-                   mark_points=d["mark_points"], correlation_warning=d["correlation_warning"])
+                   mark_points=d["mark_points"], correlation_warning=d["correlation_warning"], notes=tuple(notes))
 
     def to_dict(self) -> dict:
         return {"unknowns": [u.__dict__.copy() for u in self.unknowns],
@@ -1153,7 +1155,7 @@ def _analyse(problem: FitProblem, spec: FitSpec, outcomes: list[dict], engine: s
     zb = np.asarray(outcomes[best_k]["z"])
     xb = problem.x_of(zb)
     r, scene = problem.evaluate(zb)
-    warnings: list[str] = []
+    warnings: list[str] = list(spec.notes)
     success = not isinstance(scene, Exception) and outcomes[best_k]["status"] > 0
     message = outcomes[best_k]["message"]
     if isinstance(scene, Exception):

@@ -17,7 +17,7 @@ from pathlib import Path
 from ._jit import cache_dir, ready
 from .errors import CrashsimError, ScenarioError, SolverError
 from .cli_parser import build_parser
-from .figure_options import check_view
+from .figure_options import SCENE_FIGURE_SUFFIXES, check_view
 from .outputs import check_output_dir, check_output_file, check_workers
 from .units import Kind, format_value, parse, resolve_system, to_unit
 
@@ -461,7 +461,7 @@ def _check_outputs(args) -> None:
     if c in ("mc", "posterior") and args.plots:
         check_output_dir(args.plots, field="--plots", what="the figures")
     if c == "plot":
-        figs = _figure_suffixes()
+        figs = SCENE_FIGURE_SUFFIXES  # what save_scene_figures writes (matplotlib would write more)
         for field, path in (("-o", args.output), ("--histories", args.histories),
                             ("--time-distance", args.time_distance), ("--wheels", args.wheels)):
             if path:

@@ -14,7 +14,7 @@ import re
 
 from .errors import ScenarioError
 
-__all__ = ["LEGEND_MODES", "PAPER_SIZES", "LABEL_KINDS", "VIEWS", "ANIMATION_LEGENDS", "ZOOMS", "check_hide", "check_view",
+__all__ = ["SCENE_FIGURE_SUFFIXES", "LEGEND_MODES", "PAPER_SIZES", "LABEL_KINDS", "VIEWS", "ANIMATION_LEGENDS", "ZOOMS", "check_hide", "check_view",
            "parse_scale", "NARROW_FIGURE", "title_chars", "is_color"]
 
 #: A figure narrower than this [in] gets its legends under its panels, not beside them (the
@@ -72,6 +72,9 @@ def check_hide(hide) -> frozenset:
                             f"{', '.join(LABEL_KINDS)}", field="hide")
     return kinds
 
+
+#: The formats a scene figure (and its histories, time-distance and wheel charts) is written in.
+SCENE_FIGURE_SUFFIXES = (".png", ".svg", ".pdf")
 
 _ENGINEER = re.compile(r"""^1\s*(?:"|in|inch)\s*=\s*([0-9.eE+]+)\s*(?:'|ft|feet|foot)$""")
 

@@ -289,15 +289,28 @@ def _num(x: float) -> str:
     return format(x, ".12g")
 
 
-def interval_text(f: Field) -> str:
+def interval_text(f: Field, like: object = None) -> str:
     """The allowed range of a numeric field as text, e.g. ``"[0, 1]"`` or ``"(0, inf) m/s"`` (SI bounds,
-    brackets closed or open as the field says); used in error messages here and by the inverse sections."""
+    brackets closed or open as the field says); used in error messages here and by the inverse sections.
+    ``like``: a value as the file writes it (``"3000 lb"``); where its unit is not the SI one, the range
+    follows in that unit too (``"(0, inf) kg = (0, inf) lb"``), so the message speaks the file's units."""
     lo = "-inf" if f.minimum is None else _num(f.minimum)
     hi = "inf" if f.maximum is None else _num(f.maximum)
     left = "(" if f.exclusive_minimum or f.minimum is None else "["
     right = ")" if f.exclusive_maximum or f.maximum is None else "]"
-    unit = f" {units.si_unit(f.kind)}" if f.is_quantity and units.si_unit(f.kind) else ""
-    return f"{left}{lo}, {hi}{right}{unit}"
+    si = units.si_unit(f.kind) if f.is_quantity else ""
+    out = f"{left}{lo}, {hi}{right}{' ' + si if si else ''}"
+    if not si or not isinstance(like, str):
+        return out
+    try:
+        per_si, unit = units.number_and_unit(units.write_like(1.0, f.kind, like))
+    except (TypeError, ValueError):
+        return out
+    if not unit or unit == si or not per_si:
+        return out
+    lo2 = "-inf" if f.minimum is None else format(f.minimum * per_si, ".6g")
+    hi2 = "inf" if f.maximum is None else format(f.maximum * per_si, ".6g")
+    return f"{out} = {left}{lo2}, {hi2}{right} {unit}"
 
 
 def in_range(x: float, f: Field) -> bool:

@@ -76,6 +76,16 @@ def test_plot_output_with_a_format_matplotlib_cannot_write(no_work, places, caps
     _refused(capsys, ["plot", SCENE, "-o", str(places["dir"] / "scene.xyz")], "-o", "'.xyz'", ".png")
 
 
+@pytest.mark.parametrize("option", ["-o", "--histories", "--time-distance", "--wheels"])
+def test_plot_output_in_a_format_matplotlib_writes_but_the_figures_do_not(no_work, places, capsys, option):
+    """.jpg: matplotlib can write it, the scene figures are not (png, svg, pdf); refused before the
+    load, naming the option as written (it was refused after the run-out, as key 'path')."""
+    argv = ["plot", SCENE, "-o", str(places["dir"] / "scene.png")]
+    argv += [] if option == "-o" else [option, str(places["dir"] / "other.png")]
+    argv[argv.index(option) + 1] = str(places["dir"] / "figure.jpg")
+    _refused(capsys, argv, f"{option}: ", "'.jpg'", ".png, .svg, .pdf")
+
+
 def test_plot_output_onto_a_folder(no_work, places, capsys):
     bad = places["dir"] / "x.png"
     bad.mkdir()

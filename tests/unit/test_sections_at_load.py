@@ -42,3 +42,18 @@ def test_bounds_that_exclude_the_files_value_are_noted():
     del u["initial"]  # the start is then the middle of the bounds, and the note the same
     spec = FitSpec.from_dict(data["fit"], data)
     assert spec.notes == (note,) and spec.unknowns[1].initial == pytest.approx(0.3)
+
+
+def test_a_range_error_speaks_the_files_unit(tmp_path, capsys):
+    """An [uncertainty] bound outside its input's range: the allowed range in SI and in the unit the
+    file wrote the bound in (it gave kg alone to a file in lb)."""
+    text = SCENE.read_text(encoding="utf-8")
+    i = text.index("[[uncertainty.inputs]]")
+    item = ('[[uncertainty.inputs]]\nname = "car mass"\npath = "vehicles.car.bodies[0].mass"\n'
+            'distribution = "uniform"\nlower = "-100 lb"\nupper = "3500 lb"\n\n')
+    f = tmp_path / "scene.toml"
+    f.write_text(text[:i] + item + text[i:], encoding="utf-8")
+    assert main(["run", str(f)]) == 2
+    err = capsys.readouterr().err
+    assert "uncertainty.inputs[0].lower" in err and "'-100 lb'" in err
+    assert "(0, 250000] kg = (0, 551156] lb" in err

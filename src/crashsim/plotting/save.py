@@ -7,7 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..errors import ScenarioError
-from ..figure_options import check_hide, check_view
+from ..figure_options import SCENE_FIGURE_SUFFIXES, check_hide, check_view
 from .histories import plot_histories
 from .scene import plot_scene
 from .sheet import print_sheet
@@ -16,10 +16,6 @@ from .time_distance import plot_time_distance
 from .timeline import plot_wheel_timeline
 
 __all__ = ["SCENE_FIGURE_SUFFIXES", "save_scene_figures"]
-
-
-#: File suffixes :func:`save_scene_figures` writes (matplotlib picks the format from them).
-SCENE_FIGURE_SUFFIXES = (".png", ".svg", ".pdf")
 
 
 def save_scene_figures(scene, path, *, histories_path=None, dpi: int = 150, interval: float | None = None,

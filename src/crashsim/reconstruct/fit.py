@@ -147,7 +147,7 @@ def _check_bounds_allowed(target, lo: float, hi: float, raw: dict, key: str, fil
     for which, x in (("lower", lo), ("upper", hi)):
         if not in_range(x, target.field):
             raise ScenarioError(f"{which} = {raw[which]!r} lies outside the allowed range of {target.path}, "
-                                f"{interval_text(target.field)}", field=f"{key}.{which}", file=file)
+                                f"{interval_text(target.field, raw[which])}", field=f"{key}.{which}", file=file)
 
 
 @dataclass(frozen=True)

@@ -255,7 +255,8 @@ def _fit_to_range(distribution: str, vals: dict, target, key: str, raw: dict, fi
     hi_ok = math.inf if f.maximum is None else float(f.maximum)
     if lo_ok == -math.inf and hi_ok == math.inf:
         return vals, ""
-    allowed = interval_text(f)
+    allowed = interval_text(f, next((raw[k] for k in ("mean", "lower", "upper", "mode") if isinstance(raw.get(k), str)),
+                                    None))
     # an exclusive end is kept off by a relative 1e-9 (a value there would be refused)
     lo_in = lo_ok if not f.exclusive_minimum else lo_ok + 1e-9 * max(1.0, abs(lo_ok), abs(hi_ok) if hi_ok < math.inf else 1.0)
     hi_in = hi_ok if not f.exclusive_maximum else hi_ok - 1e-9 * max(1.0, abs(hi_ok))

@@ -1328,13 +1328,21 @@ def _linearity(problem: FitProblem, zb, rb, Jz, cov, undetermined, warnings: lis
     return tuple(probes), skipped
 
 
+#: A start whose chi^2 ends within this of the best's is at the best's cost (``_compare_starts``):
+#: a twentieth of the rise of chi^2 at one standard error (1), far below any difference an interval
+#: shows; a solver that stopped that close reports no "other minimum".
+SAME_CHI2 = 0.05
+
+
 def _compare_starts(problem: FitProblem, outcomes: list[dict], best_k: int, zb, stderr, undetermined,
                     warnings: list[str]):
     """Each start against the best: the same cost, and the same point (within a quarter standard error or
     1e-3 of the range); warnings appended for starts stuck where the scene cannot be evaluated, other
     minima and a flat minimum. Returns ``(starts, n_agree, n_same)``."""
     costs = np.array([o["cost"] for o in outcomes])
-    tol_cost = 1e-3 * max(1.0, float(costs[best_k]))
+    # the same cost: within 1e-3 of it, or a chi^2 within SAME_CHI2 of the best (a start that stopped
+    # that close is at the best minimum as far as any interval can tell: 1 is one standard error)
+    tol_cost = max(1e-3 * max(1.0, float(costs[best_k])), 0.5 * SAME_CHI2)
     se_z = np.where(np.isfinite(stderr), stderr / problem.span, np.inf)
     tol_z = np.maximum(1e-3, 0.25 * np.where(np.isfinite(se_z), se_z, 0.0))
     starts = []

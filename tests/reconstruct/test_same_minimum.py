@@ -32,3 +32,14 @@ def test_a_start_a_hair_above_the_best_is_the_same_minimum():
 def test_a_start_well_above_the_best_is_another_minimum():
     starts, n_agree, n_same, warnings = _compare([7.363, 9.5], [0.400, 0.9])
     assert n_same == 1 and any("1 of 2 starts ended in other minima (chi^2 9.5)" in w for w in warnings)
+
+
+def test_percentiles_of_a_count_are_counts():
+    """The Monte Carlo percentiles of the later impacts are a count some sample had (it printed 1.5)."""
+    from crashsim.reconstruct import montecarlo
+
+    v = np.array([0.0, 1.0, 1.0, 2.0, 2.0, 2.0, 3.0, 0.0, 1.0, 2.0])
+    cols = {"impacts.later": v, "delta_v.car": v * 1.25}
+    out = montecarlo._percentiles(cols, np.ones(v.size, bool), [5, 50, 95])
+    assert all(out["impacts.later"][k] in set(v) for k in ("p5", "p50", "p95"))
+    assert out["delta_v.car"]["p50"] == np.percentile(v * 1.25, 50)  # a continuous output as before

@@ -773,7 +773,8 @@ def _percentiles(columns: dict, mask: np.ndarray, percentiles: Sequence[float], 
     statistics are those of the arc around their circular mean
     (:func:`crashsim.geometry.unwrap_about_mean`): the mean is the circular mean, the percentiles
     and the standard deviation those of the unwrapped values (a percentile may pass +-pi where the
-    cloud crosses it, so that p5 <= p50 <= p95).
+    cloud crosses it, so that p5 <= p50 <= p95). A count's percentiles are those of its empirical
+    distribution (``inverted_cdf``: a value some sample has), not interpolated between samples.
     """
     out = {}
     for key, v in columns.items():
@@ -782,7 +783,9 @@ def _percentiles(columns: dict, mask: np.ndarray, percentiles: Sequence[float], 
             continue
         if key in angles:
             vv = unwrap_about_mean(vv)
-        p = {f"p{q:g}": float(np.percentile(vv, q)) for q in percentiles}
+        # a count (the later impacts) has percentiles that are counts: a sample's own value
+        method = "inverted_cdf" if OUTPUT_KINDS.get(key.split(".", 1)[0]) == "count" else "linear"
+        p = {f"p{q:g}": float(np.percentile(vv, q, method=method)) for q in percentiles}
         p["mean"] = circular_mean(vv) if key in angles else float(np.mean(vv))
         p["std"] = float(np.std(vv, ddof=1)) if vv.size > 1 else 0.0
         out[key] = p

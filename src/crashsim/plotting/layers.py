@@ -78,8 +78,8 @@ def draw_approaches(S: SceneDrawing) -> None:
             pp = S.d(a.perception_point)
             ax.plot([pp[0], start[0]], [pp[1], start[1]], ":", color=dark, lw=1.0, zorder=Z_TRACK)
             ax.plot(*pp, "D", ms=5, mfc="white", mec=dark, zorder=Z_IMPACT, gid=f"approach:perception:{vn}")
-            S.text(pp, f"perception ({fmt(a.reaction_time, 'time', S.system, digits=3)} before braking)", kind="approach", fontsize=6.5, color=dark,
-                   ha="center",
+            ahead = fmt(a.reaction_time, "time", S.system, digits=3)  # a Monte Carlo median without float noise
+            S.text(pp, f"perception ({ahead} before braking)", kind="approach", fontsize=6.5, color=dark, ha="center",
                    va="bottom", path_effects=halo(1.8))
             S.labels.append(pp)
             S.add(pp)

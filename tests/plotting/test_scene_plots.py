@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -23,6 +24,7 @@ from crashsim.geometry import rotate  # noqa: E402
 from crashsim.plotting import (SCENE_FIGURE_SUFFIXES, history_panels, plot_histories, plot_scene,  # noqa: E402
                                save_scene_figures)
 from crashsim.reconstruct import run_scene  # noqa: E402
+from crashsim.report import format_joint  # noqa: E402
 from crashsim.scenario import load_scenario  # noqa: E402
 from crashsim.units import Kind, to_unit  # noqa: E402
 
@@ -329,10 +331,6 @@ def test_contact_force_panel_peak_is_the_reports(name):
     """The contact-force panel's top is the peak force the report prints, to the report's four
     digits, in US units: the sampled force (10 ms) topped out 25 % (median slide, trailer) and 40 %
     (third vehicle) below it."""
-    import re
-
-    from crashsim.report import format_joint
-
     scene = _scene(ROOT / "scenarios" / "scenes" / f"{name}.toml")
     text = format_joint(scene, "US")
     reported = {m[1]: float(m[2]) for m in re.finditer(r"^ +(\S+\|\S+): .*peak force ([-+.e\d]+) lbf", text, re.M)}

@@ -163,6 +163,7 @@ def plot_histories(scene, axes=None, *, system: str | None = None):
                 ax_f.plot(p.peak_time, kf * p.peak_force, "v", color=ln.get_color(), ms=5, gid=f"histories:peak:{p.name}",
                           label=f"peak {fmt(p.peak_force, 'force', system)} (the report's)")
         ax_f.set_ylabel(f"contact force [{funit}]")
+        ax_f.margins(y=0.08)  # the peak's marker inside the panel, not cut at its top
         ax_f.set_ylim(bottom=0.0)
         ax_f.legend(fontsize=8, loc="best", title="sustained contact", title_fontsize=7)
     if joint is not None:

@@ -16,7 +16,8 @@ from crashsim.geometry import to_world  # noqa: E402
 from crashsim.plotting import plot_scene  # noqa: E402
 from crashsim.reconstruct import run_scene  # noqa: E402
 from crashsim.evidence.crush import profile_outline  # noqa: E402
-from crashsim.scenario import load_scenario  # noqa: E402
+from crashsim.scenario import load_scenario, scenario_from_dict  # noqa: E402
+from crashsim.schema import load_toml  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENE = ROOT / "tests" / "data" / "crush_head_on.toml"
@@ -61,3 +62,26 @@ def test_outline_follows_the_face_heading_and_offset(face, heading_deg, offset):
     face_pt = poly[0]
     depths = (poly[2:] - face_pt) @ inward
     assert np.allclose(sorted(depths), sorted([0.1, 0.3, 0.2, 0.0]))
+
+
+def test_a_one_sided_crush_check_reads_as_a_bound():
+    """A crush check with a body of the impact lacking a crush item is a lower bound (the report: "one-sided");
+    the figure says so, with the bound it checks, not "PASS" beside a residual twice its tolerance."""
+    data = load_toml(ROOT / "scenarios" / "scenes" / "truck_brakes_into_car.toml")
+    data["evidence"]["crush"] = [c for c in data["evidence"]["crush"] if c["body"] == "car"]  # none for the tractor
+    scene = run_scene(scenario_from_dict(data))
+    (c,) = [c for c in scene.evidence.checks if c.kind == "crush energy"]
+    assert c.passed and not c.details["complete"] and c.residual > 1.5 * c.tolerance  # passes as a bound only
+    ax = plot_scene(scene, legend="outside")
+    (text,) = [t.get_text() for t in ax.get_legend().get_texts() if t.get_text().startswith("crush energy")]
+    head, bound, why = text.split("\n")
+    assert head == "crush energy, first impact: PASS (one-sided bound)"
+    assert "|model loss - crush|" not in text
+    k = 1.0 / 1.3558179483314004  # J -> ft lbf
+    loss, crush, tol = (float(s.replace(",", "")) for s in
+                        bound.removeprefix("  model loss at least crush - tol.: ").removesuffix(" ft lbf")
+                        .replace("\N{GREATER-THAN OR EQUAL TO}", "-").split(" - "))
+    assert loss == pytest.approx(k * c.details["computed"], rel=5e-3)  # three significant digits
+    assert crush == pytest.approx(k * c.details["measured"], rel=5e-3)
+    assert tol == pytest.approx(k * c.tolerance, rel=5e-3)
+    assert "tractor" in why and "lower bound" in why

@@ -152,3 +152,48 @@ def test_histograms_without_acceptance_are_shares_of_all_samples(mc):
     assert sum(p.get_height() for p in full.containers[0]) == pytest.approx(100.0)
     assert full.get_ylabel() == gap.get_ylabel() == f"share of all {N} samples [%]"
     plt.close("all")
+
+
+TALL = Path(__file__).resolve().parents[1] / "data" / "pinned_car_north.toml"
+
+
+def _inside(inner, outer, slack: float = 1.0) -> bool:
+    return (inner.x0 >= outer.x0 - slack and inner.x1 <= outer.x1 + slack and inner.y0 >= outer.y0 - slack
+            and inner.y1 <= outer.y1 + slack)
+
+
+def _clouds_figure_is_whole(ax):
+    """The title and the one legend inside the figure, the legend outside the axes and holding the sample
+    entries, and the scale bar covered by no legend."""
+    fig = ax.figure
+    fig.draw_without_rendering()
+    r = fig.canvas.get_renderer()
+    page = fig.bbox
+    assert _inside(ax.title.get_window_extent(r), page), (ax.title.get_window_extent(r), page)
+    legends = [a for a in ax.get_children() if isinstance(a, matplotlib.legend.Legend)]
+    assert len(legends) == 1  # the sample clouds are entries of the scene's legend, not a second one over the scene
+    leg = legends[0]
+    texts = [t.get_text() for t in leg.get_texts()]
+    assert any(t.startswith("rest of ") and "samples" in t for t in texts), texts
+    lb = leg.get_window_extent(r)
+    assert _inside(lb, page), (lb, page)
+    assert not lb.overlaps(ax.get_window_extent(r))
+    bar = next(a for a in ax.artists if a.get_gid() == "scalebar")
+    assert not lb.overlaps(bar.get_window_extent(r))
+    return texts
+
+
+def test_rest_clouds_of_a_tall_scene_are_whole(tmp_path):
+    """A tall scene (its legend at the right): the longer title and legend title of the Monte Carlo
+    figure are not cut at the figure's edge, the samples' legend covers no scale bar, and the median
+    road friction (0.723923...) is written to three digits."""
+    mc = monte_carlo(load_toml(TALL), n=6, engine=default_engine(), workers=1, progress=False, file=str(TALL))
+    ax = plot_rest_clouds(mc)
+    texts = _clouds_figure_is_whole(ax)
+    assert "road surface outside the zones: f = 0.724" in texts, texts
+    plt.close("all")
+
+
+def test_rest_clouds_of_a_wide_scene_are_whole(mc):
+    _clouds_figure_is_whole(plot_rest_clouds(mc))
+    plt.close("all")

@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -23,6 +24,7 @@ from crashsim.geometry import rotate  # noqa: E402
 from crashsim.plotting import (SCENE_FIGURE_SUFFIXES, history_panels, plot_histories, plot_scene,  # noqa: E402
                                save_scene_figures)
 from crashsim.reconstruct import run_scene  # noqa: E402
+from crashsim.report import format_joint  # noqa: E402
 from crashsim.scenario import load_scenario  # noqa: E402
 from crashsim.units import Kind, to_unit  # noqa: E402
 
@@ -297,25 +299,66 @@ def test_articulation_limits_once_each_and_only_where_reached():
 
 def test_contact_force_panel_and_impact_lines():
     """The median-barrier slide: both bodies stay in sustained contact; the fourth panel draws
-    each pair's sampled force (the pair's force track; the report's peak force, read off the
-    solution at every integrator step, is at least its largest sample) and every panel marks
-    each later impact event (#2 the trailer's side slap, then the re-strikes) with a vertical line at
-    its time."""
+    each pair's force on the samples and on the solution's own steps (every sample is on the line,
+    the report's peak force is its top, marked) and every panel marks each later impact event (#2
+    the trailer's side slap, then the re-strikes) with a vertical line at its time."""
     scene = _scene(ROOT / "scenarios" / "scenes" / "median_barrier_slide.toml")
     fig = plot_histories(scene)
     assert len(fig.axes) == 4 and fig.axes[3].get_ylabel() == "contact force [N]"
     pairs = {p.name.replace("|", " \N{EN DASH} "): p for p in scene.joint.pairs if p.sustained}
-    lines = {ln.get_label(): ln for ln in fig.axes[3].get_lines() if not ln.get_label().startswith("_")}
+    lines = {ln.get_label(): ln for ln in fig.axes[3].get_lines()
+             if not ln.get_label().startswith(("_", "peak "))}
     assert lines.keys() == pairs.keys()
     for name, ln in lines.items():
-        np.testing.assert_array_equal(ln.get_ydata(), pairs[name].force)
-        assert max(ln.get_ydata()) <= pairs[name].peak_force * (1 + 1e-12)
+        p = pairs[name]
+        x, y = np.asarray(ln.get_xdata()), np.asarray(ln.get_ydata())
+        assert np.all(np.diff(x) >= 0)
+        for tq, fq in zip(p.t, p.force):  # every sample on the line
+            assert np.any((x == tq) & (y == fq)), (name, tq)
+        assert max(y) == p.peak_force
+        (mark,) = [m for m in fig.axes[3].get_lines() if m.get_gid() == f"histories:peak:{p.name}"]
+        assert (mark.get_xdata()[0], mark.get_ydata()[0]) == (p.peak_time, p.peak_force)
     events = scene.joint.impact_events()
     assert len(events) >= 2
     for ax in fig.axes:
         for ev in events:
             assert any(np.allclose(ln.get_xdata(), ev.t) for ln in ax.get_lines())
     assert sorted(t.get_text() for t in fig.axes[0].texts) == sorted(f"#{ev.number}" for ev in events)
+
+
+@pytest.mark.parametrize("name", ["median_barrier_slide", "third_vehicle_waiting_car"])
+def test_contact_force_panel_peak_is_the_reports(name):
+    """The contact-force panel's top is the peak force the report prints, to the report's four
+    digits, in US units: the sampled force (10 ms) topped out 25 % (median slide, trailer) and 40 %
+    (third vehicle) below it."""
+    scene = _scene(ROOT / "scenarios" / "scenes" / f"{name}.toml")
+    text = format_joint(scene, "US")
+    reported = {m[1]: float(m[2]) for m in re.finditer(r"^ +(\S+\|\S+): .*peak force ([-+.e\d]+) lbf", text, re.M)}
+    assert reported
+    fig = plot_histories(scene, system="US")
+    for pair, peak in reported.items():
+        (ln,) = [ln for ln in fig.axes[3].get_lines() if ln.get_label() == pair.replace("|", " \N{EN DASH} ")]
+        drawn = max(ln.get_ydata())
+        digits = 10.0 ** (np.floor(np.log10(peak)) - 3)  # the report's last digit
+        assert abs(drawn - peak) <= 0.5 * digits, (pair, drawn, peak)
+    plt.close(fig)
+
+
+def test_contact_force_panel_starts_at_the_press():
+    """A pair pressed into the barrier between two samples (10 ms apart) has its force drawn from the
+    instant the run reports it pressed (contact_pressed), not from the next sample."""
+    scene = _scene(ROOT / "scenarios" / "scenes" / "barrier_glance_15deg.toml")
+    fig = plot_histories(scene)
+    for e in (e for e in scene.joint.events if e.kind == "contact_pressed"):
+        pair = e.data["pair"]
+        (p,) = [p for p in scene.joint.pairs if p.name == pair]
+        assert p.sustained
+        (ln,) = [ln for ln in fig.axes[3].get_lines() if ln.get_label() == pair.replace("|", " \N{EN DASH} ")]
+        x, y = np.asarray(ln.get_xdata()), np.asarray(ln.get_ydata())
+        first = x[(y > 0) & (x >= e.t - 1e-9)][0]
+        sampled = p.t[(p.force > 0) & (p.t >= e.t - 1e-9)][0]
+        assert first - e.t < 1e-3 < sampled - e.t, (pair, e.t, first, sampled)
+    plt.close(fig)
 
 
 def test_histories_need_a_runout():

@@ -678,11 +678,13 @@ def assemble_scene(model, integrator, *, status, message, t_end, y_initial, y_en
         n_imp[f"{imp.body1}|{imp.body2}"] = n_imp.get(f"{imp.body1}|{imp.body2}", 0) + 1
     pairs = []
     if lean is None:
-        span, peak, deepest, closing = contact_summaries(model, integrator, table, arrays, y_end, t_end)
+        span, peak, deepest, closing, peak_t, (node_t, node_f) = contact_summaries(model, integrator, table, arrays,
+                                                                                   y_end, t_end)
     for p, pair in enumerate(model.pairs if lean is None else ()):
         pairs.append(PairSummary(pair.name, pair.a, pair.b, n_imp.get(pair.name, 0), float(span[p]),
                                  float(peak[p]), float(max(pen[p], deepest[p])), float(quad[nb + 3 * nw + p]),
-                                 T.copy(), CF[:, p].copy(), float(closing[p])))
+                                 T.copy(), CF[:, p].copy(), float(closing[p]), float(peak_t[p]),
+                                 node_t.copy(), node_f[:, p].copy()))
     ke0, ke1 = model.kinetic_energy(y_initial), model.kinetic_energy(y_end)
     tyres = float(np.sum(quad[nb + 2 * nw: nb + 3 * nw]))
     stops = float(sum(e.energy for e in events if e.kind in ("stop_closed", "stop_impact")))

@@ -244,6 +244,13 @@ class PairSummary:
         the speed its depth ``e`` holds, ``omega e`` (``omega = sqrt(k / m_eff)``; the closing
         speed itself for a point at the surface). Below the pair's impulse threshold, since a
         larger one is an impact (the re-strike rule).
+    peak_time : float
+        When the force reached ``peak_force`` [s] (NaN without a force).
+    node_t, node_force : ndarray
+        The sustained-contact force on body1 [N] at the nodes ``peak_force`` was found on (every
+        integrator step and its quarter points in the segments with the pair in contact or
+        disarmed; zero out of contact) against time [s]: what a figure draws beside ``t, force``
+        so that it shows the peak and a contact shorter than the sample step.
     """
 
     name: str
@@ -257,6 +264,9 @@ class PairSummary:
     t: np.ndarray = field(default_factory=lambda: np.zeros(0))
     force: np.ndarray = field(default_factory=lambda: np.zeros(0))
     max_closing: float = 0.0
+    peak_time: float = float("nan")
+    node_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    node_force: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     @property
     def sustained(self) -> bool:
@@ -265,7 +275,7 @@ class PairSummary:
         return self.peak_force > FORCE_FLOOR
 
     def to_dict(self, history: bool = False) -> dict:
-        d = {k: v for k, v in self.__dict__.items() if k not in ("t", "force")}
+        d = {k: v for k, v in self.__dict__.items() if k not in ("t", "force", "peak_time", "node_t", "node_force")}
         if history:
             d.update(t=self.t, force=self.force)
         return jsonable(d)

@@ -24,7 +24,11 @@ _SUMMARY_POINTS = np.array([0.0, 0.25, 0.5, 0.75])
 def contact_summaries(model, integrator, table, arrays, y_end, t_end):
     """Time in sustained contact, peak contact force, deepest penetration and fastest closing in
     contact of every pair, from the solution itself (not the ``sample_dt`` grid):
-    ``(span, peak, deepest, closing)``, each (npairs,).
+    ``(span, peak, deepest, closing, peak_time, nodes)``, the first five each (npairs,);
+    ``nodes`` is ``(t, force)``: the times the force was evaluated at (K,) and each pair's
+    sustained-contact force there (K, npairs), zero where the pair is not in contact, so that a
+    figure can draw the force the summaries saw (its largest node, and the refined peak at
+    ``peak_time``, are the peak).
 
     The span is the time the pair spent in sustained contact, from the segments the events cut
     (so it is the span of the pair's own contact events).  Force, depth and the closing speed
@@ -39,8 +43,10 @@ def contact_summaries(model, integrator, table, arrays, y_end, t_end):
     k = kernels()
     npr = len(model.pairs)
     span, peak, deepest, closing = np.zeros(npr), np.zeros(npr), np.zeros(npr), np.zeros(npr)
+    peak_time = np.full(npr, np.nan)
+    none = (np.zeros(0), np.zeros((0, npr)))
     if not npr or not table:
-        return span, peak, deepest, closing
+        return span, peak, deepest, closing, peak_time, none
     pstate = arrays.pstate
     edges = integrator.step_edges()
     T, G = [], []
@@ -58,7 +64,7 @@ def contact_summaries(model, integrator, table, arrays, y_end, t_end):
         T.append(np.append(fine, t1))
         G.append(np.full(fine.size + 1, g, dtype=np.int64))
     if not T:
-        return span, peak, deepest, closing
+        return span, peak, deepest, closing, peak_time, none
     # one more node at the run's end: the samplers return the final state there
     T = np.concatenate(T + [[t_end]])
     G = np.concatenate(G + [np.array([len(table) - 1], dtype=np.int64)])
@@ -69,19 +75,20 @@ def contact_summaries(model, integrator, table, arrays, y_end, t_end):
     # impact's state before the impulse)
     ends = np.array([t1 for _, t1, _ in table])[G]
     closing = np.where((T < ends)[:, None], closing, 0.0).max(axis=0)
+    F = np.where(pstate[G] == k.PS_CONTACT, CF, 0.0)
     for p in range(npr):
-        f = np.where(pstate[G, p] == k.PS_CONTACT, CF[:, p], 0.0)
+        f = F[:, p]
         j = int(np.argmax(f))
-        peak[p] = f[j]
+        peak[p], peak_time[p] = f[j], T[j]
         if 0 < j < len(f) - 1 and G[j - 1] == G[j] == G[j + 1] and T[j - 1] < T[j] < T[j + 1]:
             # the parabola through the largest node and its neighbours (times from the middle one)
             x0, x2 = T[j - 1] - T[j], T[j + 1] - T[j]
             d0, d2 = f[j - 1] - f[j], f[j + 1] - f[j]
             det = x0 * x2 * (x0 - x2)
             a, b = (d0 * x2 - d2 * x0) / det, (d2 * x0 * x0 - d0 * x2 * x2) / det
-            if a < 0 and x0 <= -b / (2 * a) <= x2:
-                peak[p] = max(f[j], f[j] - b * b / (4 * a))
-    return span, peak, deepest, closing
+            if a < 0 and x0 <= -b / (2 * a) <= x2 and f[j] - b * b / (4 * a) > f[j]:
+                peak[p], peak_time[p] = f[j] - b * b / (4 * a), T[j] - b / (2 * a)
+    return span, peak, deepest, closing, peak_time, (T, F)
 
 
 def event_places(model, sol, events) -> list:

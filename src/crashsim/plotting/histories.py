@@ -8,11 +8,11 @@ import numpy as np
 
 from ..errors import ScenarioError
 from ..figure_options import title_chars
-from ..units import Kind, convert, to_unit
+from ..units import Kind, convert, format_value as fmt, to_unit
 from .loads import draw_roll_panel, has_roll_panel
 from .style import FAMILIES, figure_system, pyplot, wrap
 
-__all__ = ["history_panels", "IMPACT_LABEL_GAP", "LIMIT_SHOWN_FROM", "plot_histories"]
+__all__ = ["contact_force_line", "history_panels", "IMPACT_LABEL_GAP", "LIMIT_SHOWN_FROM", "plot_histories"]
 
 
 def history_panels(scene) -> int:
@@ -30,6 +30,22 @@ IMPACT_LABEL_GAP = 0.03
 #: An articulation limit is drawn on the histories' articulation panel once a hitch's articulation
 #: reaches this share of it (below, the legend names it without the lines).
 LIMIT_SHOWN_FROM = 0.3
+
+
+def contact_force_line(pair) -> tuple[np.ndarray, np.ndarray]:
+    """(t [s], force [N]) of a pair's sustained-contact force as the histories draw it: the samples
+    (``pair.t``, ``pair.force``) merged in time with the nodes the pair summary's peak was found on
+    (every integrator step and its quarter points while in contact, ``pair.node_t``) and the
+    refined peak itself, so that the line reaches ``pair.peak_force`` and shows a contact
+    shorter than the sample step. At a time in both, the node comes last (a segment's end)."""
+    t = [np.asarray(pair.t, dtype=float), np.asarray(pair.node_t, dtype=float)]
+    f = [np.asarray(pair.force, dtype=float), np.asarray(pair.node_force, dtype=float)]
+    if np.isfinite(pair.peak_time):
+        t.append(np.array([pair.peak_time]))
+        f.append(np.array([pair.peak_force]))
+    t, f = np.concatenate(t), np.concatenate(f)
+    order = np.argsort(t, kind="stable")
+    return t[order], f[order]
 
 
 def plot_histories(scene, axes=None, *, system: str | None = None):
@@ -64,7 +80,9 @@ def plot_histories(scene, axes=None, *, system: str | None = None):
     ``HitchHistory.articulation`` (heading of the front body minus that of the rear body);
     a hitch's articulation limit, if set, is drawn as thin grey lines.  Secondary impacts are
     thin vertical lines, numbered as in the report (#2, #3, ...); the contact-force panel
-    shows each pair's sampled sustained-contact force (``PairSummary.force``).
+    shows each pair's sustained-contact force on the samples and on the solution's own steps
+    (:func:`contact_force_line`), its peak marked with the value the report gives
+    (``PairSummary.peak_force`` at ``peak_time``).
     """
     system = figure_system(scene, system)
     if not scene.runout:
@@ -139,8 +157,13 @@ def plot_histories(scene, axes=None, *, system: str | None = None):
         ax_f = axes[3]
         kf, funit = to_unit(1.0, Kind.FORCE, system)
         for k, p in enumerate(q for q in joint.pairs if q.sustained):
-            ax_f.plot(p.t, kf * np.asarray(p.force), styles[k % len(styles)], lw=1.3, label=p.name.replace("|", " \N{EN DASH} "))
+            t, f = contact_force_line(p)
+            (ln,) = ax_f.plot(t, kf * f, styles[k % len(styles)], lw=1.3, label=p.name.replace("|", " \N{EN DASH} "))
+            if np.isfinite(p.peak_time):  # the report's peak, where the solution reached it
+                ax_f.plot(p.peak_time, kf * p.peak_force, "v", color=ln.get_color(), ms=5, gid=f"histories:peak:{p.name}",
+                          label=f"peak {fmt(p.peak_force, 'force', system)} (the report's)")
         ax_f.set_ylabel(f"contact force [{funit}]")
+        ax_f.margins(y=0.08)  # the peak's marker inside the panel, not cut at its top
         ax_f.set_ylim(bottom=0.0)
         ax_f.legend(fontsize=8, loc="best", title="sustained contact", title_fontsize=7)
     if joint is not None:

@@ -17,7 +17,7 @@ from .road import clip_polygon, clip_polyline
 from .style import (EVIDENCE_COLOR, FAIL_COLOR, PASS_COLOR, Z_ARROW, Z_BARRIER, Z_EVIDENCE, Z_GHOST, Z_IMPACT, Z_TEXT,
                     Z_TRACK, halo, nice_at_most, wrap)
 
-__all__ = ["draw_scene_underlay", "draw_track", "draw_approaches", "CRUSH_KEY", "draw_crush", "check_map",
+__all__ = ["draw_scene_underlay", "draw_track", "draw_approaches", "CRUSH_KEY", "crush_text", "draw_crush", "check_map",
            "draw_evidence", "draw_arrows", "draw_obstacles", "draw_impacts", "draw_barrier"]
 
 
@@ -78,8 +78,8 @@ def draw_approaches(S: SceneDrawing) -> None:
             pp = S.d(a.perception_point)
             ax.plot([pp[0], start[0]], [pp[1], start[1]], ":", color=dark, lw=1.0, zorder=Z_TRACK)
             ax.plot(*pp, "D", ms=5, mfc="white", mec=dark, zorder=Z_IMPACT, gid=f"approach:perception:{vn}")
-            S.text(pp, f"perception ({a.reaction_time:g} s before braking)", kind="approach", fontsize=6.5, color=dark,
-                   ha="center",
+            ahead = fmt(a.reaction_time, "time", S.system, digits=3)  # a Monte Carlo median without float noise
+            S.text(pp, f"perception ({ahead} before braking)", kind="approach", fontsize=6.5, color=dark, ha="center",
                    va="bottom", path_effects=halo(1.8))
             S.labels.append(pp)
             S.add(pp)
@@ -167,6 +167,31 @@ def _residual_text(c, system) -> str:
     return f"{fmt(abs(c.residual), c.quantity, system, 2)} (tol. {fmt(c.tolerance, c.quantity, system, 2)})"
 
 
+def _three_digits(x: float) -> str:
+    """``x`` to three significant digits without an exponent: 72,400 (not 7.24e+04), 0.0125."""
+    if x == 0 or not np.isfinite(x):
+        return f"{x:g}"
+    decimals = max(0, 2 - int(np.floor(np.log10(abs(float(f"{x:.3g}"))))))
+    return f"{float(f'{x:.3g}'):,.{decimals}f}"
+
+
+def crush_text(c, verdict: str, system) -> str:
+    """The legend text of a crush-energy check: two-sided, the residual |model loss - crush| against
+    its tolerance; one-sided (a body of the impact without a crush item: the crush energy is a lower
+    bound of the energy absorbed, as the report says), the bound it is checked against, marked so:
+    "PASS (one-sided bound)", "model loss at least crush - tol.: 72,400 >= 48,000 - 12,000 ft lbf"
+    (with the sign >= as one character)."""
+    d = c.details
+    if d.get("complete", True) or np.isinf(c.residual):
+        return wrap(f"{c.name}: {verdict}", 52) + f"\n  |model loss - crush| {_residual_text(c, system)}"
+    k, unit = to_unit(1.0, Kind.ENERGY, system)
+    num = [_three_digits(k * v) for v in (d["computed"], d["measured"], c.tolerance)]
+    rel = "\N{GREATER-THAN OR EQUAL TO}" if c.passed else "<"
+    return (wrap(f"{c.name}: {verdict} (one-sided bound)", 52)
+            + f"\n  model loss at least crush - tol.: {num[0]} {rel} {num[1]} - {num[2]} {unit}"
+            + f"\n  (no crush item for {', '.join(d['missing'])}: the crush energy is a lower bound)")
+
+
 def draw_evidence(S: SceneDrawing, checks: dict) -> None:
     from matplotlib.lines import Line2D
     from matplotlib.patches import Circle, Polygon
@@ -228,8 +253,7 @@ def draw_evidence(S: SceneDrawing, checks: dict) -> None:
     for c in (S.scene.evidence.checks if S.scene.evidence is not None else ()):
         if c.kind == "crush energy":  # one check per group of crush items (drawn on the faces)
             verdict, color = _verdict([c])
-            S.legend_entry(wrap(f"{c.name}: {verdict}", 52) + f"\n  |model loss - crush| {_residual_text(c, system)}",
-                           Line2D([], [], ls="none"), color)
+            S.legend_entry(crush_text(c, verdict, system), Line2D([], [], ls="none"), color)
     for i, x in enumerate(getattr(ev, "recorder", ())):
         c = checks.get(("recorder", i))
         verdict, color = _verdict([c])

@@ -10,10 +10,11 @@ from typing import NamedTuple
 import numpy as np
 
 from ..motion.road import points_in_polygon, signed_distance
+from ..units import format_value
 from .drawing import SceneDrawing
 from .style import MAP_STYLES, ZONE_COLORS, Z_MAP, Z_TEXT, Z_ZONE, darker, halo
 
-__all__ = ["region_of_interest", "clip_polygon", "clip_polyline", "zone_colors", "draw_zones",
+__all__ = ["friction_text", "region_of_interest", "clip_polygon", "clip_polyline", "zone_colors", "draw_zones",
            "map_line_legend_texts", "draw_map_lines", "label_road_layout"]
 
 
@@ -106,10 +107,16 @@ def _zones(S: SceneDrawing) -> tuple:
     return spec.road.zones if spec is not None else ()
 
 
+def friction_text(mu: float) -> str:
+    """A friction coefficient to three significant digits, ``"f = 0.72"`` (a Monte Carlo median such
+    as 0.720011 without its float noise)."""
+    return f"f = {format_value(float(mu), 'dimensionless', digits=3)}"
+
+
 def _zone_label(zone) -> str:
     slope = [f"{what} {100 * v:.3g} %" for what, v in (("grade", zone.grade), ("cross-slope", zone.cross_slope))
              if v is not None]
-    return ", ".join([f"{zone.name}, f = {zone.mu:g}", *slope])
+    return ", ".join([f"{zone.name}, {friction_text(zone.mu)}", *slope])
 
 
 def zone_colors(zones) -> list[tuple[str, str]]:
@@ -151,7 +158,7 @@ def draw_zones(S: SceneDrawing, roi: _Roi) -> None:
             S.add(inside)
         S.legend_entry(legend[z.name], Patch(facecolor=fill, edgecolor=edge, hatch=".", lw=0.8))
     if zones:
-        S.legend_entry(f"road surface outside the zones: f = {S.sc.runout.road.mu:g}",
+        S.legend_entry(f"road surface outside the zones: {friction_text(S.sc.runout.road.mu)}",
                        Patch(facecolor="white", edgecolor="0.6", lw=0.8))
 
 

@@ -17,7 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..plotting import plot_scene
+from ..plotting import layout_scene_figure, plot_scene, replace_scale_bar, scene_drawing
+from ..plotting.layout import scene_legend
 from ..units import resolve_system, to_unit
 
 __all__ = ["plot_histograms", "plot_rest_clouds", "plot_tornado", "save_mc_figures", "default_histogram_keys"]
@@ -205,6 +206,7 @@ def plot_rest_clouds(mc, scene=None, ax=None, *, system: str | None = None, max_
     plt = _plt()
     scene = scene if scene is not None else mc.nominal
     sysname = _system(mc, system)
+    new = ax is None
     if scene is not None:
         ax = plot_scene(scene, ax=ax, times=(), evidence=evidence, arrows=False, system=sysname, legend=True)
     elif ax is None:
@@ -247,19 +249,41 @@ def plot_rest_clouds(mc, scene=None, ax=None, *, system: str | None = None, max_
         ax.set_xlim(min(x0, lo[0] - pad), max(x1, hi[0] + pad))
         ax.set_ylim(min(y0, lo[1] - pad), max(y1, hi[1] + pad))
     ax.set_title(f"Rest positions over the median scene. {_headline(mc)}", fontsize=9)
-    handles, labels = ax.get_legend_handles_labels()
-    ours = [(h, lab) for h, lab in zip(handles, labels) if lab.startswith("rest of") and "samples" in lab]
-    if ours:
-        leg = ax.get_legend()
-        from matplotlib.lines import Line2D
+    if scene is not None:
+        _lay_out_clouds(ax, [c for c in ax.collections if c.get_label().startswith("rest of")], new)
+    elif pts:
+        ax.legend(loc="best", fontsize=7)
+    return ax
 
-        def proxy(h):  # a legend marker of the scatter's colour, opaque and of one size
-            return Line2D([], [], ls="none", marker="o", markersize=5, markeredgewidth=0,
-                          markerfacecolor=h.get_facecolor()[0][:3])
 
-        ax.legend([proxy(h) for h, _ in ours], [lab for _, lab in ours], loc="lower right", fontsize=7)
-        if leg is not None:
-            ax.add_artist(leg)
+def _lay_out_clouds(ax, clouds, new: bool) -> None:
+    """The scene figure laid out again for what :func:`plot_rest_clouds` added to it: the sample
+    clouds as entries of the scene's legend (outside the axes, where they cover neither the
+    scale bar nor the scene), the longer title and legend title, and the limits widened to the
+    clouds; a new figure sized to hold them all (:func:`layout_scene_figure`)."""
+    from matplotlib.lines import Line2D
+
+    S = scene_drawing(ax)
+    old = ax.get_legend()
+    if S is None or old is None:
+        return
+    fig = ax.figure
+    r = fig.canvas.get_renderer()
+    below = old.get_window_extent(r).y1 <= ax.get_window_extent(r).y0  # plot_scene's legend: under or at the right
+    title = old.get_title().get_text()
+    old.remove()
+    for c in clouds:  # a legend marker of the scatter's colour, opaque and of one size
+        S.legend_entry(c.get_label(), Line2D([], [], ls="none", marker="o", markersize=5, markeredgewidth=0,
+                                             markerfacecolor=c.get_facecolor()[0][:3]))
+    leg = scene_legend(S, "outside", below)
+    if title:
+        leg.get_title().set_text(title)
+        leg.set_alignment("left")  # the entries under the start of the (longer) title, not centred under it
+    if new:
+        layout_scene_figure(ax, leg, below, width=S.width)
+    replace_scale_bar(ax)
+
+
     return ax
 
 

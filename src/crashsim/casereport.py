@@ -30,7 +30,7 @@ from .plotting.timeline import plot_wheel_timeline
 from .motion.wheels import wheel_labels
 from .report import closing_error_text, describe_event, format_approach, rollover_cells, validity_text
 from .survey.report import survey_records
-from .units import format_value, system_label, toml_repr
+from .units import DISPLAY_UNITS, format_value, system_label, to_unit, toml_repr
 
 __all__ = ["toml_comments", "input_rows", "sha256_file", "survey_files", "load_json", "inputs_sha256", "made_from",
            "check_result_json", "MADE_FROM", "render_case_report", "write_case_report",
@@ -237,12 +237,39 @@ def _si_text(value) -> str:
     return ""
 
 
+def _kind_of_unit(unit: str):
+    """The kind whose display unit (SI or US, :data:`~crashsim.units.DISPLAY_UNITS`) is ``unit``, or None."""
+    return next((k for k, labels in DISPLAY_UNITS.items() if unit and unit in labels.values()), None)
+
+
+def _in_system(leaf, si, system) -> tuple[str, str] | None:
+    """A preset's value (``leaf`` as the library writes it, ``si`` validated) as ``(value, unit)`` in the
+    report's ``system`` where its unit differs from the library's (``"8.30 m"`` in a US report:
+    ``("27.23 ft", "ft")``); None to keep it as written."""
+    written = _unit_of(leaf)
+    kind = _kind_of_unit(written)
+    if system is None or kind is None or si is None:
+        return None
+    values = si if isinstance(si, (list, tuple)) else [si]
+    if not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values):
+        return None
+    # 4 significant digits, more for a number of 5 or more digits (20944 lb, not 2.094e+04 lb)
+    texts = [format_value(float(v), kind, system, max(4, len(f"{abs(to_unit(float(v), kind, system)[0]):.0f}")))
+             for v in values]
+    unit = texts[0].split(" ", 1)[1] if " " in texts[0] else ""
+    if unit == written:
+        return None
+    value = texts[0] if not isinstance(si, (list, tuple)) else "[" + ", ".join(texts) + "]"
+    return value, unit
+
+
 def input_rows(raw: dict, comments: dict[str, str], validated: dict | None = None,
-               presets: dict | None = None) -> list[dict]:
+               presets: dict | None = None, system: str | None = None) -> list[dict]:
     """Every value of a scenario file as a row: ``key`` (dotted path), ``value`` as written, ``unit`` as
     written (``-`` for a plain number), ``si`` (the validated value in SI, where it is a number),
     ``comment`` (from the file) and ``origin`` (``file``, or ``preset NAME`` for a value a body takes from
-    the vehicle library, whose source is then its comment)."""
+    the vehicle library, whose source is then its comment). Given a ``system`` ("SI", "US"), a preset's
+    value and unit are in its units (the library writes SI; the file's own values stay as written)."""
     rows = []
     if comments.get(FILE_COMMENT):
         rows.append({"key": "(the file)", "value": "", "unit": "", "si": "", "comment": comments[FILE_COMMENT],
@@ -270,9 +297,10 @@ def input_rows(raw: dict, comments: dict[str, str], validated: dict | None = Non
                     continue
                 for sub, leaf in _flatten(v, f"{body}.{k}"):
                     si = _si_text(_lookup(validated, sub)) if validated is not None else ""
-                    rows.append({"key": sub, "value": toml_repr(leaf),
-                                 "unit": _unit_of(leaf) if si or validated is None else "", "si": si,
-                                 "comment": f"from preset {value}", "origin": f"preset {value}"})
+                    conv = _in_system(leaf, _lookup(validated, sub), system) if si else None
+                    rows.append({"key": sub, "value": conv[0] if conv else toml_repr(leaf),
+                                 "unit": conv[1] if conv else _unit_of(leaf) if si or validated is None else "",
+                                 "si": si, "comment": f"from preset {value}", "origin": f"preset {value}"})
     return rows
 
 
@@ -631,10 +659,13 @@ def breakable_key(key) -> markupsafe.Markup:
 
 def _posterior(d: dict, system: str) -> dict:
     rows = []
-    for u in d.get("unknowns", []) + [{"name": x["key"], "path": x["key"], **x} for x in d.get("derived", [])]:
+    for u in d.get("unknowns", []) + [{"name": x["key"], "path": x["key"], "derived": True, **x}
+                                      for x in d.get("derived", [])]:
         p = u.get("percentiles", {})
-        rows.append({"name": u.get("name") or u["path"], "values": {q: _num(v, u.get("kind"), system)
-                                                                      for q, v in p.items()},
+        # a derived fraction (an energy loss) in percent, as the posterior's text report and the Monte Carlo's
+        show = percent if u.get("derived") and u.get("kind") == "dimensionless" else (
+            lambda v, kind=u.get("kind"): _num(v, kind, system))
+        rows.append({"name": u.get("name") or u["path"], "values": {q: show(v) for q, v in p.items()},
                      "ess": _num(u.get("ess"), None, system) if u.get("ess") is not None else ""})
     qs = list(dict.fromkeys(q for r in rows for q in r["values"]))  # the JSON's order
     diag = d.get("diagnostics", {})
@@ -691,7 +722,7 @@ def render_case_report(scene, *, input_files, system: str | None = None, fit: di
         "version": __version__,
         "date": now.strftime("%Y-%m-%d %H:%M UTC"),
         "files": [{"name": str(p), "sha256": sha256_file(p), "bytes": p.stat().st_size} for p in files_],
-        "inputs": input_rows(raw, toml_comments(text), sc.data, presets),
+        "inputs": input_rows(raw, toml_comments(text), sc.data, presets, system),
         "approach": approach, "impacts": _impacts(scene, system), "first_bodies": _first_impact_bodies(scene, system),
         "law": scene.impact.tangential_law, "runout": _runout(scene, system), "evidence": _evidence(scene, system),
         "fit": _fit(fit, system) if fit else None, "mc": _mc(mc, system, output_kinds) if mc else None,

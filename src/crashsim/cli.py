@@ -310,9 +310,10 @@ def _cmd_report(args) -> int:
     command = " ".join(["crashsim", "report", args.file, "-o", Path(args.output).name]
                        + [f"--{k} {getattr(args, k)}" for k in ("fit", "mc", "posterior") if getattr(args, k)]
                        + ([f"--units {args.units}"] if args.units else []))
-    written = write_case_report(scene, args.output, input_files=inputs, system=args.units, presets=presets(),
+    system = resolve_system(args.units, scenario.units)  # the report's units, its validation table's too
+    written = write_case_report(scene, args.output, input_files=inputs, system=system, presets=presets(),
                                 command=command, output_kinds=OUTPUT_KINDS,
-                                validation=class_errors(scene, system=args.units), **extra)
+                                validation=class_errors(scene, system=system), **extra)
     sys.stdout.write(f"wrote {written}\n")
     return 0
 

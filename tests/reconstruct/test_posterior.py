@@ -437,6 +437,27 @@ def test_samples_integrate_at_the_tolerance_their_evidence_needs():
     assert evidence_tolerance([Item("rest", "length", 1.0)], scene, 1e-3, 1e-5).rtol == 1e-3
 
 
+def test_a_us_report_shows_its_lengths_in_ft_and_names_every_correlation_column():
+    """A US report: the tolerance sentence's sigma and CG path in ft (it printed them in m), and every
+    column of the correlation matrix named -- the derived quantities' columns, which have no row, in a
+    line below it (they were numbers without a name)."""
+    import re
+
+    res = run_posterior(rebound(), workers=1, progress=False, engine=ENGINE)
+    us, si = res.report("US"), res.report("SI")
+    rule = next(line for line in us.splitlines() if line.startswith("run-out tolerance of the samples"))
+    assert "0.656 ft" in rule and "longest CG path" in rule and not re.search(r"\d m\b", rule), rule
+    assert "0.2 m" in next(line for line in si.splitlines() if line.startswith("run-out tolerance"))
+    assert res.tolerance.rule == res.tolerance.text("SI")  # the JSON's sentence: SI
+    lines = us.splitlines()
+    i = lines.index("Posterior correlation (unknowns; derived quantities in the columns after them)")
+    labels = res.labels
+    assert len(labels) > len(res.unknowns)  # derived columns exist here
+    legend = lines[i + 2 + len(res.unknowns)]
+    for j, lab in enumerate(labels[len(res.unknowns):], start=len(res.unknowns) + 1):
+        assert f"{j} {lab}" in legend, legend
+
+
 def test_a_short_chain_s_advice_fits_its_sampler():
     """An ensemble's chain file continues a run; the independence sampler keeps none (one chain, run
     again): the warning of a chain shorter than TAU_FACTOR autocorrelation times says which."""

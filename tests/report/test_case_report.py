@@ -531,6 +531,43 @@ class _Table(HTMLParser):
             self.cell.append(data)
 
 
+def test_a_posterior_s_energy_loss_is_a_percentage(tmp_path):
+    """A derived fraction of the posterior (an energy loss) in %, as the text report and the Monte Carlo
+    section print it (it was a bare fraction, 0.43); a dimensionless unknown (a friction) stays a number."""
+    scene = run_scene(load_scenario(SCENE))
+    post = {"success": True, "message": "ok", "warnings": [],
+            "diagnostics": {"samples": 100, "acceptance_mean": 0.4, "chain_long_enough": True},
+            "unknowns": [{"path": "runout.road_friction", "name": "road friction", "kind": "dimensionless",
+                          "ess": 120.0, "percentiles": {"p2.5": 0.61, "p50": 0.7, "p97.5": 0.8}}],
+            "derived": [{"key": "energy_loss.system", "kind": "dimensionless",
+                         "percentiles": {"p2.5": 0.3874, "p50": 0.43, "p97.5": 0.4676}}]}
+    text = render_case_report(scene, input_files=[SCENE], system="US", posterior=post, figures=False)
+    rows = {r[0]: r[1:] for r in _table_rows(text, "posterior") if r}
+    assert rows["energy_loss.system"][:3] == ["38.7 %", "43.0 %", "46.8 %"], rows
+    assert rows["road friction"][:3] == ["0.61", "0.7", "0.8"], rows
+
+
+def test_preset_values_are_in_the_report_s_units():
+    """A US report lists the geometry a body takes from a preset in ft (the library writes m; it showed
+    m); its SI column and the file's own values are unchanged, and an SI report keeps the library's text."""
+    import tomllib
+
+    scene = ROOT / "scenarios" / "scenes" / "truck_brakes_into_car.toml"
+    text = scene.read_text(encoding="utf-8")
+    raw, sc = tomllib.loads(text), load_scenario(scene)
+    us = {r["key"]: r for r in input_rows(raw, toml_comments(text), sc.data, presets(), "US")}
+    si = {r["key"]: r for r in input_rows(raw, toml_comments(text), sc.data, presets(), "SI")}
+    length = "vehicles.truck.bodies[0].length"
+    assert us[length]["origin"] == "preset tractor-3axle"
+    assert (us[length]["value"], us[length]["unit"], us[length]["si"]) == ("27.23 ft", "ft", "8.3")
+    assert (si[length]["value"], si[length]["unit"]) == ('"8.30 m"', "m")
+    hitch = us["vehicles.truck.bodies[0].rear_hitch"]
+    assert (hitch["value"], hitch["unit"]) == ("[-10.17 ft, 0 ft]", "ft")
+    assert us["vehicles.truck.bodies[0].mass"]["value"] == "20944 lb"  # 5 digits, not 2.094e+04
+    own = [k for k, r in us.items() if r["origin"] == "file" and r["unit"]]
+    assert own and all(us[k]["value"] == si[k]["value"] for k in own)  # the file's values as written
+
+
 def _table_rows(text: str, section: str) -> list[list[str]]:
     p = _Table(section)
     p.feed(text)

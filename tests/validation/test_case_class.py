@@ -12,7 +12,7 @@ import crashsim
 from crashsim.casereport import render_case_report
 from crashsim.cli import main
 from crashsim.validation import class_errors, scene_class
-from crashsim.validation.classify import load_error_table
+from crashsim.validation.classify import HEAVY_CLASS, load_error_table
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -23,7 +23,9 @@ ROOT = Path(__file__).resolve().parents[2]
     ("validation/ricsac-11/scene.toml", "car-to-car", "front-to-front", False),
     ("validation/mash-3-10/scene.toml", "vehicle-to-barrier", None, False),
     ("scenarios/scenes/barrier_glance_15deg.toml", "vehicle-to-barrier", None, False),
-    ("scenarios/scenes/truck_brakes_into_car.toml", "car-to-car", "front-to-side", True),
+    # an articulated or heavy vehicle: not the class of the staged car-to-car collisions (it said car-to-car)
+    ("scenarios/scenes/truck_brakes_into_car.toml", HEAVY_CLASS, "front-to-side", True),
+    ("scenarios/scenes/tractor_tanker_struck.toml", HEAVY_CLASS, "front-to-side", True),
 ])
 def test_the_class_of_a_scene(path, cls, configuration, outside):
     scene = crashsim.run(ROOT / path)
@@ -54,12 +56,21 @@ def test_the_case_report_quotes_the_class_error(tmp_path, capsys):
     html = out.read_text()
     section = html[html.index('id="known-error"'):]
     section = section[:section.index("</section>")]
-    assert "car-to-car</b>, front-to-side" in section
+    assert f"{HEAVY_CLASS}</b>, front-to-side" in section and "The suite has no case of this class." in section
     assert "Outside the validation suite's cases" in section and "articulated" in section
+    # the related classes the suite has: the car-to-car collisions, off-tracking, the truck's stop
+    for cls in ("car-to-car, front-to-side", "car-to-car, all its cases", "articulated kinematics",
+                "approach and braking"):
+        assert f"Related class {cls}" in section, cls
     table = load_error_table()
     dv = [abs(r["error"]) for r in table["quantities"] if r["configuration"] == "front-to-side" and r["group"] == "delta-v"]
     assert f"{100 * max(dv):.1f} %" in section  # the largest delta-v error of the configuration, as the table has it
     assert re.search(r"ricsac-01, ricsac-06, ricsac-08", section)
+    # a US scene: the car-to-car speed errors in mph, as the rest of its report (they were in m/s)
+    sep = [abs(r["error"]) for r in table["quantities"] if r["configuration"] == "front-to-side"
+           and r["group"] == "separation velocity"]
+    assert f"{max(sep) / 0.44704:.3g} mph" in section and "m/s" not in section and "rad/s" not in section
+
 
 
 def test_a_report_without_the_table_says_so():

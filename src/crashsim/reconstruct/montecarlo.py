@@ -601,7 +601,7 @@ class MCResult:
                      + (f"{self.backend}, {self.workers} worker(s)" if self.backend != "serial" else "serial (this process)")
                      + f"; {self.elapsed:.1f} s")
         if self.tolerance is not None:
-            lines.append(f"run-out tolerance of the samples: {self.tolerance.rule}")
+            lines.append(f"run-out tolerance of the samples: {self.tolerance.text(system)}")
         lines.append("")
         lines.append("Uncertain inputs")
         output_show = show

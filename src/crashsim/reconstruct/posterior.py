@@ -505,7 +505,7 @@ class PosteriorResult:
             lines.append(f"target: {sp.ess} effective samples of every unknown, checked every {sp.check_every} steps: "
                          + (f"met at step {self.steps}" if met else f"not met in {self.steps} steps"))
         if self.tolerance is not None:
-            lines.append(f"run-out tolerance of the samples: {self.tolerance.rule}")
+            lines.append(f"run-out tolerance of the samples: {self.tolerance.text(system)}")
         lines.append("")
         lines.append(f"Priors ({sp.prior}) and likelihood: -chi^2/2 of the evidence residuals over their sigmas")
         for u, p in zip(self.unknowns, self.priors):
@@ -558,6 +558,8 @@ class PosteriorResult:
             rows.append([f"{i + 1} {lab}"] + [f"{self.correlation[i, j]:.3f}" if np.isfinite(self.correlation[i, j])
                                               else "n/a" for j in range(len(labels))])
         lines += table(rows[:n + 1], "l" + "r" * len(labels))
+        if len(labels) > n:  # the derived columns have no row: their numbers named here
+            lines.append("  columns " + ", ".join(f"{j + 1} {labels[j]}" for j in range(n, len(labels))))
         lines.append("")
         lines.append("Diagnostics")
         acc = self.acceptance

@@ -12,6 +12,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from ..units import format_value
+
 __all__ = ["EVIDENCE_SHARE", "LOOSEST_RTOL", "SampleTolerance", "evidence_tolerance", "tolerance_items",
            "with_tolerance"]
 
@@ -27,7 +29,9 @@ class SampleTolerance:
     """The run-out tolerance of the posterior's samples and how it was chosen (:func:`evidence_tolerance`).
 
     ``rtol``, ``atol``: what the samples integrate at; ``file_rtol``, ``file_atol``: the scenario's;
-    ``rule``: the sentence of the report that says why.
+    ``rule``: the sentence of the report that says why (SI); ``bound``: the evidence bound that chose
+    ``rtol`` -- ``(quantity, sigma, scale, what)``, SI -- from which :meth:`text` writes the sentence in
+    a report's units (empty: no bound, ``rule`` as it is).
     """
 
     rtol: float
@@ -35,6 +39,11 @@ class SampleTolerance:
     file_rtol: float
     file_atol: float
     rule: str
+    bound: tuple = ()
+
+    def text(self, system: str = "SI") -> str:
+        """``rule`` with its sigma and scale in the units of ``system`` ("SI", "US")."""
+        return _rule_text(self.rtol, self.file_rtol, self.bound, system) if self.bound else self.rule
 
     @property
     def changed(self) -> bool:
@@ -83,21 +92,30 @@ def evidence_tolerance(items, scene, rtol: float, atol: float, what: str = "sigm
             speed = max(speed, math.hypot(*b.initial.velocity))
     bounds = []
     runout_kinds = {"rest", "rest heading", "mark", "recorder"}
-    for quantity, scale, label in (("length", max(path, 1.0), f"the longest CG path {max(path, 1.0):.3g} m"),
-                                   ("angle", max(turn, 1.0), f"the largest heading change {max(turn, 1.0):.3g} rad"),
-                                   ("speed", max(speed, 1.0), f"the largest speed {max(speed, 1.0):.3g} m/s")):
+    for quantity, scale in (("length", max(path, 1.0)), ("angle", max(turn, 1.0)), ("speed", max(speed, 1.0))):
         sig = [it.sigma for it in items if it.kind in runout_kinds and it.quantity == quantity]
         if sig:
-            unit = {"length": "m", "angle": "rad", "speed": "m/s"}[quantity]
-            bounds.append((EVIDENCE_SHARE * min(sig) / scale, f"{EVIDENCE_SHARE:g} x the smallest {quantity} {what} "
-                                                               f"{min(sig):.3g} {unit} over {label}"))
+            bounds.append((EVIDENCE_SHARE * min(sig) / scale, (quantity, min(sig), scale, what)))
     if not bounds:
         return SampleTolerance(rtol, atol, rtol, atol, "the file's tolerance (no evidence of the run-out sets a bound)")
     bound, why = min(bounds)
     new = min(max(rtol, bound), LOOSEST_RTOL) if rtol < LOOSEST_RTOL else rtol
-    rule = (f"rtol {new:.3g} (file {rtol:.3g}): the integration error bound rtol x scale is at most "
-            f"{why}" + (f", capped at {LOOSEST_RTOL:g}" if bound > LOOSEST_RTOL and new == LOOSEST_RTOL else ""))
-    return SampleTolerance(new, atol * new / rtol, rtol, atol, rule)
+    return SampleTolerance(new, atol * new / rtol, rtol, atol, _rule_text(new, rtol, why, "SI"), why)
+
+
+#: What bounds the integration error of each kind of evidence, in the rule's sentence.
+_SCALES = {"length": "the longest CG path", "angle": "the largest heading change", "speed": "the largest speed"}
+
+
+def _rule_text(new: float, rtol: float, bound: tuple, system: str) -> str:
+    """The sentence of :attr:`SampleTolerance.rule` for ``bound`` (quantity, sigma, scale, what), in ``system``."""
+    quantity, sigma, scale, what = bound
+    capped = EVIDENCE_SHARE * sigma / scale > LOOSEST_RTOL and new == LOOSEST_RTOL
+    shown = (lambda v: format(v, ".3g") + " rad") if quantity == "angle" else (  # noqa: E731
+        lambda v: format_value(v, quantity, system, 3))
+    return (f"rtol {new:.3g} (file {rtol:.3g}): the integration error bound rtol x scale is at most "
+            f"{EVIDENCE_SHARE:g} x the smallest {quantity} {what} {shown(sigma)} over {_SCALES[quantity]} "
+            f"{shown(scale)}" + (f", capped at {LOOSEST_RTOL:g}" if capped else ""))
 
 
 @dataclass(frozen=True)

@@ -4,16 +4,22 @@ A scene's class follows from its first impact, by rule:
 
 * the impact's other body is a barrier (a fixed body): **vehicle-to-barrier** (its cases: a small car and
   a loaded tractor-van semitrailer);
-* otherwise **car-to-car**, with the configuration of the faces that meet: each body's face is the side
-  of its outline nearest the impact point (front, rear or side), giving front-to-side, front-to-rear,
-  front-to-front, side-to-side, rear-to-side or rear-to-rear.
+* otherwise, if a vehicle of the impact is articulated or heavier than the suite's cars
+  (:data:`CAR_MASS_LIMIT`), **articulated or heavy vehicle-to-vehicle**: the suite has no staged collision of one, so
+  the report quotes the classes nearest it (:func:`related_classes`): car-to-car for the impact,
+  articulated kinematics for an articulated vehicle, approach and braking for a scene with an approach;
+* otherwise **car-to-car**.
+
+Between two vehicles the configuration is that of the faces that meet: each body's face is the side
+of its outline nearest the impact point (front, rear or side), giving front-to-side, front-to-rear,
+front-to-front, side-to-side, rear-to-side or rear-to-rear.
 
 The suite's errors come from the table ``benchmarks/validation_suite.py`` writes into the package
 (``crashsim/data/validation_errors.json``, the numbers of ``docs/validation/errors.md``): for the class,
 every quantity group's mean and largest error over the class's cases, and, where the suite has cases of
-the same configuration, the same over those alone. A scene whose vehicles lie outside the validated
-cases of a car-to-car class (an articulated vehicle, one heavier than their cars) is told so: the class's errors are
-then the nearest evidence the suite has, not a measured error rate of that configuration.
+the same configuration, the same over those alone. A scene of that class is told what puts it
+outside the suite's cases: the related classes' errors are the nearest evidence the suite has, not a
+measured error rate of that configuration.
 """
 
 from __future__ import annotations
@@ -27,13 +33,16 @@ import numpy as np
 from ..geometry import rotation
 from .output import summary_value_text
 
-__all__ = ["face_of", "scene_class", "load_error_table", "class_errors", "TABLE"]
+__all__ = ["face_of", "scene_class", "related_classes", "load_error_table", "class_errors", "TABLE", "HEAVY_CLASS",
+           "CAR_MASS_LIMIT"]
 
 #: The packaged error table (written by benchmarks/validation_suite.py).
 TABLE = "data/validation_errors.json"
 
 #: Largest body mass of the suite's car-to-car cases, rounded up [kg]: heavier is outside them.
 CAR_MASS_LIMIT = 2500.0
+#: The class of an impact between vehicles one of which is articulated or heavier than CAR_MASS_LIMIT.
+HEAVY_CLASS = "articulated or heavy vehicle-to-vehicle"
 
 
 def face_of(body, state, point) -> str:
@@ -70,8 +79,22 @@ def scene_class(scene) -> dict:
         faces.append(face_of(bodies[n][1], sc.states[n], imp.point))
     order = {"front": 0, "rear": 1, "side": 2}
     a, b = sorted(faces, key=order.get)
-    return {"class": "car-to-car", "configuration": f"{a}-to-{b}", "outside": outside,
-            "rule": f"the impact point lies nearest {b1}'s {faces[0]} and {b2}'s {faces[1]}"}
+    rule = f"the impact point lies nearest {b1}'s {faces[0]} and {b2}'s {faces[1]}"
+    if outside:
+        return {"class": HEAVY_CLASS, "configuration": f"{a}-to-{b}", "outside": outside,
+                "rule": f"an articulated or heavy vehicle in the impact; {rule}", "related": related_classes(scene)}
+    return {"class": "car-to-car", "configuration": f"{a}-to-{b}", "outside": outside, "rule": rule}
+
+
+def related_classes(scene) -> list[tuple[str, str]]:
+    """The suite's classes nearest a scene of :data:`HEAVY_CLASS`, each with why: ``(class, why)``."""
+    sc = scene.scenario
+    out = [("car-to-car", "the staged collisions between cars: the nearest evidence for the impact")]
+    if any(len(v.bodies) > 1 for v in sc.vehicles):
+        out.append(("articulated kinematics", "an articulated vehicle's run-out"))
+    if sc.approaches:
+        out.append(("approach and braking", "the approach and its braking"))
+    return out
 
 
 def load_error_table() -> dict | None:
@@ -115,7 +138,15 @@ def class_errors(scene, table: dict | None = None, system: str | None = None) ->
         return {**c, "available": False, "class_rows": [], "configuration_rows": []}
     rows = [r for r in table["quantities"] if r["class"] == c["class"]]
     conf = [r for r in rows if c["configuration"] and r.get("configuration") == c["configuration"]]
+    related = []  # (title, rows) of the classes nearest a class the suite has no case of
+    for cls, why in c.get("related", []):
+        these = [r for r in table["quantities"] if r["class"] == cls]
+        same = [r for r in these if c["configuration"] and r.get("configuration") == c["configuration"]]
+        if same:
+            related.append((f"Related class {cls}, {c['configuration']} ({why})", _texts(_summarise(same), system)))
+        if these:
+            related.append((f"Related class {cls}, all its cases ({why})", _texts(_summarise(these), system)))
     return {**c, "available": True, "version": table.get("version"), "date": table.get("date"),
             "command": table.get("command"), "class_rows": _texts(_summarise(rows), system),
-            "configuration_rows": _texts(_summarise(conf), system),
+            "configuration_rows": _texts(_summarise(conf), system), "related_rows": related,
             "cases": sorted({r["case"] for r in rows})}

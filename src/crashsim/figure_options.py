@@ -14,8 +14,8 @@ import re
 
 from .errors import ScenarioError
 
-__all__ = ["SCENE_FIGURE_SUFFIXES", "LEGEND_MODES", "PAPER_SIZES", "LABEL_KINDS", "VIEWS", "ANIMATION_LEGENDS", "ZOOMS", "check_hide", "check_view",
-           "parse_scale", "NARROW_FIGURE", "title_chars", "is_color"]
+__all__ = ["SCENE_FIGURE_SUFFIXES", "LEGEND_MODES", "PAPER_SIZES", "LABEL_KINDS", "VIEWS", "ANIMATION_LEGENDS", "ZOOMS",
+           "check_hide", "check_view", "parse_scale", "NARROW_FIGURE", "title_chars", "is_color"]
 
 #: A figure narrower than this [in] gets its legends under its panels, not beside them (the
 #: time-distance chart, the wheel time line).

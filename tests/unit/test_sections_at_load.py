@@ -21,13 +21,14 @@ def test_a_path_typo_is_refused_by_a_command_that_does_not_use_the_section(tmp_p
     start = text.index(f"[{section}]")
     assert 'path = "runout.road_friction"' in text[start:]
     f = tmp_path / "scene.toml"
-    f.write_text(text[:start] + text[start:].replace('path = "runout.road_friction"', 'path = "runout.road_fricton"', 1),
-                 encoding="utf-8")
+    typo = text[start:].replace('path = "runout.road_friction"', 'path = "runout.road_fricton"', 1)
+    f.write_text(text[:start] + typo, encoding="utf-8")
     out = tmp_path / "scene.png"
     code = main([command[0], str(f), *[c.format(out=out) for c in command[1:]]])
     err = capsys.readouterr().err
     assert code == 2
-    assert "scene.toml" in err and key in err and "'runout.road_fricton'" in err and "did you mean 'road_friction'" in err
+    assert "scene.toml" in err and key in err and "'runout.road_fricton'" in err
+    assert "did you mean 'road_friction'" in err
     assert not out.exists()
 
 

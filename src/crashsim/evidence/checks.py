@@ -20,10 +20,10 @@ point of impact distance between the scenario's contact point and the measured o
 delta-v         computed minus recorded delta-v of a body [m/s]: its magnitude, or its
                 component along the body's x (longitudinal, as event data recorders report)
                 or across it (lateral: positive to the left, the body's y axis, or to the right,
-                SAE J670, as the item's ``lateral_positive`` says), in the body axes at impact.  Of the first impact (default:
-                a recorder records one event, normally the first), or summed over all the
-                body's impacts (``impacts = "all"``: a recorder that accumulates a whole event
-                which includes a later impact).
+                SAE J670, as the item's ``lateral_positive`` says), in the body axes at impact.
+                Of the first impact (default: a recorder records one event, normally the
+                first), or summed over all the body's impacts (``impacts = "all"``: a recorder
+                that accumulates a whole event which includes a later impact).
 crush energy    the impact model's energy loss at the crush surface minus the CRASH3 crush energy
                 of the bodies [J], per group of crush items (:mod:`crashsim.evidence.crush`).
 rollover        a statement that a vehicle (any of its units) or one unit did or did not roll,

@@ -160,7 +160,8 @@ def plot_histories(scene, axes=None, *, system: str | None = None):
             t, f = contact_force_line(p)
             (ln,) = ax_f.plot(t, kf * f, styles[k % len(styles)], lw=1.3, label=p.name.replace("|", " \N{EN DASH} "))
             if np.isfinite(p.peak_time):  # the report's peak, where the solution reached it
-                ax_f.plot(p.peak_time, kf * p.peak_force, "v", color=ln.get_color(), ms=5, gid=f"histories:peak:{p.name}",
+                ax_f.plot(p.peak_time, kf * p.peak_force, "v", color=ln.get_color(), ms=5,
+                          gid=f"histories:peak:{p.name}",
                           label=f"peak {fmt(p.peak_force, 'force', system)} (the report's)")
         ax_f.set_ylabel(f"contact force [{funit}]")
         ax_f.margins(y=0.08)  # the peak's marker inside the panel, not cut at its top

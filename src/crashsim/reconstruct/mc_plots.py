@@ -284,9 +284,6 @@ def _lay_out_clouds(ax, clouds, new: bool) -> None:
     replace_scale_bar(ax)
 
 
-    return ax
-
-
 def plot_tornado(mc, key: str | None = None, ax=None, *, system: str | None = None):
     """Tornado chart: the output (default the first contact body's delta-v) as each input goes from its
     5th to its 95th percentile with the others at their medians; Spearman rank correlation over
